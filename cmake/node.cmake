@@ -1,0 +1,1 @@
+# ROS adapters and the node executables.

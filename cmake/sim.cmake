@@ -1,0 +1,1 @@
+# ROS-free simulator: device models, line emulation on a pty, executable.

@@ -1,0 +1,43 @@
+// Serial line settings of one bus, with the checks and the timing derived from them.
+#pragma once
+
+#include <string>
+
+namespace modbus_rtu_driver {
+
+enum class Parity { kNone, kEven, kOdd };
+enum class DirectionControl { kAuto, kRtsHigh, kRtsLow };  // RTS modes: level while sending
+
+struct LinkConfig {
+  std::string port = "/dev/ttyUSB0";
+  int baud = 9600;               // 1200-115200
+  Parity parity = Parity::kNone;
+  int data_bits = 8;             // 7 or 8
+  int stop_bits = 1;             // 1 or 2
+  double response_timeout = 0.5;  // s, wait for the first byte of a reply
+  double byte_timeout = 0.0;      // s, silence that ends a reply; 0 = derived from the baud
+  int retries = 1;                // extra attempts after a timeout/CRC/wrong-address error
+  double min_gap = 0.0;           // s, silence kept between frames; 0 = t3.5 of the baud
+  DirectionControl direction = DirectionControl::kAuto;
+  bool low_latency = true;        // ask the USB adapter driver for ASYNC_LOW_LATENCY
+};
+
+// Empty when valid, else one message naming the field, the value and the allowed range.
+std::string validateLinkConfig(const LinkConfig& config);
+
+const char* parityName(Parity parity);  // "none", "even", "odd"
+bool parseParity(const std::string& text, Parity* out);
+bool isStandardBaud(int baud);
+
+// Bits per character on the wire (start + data + parity + stop).
+int bitsPerCharacter(const LinkConfig& config);
+// Seconds one character takes at the configured baud.
+double characterTime(const LinkConfig& config);
+// The RTU inter-frame silence: 3.5 characters, fixed at 1.75 ms above 19200 baud (spec).
+double frameGap(const LinkConfig& config);
+// Byte timeout used when none is configured: 1.5 characters, at least 0.5 ms... plus slack for
+// USB adapters and scheduler jitter.
+double effectiveByteTimeout(const LinkConfig& config);
+double effectiveMinGap(const LinkConfig& config);
+
+}  // namespace modbus_rtu_driver

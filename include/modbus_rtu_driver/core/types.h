@@ -1,0 +1,100 @@
+// Plain Modbus request/result types shared by the bus, the devices and the simulator.
+// ROS-free: nothing here may include ros.h.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace modbus_rtu_driver {
+
+enum class FunctionCode : uint8_t {
+  kReadCoils = 0x01,
+  kReadDiscreteInputs = 0x02,
+  kReadHoldingRegisters = 0x03,
+  kReadInputRegisters = 0x04,
+  kWriteSingleCoil = 0x05,
+  kWriteSingleRegister = 0x06,
+  kWriteMultipleCoils = 0x0F,
+  kWriteMultipleRegisters = 0x10,
+};
+
+bool isKnownFunction(uint8_t code);
+bool isReadFunction(FunctionCode fc);
+bool isBitFunction(FunctionCode fc);  // 01, 02, 05, 15
+const char* functionName(FunctionCode fc);
+
+// Modbus exception codes (the ones a device sends back in an exception reply).
+enum ExceptionCode : uint8_t {
+  kIllegalFunction = 0x01,
+  kIllegalDataAddress = 0x02,
+  kIllegalDataValue = 0x03,
+  kSlaveDeviceFailure = 0x04,
+};
+std::string exceptionName(uint8_t code);
+
+constexpr uint8_t kBroadcastAddress = 0;
+constexpr uint8_t kMaxStandardSlave = 247;  // 248-255 are reserved by the spec but used by real boards
+constexpr size_t kMaxAduLength = 256;
+constexpr uint16_t kMaxReadBits = 2000;
+constexpr uint16_t kMaxReadRegisters = 125;
+constexpr uint16_t kMaxWriteBits = 1968;
+constexpr uint16_t kMaxWriteRegisters = 123;
+
+// One Modbus transaction as the caller means it. For bit functions, `values` holds 0/1.
+struct Request {
+  uint8_t slave = 1;
+  FunctionCode function = FunctionCode::kReadHoldingRegisters;
+  uint16_t address = 0;
+  uint16_t count = 1;            // items to read or write (1 for 05/06)
+  std::vector<uint16_t> values;  // write payload
+  // Address 0 is a broadcast: nobody answers. Some boards (LC relay) answer commands sent to
+  // address 0 when they are alone on the bus; such requests set this flag.
+  bool single_device_at_zero = false;
+  // The LC board answers its FC16 "set address" command by echoing the whole request.
+  bool reply_echoes_request = false;
+
+  static Request readCoils(uint8_t slave, uint16_t address, uint16_t count);
+  static Request readDiscreteInputs(uint8_t slave, uint16_t address, uint16_t count);
+  static Request readHoldingRegisters(uint8_t slave, uint16_t address, uint16_t count);
+  static Request readInputRegisters(uint8_t slave, uint16_t address, uint16_t count);
+  static Request writeSingleCoil(uint8_t slave, uint16_t address, bool on);
+  static Request writeSingleRegister(uint8_t slave, uint16_t address, uint16_t value);
+  static Request writeMultipleCoils(uint8_t slave, uint16_t address, const std::vector<bool>& bits);
+  static Request writeMultipleRegisters(uint8_t slave, uint16_t address,
+                                        const std::vector<uint16_t>& values);
+
+  bool expectsReply() const { return slave != kBroadcastAddress || single_device_at_zero; }
+  // Empty when the request is well formed, else a message naming the bad field.
+  std::string validate() const;
+  // "FC03 read holding registers, slave 1, address 0x00FD, count 1"
+  std::string describe() const;
+};
+
+enum class ErrorKind {
+  kNone,
+  kTimeout,          // no (complete) reply in time
+  kCrc,              // a reply arrived with a bad CRC
+  kWrongAddress,     // a reply from another slave
+  kException,        // the device answered with a Modbus exception
+  kMalformed,        // a reply that does not fit the request
+  kIo,               // the port failed (unplugged, closed)
+  kInvalidArgument,  // refused before anything reached the bus
+  kNotConnected,     // the port is not open
+};
+const char* errorKindName(ErrorKind kind);
+
+// Outcome of one transaction. `values` carries what was read (bits as 0/1) or, for writes,
+// what the device confirmed.
+struct Result {
+  ErrorKind error = ErrorKind::kNone;
+  uint8_t exception_code = 0;
+  std::string message;
+  std::vector<uint16_t> values;
+
+  bool ok() const { return error == ErrorKind::kNone; }
+  static Result success(std::vector<uint16_t> values = {});
+  static Result failure(ErrorKind kind, std::string message, uint8_t exception_code = 0);
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,70 @@
+#include "modbus_rtu_driver/core/link_config.h"
+
+#include <algorithm>
+
+namespace modbus_rtu_driver {
+
+const char* parityName(Parity p) {
+  switch (p) {
+    case Parity::kNone: return "none";
+    case Parity::kEven: return "even";
+    case Parity::kOdd: return "odd";
+  }
+  return "?";
+}
+
+bool parseParity(const std::string& t, Parity* out) {
+  if (t == "none" || t == "N") *out = Parity::kNone;
+  else if (t == "even" || t == "E") *out = Parity::kEven;
+  else if (t == "odd" || t == "O") *out = Parity::kOdd;
+  else return false;
+  return true;
+}
+
+bool isStandardBaud(int b) {
+  static const int kRates[] = {1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200};
+  return std::find(std::begin(kRates), std::end(kRates), b) != std::end(kRates);
+}
+
+std::string validateLinkConfig(const LinkConfig& c) {
+  if (c.port.empty()) return "port: must name a serial device such as /dev/ttyUSB0";
+  if (!isStandardBaud(c.baud))
+    return "baud: " + std::to_string(c.baud) +
+           " is not one of 1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200";
+  if (c.data_bits != 7 && c.data_bits != 8)
+    return "data_bits: " + std::to_string(c.data_bits) + " is not 7 or 8";
+  if (c.stop_bits != 1 && c.stop_bits != 2)
+    return "stop_bits: " + std::to_string(c.stop_bits) + " is not 1 or 2";
+  if (!(c.response_timeout >= 0.001 && c.response_timeout <= 10.0))
+    return "response_timeout: " + std::to_string(c.response_timeout) +
+           " s is outside 0.001-10 s";
+  if (!(c.byte_timeout >= 0.0 && c.byte_timeout <= 1.0))
+    return "byte_timeout: " + std::to_string(c.byte_timeout) + " s is outside 0-1 s (0 = auto)";
+  if (c.retries < 0 || c.retries > 10)
+    return "retries: " + std::to_string(c.retries) + " is outside 0-10";
+  if (!(c.min_gap >= 0.0 && c.min_gap <= 1.0))
+    return "min_gap: " + std::to_string(c.min_gap) + " s is outside 0-1 s (0 = t3.5)";
+  return {};
+}
+
+int bitsPerCharacter(const LinkConfig& c) {
+  return 1 + c.data_bits + (c.parity == Parity::kNone ? 0 : 1) + c.stop_bits;
+}
+
+double characterTime(const LinkConfig& c) {
+  return static_cast<double>(bitsPerCharacter(c)) / c.baud;
+}
+
+double frameGap(const LinkConfig& c) {
+  return c.baud > 19200 ? 0.00175 : 3.5 * characterTime(c);
+}
+
+double effectiveByteTimeout(const LinkConfig& c) {
+  if (c.byte_timeout > 0) return c.byte_timeout;
+  // 1.5 characters is the spec's limit, but USB adapters deliver in chunks; 5 ms of slack.
+  return 1.5 * characterTime(c) + 0.005;
+}
+
+double effectiveMinGap(const LinkConfig& c) { return c.min_gap > 0 ? c.min_gap : frameGap(c); }
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,45 @@
+// Loads ../shared/golden-frames.tsv: every literal frame the device manuals print.
+#pragma once
+
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "modbus_rtu_driver/core/frame.h"
+
+namespace modbus_rtu_driver {
+
+struct GoldenFrame {
+  std::string seed, device;
+  int slave = 0;
+  Bytes request, response;  // response empty when the manual shows none
+  std::string meaning;
+  bool request_crc_printed_wrong = false;
+};
+
+inline std::vector<GoldenFrame> loadGoldenFrames(const std::string& path) {
+  std::vector<GoldenFrame> rows;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#' || line.rfind("seed\t", 0) == 0) continue;
+    std::vector<std::string> cols;
+    std::stringstream ss(line);
+    std::string col;
+    while (std::getline(ss, col, '\t')) cols.push_back(col);
+    if (cols.size() < 6) continue;
+    GoldenFrame g;
+    g.seed = cols[0];
+    g.device = cols[1];
+    g.slave = std::stoi(cols[2]);
+    g.request = fromHex(cols[3]).value_or(Bytes{});
+    if (cols[4] != "-") g.response = fromHex(cols[4]).value_or(Bytes{});
+    g.meaning = cols[5];
+    g.request_crc_printed_wrong = g.meaning.find("wrong CRC") != std::string::npos;
+    rows.push_back(g);
+  }
+  return rows;
+}
+
+}  // namespace modbus_rtu_driver
