@@ -1,6 +1,9 @@
 // The one thing device code talks to: run a Modbus transaction, get the outcome.
 // Implemented by RtuLink (libmodbus on a serial port) and by the unit tests' ScriptedTransport.
+// Only the bus thread (BusScheduler) calls these.
 #pragma once
+
+#include <string>
 
 #include "modbus_rtu_driver/core/types.h"
 
@@ -11,6 +14,13 @@ class Transport {
   virtual ~Transport() = default;
   // Runs one request (with the link's retries). Broadcasts return success once sent.
   virtual Result execute(const Request& request) = 0;
+  // (Re)opens the port. False with a message when it cannot.
+  virtual bool connect(std::string* error) {
+    (void)error;
+    return true;
+  }
+  virtual bool connected() const { return true; }
+  virtual void disconnect() {}
 };
 
 }  // namespace modbus_rtu_driver

@@ -1,0 +1,99 @@
+// The bus thread. It alone calls the Transport (and so libmodbus); everyone else hands it jobs.
+// Writes (submit) go ahead of polls; polls run at their device's rate, earliest due first, and a
+// device that stops answering is polled with backoff so it cannot stall the others.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <future>
+#include <map>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "modbus_rtu_driver/core/status.h"
+#include "modbus_rtu_driver/core/transport.h"
+
+namespace modbus_rtu_driver {
+
+struct DeviceHealth {
+  bool online = true;            // false after `offline_after` failed transactions in a row
+  uint32_t consecutive_failures = 0;
+  uint64_t polls_ok = 0, polls_failed = 0, writes_ok = 0, writes_failed = 0;
+  std::string last_error;        // empty when none yet
+  double achieved_poll_rate = 0;  // Hz over the last seconds
+  bool rate_overrun = false;      // the bus could not keep the configured rate
+};
+
+class BusScheduler {
+ public:
+  using Job = std::function<Result(Transport&)>;
+  using ResultCallback = std::function<void(const Result&)>;
+
+  struct Options {
+    int offline_after = 3;           // failed transactions in a row before a device is offline
+    double backoff_initial = 0.5;    // s between probes of an offline device, doubling
+    double backoff_max = 5.0;        // s
+    double reconnect_initial = 0.5;  // s between attempts to reopen the port, doubling
+    double reconnect_max = 5.0;      // s
+  };
+
+  explicit BusScheduler(Transport& transport);
+  BusScheduler(Transport& transport, Options options);
+  ~BusScheduler();  // stops the thread; pending jobs fail with "bus stopped"
+
+  void start();
+  void stop();
+
+  // Registers a device so its health is tracked. Must be called before start().
+  void addDevice(const std::string& device);
+  // Periodic poll of `device` at `rate_hz` (0 = never). `on_result` runs on the bus thread right
+  // after each poll with its outcome.
+  void addPoll(const std::string& device, double rate_hz, Job poll, ResultCallback on_result);
+
+  // Runs `job` on the bus thread ahead of every poll. The future holds the real outcome. When
+  // the device is offline the job still runs once (a write is how a user probes too), but the
+  // transport's retries are what they are: the answer comes after one attempt cycle.
+  std::future<Result> submit(const std::string& device, Job job);
+
+  DeviceHealth health(const std::string& device) const;
+  bool connected() const;
+  std::string connectionError() const;
+
+ private:
+  struct Poll {
+    std::string device;
+    std::chrono::steady_clock::duration period{};
+    std::chrono::steady_clock::time_point due{};
+    Job job;
+    ResultCallback on_result;
+  };
+  struct Pending {
+    std::string device;
+    Job job;
+    std::promise<Result> promise;
+  };
+
+  void run();
+  void record(const std::string& device, const Result& result, bool is_poll);
+
+  Transport& transport_;
+  Options options_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<Pending> writes_;
+  std::vector<Poll> polls_;
+  std::map<std::string, DeviceHealth> health_;
+  std::map<std::string, std::chrono::steady_clock::time_point> backoff_until_;
+  std::map<std::string, double> backoff_;
+  std::map<std::string, std::deque<std::chrono::steady_clock::time_point>> poll_times_;
+  bool running_ = false;
+  bool connected_ = false;
+  std::string connection_error_;
+  std::thread thread_;
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,71 @@
+// One serial RTU link through libmodbus. Slaves 1-247 go through libmodbus's own API; address 0
+// (broadcast, and the LC board's single-device commands) and 248-255, which libmodbus 3.1.6
+// cannot address or filters out, go through modbus_send_raw_request and a reply reader of our
+// own that checks the CRC. With libmodbus >= 3.1.7 its quirks are used instead.
+// Between transactions the link keeps a minimum silence (t3.5 by default) and flushes stale
+// input, so a late or long reply is never taken as the answer to the next request.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+#include "modbus_rtu_driver/core/link_config.h"
+#include "modbus_rtu_driver/core/transport.h"
+
+typedef struct _modbus modbus_t;  // NOLINT: libmodbus's own name
+
+namespace modbus_rtu_driver {
+
+struct LinkStats {
+  uint64_t requests = 0;       // transactions asked for (not counting retries)
+  uint64_t attempts = 0;       // frames sent, retries included
+  uint64_t ok = 0;
+  uint64_t broadcasts = 0;
+  uint64_t timeouts = 0;
+  uint64_t crc_errors = 0;
+  uint64_t wrong_address = 0;
+  uint64_t exceptions = 0;
+  uint64_t malformed = 0;
+  uint64_t io_errors = 0;
+  uint64_t retries = 0;
+  uint64_t reconnects = 0;
+  double last_latency = 0;  // s, request sent to reply decoded, successful transactions
+  double mean_latency = 0;  // s
+  double max_latency = 0;   // s
+};
+
+class RtuLink : public Transport {
+ public:
+  explicit RtuLink(LinkConfig config);
+  ~RtuLink() override;
+  RtuLink(const RtuLink&) = delete;
+  RtuLink& operator=(const RtuLink&) = delete;
+
+  bool connect(std::string* error) override;
+  bool connected() const override { return ctx_ != nullptr; }
+  void disconnect() override;
+  Result execute(const Request& request) override;
+
+  // Response timeout for one request to `slave`: the configured one, raised to cover a device's
+  // reply delay (the LD58A08 can wait up to 1000 ms before answering).
+  void setReplyDelay(uint8_t slave, double seconds);
+
+  const LinkConfig& config() const { return config_; }
+  LinkStats stats() const { return stats_; }
+
+ private:
+  Result attempt(const Request& request);
+  Result viaLibmodbus(const Request& request);
+  Result viaRaw(const Request& request);
+  void keepGap();
+  void account(const Result& result, double latency);
+
+  LinkConfig config_;
+  modbus_t* ctx_ = nullptr;
+  LinkStats stats_;
+  double reply_delay_[256] = {};
+  std::chrono::steady_clock::time_point last_activity_{};
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,74 @@
+// One class per device type behind this interface. Device objects live on the bus thread:
+// every method taking a Transport runs there (through BusScheduler), and the snapshot getters
+// are read there too (in the scheduler's result callbacks).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "modbus_rtu_driver/core/transport.h"
+#include "modbus_rtu_driver/core/types.h"
+
+namespace modbus_rtu_driver {
+
+struct DeviceConfig {
+  std::string name;              // ROS namespace of the device under the node
+  std::string type;              // ld58a08 | lc_relay8 | yespeed_pdu
+  int address = 1;               // 1-255
+  double poll_rate = 1.0;        // Hz, 0 = never poll
+  std::vector<std::string> outputs;  // channel names; empty = out0..outN-1
+  std::vector<std::string> inputs;   // channel names; empty = in0..inN-1
+  double reply_delay = 0.0;      // s the device waits before answering (LD58A08 0x00FC x 40 ms)
+};
+
+class Device {
+ public:
+  explicit Device(DeviceConfig config) : config_(std::move(config)) {}
+  virtual ~Device() = default;
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+
+  const DeviceConfig& config() const { return config_; }
+  uint8_t address() const { return static_cast<uint8_t>(config_.address); }
+  const std::string& name() const { return config_.name; }
+
+  virtual const char* type() const = 0;
+  virtual size_t outputCount() const = 0;
+  virtual size_t inputCount() const { return 0; }
+
+  // Reads everything the device reports (outputs, inputs, telemetry, settings) into the
+  // snapshot. On failure the snapshot keeps its previous values and the Result says why.
+  virtual Result poll(Transport& bus) = 0;
+  // Sets channels[i] to states[i] with as few frames as the function codes allow; checks the
+  // arguments first (nothing is sent when they are bad). On success the snapshot holds the
+  // confirmed states.
+  virtual Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                            const std::vector<bool>& states) = 0;
+
+  // Last confirmed states (from a poll or a confirmed write); empty until known.
+  const std::vector<bool>& outputs() const { return outputs_; }
+  const std::vector<bool>& inputs() const { return inputs_; }
+
+  // Names for every channel, defaults filled in.
+  std::vector<std::string> outputNames() const;
+  std::vector<std::string> inputNames() const;
+
+ protected:
+  // Shared check of setOutputs arguments: sizes match, channels in range, no duplicates.
+  std::string validateChannels(const std::vector<uint8_t>& channels,
+                               const std::vector<bool>& states) const;
+  // Writes the outputs of a board whose coils 0..N-1 are the outputs, with FC05 for one
+  // channel, FC15 over the span otherwise (reading the coils first when the span has gaps).
+  Result writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                          const std::vector<bool>& states);
+
+  std::vector<bool> outputs_;
+  std::vector<bool> inputs_;
+
+ private:
+  DeviceConfig config_;
+};
+
+}  // namespace modbus_rtu_driver

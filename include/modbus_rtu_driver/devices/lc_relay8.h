@@ -1,0 +1,43 @@
+// LC Technology 8-relay board with 8 optocoupler inputs: coils 0-7 (relay #1-#8), discrete
+// inputs 0-7 (1 = input pulled low), flash-close / flash-open at 0x0003 + 5*n (FC16: mode,
+// delay in 0.1 s), baud code write 0x03E9 / read 0x03E8, address read/set through slave 0.
+// Factory address 255. Manual: seeds/001.
+#pragma once
+
+#include "modbus_rtu_driver/devices/device.h"
+
+namespace modbus_rtu_driver {
+
+class LcRelay8 : public Device {
+ public:
+  static constexpr size_t kChannels = 8;
+  static constexpr uint16_t kFlashClose = 0x0004;
+  static constexpr uint16_t kFlashOpen = 0x0002;
+  static constexpr uint16_t kBaudWriteRegister = 0x03E9;
+  static constexpr uint16_t kBaudReadRegister = 0x03E8;
+  static uint16_t flashRegister(uint8_t channel) { return static_cast<uint16_t>(3 + 5 * channel); }
+
+  explicit LcRelay8(DeviceConfig config) : Device(std::move(config)) {}
+  const char* type() const override { return "lc_relay8"; }
+  size_t outputCount() const override { return kChannels; }
+  size_t inputCount() const override { return kChannels; }
+
+  // FC01 relays then FC02 inputs.
+  Result poll(Transport& bus) override;
+  Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                    const std::vector<bool>& states) override;
+
+  // Empty when valid: channel 0-7, duration 0.1-6553.5 s.
+  static std::string validatePulse(uint8_t channel, double duration);
+  // state true = flash-close (on for duration, then off); false = flash-open.
+  Result pulse(Transport& bus, uint8_t channel, bool state, double duration);
+
+  Result readBaudCode(Transport& bus, uint16_t* code);
+  Result writeBaudCode(Transport& bus, uint16_t code);  // 2, 3, 4 = 4800, 9600, 19200
+
+  // "Single device on the bus" operations at address 0 (any LC board answers them).
+  static Result readAddressAtZero(Transport& bus);                // values[0] = address
+  static Result setAddressAtZero(Transport& bus, uint8_t address);  // 1-255
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,83 @@
+// LD58A08: 8 digital outputs (coils 0-7, mirrored in holding register 0x0080), each also a PWM
+// channel. Channels 0-5 are slow (period / on-time in 0.1 s, pulse count at 0x00n2), channels
+// 6-7 fast (frequency Hz, duty %, output time in 0.1 s at 0x00n2). Manual: seeds/000.
+#pragma once
+
+#include <array>
+
+#include "modbus_rtu_driver/devices/device.h"
+
+namespace modbus_rtu_driver {
+
+struct PwmSettings {
+  uint8_t channel = 0;
+  // Channels 0-5.
+  double period = 0.0;   // s, 0.1-6553.5
+  double on_time = 0.0;  // s, 0-6553.4 and <= period
+  uint16_t pulses = 0;   // 1-65534; 0 = continuous (written as 0xFFFF)
+  // Channels 6-7.
+  double frequency = 0.0;   // Hz, 1-20000
+  double duty_cycle = 0.0;  // %, 0-100
+  double duration = 0.0;    // s, 0.1-6553.4; 0 = continuous (written as 0xFFFF)
+};
+
+// What the device reports for a channel (registers 0x00n0-0x00n2 decoded).
+struct PwmState {
+  uint8_t channel = 0;
+  bool high_speed = false;
+  double period = 0.0, on_time = 0.0;
+  uint16_t pulses = 0;  // raw register: 0 off, 0xFFFF continuous, else pulses left
+  double frequency = 0.0, duty_cycle = 0.0;
+  double duration = 0.0;  // s; raw 0xFFFF reported as 6553.5
+  bool running = false;
+};
+
+// Special function registers.
+struct Ld58a08Settings {
+  uint16_t power_down_save = 0;  // 0x00FA
+  uint16_t return_delay = 0;     // 0x00FC, x40 ms, 0-25
+  uint16_t address = 1;          // 0x00FD, 1-247
+  uint16_t baud_code = 3;        // 0x00FE, 0-7
+  uint16_t parity = 0;           // 0x00FF, 0 none 1 even 2 odd
+};
+
+class Ld58a08 : public Device {
+ public:
+  static constexpr size_t kChannels = 8;
+  static constexpr uint16_t kOutputMaskRegister = 0x0080;
+  static constexpr uint16_t kPowerDownSaveRegister = 0x00FA;
+  static constexpr uint16_t kFactoryResetRegister = 0x00FB;
+  static constexpr uint16_t kReturnDelayRegister = 0x00FC;
+  static constexpr uint16_t kAddressRegister = 0x00FD;
+  static constexpr uint16_t kBaudRegister = 0x00FE;
+  static constexpr uint16_t kParityRegister = 0x00FF;
+  static uint16_t pwmRegister(uint8_t channel) { return static_cast<uint16_t>(channel * 0x10); }
+
+  explicit Ld58a08(DeviceConfig config) : Device(std::move(config)) {}
+  const char* type() const override { return "ld58a08"; }
+  size_t outputCount() const override { return kChannels; }
+
+  // Polls the outputs (FC01) and the PWM registers of every channel.
+  Result poll(Transport& bus) override;
+  Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                    const std::vector<bool>& states) override;
+
+  // Empty when valid, else a message naming the field and its range.
+  static std::string validatePwm(const PwmSettings& settings);
+  // One FC16 write of the channel's three registers.
+  Result setPwm(Transport& bus, const PwmSettings& settings);
+  // Writes 0 to the channel's enable register (0x00n2).
+  Result stopPwm(Transport& bus, uint8_t channel);
+  Result readPwm(Transport& bus);  // fills pwm()
+  const std::array<PwmState, kChannels>& pwm() const { return pwm_; }
+  bool pwmKnown() const { return pwm_known_; }
+
+  Result readSettings(Transport& bus, Ld58a08Settings* out);
+  Result setReturnDelay(Transport& bus, uint16_t units_of_40ms);  // 0-25
+
+ private:
+  std::array<PwmState, kChannels> pwm_{};
+  bool pwm_known_ = false;
+};
+
+}  // namespace modbus_rtu_driver
