@@ -7,3 +7,6 @@ add_library(modbus_rtu_core
 )
 target_include_directories(modbus_rtu_core PUBLIC include ${LIBMODBUS_INCLUDE_DIRS})
 target_link_libraries(modbus_rtu_core PUBLIC ${LIBMODBUS_LIBRARIES} Threads::Threads)
+# The link (libmodbus) and the device models add their sources to the core library.
+include(cmake/link.cmake)
+include(cmake/devices.cmake)

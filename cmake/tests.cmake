@@ -6,3 +6,7 @@ catkin_add_gtest(test_frame test/unit/test_frame.cpp)
 target_link_libraries(test_frame modbus_rtu_core gtest_main)
 target_compile_definitions(test_frame PRIVATE
   GOLDEN_FRAMES_PATH="${GOLDEN_FRAMES}")
+include(cmake/tests_link.cmake)
+include(cmake/tests_devices.cmake)
+include(cmake/tests_sim.cmake)
+include(cmake/tests_node.cmake)

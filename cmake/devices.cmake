@@ -1,0 +1,1 @@
+# Device models and BusScheduler: target_sources(modbus_rtu_core PRIVATE ...)

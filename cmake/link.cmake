@@ -1,0 +1,1 @@
+# RtuLink sources: target_sources(modbus_rtu_core PRIVATE ...)
