@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds, runs every test (gtest unit tests, then the rostests one
+# after another) and ends with "N passed, N failed". Exit code 0 only when all passed.
+source "$(dirname "$0")/common.sh"
+install_deps
+build_workspace
+cd "$WS"
+catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" tests
+rm -rf "$WS/build/test_results"
+# -j1: rostests each start their own master and must not run in parallel.
+catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests 2>&1 | tee "$WS/run_tests.log" |
+  grep -E '^\[ *(RUN|FAILED|PASSED|OK) |^\[Testcase|FAILURE|ERROR:|^Ran |testcase|^\[ROSUNIT\]|^ *\* ' || true
+exec /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$WS/build/test_results"

@@ -1,0 +1,173 @@
+#include "modbus_rtu_driver/core/bus_config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cctype>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "modbus_rtu_driver/devices/registry.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+struct ConfigError {
+  std::string message;
+};
+
+[[noreturn]] void fail(const std::string& key, const std::string& what) {
+  throw ConfigError{key + ": " + what};
+}
+
+std::string show(const YAML::Node& n) {
+  if (n.IsScalar()) return "'" + n.Scalar() + "'";
+  if (n.IsSequence()) return "a list";
+  if (n.IsMap()) return "a map";
+  return "nothing";
+}
+
+template <typename T>
+T get(const YAML::Node& n, const std::string& key, const char* expected) {
+  try {
+    return n.as<T>();
+  } catch (const YAML::Exception&) {
+    fail(key, show(n) + " is not " + expected);
+  }
+}
+
+double getNumber(const YAML::Node& n, const std::string& key) {
+  return get<double>(n, key, "a number");
+}
+
+int getInt(const YAML::Node& n, const std::string& key) {
+  const double v = getNumber(n, key);
+  if (v != static_cast<int>(v)) fail(key, show(n) + " is not a whole number");
+  return static_cast<int>(v);
+}
+
+void checkKeys(const YAML::Node& map, const std::string& where, const std::set<std::string>& known) {
+  for (const auto& kv : map) {
+    const std::string key = kv.first.as<std::string>();
+    if (!known.count(key)) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      fail(where + key, "unknown key (known keys: " + list + ")");
+    }
+  }
+}
+
+std::vector<std::string> getNames(const YAML::Node& n, const std::string& key) {
+  if (!n.IsSequence()) fail(key, show(n) + " is not a list of names");
+  std::vector<std::string> names;
+  for (const auto& item : n) names.push_back(get<std::string>(item, key, "a name"));
+  return names;
+}
+
+DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
+  const std::string where = "devices/" + name + "/";
+  if (!isValidRosName(name))
+    fail("devices/" + name,
+         "device name is not a valid ROS name (a letter, then letters, digits or '_')");
+  if (!n.IsMap()) fail("devices/" + name, show(n) + " is not a map of device settings");
+  checkKeys(n, where, {"type", "address", "poll_rate", "outputs", "inputs", "reply_delay"});
+  DeviceConfig d;
+  d.name = name;
+  if (!n["type"]) {
+    fail(where + "type", "missing (one of " + [] {
+      std::string s;
+      for (const auto& t : knownDeviceTypes()) s += (s.empty() ? "" : ", ") + t;
+      return s;
+    }() + ")");
+  }
+  d.type = get<std::string>(n["type"], where + "type", "a device type");
+  if (!n["address"]) fail(where + "address", "missing (the device's slave address, 1-255)");
+  d.address = getInt(n["address"], where + "address");
+  if (n["poll_rate"]) d.poll_rate = getNumber(n["poll_rate"], where + "poll_rate");
+  if (n["reply_delay"]) d.reply_delay = getNumber(n["reply_delay"], where + "reply_delay");
+  if (n["outputs"]) d.outputs = getNames(n["outputs"], where + "outputs");
+  if (n["inputs"]) d.inputs = getNames(n["inputs"], where + "inputs");
+  const std::string problem = validateDeviceConfig(d);
+  if (!problem.empty()) throw ConfigError{problem};
+  return d;
+}
+
+void parse(const YAML::Node& root, BusConfig* out) {
+  if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
+  checkKeys(root, "", {"port", "baud", "parity", "data_bits", "stop_bits", "response_timeout",
+                       "byte_timeout", "retries", "min_gap", "direction", "low_latency", "role",
+                       "diagnostic_period", "devices"});
+  LinkConfig& link = out->link;
+  if (root["port"]) link.port = get<std::string>(root["port"], "port", "a device path");
+  if (root["baud"]) link.baud = getInt(root["baud"], "baud");
+  if (root["parity"]) {
+    const std::string p = get<std::string>(root["parity"], "parity", "none, even or odd");
+    if (!parseParity(p, &link.parity)) fail("parity", "'" + p + "' is not none, even or odd");
+  }
+  if (root["data_bits"]) link.data_bits = getInt(root["data_bits"], "data_bits");
+  if (root["stop_bits"]) link.stop_bits = getInt(root["stop_bits"], "stop_bits");
+  if (root["response_timeout"])
+    link.response_timeout = getNumber(root["response_timeout"], "response_timeout");
+  if (root["byte_timeout"]) link.byte_timeout = getNumber(root["byte_timeout"], "byte_timeout");
+  if (root["retries"]) link.retries = getInt(root["retries"], "retries");
+  if (root["min_gap"]) link.min_gap = getNumber(root["min_gap"], "min_gap");
+  if (root["low_latency"])
+    link.low_latency = get<bool>(root["low_latency"], "low_latency", "true or false");
+  if (root["direction"]) {
+    const std::string d = get<std::string>(root["direction"], "direction", "auto, rts_high, rts_low");
+    if (d == "auto") link.direction = DirectionControl::kAuto;
+    else if (d == "rts_high") link.direction = DirectionControl::kRtsHigh;
+    else if (d == "rts_low") link.direction = DirectionControl::kRtsLow;
+    else fail("direction", "'" + d + "' is not auto, rts_high or rts_low");
+  }
+  const std::string link_problem = validateLinkConfig(link);
+  if (!link_problem.empty()) throw ConfigError{link_problem};
+  if (root["role"]) {
+    out->role = get<std::string>(root["role"], "role", "master");
+    if (out->role != "master") fail("role", "'" + out->role + "' is not supported (master)");
+  }
+  if (root["diagnostic_period"]) {
+    out->diagnostic_period = getNumber(root["diagnostic_period"], "diagnostic_period");
+    if (!(out->diagnostic_period >= 0.1 && out->diagnostic_period <= 60))
+      fail("diagnostic_period", std::to_string(out->diagnostic_period) + " s is outside 0.1-60 s");
+  }
+  const YAML::Node devices = root["devices"];
+  if (!devices) fail("devices", "missing (a map of device name -> settings)");
+  if (!devices.IsMap() || devices.size() == 0)
+    fail("devices", show(devices) + " is not a non-empty map of device name -> settings");
+  std::map<int, std::string> by_address;
+  for (const auto& kv : devices) {
+    const std::string name = kv.first.as<std::string>();
+    DeviceConfig d = parseDevice(name, kv.second);
+    auto [it, fresh] = by_address.emplace(d.address, name);
+    if (!fresh)
+      fail("devices/" + name + "/address",
+           std::to_string(d.address) + " is already used by device '" + it->second + "'");
+    out->devices.push_back(std::move(d));
+  }
+}
+
+}  // namespace
+
+bool isValidRosName(const std::string& name) {
+  if (name.empty() || !std::isalpha(static_cast<unsigned char>(name[0]))) return false;
+  for (char c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
+  return true;
+}
+
+bool parseBusConfig(const YAML::Node& root, BusConfig* out, std::string* error) {
+  *out = BusConfig{};
+  try {
+    parse(root, out);
+    return true;
+  } catch (const ConfigError& e) {
+    if (error) *error = e.message;
+  } catch (const YAML::Exception& e) {
+    if (error) *error = std::string("configuration: ") + e.what();
+  }
+  return false;
+}
+
+}  // namespace modbus_rtu_driver

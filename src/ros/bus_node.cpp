@@ -1,0 +1,95 @@
+#include "modbus_rtu_driver/ros/bus_node.h"
+
+#include <diagnostic_msgs/DiagnosticStatus.h>
+
+#include "modbus_rtu_driver/devices/registry.h"
+#include "modbus_rtu_driver/ros/adapter_registry.h"
+#include "modbus_rtu_driver/ros/yaml_params.h"
+
+namespace modbus_rtu_driver {
+
+BusNode::BusNode(const ros::NodeHandle& private_nh) : nh_(private_nh) {}
+
+BusNode::~BusNode() {
+  // The bus thread calls into the adapters: stop it before they go.
+  if (bus_) bus_->stop();
+}
+
+bool BusNode::start() {
+  XmlRpc::XmlRpcValue params;
+  if (!nh_.getParam("", params) || params.getType() != XmlRpc::XmlRpcValue::TypeStruct) {
+    ROS_FATAL("no configuration in %s: load a YAML file with rosparam (see config/)",
+              nh_.getNamespace().c_str());
+    return false;
+  }
+  std::string error;
+  if (!parseBusConfig(toYaml(params), &config_, &error)) {
+    ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());
+    return false;
+  }
+  link_ = std::make_unique<RtuLink>(config_.link);
+  bus_ = std::make_unique<BusScheduler>(*link_);
+  for (const DeviceConfig& dc : config_.devices) {
+    std::shared_ptr<Device> device = createDevice(dc, &error);
+    if (!device) {
+      ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());
+      return false;
+    }
+    link_->setReplyDelay(device->address(), dc.reply_delay);
+    bus_->addDevice(dc.name);
+    auto adapter = createAdapter(device, *bus_, nh_);
+    if (!adapter) {
+      ROS_FATAL("devices/%s/type: '%s' has no ROS interface", dc.name.c_str(), dc.type.c_str());
+      return false;
+    }
+    adapters_.push_back(std::move(adapter));
+  }
+
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>();
+  diagnostics_->setHardwareID(config_.link.port);
+  diagnostics_->add("bus " + config_.link.port, this, &BusNode::diagnoseBus);
+  for (auto& a : adapters_) {
+    DeviceAdapter* raw = a.get();
+    diagnostics_->add("device " + a->name(),
+                      [raw](diagnostic_updater::DiagnosticStatusWrapper& s) { raw->diagnose(s); });
+  }
+  diagnostics_timer_ = nh_.createTimer(ros::Duration(config_.diagnostic_period),
+                                       [this](const ros::TimerEvent&) { diagnostics_->force_update(); });
+
+  for (auto& a : adapters_) a->start();
+  bus_->start();
+  ROS_INFO("bus %s at %d baud, %s parity: %zu device(s)", config_.link.port.c_str(),
+           config_.link.baud, parityName(config_.link.parity), adapters_.size());
+  return true;
+}
+
+void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  using diagnostic_msgs::DiagnosticStatus;
+  const LinkStats s = link_->stats();
+  if (!bus_->connected()) {
+    status.summary(DiagnosticStatus::ERROR, "port not open: " + bus_->connectionError());
+  } else if (s.timeouts + s.crc_errors + s.wrong_address + s.malformed + s.io_errors > 0) {
+    status.summary(DiagnosticStatus::WARN, "link up, errors seen");
+  } else {
+    status.summary(DiagnosticStatus::OK, "link up");
+  }
+  status.add("port", config_.link.port);
+  status.add("baud", config_.link.baud);
+  status.add("parity", parityName(config_.link.parity));
+  status.add("requests", s.requests);
+  status.add("ok", s.ok);
+  status.add("broadcasts", s.broadcasts);
+  status.add("timeouts", s.timeouts);
+  status.add("crc errors", s.crc_errors);
+  status.add("wrong address", s.wrong_address);
+  status.add("exceptions", s.exceptions);
+  status.add("malformed", s.malformed);
+  status.add("i/o errors", s.io_errors);
+  status.add("retries", s.retries);
+  status.add("reconnects", s.reconnects);
+  status.add("latency last [ms]", s.last_latency * 1e3);
+  status.add("latency mean [ms]", s.mean_latency * 1e3);
+  status.add("latency max [ms]", s.max_latency * 1e3);
+}
+
+}  // namespace modbus_rtu_driver

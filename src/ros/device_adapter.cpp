@@ -1,0 +1,155 @@
+#include "modbus_rtu_driver/ros/device_adapter.h"
+
+#include <diagnostic_msgs/DiagnosticStatus.h>
+
+#include "modbus_rtu_driver/DigitalStates.h"
+
+namespace modbus_rtu_driver {
+
+DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
+                             const ros::NodeHandle& node)
+    : device_(std::move(device)), bus_(bus), nh_(node, device_->name()) {}
+
+void DeviceAdapter::start() {
+  const auto names = device_->outputNames();
+  const size_t n = device_->outputCount();
+  outputs_pub_ = nh_.advertise<DigitalStates>("outputs", 1, true);
+  published_outputs_.assign(n, std::nullopt);
+  pending_commands_.assign(n, std::nullopt);
+  for (size_t i = 0; i < n; ++i) {
+    const auto ch = static_cast<uint8_t>(i);
+    output_state_pubs_.push_back(nh_.advertise<std_msgs::Bool>(names[i] + "/state", 1, true));
+    command_subs_.push_back(nh_.subscribe<std_msgs::Bool>(
+        names[i] + "/command", 10,
+        [this, ch](const std_msgs::Bool::ConstPtr& msg) { onCommand(ch, msg); }));
+    services_.push_back(nh_.advertiseService<std_srvs::SetBool::Request, std_srvs::SetBool::Response>(
+        names[i] + "/set", [this, ch](std_srvs::SetBool::Request& req,
+                                      std_srvs::SetBool::Response& res) {
+          return onSet(ch, req, res);
+        }));
+  }
+  services_.push_back(nh_.advertiseService("set_outputs", &DeviceAdapter::onSetOutputs, this));
+  auto device = device_;
+  bus_.addPoll(
+      device_->name(), device_->config().poll_rate,
+      [device](Transport& t) { return device->poll(t); },
+      [this](const Result& r) { onPoll(r); });
+}
+
+void DeviceAdapter::onPoll(const Result& result) {
+  if (result.ok()) publishOutputs();
+}
+
+Result DeviceAdapter::runOnBus(BusScheduler::Job job) {
+  return bus_.submit(device_->name(), std::move(job)).get();
+}
+
+void DeviceAdapter::publishOutputs() {
+  const auto& states = device_->outputs();
+  if (states.size() != device_->outputCount()) return;  // not known yet
+  DigitalStates msg;
+  msg.header.stamp = ros::Time::now();
+  msg.states.assign(states.begin(), states.end());
+  msg.names = device_->outputNames();
+  outputs_pub_.publish(msg);
+  for (size_t i = 0; i < states.size(); ++i) {
+    if (published_outputs_[i] == states[i]) continue;
+    published_outputs_[i] = states[i];
+    std_msgs::Bool b;
+    b.data = states[i];
+    output_state_pubs_[i].publish(b);
+  }
+}
+
+std::string DeviceAdapter::answer(const Result& result, const std::string& what) const {
+  if (result.ok()) return what;
+  std::string msg = device_->name() + ": " + result.message;
+  if (result.error != ErrorKind::kInvalidArgument && !bus_.health(device_->name()).online)
+    msg += " (device is offline)";
+  return msg;
+}
+
+bool DeviceAdapter::onSet(uint8_t channel, std_srvs::SetBool::Request& req,
+                          std_srvs::SetBool::Response& res) {
+  auto device = device_;
+  const bool state = req.data;
+  const Result r = runOnBus([this, device, channel, state](Transport& t) {
+    Result w = device->setOutputs(t, {channel}, {state});
+    if (w.ok()) publishOutputs();
+    return w;
+  });
+  res.success = r.ok();
+  res.message = answer(r, device_->outputNames()[channel] + (state ? " on" : " off"));
+  return true;
+}
+
+bool DeviceAdapter::onSetOutputs(SetOutputs::Request& req, SetOutputs::Response& res) {
+  auto device = device_;
+  std::vector<uint8_t> channels(req.channels.begin(), req.channels.end());
+  std::vector<bool> states(req.states.begin(), req.states.end());
+  const Result r = runOnBus([this, device, channels, states](Transport& t) {
+    Result w = device->setOutputs(t, channels, states);
+    if (w.ok()) publishOutputs();
+    return w;
+  });
+  res.success = r.ok();
+  res.message = answer(r, std::to_string(channels.size()) + " output(s) set");
+  return true;
+}
+
+void DeviceAdapter::onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(commands_mutex_);
+  pending_commands_[channel] = msg->data;
+  if (commands_queued_) return;  // the queued job will take the newest value
+  commands_queued_ = true;
+  bus_.submit(device_->name(), [this](Transport& t) {
+    std::vector<uint8_t> channels;
+    std::vector<bool> states;
+    {
+      std::lock_guard<std::mutex> lock(commands_mutex_);
+      for (size_t i = 0; i < pending_commands_.size(); ++i) {
+        if (!pending_commands_[i]) continue;
+        channels.push_back(static_cast<uint8_t>(i));
+        states.push_back(*pending_commands_[i]);
+        pending_commands_[i].reset();
+      }
+      commands_queued_ = false;
+    }
+    if (channels.empty()) return Result::success();
+    Result w = device_->setOutputs(t, channels, states);
+    if (w.ok()) {
+      publishOutputs();
+    } else {
+      ROS_WARN_THROTTLE(1.0, "%s: command failed: %s", device_->name().c_str(), w.message.c_str());
+    }
+    return w;
+  });
+}
+
+void DeviceAdapter::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const DeviceHealth h = bus_.health(device_->name());
+  using diagnostic_msgs::DiagnosticStatus;
+  if (!h.online) {
+    status.summary(DiagnosticStatus::ERROR, "offline: " + h.last_error);
+  } else if (h.rate_overrun) {
+    status.summary(DiagnosticStatus::WARN, "bus cannot keep the configured poll rate");
+  } else if (h.consecutive_failures > 0) {
+    status.summary(DiagnosticStatus::WARN, "last transaction failed: " + h.last_error);
+  } else {
+    status.summary(DiagnosticStatus::OK, "online");
+  }
+  status.hardware_id = device_->type() + std::string(" @") + std::to_string(device_->address());
+  status.add("type", device_->type());
+  status.add("address", device_->config().address);
+  status.add("online", h.online);
+  status.add("poll rate configured [Hz]", device_->config().poll_rate);
+  status.add("poll rate achieved [Hz]", h.achieved_poll_rate);
+  status.add("polls ok", h.polls_ok);
+  status.add("polls failed", h.polls_failed);
+  status.add("writes ok", h.writes_ok);
+  status.add("writes failed", h.writes_failed);
+  status.add("consecutive failures", h.consecutive_failures);
+  status.add("last error", h.last_error.empty() ? "none" : h.last_error);
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,111 @@
+// LD58A08: PWM channels (set_pwm / stop_pwm services, pwm topic read back from the device).
+#include "modbus_rtu_driver/PwmStates.h"
+#include "modbus_rtu_driver/SetPwm.h"
+#include "modbus_rtu_driver/StopPwm.h"
+#include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/ros/adapter_registry.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+class Ld58a08Adapter : public DeviceAdapter {
+ public:
+  using DeviceAdapter::DeviceAdapter;
+
+  void start() override {
+    DeviceAdapter::start();
+    pwm_pub_ = nh_.advertise<PwmStates>("pwm", 1, true);
+    set_srv_ = nh_.advertiseService("set_pwm", &Ld58a08Adapter::onSetPwm, this);
+    stop_srv_ = nh_.advertiseService("stop_pwm", &Ld58a08Adapter::onStopPwm, this);
+  }
+
+ private:
+  Ld58a08& board() { return static_cast<Ld58a08&>(*device_); }
+
+  void onPoll(const Result& result) override {
+    DeviceAdapter::onPoll(result);
+    if (result.ok()) publishPwm();
+  }
+
+  // Bus thread: publish the PWM settings when they changed.
+  void publishPwm() {
+    if (!board().pwmKnown()) return;
+    PwmStates msg;
+    for (const PwmState& s : board().pwm()) {
+      PwmChannel c;
+      c.channel = s.channel;
+      c.high_speed = s.high_speed;
+      c.period = s.period;
+      c.on_time = s.on_time;
+      c.pulses = s.pulses;
+      c.frequency = s.frequency;
+      c.duty_cycle = s.duty_cycle;
+      c.duration = s.duration;
+      c.running = s.running;
+      msg.channels.push_back(c);
+    }
+    if (have_last_ && msg.channels == last_.channels) return;
+    last_ = msg;
+    have_last_ = true;
+    msg.header.stamp = ros::Time::now();
+    pwm_pub_.publish(msg);
+  }
+
+  bool onSetPwm(SetPwm::Request& req, SetPwm::Response& res) {
+    PwmSettings s;
+    s.channel = req.channel;
+    s.period = req.period;
+    s.on_time = req.on_time;
+    s.pulses = req.pulses;
+    s.frequency = req.frequency;
+    s.duty_cycle = req.duty_cycle;
+    s.duration = req.duration;
+    const std::string problem = Ld58a08::validatePwm(s);
+    if (!problem.empty()) {
+      res.success = false;
+      res.message = device_->name() + ": " + problem;
+      return true;
+    }
+    const Result r = runOnBus([this, s](Transport& t) {
+      Result w = board().setPwm(t, s);
+      if (w.ok() && board().readPwm(t).ok()) publishPwm();
+      return w;
+    });
+    res.success = r.ok();
+    res.message = answer(r, "PWM set on channel " + std::to_string(s.channel));
+    return true;
+  }
+
+  bool onStopPwm(StopPwm::Request& req, StopPwm::Response& res) {
+    if (req.channel >= Ld58a08::kChannels) {
+      res.success = false;
+      res.message = device_->name() + ": channel: " + std::to_string(req.channel) +
+                    " is outside 0-7";
+      return true;
+    }
+    const uint8_t channel = req.channel;
+    const Result r = runOnBus([this, channel](Transport& t) {
+      Result w = board().stopPwm(t, channel);
+      if (w.ok() && board().readPwm(t).ok()) publishPwm();
+      return w;
+    });
+    res.success = r.ok();
+    res.message = answer(r, "PWM stopped on channel " + std::to_string(channel));
+    return true;
+  }
+
+  ros::Publisher pwm_pub_;
+  ros::ServiceServer set_srv_, stop_srv_;
+  PwmStates last_;
+  bool have_last_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<DeviceAdapter> makeLd58a08Adapter(std::shared_ptr<Device> device,
+                                                  BusScheduler& bus, const ros::NodeHandle& nh) {
+  return std::make_unique<Ld58a08Adapter>(std::move(device), bus, nh);
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,90 @@
+// Yespeed PDU: telemetry every poll, limits latched, set_limits.
+#include "modbus_rtu_driver/PduLimits.h"
+#include "modbus_rtu_driver/PduTelemetry.h"
+#include "modbus_rtu_driver/SetPduLimits.h"
+#include "modbus_rtu_driver/devices/yespeed_pdu.h"
+#include "modbus_rtu_driver/ros/adapter_registry.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+class YespeedPduAdapter : public DeviceAdapter {
+ public:
+  using DeviceAdapter::DeviceAdapter;
+
+  void start() override {
+    DeviceAdapter::start();
+    telemetry_pub_ = nh_.advertise<PduTelemetry>("telemetry", 50);
+    limits_pub_ = nh_.advertise<PduLimits>("limits", 1, true);
+    set_limits_srv_ = nh_.advertiseService("set_limits", &YespeedPduAdapter::onSetLimits, this);
+  }
+
+ private:
+  YespeedPdu& pdu() { return static_cast<YespeedPdu&>(*device_); }
+
+  void onPoll(const Result& result) override {
+    DeviceAdapter::onPoll(result);
+    // A failed read publishes nothing rather than an old value.
+    if (pdu().readingFresh()) {
+      const PduReading& r = pdu().reading();
+      PduTelemetry msg;
+      msg.header.stamp = ros::Time::now();
+      msg.temperature = static_cast<float>(r.temperature);
+      msg.humidity = static_cast<float>(r.humidity);
+      msg.voltage = static_cast<float>(r.voltage);
+      msg.current = static_cast<float>(r.current);
+      msg.power = static_cast<float>(r.power);
+      telemetry_pub_.publish(msg);
+    }
+    publishLimits();
+  }
+
+  void publishLimits() {
+    if (!pdu().limitsKnown()) return;
+    const PduLimitValues& l = pdu().limits();
+    PduLimits msg;
+    msg.over_voltage = static_cast<float>(l.over_voltage);
+    msg.under_voltage = static_cast<float>(l.under_voltage);
+    msg.over_current = static_cast<float>(l.over_current);
+    if (have_last_ && msg == last_) return;
+    last_ = msg;
+    have_last_ = true;
+    limits_pub_.publish(msg);
+  }
+
+  bool onSetLimits(SetPduLimits::Request& req, SetPduLimits::Response& res) {
+    PduLimitValues l;
+    l.over_voltage = req.limits.over_voltage;
+    l.under_voltage = req.limits.under_voltage;
+    l.over_current = req.limits.over_current;
+    const std::string problem = YespeedPdu::validateLimits(l);
+    if (!problem.empty()) {
+      res.success = false;
+      res.message = device_->name() + ": " + problem;
+      return true;
+    }
+    const Result r = runOnBus([this, l](Transport& t) {
+      Result w = pdu().setLimits(t, l);
+      if (w.ok()) publishLimits();
+      return w;
+    });
+    res.success = r.ok();
+    res.message = answer(r, "limits set");
+    return true;
+  }
+
+  ros::Publisher telemetry_pub_, limits_pub_;
+  ros::ServiceServer set_limits_srv_;
+  PduLimits last_;
+  bool have_last_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<DeviceAdapter> makeYespeedPduAdapter(std::shared_ptr<Device> device,
+                                                     BusScheduler& bus, const ros::NodeHandle& nh) {
+  return std::make_unique<YespeedPduAdapter>(std::move(device), bus, nh);
+}
+
+}  // namespace modbus_rtu_driver
