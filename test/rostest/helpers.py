@@ -1,0 +1,54 @@
+"""Shared pieces of the rostests: the simulator's control socket and waiting helpers."""
+import os
+import sys
+import time
+
+import rospy
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
+
+
+def sim():
+    """The simulator of this test, at the control socket named by ~sim_control."""
+    path = rospy.get_param("~sim_control")
+    deadline = time.time() + 20
+    while not os.path.exists(path):
+        if time.time() > deadline:
+            raise RuntimeError("simulator control socket %s never appeared" % path)
+        time.sleep(0.1)
+    return SimControl(path)
+
+
+def wait_until(predicate, timeout, what):
+    """Polls predicate() until it is true; fails the calling test with `what` otherwise."""
+    deadline = time.time() + timeout
+    last = None
+    while time.time() < deadline and not rospy.is_shutdown():
+        last = predicate()
+        if last:
+            return last
+        time.sleep(0.05)
+    raise AssertionError("timed out after %.1f s waiting for %s (last: %r)" % (timeout, what, last))
+
+
+class Latest:
+    """Keeps the newest message of a topic, and how many arrived."""
+
+    def __init__(self, topic, msg_type):
+        self.msg = None
+        self.count = 0
+        self.sub = rospy.Subscriber(topic, msg_type, self._cb)
+
+    def _cb(self, msg):
+        self.msg = msg
+        self.count += 1
+
+    def wait(self, timeout=10.0, predicate=lambda m: True, what="a message"):
+        return wait_until(lambda: self.msg if self.msg is not None and predicate(self.msg) else None,
+                          timeout, what + " on " + self.sub.name)
+
+
+def service(name, srv_type, timeout=20.0):
+    rospy.wait_for_service(name, timeout=timeout)
+    return rospy.ServiceProxy(name, srv_type)

@@ -1,0 +1,82 @@
+#!/usr/bin/env python3
+"""Bad YAML stops the real node with one clear error naming the key and the value."""
+import subprocess
+import unittest
+
+import rosparam
+import rospy
+import rostest
+
+GOOD = {
+    "port": "/tmp/modbus_rtu_rostest_bad_config/none",
+    "baud": 9600,
+    "devices": {"relays": {"type": "lc_relay8", "address": 255}},
+}
+
+
+def with_change(path, value):
+    """GOOD with one key changed (value None removes it)."""
+    import copy
+    cfg = copy.deepcopy(GOOD)
+    node = cfg
+    for key in path[:-1]:
+        node = node[key]
+    if value is None:
+        del node[path[-1]]
+    else:
+        node[path[-1]] = value
+    return cfg
+
+
+CASES = [
+    (with_change(["devices", "relays", "type"], "ld99"), ["devices/relays/type", "ld99"]),
+    (with_change(["baud"], 9601), ["baud", "9601"]),
+    (with_change(["parity"], "mark"), ["parity", "mark"]),
+    (with_change(["devices", "relays", "address"], 0), ["devices/relays/address"]),
+    (with_change(["devices", "pdu"], {"type": "yespeed_pdu", "address": 255}),
+     ["address", "255"]),
+    (with_change(["devices", "pdu"], {"type": "yespeed_pdu", "address": 248}),
+     ["devices/pdu/address", "248"]),
+    (with_change(["devices", "relays", "outputs"], ["pump", "bad-name"] + ["x%d" % i for i in range(6)]),
+     ["devices/relays/outputs", "bad-name"]),
+    (with_change(["devices", "relays", "poll_rate"], -1.0), ["devices/relays/poll_rate"]),
+    (with_change(["devices", "relays", "colour"], "red"), ["devices/relays/colour", "unknown key"]),
+    (with_change(["devices"], None), ["devices", "missing"]),
+    (with_change(["stop_bits"], 3), ["stop_bits", "3"]),
+    (with_change(["response_timeout"], "fast"), ["response_timeout", "fast"]),
+]
+
+
+class BadConfigTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_bad_config")
+
+    def test_good_config_starts(self):
+        # The baseline must be valid, or the cases below would prove nothing.
+        rosparam.upload_params("/good_case", GOOD)
+        proc = subprocess.Popen(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus", "__name:=good_case"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            out, _ = proc.communicate(timeout=4)
+            self.fail("the node with a valid config exited (%s): %s" % (proc.returncode, out))
+        except subprocess.TimeoutExpired:
+            proc.terminate()
+            proc.communicate(timeout=10)
+
+    def test_each_bad_key_stops_the_node_naming_it(self):
+        for i, (cfg, words) in enumerate(CASES):
+            name = "bad_case_%d" % i
+            rosparam.upload_params("/" + name, cfg)
+            proc = subprocess.run(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus", "__name:=" + name],
+                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                  timeout=20)
+            self.assertNotEqual(proc.returncode, 0, "%s started with %r" % (name, cfg))
+            errors = [l for l in proc.stdout.splitlines() if "invalid configuration" in l]
+            self.assertEqual(len(errors), 1, proc.stdout)
+            for w in words:
+                self.assertIn(w, errors[0], "case %d: %r" % (i, cfg))
+
+
+if __name__ == "__main__":
+    rostest.rosrun("modbus_rtu_driver", "bad_config", BadConfigTest)

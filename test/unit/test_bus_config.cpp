@@ -1,0 +1,133 @@
+// The bus configuration: defaults, and one clear message naming the key for each bad value.
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include "modbus_rtu_driver/core/bus_config.h"
+
+using namespace modbus_rtu_driver;
+
+namespace {
+
+const char* kGood = R"(
+port: /dev/ttyUSB0
+baud: 9600
+parity: none
+data_bits: 8
+stop_bits: 1
+response_timeout: 0.5
+retries: 1
+devices:
+  relays:
+    type: lc_relay8
+    address: 255
+    poll_rate: 10.0
+    outputs: [pump, valve, lamp, fan, out4, out5, out6, out7]
+    inputs: [door, estop, in2, in3, in4, in5, in6, in7]
+  pwm_board: {type: ld58a08, address: 1, poll_rate: 5.0}
+  pdu: {type: yespeed_pdu, address: 2, poll_rate: 2.0}
+)";
+
+std::string errorOf(const std::string& yaml) {
+  BusConfig config;
+  std::string error;
+  const bool ok = parseBusConfig(YAML::Load(yaml), &config, &error);
+  return ok ? "" : error;
+}
+
+// kGood with one line replaced.
+std::string replaced(const std::string& from, const std::string& to) {
+  std::string s = kGood;
+  const auto at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) s.replace(at, from.size(), to);
+  return s;
+}
+
+}  // namespace
+
+TEST(BusConfig, TheIssueExampleParses) {
+  BusConfig c;
+  std::string error;
+  ASSERT_TRUE(parseBusConfig(YAML::Load(kGood), &c, &error)) << error;
+  EXPECT_EQ(c.link.port, "/dev/ttyUSB0");
+  EXPECT_EQ(c.link.baud, 9600);
+  EXPECT_EQ(c.link.parity, Parity::kNone);
+  ASSERT_EQ(c.devices.size(), 3u);
+  EXPECT_EQ(c.devices[0].name, "relays");  // document order is kept
+  EXPECT_EQ(c.devices[0].type, "lc_relay8");
+  EXPECT_EQ(c.devices[0].address, 255);
+  EXPECT_DOUBLE_EQ(c.devices[0].poll_rate, 10.0);
+  EXPECT_EQ(c.devices[0].outputs[0], "pump");
+  EXPECT_EQ(c.devices[0].inputs[1], "estop");
+  EXPECT_EQ(c.devices[2].type, "yespeed_pdu");
+}
+
+TEST(BusConfig, MissingOptionalKeysTakeDefaults) {
+  BusConfig c;
+  std::string error;
+  ASSERT_TRUE(parseBusConfig(YAML::Load("devices: {r: {type: lc_relay8, address: 255}}"), &c,
+                             &error))
+      << error;
+  EXPECT_EQ(c.link.port, "/dev/ttyUSB0");
+  EXPECT_EQ(c.link.baud, 9600);
+  EXPECT_EQ(c.link.data_bits, 8);
+  EXPECT_EQ(c.link.stop_bits, 1);
+  EXPECT_DOUBLE_EQ(c.link.response_timeout, 0.5);
+  EXPECT_EQ(c.link.retries, 1);
+  EXPECT_DOUBLE_EQ(c.devices[0].poll_rate, 1.0);
+  EXPECT_TRUE(c.devices[0].outputs.empty());
+}
+
+struct BadCase {
+  const char* from;
+  const char* to;
+  std::vector<std::string> words;  // must all appear in the one error message
+};
+
+TEST(BusConfig, EachBadValueIsNamed) {
+  const std::vector<BadCase> cases = {
+      {"baud: 9600", "baud: 9601", {"baud", "9601", "115200"}},
+      {"baud: 9600", "baud: fast", {"baud", "fast"}},
+      {"parity: none", "parity: mark", {"parity", "mark", "none, even or odd"}},
+      {"data_bits: 8", "data_bits: 9", {"data_bits", "9"}},
+      {"stop_bits: 1", "stop_bits: 3", {"stop_bits", "3"}},
+      {"response_timeout: 0.5", "response_timeout: 0", {"response_timeout"}},
+      {"retries: 1", "retries: -1", {"retries", "-1"}},
+      {"port: /dev/ttyUSB0", "port: ''", {"port"}},
+      {"port: /dev/ttyUSB0", "port: /dev/ttyUSB0\ncolour: red", {"colour", "unknown key"}},
+      {"type: lc_relay8", "type: ld99", {"devices/relays/type", "ld99"}},
+      {"address: 255", "address: 256", {"devices/relays/address", "256"}},
+      {"address: 255", "address: 0", {"devices/relays/address", "0"}},
+      {"address: 1,", "address: 248,", {"devices/pwm_board/address", "248", "1-247"}},
+      {"address: 2,", "address: 1,", {"devices/pdu/address", "already used", "pwm_board"}},
+      {"poll_rate: 10.0", "poll_rate: -2", {"devices/relays/poll_rate", "-2"}},
+      {"  relays:", "  bad-name:", {"bad-name", "ROS name"}},
+      {"[pump, valve,", "[pump, 2valve,", {"devices/relays/outputs", "2valve"}},
+      {"[pump, valve,", "[pump, pump,", {"devices/relays/outputs", "pump"}},
+      {"[door, estop, in2, in3, in4, in5, in6, in7]", "[door]", {"devices/relays/inputs", "8"}},
+      {"    poll_rate: 10.0", "    poll_rate: 10.0\n    colour: red",
+       {"devices/relays/colour", "unknown key"}},
+  };
+  for (const auto& c : cases) {
+    const std::string error = errorOf(replaced(c.from, c.to));
+    ASSERT_FALSE(error.empty()) << c.to;
+    for (const auto& w : c.words) EXPECT_NE(error.find(w), std::string::npos) << c.to << " -> " << error;
+  }
+}
+
+TEST(BusConfig, MissingRequiredKeys) {
+  EXPECT_NE(errorOf("port: /dev/ttyS0").find("devices"), std::string::npos);
+  EXPECT_NE(errorOf("devices: {r: {address: 3}}").find("devices/r/type"), std::string::npos);
+  EXPECT_NE(errorOf("devices: {r: {type: ld58a08}}").find("devices/r/address"), std::string::npos);
+  EXPECT_NE(errorOf("devices: {}").find("devices"), std::string::npos);
+  EXPECT_NE(errorOf("- a\n- b").find("not a map"), std::string::npos);
+}
+
+TEST(BusConfig, RosNames) {
+  EXPECT_TRUE(isValidRosName("pump"));
+  EXPECT_TRUE(isValidRosName("out_7"));
+  EXPECT_FALSE(isValidRosName("7out"));
+  EXPECT_FALSE(isValidRosName("a-b"));
+  EXPECT_FALSE(isValidRosName(""));
+  EXPECT_FALSE(isValidRosName("a/b"));
+}
