@@ -5,6 +5,7 @@ import subprocess
 import unittest
 
 import rosbag
+import rospkg
 import rospy
 import rostest
 
@@ -34,6 +35,17 @@ class BagTest(unittest.TestCase):
         for m in telemetry:
             self.assertGreater(m.voltage, 150.0)
             self.assertGreater(m.power, -1.0)
+        # The plotting script turns the bag into a PNG.
+        png = os.path.join(os.path.dirname(BAG), "telemetry.png")
+        if os.path.exists(png):
+            os.remove(png)
+        script = os.path.join(rospkg.RosPack().get_path("modbus_rtu_driver"), "scripts", "plot_bag.py")
+        out = subprocess.run(["/usr/bin/python3", script, BAG, "-o", png, "--node", "/bus"],
+                             check=True, timeout=120, stdout=subprocess.PIPE, text=True).stdout
+        self.assertIn("%d telemetry samples" % len(telemetry), out)
+        with open(png, "rb") as f:
+            self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
+        self.assertGreater(os.path.getsize(png), 10000)
 
 
 if __name__ == "__main__":
