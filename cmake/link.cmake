@@ -1,1 +1,2 @@
 # RtuLink sources: target_sources(modbus_rtu_core PRIVATE ...)
+target_sources(modbus_rtu_core PRIVATE src/core/rtu_link.cpp)

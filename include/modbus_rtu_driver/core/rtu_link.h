@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <mutex>
 #include <string>
 
 #include "modbus_rtu_driver/core/link_config.h"
@@ -52,18 +53,27 @@ class RtuLink : public Transport {
   void setReplyDelay(uint8_t slave, double seconds);
 
   const LinkConfig& config() const { return config_; }
-  LinkStats stats() const { return stats_; }
+  // Safe to call from any thread (diagnostics).
+  LinkStats stats() const;
+  // True when the port accepted ASYNC_LOW_LATENCY (USB adapters; ptys do not support it).
+  bool lowLatency() const { return low_latency_; }
 
  private:
   Result attempt(const Request& request);
-  Result viaLibmodbus(const Request& request);
-  Result viaRaw(const Request& request);
+  Result readViaLibmodbus(const Request& request);
+  Result exchangeRaw(const Request& request, bool read_reply_ourselves);
+  Result readReply(const Request& request);
+  Result sendBroadcast(const Request& request);
+  Result fromErrno(const Request& request, int error) const;
   void keepGap();
   void account(const Result& result, double latency);
 
   LinkConfig config_;
   modbus_t* ctx_ = nullptr;
+  mutable std::mutex stats_mutex_;
   LinkStats stats_;
+  bool low_latency_ = false;
+  bool ever_connected_ = false;
   double reply_delay_[256] = {};
   std::chrono::steady_clock::time_point last_activity_{};
 };

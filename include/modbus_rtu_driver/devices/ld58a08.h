@@ -57,7 +57,7 @@ class Ld58a08 : public Device {
   const char* type() const override { return "ld58a08"; }
   size_t outputCount() const override { return kChannels; }
 
-  // Polls the outputs (FC01) and the PWM registers of every channel.
+  // Polls the outputs (FC01) and the PWM registers of one channel (all on the first poll).
   Result poll(Transport& bus) override;
   Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                     const std::vector<bool>& states) override;
@@ -76,7 +76,10 @@ class Ld58a08 : public Device {
   Result setReturnDelay(Transport& bus, uint16_t units_of_40ms);  // 0-25
 
  private:
+  Result readPwmChannel(Transport& bus, uint8_t channel, PwmState* out);
+
   std::array<PwmState, kChannels> pwm_{};
+  uint8_t poll_cursor_ = 0;
   bool pwm_known_ = false;
 };
 

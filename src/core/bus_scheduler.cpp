@@ -1,0 +1,216 @@
+#include "modbus_rtu_driver/core/bus_scheduler.h"
+
+#include <algorithm>
+
+namespace modbus_rtu_driver {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+
+Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+
+// Failures that say the device did not answer properly (as opposed to answering "no").
+bool isSilence(ErrorKind k) {
+  return k == ErrorKind::kTimeout || k == ErrorKind::kCrc || k == ErrorKind::kWrongAddress ||
+         k == ErrorKind::kMalformed || k == ErrorKind::kIo || k == ErrorKind::kNotConnected;
+}
+}  // namespace
+
+BusScheduler::BusScheduler(Transport& transport) : BusScheduler(transport, Options{}) {}
+
+BusScheduler::BusScheduler(Transport& transport, Options options)
+    : transport_(transport), options_(options) {}
+
+BusScheduler::~BusScheduler() { stop(); }
+
+void BusScheduler::start() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (running_) return;
+  running_ = true;
+  thread_ = std::thread(&BusScheduler::run, this);
+}
+
+void BusScheduler::stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    running_ = false;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  std::deque<Pending> left;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    left.swap(writes_);
+  }
+  for (auto& p : left) p.promise.set_value(Result::failure(ErrorKind::kIo, "bus stopped"));
+}
+
+void BusScheduler::addDevice(const std::string& device) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  health_[device];
+}
+
+void BusScheduler::addPoll(const std::string& device, double rate_hz, Job poll,
+                           ResultCallback on_result) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  health_[device];
+  if (!(rate_hz > 0)) return;  // 0 = never poll
+  Poll p;
+  p.device = device;
+  p.period = seconds(1.0 / rate_hz);
+  p.due = Clock::now();
+  p.job = std::move(poll);
+  p.on_result = std::move(on_result);
+  polls_.push_back(std::move(p));
+}
+
+std::future<Result> BusScheduler::submit(const std::string& device, Job job) {
+  Pending p;
+  p.device = device;
+  p.job = std::move(job);
+  std::future<Result> f = p.promise.get_future();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (running_) {
+      writes_.push_back(std::move(p));
+    } else {
+      p.promise.set_value(Result::failure(ErrorKind::kIo, "bus stopped"));
+    }
+  }
+  wake_.notify_all();
+  return f;
+}
+
+DeviceHealth BusScheduler::health(const std::string& device) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = health_.find(device);
+  return it == health_.end() ? DeviceHealth{} : it->second;
+}
+
+bool BusScheduler::connected() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return connected_;
+}
+
+std::string BusScheduler::connectionError() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return connection_error_;
+}
+
+void BusScheduler::record(const std::string& device, const Result& result, bool is_poll) {
+  if (result.error == ErrorKind::kInvalidArgument) return;  // never reached the bus
+  const auto now = Clock::now();
+  DeviceHealth& h = health_[device];
+  if (is_poll) {
+    (result.ok() ? h.polls_ok : h.polls_failed)++;
+    auto& times = poll_times_[device];
+    times.push_back(now);
+    while (times.size() > 2 && now - times.front() > std::chrono::seconds(5)) times.pop_front();
+    const double span = std::chrono::duration<double>(times.back() - times.front()).count();
+    h.achieved_poll_rate = span > 0 ? (times.size() - 1) / span : 0.0;
+  } else {
+    (result.ok() ? h.writes_ok : h.writes_failed)++;
+  }
+  if (!result.ok()) h.last_error = result.message;
+  if (!isSilence(result.error)) {  // it answered, even if with an exception
+    h.consecutive_failures = 0;
+    h.online = true;
+    backoff_.erase(device);
+    backoff_until_.erase(device);
+    return;
+  }
+  ++h.consecutive_failures;
+  if (h.consecutive_failures < static_cast<uint32_t>(options_.offline_after)) return;
+  h.online = false;
+  double& b = backoff_[device];
+  b = b > 0 ? std::min(options_.backoff_max, b * 2) : options_.backoff_initial;
+  backoff_until_[device] = now + seconds(b);
+}
+
+void BusScheduler::run() {
+  double reconnect_delay = options_.reconnect_initial;
+  auto next_connect = Clock::now();
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (running_) {
+    auto now = Clock::now();
+    if (!transport_.connected()) {
+      if (now >= next_connect) {
+        lock.unlock();
+        std::string error;
+        const bool ok = transport_.connect(&error);
+        lock.lock();
+        connected_ = ok;
+        connection_error_ = ok ? "" : error;
+        if (ok) {
+          reconnect_delay = options_.reconnect_initial;
+          continue;
+        }
+        next_connect = Clock::now() + seconds(reconnect_delay);
+        reconnect_delay = std::min(options_.reconnect_max, reconnect_delay * 2);
+      }
+      // Nobody waits for a bus that is not there: queued writes fail now.
+      while (!writes_.empty()) {
+        writes_.front().promise.set_value(Result::failure(
+            ErrorKind::kNotConnected, "port not open: " + connection_error_));
+        writes_.pop_front();
+      }
+      wake_.wait_until(lock, next_connect);
+      continue;
+    }
+    connected_ = true;
+
+    if (!writes_.empty()) {  // writes go ahead of polls
+      Pending p = std::move(writes_.front());
+      writes_.pop_front();
+      lock.unlock();
+      Result r = p.job(transport_);
+      lock.lock();
+      record(p.device, r, false);
+      if (r.error == ErrorKind::kIo) transport_.disconnect();
+      p.promise.set_value(std::move(r));
+      continue;
+    }
+
+    // The poll due first; an offline device waits out its backoff.
+    Poll* next = nullptr;
+    Clock::time_point when{};
+    for (Poll& p : polls_) {
+      auto t = p.due;
+      auto b = backoff_until_.find(p.device);
+      if (b != backoff_until_.end() && health_[p.device].online == false) t = std::max(t, b->second);
+      if (!next || t < when) {
+        next = &p;
+        when = t;
+      }
+    }
+    if (!next) {
+      wake_.wait(lock);
+      continue;
+    }
+    if (when > now) {
+      wake_.wait_until(lock, when);
+      continue;
+    }
+    lock.unlock();
+    Result r = next->job(transport_);
+    if (next->on_result) next->on_result(r);
+    lock.lock();
+    record(next->device, r, true);
+    if (r.error == ErrorKind::kIo) transport_.disconnect();
+    // Keep the schedule; when the bus fell more than a period behind, restart from now and say
+    // that the rate is not kept.
+    now = Clock::now();
+    next->due += next->period;
+    DeviceHealth& h = health_[next->device];
+    if (next->due + next->period < now) {
+      next->due = now;
+      h.rate_overrun = h.online;
+    } else if (next->due > now) {
+      h.rate_overrun = false;
+    }
+  }
+}
+
+}  // namespace modbus_rtu_driver

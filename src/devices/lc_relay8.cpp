@@ -1,0 +1,72 @@
+#include "modbus_rtu_driver/devices/lc_relay8.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace modbus_rtu_driver {
+
+Result LcRelay8::poll(Transport& bus) {
+  Result relays = bus.execute(Request::readCoils(address(), 0, kChannels));
+  if (!relays.ok()) return relays;
+  outputs_.assign(relays.values.begin(), relays.values.end());
+  Result inputs = bus.execute(Request::readDiscreteInputs(address(), 0, kChannels));
+  if (!inputs.ok()) return inputs;
+  inputs_.assign(inputs.values.begin(), inputs.values.end());
+  return inputs;
+}
+
+Result LcRelay8::setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                            const std::vector<bool>& states) {
+  return writeCoilOutputs(bus, channels, states);
+}
+
+std::string LcRelay8::validatePulse(uint8_t channel, double duration) {
+  if (channel >= kChannels) return "channel: " + std::to_string(channel) + " is outside 0-7";
+  const double tenths = duration * 10.0;
+  if (!(duration >= 0.1 && duration <= 6553.5) || std::fabs(tenths - std::round(tenths)) > 1e-6) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "duration: %g s is outside 0.1-6553.5 s in steps of 0.1 s",
+                  duration);
+    return buf;
+  }
+  return {};
+}
+
+Result LcRelay8::pulse(Transport& bus, uint8_t channel, bool state, double duration) {
+  const std::string problem = validatePulse(channel, duration);
+  if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
+  const auto tenths = static_cast<uint16_t>(std::lround(duration * 10.0));
+  return bus.execute(Request::writeMultipleRegisters(address(), flashRegister(channel),
+                                                     {state ? kFlashClose : kFlashOpen, tenths}));
+}
+
+Result LcRelay8::readBaudCode(Transport& bus, uint16_t* code) {
+  Result r = bus.execute(Request::readHoldingRegisters(address(), kBaudReadRegister, 1));
+  if (r.ok()) *code = r.values[0];
+  return r;
+}
+
+Result LcRelay8::writeBaudCode(Transport& bus, uint16_t code) {
+  if (code < 2 || code > 4)
+    return Result::failure(ErrorKind::kInvalidArgument,
+                           "baud code: " + std::to_string(code) +
+                               " is outside 2-4 (4800, 9600, 19200 baud)");
+  return bus.execute(Request::writeMultipleRegisters(address(), kBaudWriteRegister, {code}));
+}
+
+Result LcRelay8::readAddressAtZero(Transport& bus) {
+  Request r = Request::readHoldingRegisters(kBroadcastAddress, 0, 1);
+  r.single_device_at_zero = true;
+  return bus.execute(r);
+}
+
+Result LcRelay8::setAddressAtZero(Transport& bus, uint8_t new_address) {
+  if (new_address < 1)
+    return Result::failure(ErrorKind::kInvalidArgument, "address: 0 is outside 1-255");
+  Request r = Request::writeMultipleRegisters(kBroadcastAddress, 0, {new_address});
+  r.single_device_at_zero = true;
+  r.reply_echoes_request = true;
+  return bus.execute(r);
+}
+
+}  // namespace modbus_rtu_driver

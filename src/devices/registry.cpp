@@ -1,0 +1,103 @@
+#include "modbus_rtu_driver/devices/registry.h"
+
+#include <cstdio>
+#include <set>
+
+#include "modbus_rtu_driver/core/bus_config.h"
+#include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/devices/yespeed_pdu.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+struct DeviceType {
+  const char* name;
+  int max_address;  // LC boards accept 1-255; the others follow the spec's 1-247
+  size_t outputs, inputs;
+  std::unique_ptr<Device> (*make)(const DeviceConfig&);
+};
+
+template <typename T>
+std::unique_ptr<Device> make(const DeviceConfig& c) {
+  return std::make_unique<T>(c);
+}
+
+// One line per device type.
+const DeviceType kTypes[] = {
+    {"ld58a08", 247, Ld58a08::kChannels, 0, make<Ld58a08>},
+    {"lc_relay8", 255, LcRelay8::kChannels, LcRelay8::kChannels, make<LcRelay8>},
+    {"yespeed_pdu", 247, YespeedPdu::kRelays, 0, make<YespeedPdu>},
+};
+
+const DeviceType* find(const std::string& name) {
+  for (const auto& t : kTypes)
+    if (name == t.name) return &t;
+  return nullptr;
+}
+
+std::string checkNames(const std::string& key, const std::vector<std::string>& names,
+                       size_t expected) {
+  if (names.empty()) return {};
+  if (names.size() != expected)
+    return key + ": " + std::to_string(names.size()) + " names given, the device has " +
+           std::to_string(expected);
+  std::set<std::string> seen;
+  for (const auto& n : names) {
+    if (!isValidRosName(n))
+      return key + ": '" + n + "' is not a valid ROS name (a letter, then letters, digits or '_')";
+    if (!seen.insert(n).second) return key + ": '" + n + "' is given twice";
+  }
+  return {};
+}
+
+}  // namespace
+
+std::vector<std::string> knownDeviceTypes() {
+  std::vector<std::string> names;
+  for (const auto& t : kTypes) names.push_back(t.name);
+  return names;
+}
+
+std::string validateDeviceConfig(const DeviceConfig& c) {
+  const std::string where = "devices/" + c.name + "/";
+  const DeviceType* t = find(c.type);
+  if (!t) {
+    std::string list;
+    for (const auto& n : knownDeviceTypes()) list += (list.empty() ? "" : ", ") + n;
+    return where + "type: '" + c.type + "' is not a known device type (" + list + ")";
+  }
+  if (c.address < 1 || c.address > t->max_address)
+    return where + "address: " + std::to_string(c.address) + " is outside 1-" +
+           std::to_string(t->max_address) + " for " + c.type;
+  if (!(c.poll_rate >= 0.0 && c.poll_rate <= 1000.0)) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%g", c.poll_rate);
+    return where + "poll_rate: " + buf + " Hz is outside 0-1000 Hz (0 = never poll)";
+  }
+  if (!(c.reply_delay >= 0.0 && c.reply_delay <= 1.0)) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%g", c.reply_delay);
+    return where + "reply_delay: " + buf + " s is outside 0-1 s";
+  }
+  std::string problem = checkNames(where + "outputs", c.outputs, t->outputs);
+  if (problem.empty()) {
+    if (t->inputs == 0 && !c.inputs.empty())
+      problem = where + "inputs: " + c.type + " has no inputs";
+    else
+      problem = checkNames(where + "inputs", c.inputs, t->inputs);
+  }
+  return problem;
+}
+
+std::unique_ptr<Device> createDevice(const DeviceConfig& config, std::string* error) {
+  const std::string problem = validateDeviceConfig(config);
+  if (!problem.empty()) {
+    if (error) *error = problem;
+    return nullptr;
+  }
+  return find(config.type)->make(config);
+}
+
+}  // namespace modbus_rtu_driver

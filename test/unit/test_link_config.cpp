@@ -1,0 +1,67 @@
+// Line timing derived from the serial settings, and the escalating status.
+#include <gtest/gtest.h>
+
+#include "modbus_rtu_driver/core/link_config.h"
+#include "modbus_rtu_driver/core/status.h"
+
+using namespace modbus_rtu_driver;
+
+TEST(LinkConfig, CharacterTimeAndFrameGap) {
+  LinkConfig c;
+  c.baud = 9600;
+  EXPECT_EQ(bitsPerCharacter(c), 10);  // 8N1
+  EXPECT_NEAR(characterTime(c), 10.0 / 9600, 1e-12);
+  EXPECT_NEAR(frameGap(c), 3.5 * 10.0 / 9600, 1e-12);  // about 3.65 ms
+  c.parity = Parity::kEven;
+  EXPECT_EQ(bitsPerCharacter(c), 11);
+  c.baud = 115200;
+  EXPECT_DOUBLE_EQ(frameGap(c), 0.00175);  // fixed above 19200 baud by the spec
+  c.min_gap = 0.01;
+  EXPECT_DOUBLE_EQ(effectiveMinGap(c), 0.01);
+}
+
+TEST(LinkConfig, ValidationNamesTheField) {
+  LinkConfig c;
+  EXPECT_EQ(validateLinkConfig(c), "");
+  c.baud = 12345;
+  EXPECT_NE(validateLinkConfig(c).find("baud: 12345"), std::string::npos);
+  c = LinkConfig{};
+  c.stop_bits = 3;
+  EXPECT_NE(validateLinkConfig(c).find("stop_bits"), std::string::npos);
+  c = LinkConfig{};
+  c.response_timeout = 0;
+  EXPECT_NE(validateLinkConfig(c).find("response_timeout"), std::string::npos);
+  c = LinkConfig{};
+  c.retries = 11;
+  EXPECT_NE(validateLinkConfig(c).find("retries"), std::string::npos);
+}
+
+TEST(LinkConfig, Parity) {
+  Parity p;
+  EXPECT_TRUE(parseParity("even", &p));
+  EXPECT_EQ(p, Parity::kEven);
+  EXPECT_TRUE(parseParity("O", &p));
+  EXPECT_EQ(p, Parity::kOdd);
+  EXPECT_FALSE(parseParity("mark", &p));
+  EXPECT_STREQ(parityName(Parity::kNone), "none");
+}
+
+TEST(Status, OnlyEscalatesUntilReset) {
+  Status s;
+  EXPECT_EQ(s.level(), Level::kOk);
+  s.escalate(Level::kWarn, "slow");
+  s.escalate(Level::kOk, "fine again");
+  EXPECT_EQ(s.level(), Level::kWarn);
+  EXPECT_EQ(s.message(), "slow");
+  s.escalate(Level::kError, "offline");
+  s.escalate(Level::kWarn, "slow");
+  EXPECT_EQ(s.level(), Level::kError);
+  EXPECT_EQ(s.message(), "offline");
+  s.escalate(Level::kError, "second error");
+  EXPECT_EQ(s.message(), "offline");  // the first message of a level is kept
+  s.escalate(Level::kStale, "no data");
+  EXPECT_EQ(s.level(), Level::kStale);
+  s.reset();
+  EXPECT_EQ(s.level(), Level::kOk);
+  EXPECT_STREQ(levelName(Level::kStale), "STALE");
+}
