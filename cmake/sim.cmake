@@ -1,1 +1,12 @@
 # ROS-free simulator: device models, line emulation on a pty, executable.
+add_library(modbus_rtu_sim
+  src/sim/sim_device.cpp
+  src/sim/sim_ld58a08.cpp
+  src/sim/sim_lc_relay8.cpp
+  src/sim/sim_yespeed_pdu.cpp
+  src/sim/simulator.cpp
+)
+target_link_libraries(modbus_rtu_sim PUBLIC modbus_rtu_core yaml-cpp Threads::Threads)
+
+add_executable(modbus_rtu_simulator src/sim/simulator_main.cpp)
+target_link_libraries(modbus_rtu_simulator modbus_rtu_sim)

@@ -3,7 +3,9 @@
 set -euo pipefail
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 REPO=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-WS=$REPO/.build/ws
+# The catkin workspace lives outside the repository (its src/ links back to the repository, and
+# a workspace inside it would make rosrun and roslaunch walk in circles). One per checkout.
+WS=$("$REPO/scripts/workspace.sh")
 
 DEPS=(build-essential cmake pkg-config ros-core-dev libmodbus-dev libyaml-cpp-dev
   python3-rostest librostest-dev libstd-srvs-dev libdiagnostic-updater-dev librosbag-dev

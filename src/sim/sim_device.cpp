@@ -1,0 +1,79 @@
+#include "modbus_rtu_driver/sim/sim_device.h"
+
+#include "modbus_rtu_driver/sim/sim_lc_relay8.h"
+#include "modbus_rtu_driver/sim/sim_ld58a08.h"
+#include "modbus_rtu_driver/sim/sim_yespeed_pdu.h"
+
+namespace modbus_rtu_driver {
+
+bool parseTable(const std::string& name, Table* out) {
+  if (name == "coil") *out = Table::kCoil;
+  else if (name == "input") *out = Table::kDiscreteInput;
+  else if (name == "holding") *out = Table::kHolding;
+  else if (name == "ireg") *out = Table::kInputRegister;
+  else return false;
+  return true;
+}
+
+std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point now) {
+  const bool broadcast = r.slave == kBroadcastAddress;
+  uint8_t exception = 0;
+  std::vector<uint16_t> values;
+  switch (r.function) {
+    case FunctionCode::kReadCoils:
+    case FunctionCode::kReadDiscreteInputs:
+    case FunctionCode::kReadHoldingRegisters:
+    case FunctionCode::kReadInputRegisters: {
+      if (broadcast) return std::nullopt;
+      const Table t = r.function == FunctionCode::kReadCoils            ? Table::kCoil
+                      : r.function == FunctionCode::kReadDiscreteInputs ? Table::kDiscreteInput
+                      : r.function == FunctionCode::kReadHoldingRegisters ? Table::kHolding
+                                                                          : Table::kInputRegister;
+      const uint16_t max = isBitFunction(r.function) ? kMaxReadBits : kMaxReadRegisters;
+      if (r.count < 1 || r.count > max) {
+        exception = kIllegalDataValue;
+        break;
+      }
+      for (uint32_t a = r.address; a < r.address + r.count && !exception; ++a) {
+        uint16_t v = 0;
+        exception = a > 0xFFFF ? static_cast<uint8_t>(kIllegalDataAddress)
+                               : read(t, static_cast<uint16_t>(a), now, &v);
+        values.push_back(v);
+      }
+      break;
+    }
+    case FunctionCode::kWriteSingleCoil:
+    case FunctionCode::kWriteMultipleCoils:
+      for (uint16_t v : r.values)
+        if (v > 1) exception = kIllegalDataValue;  // FC05 value not FF00/0000
+      if (!exception) exception = write(Table::kCoil, r.address, r.values, now);
+      break;
+    case FunctionCode::kWriteSingleRegister:
+    case FunctionCode::kWriteMultipleRegisters:
+      exception = write(Table::kHolding, r.address, r.values, now);
+      break;
+  }
+  if (broadcast) return std::nullopt;  // applied, never answered
+  if (exception) return encodeException(r.slave, static_cast<uint8_t>(r.function), exception);
+  return encodeReply(r, values);
+}
+
+Bytes SimDevice::unknownFunction(uint8_t slave, uint8_t function) const {
+  return encodeException(slave, function, kIllegalFunction);
+}
+
+uint8_t SimDevice::setDirect(Table table, uint16_t address, uint16_t value,
+                             SimClock::time_point now) {
+  if (table == Table::kCoil || table == Table::kHolding) return write(table, address, {value}, now);
+  return kIllegalDataAddress;
+}
+
+std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t address,
+                                         SimLineSettings line) {
+  if (type == "ld58a08") return std::make_unique<SimLd58a08>(address, line);
+  if (type == "lc_relay8") return std::make_unique<SimLcRelay8>(address, line);
+  if (type == "yespeed_pdu") return std::make_unique<SimYespeedPdu>(address, line);
+  return nullptr;
+}
+
+}  // namespace modbus_rtu_driver

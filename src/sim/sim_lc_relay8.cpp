@@ -1,0 +1,129 @@
+#include "modbus_rtu_driver/sim/sim_lc_relay8.h"
+
+#include <yaml-cpp/yaml.h>
+
+namespace modbus_rtu_driver {
+
+namespace {
+int baudOfCode(uint16_t code) { return code == 2 ? 4800 : code == 4 ? 19200 : 9600; }
+}  // namespace
+
+SimLcRelay8::SimLcRelay8(uint8_t address, SimLineSettings line) : SimDevice(address, line) {
+  baud_code_ = line.baud == 4800 ? 2 : line.baud == 19200 ? 4 : 3;
+}
+
+std::optional<Bytes> SimLcRelay8::handleAtZero(const Request& r) {
+  if (r.function == FunctionCode::kReadHoldingRegisters && r.address == 0 && r.count == 1)
+    return encodeReply(r, {address_});
+  if (r.function == FunctionCode::kWriteMultipleRegisters && r.address == 0 && r.count == 1) {
+    if (r.values[0] < 1 || r.values[0] > 255)
+      return encodeException(0, static_cast<uint8_t>(r.function), kIllegalDataValue);
+    address_ = static_cast<uint8_t>(r.values[0]);
+    Request echo = r;
+    echo.reply_echoes_request = true;  // the board echoes the whole request (manual)
+    return encodeReply(echo, {});
+  }
+  return std::nullopt;
+}
+
+void SimLcRelay8::tick(SimClock::time_point now) {
+  for (uint8_t ch = 0; ch < 8; ++ch) {
+    Flash& f = flash_[ch];
+    if (!f.active || now < f.ends) continue;
+    f.active = false;
+    const uint8_t bit = static_cast<uint8_t>(1u << ch);
+    // Flash-close ends open, flash-open ends closed.
+    relays_ = f.mode == 0x0004 ? (relays_ & static_cast<uint8_t>(~bit)) : (relays_ | bit);
+  }
+}
+
+uint8_t SimLcRelay8::read(Table table, uint16_t a, SimClock::time_point now, uint16_t* v) {
+  tick(now);
+  switch (table) {
+    case Table::kCoil:
+      if (a > 7) return kIllegalDataAddress;
+      *v = (relays_ >> a) & 1;
+      return 0;
+    case Table::kDiscreteInput:
+      if (a > 7) return kIllegalDataAddress;
+      *v = (inputs_ >> a) & 1;
+      return 0;
+    case Table::kHolding:
+      if (a == 0x03E8) {
+        *v = static_cast<uint16_t>(line_.baud == 4800 ? 2 : line_.baud == 19200 ? 4 : 3);
+        return 0;
+      }
+      if (a >= 3 && a < 3 + 5 * 8 && (a - 3) % 5 <= 1) {
+        const Flash& f = flash_[(a - 3) / 5];
+        *v = (a - 3) % 5 == 0 ? f.mode : f.delay;
+        return 0;
+      }
+      return kIllegalDataAddress;
+    default:
+      return kIllegalFunction;
+  }
+}
+
+uint8_t SimLcRelay8::write(Table table, uint16_t a, const std::vector<uint16_t>& values,
+                           SimClock::time_point now) {
+  tick(now);
+  if (table == Table::kCoil) {
+    if (a + values.size() > 8) return kIllegalDataAddress;
+    for (size_t i = 0; i < values.size(); ++i) {
+      const uint8_t ch = static_cast<uint8_t>(a + i);
+      const uint8_t bit = static_cast<uint8_t>(1u << ch);
+      relays_ = values[i] ? (relays_ | bit) : (relays_ & static_cast<uint8_t>(~bit));
+      flash_[ch].active = false;  // manual mode cancels a running flash
+    }
+    return 0;
+  }
+  if (table != Table::kHolding) return kIllegalFunction;
+  if (a == 0x03E9 && values.size() == 1) {
+    if (values[0] < 2 || values[0] > 4) return kIllegalDataValue;
+    baud_code_ = values[0];
+    return 0;
+  }
+  // Flash: mode and delay together at 0x0003 + 5*n.
+  if (a >= 3 && a < 3 + 5 * 8 && (a - 3) % 5 == 0 && values.size() == 2) {
+    const uint16_t mode = values[0], delay = values[1];
+    if ((mode != 0x0004 && mode != 0x0002) || delay == 0) return kIllegalDataValue;
+    const uint8_t ch = static_cast<uint8_t>((a - 3) / 5);
+    Flash& f = flash_[ch];
+    f.mode = mode;
+    f.delay = delay;
+    f.active = true;
+    f.ends = now + std::chrono::milliseconds(100 * delay);
+    const uint8_t bit = static_cast<uint8_t>(1u << ch);
+    relays_ = mode == 0x0004 ? (relays_ | bit) : (relays_ & static_cast<uint8_t>(~bit));
+    return 0;
+  }
+  return kIllegalDataAddress;
+}
+
+uint8_t SimLcRelay8::setDirect(Table table, uint16_t a, uint16_t v, SimClock::time_point now) {
+  if (table != Table::kDiscreteInput) return SimDevice::setDirect(table, a, v, now);
+  if (a > 7) return kIllegalDataAddress;
+  const uint8_t bit = static_cast<uint8_t>(1u << a);
+  inputs_ = v ? (inputs_ | bit) : (inputs_ & static_cast<uint8_t>(~bit));
+  return 0;
+}
+
+void SimLcRelay8::powerCycle() {
+  line_.baud = baudOfCode(baud_code_);
+  relays_ = 0;
+  flash_ = {};
+}
+
+void SimLcRelay8::saveState(YAML::Node& n) const {
+  n["address"] = static_cast<int>(address_);
+  n["baud_code"] = baud_code_;
+  n["baud"] = line_.baud;
+}
+
+void SimLcRelay8::loadState(const YAML::Node& n) {
+  address_ = static_cast<uint8_t>(n["address"].as<int>(address_));
+  baud_code_ = n["baud_code"].as<uint16_t>(baud_code_);
+  line_.baud = n["baud"].as<int>(line_.baud);
+}
+
+}  // namespace modbus_rtu_driver
