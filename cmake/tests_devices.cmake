@@ -1,1 +1,3 @@
 # Tests of the devices area.
+catkin_add_gtest(test_devices test/unit/test_devices.cpp)
+target_link_libraries(test_devices modbus_rtu_core gtest_main)

@@ -1,0 +1,60 @@
+// A Transport that plays a script of (expected request bytes, reply bytes): the real device
+// code runs against it, every frame it sends is compared byte for byte, and a test ends by
+// asserting that the script was used up.
+#pragma once
+
+#include <deque>
+#include <string>
+
+#include "modbus_rtu_driver/core/frame.h"
+#include "modbus_rtu_driver/core/transport.h"
+
+namespace modbus_rtu_driver {
+
+class ScriptedTransport : public Transport {
+ public:
+  // `reply_hex` empty = the device stays silent (timeout).
+  ScriptedTransport& expect(const std::string& request_hex, const std::string& reply_hex = "") {
+    steps_.push_back({*fromHex(request_hex), reply_hex.empty() ? Bytes{} : *fromHex(reply_hex)});
+    return *this;
+  }
+  // Expects `request` and answers what a device would (encodeReply with `values` for reads).
+  ScriptedTransport& expectEcho(const std::string& request_hex) {
+    const Bytes req = *fromHex(request_hex);
+    auto decoded = decodeRequest(req);
+    steps_.push_back({req, decoded ? encodeReply(*decoded, {}) : Bytes{}});
+    return *this;
+  }
+
+  Result execute(const Request& request) override {
+    const Bytes sent = encodeRequest(request);
+    ++executed_;
+    if (steps_.empty()) {
+      mismatches_ += "unexpected request " + toHex(sent) + "\n";
+      return Result::failure(ErrorKind::kMalformed, "script exhausted");
+    }
+    const Step step = steps_.front();
+    steps_.pop_front();
+    if (sent != step.request) {
+      mismatches_ += "expected " + toHex(step.request) + " got " + toHex(sent) + "\n";
+      return Result::failure(ErrorKind::kMalformed, "unexpected request");
+    }
+    if (!request.expectsReply()) return Result::success(request.values);
+    if (step.reply.empty()) return Result::failure(ErrorKind::kTimeout, request.describe() + ": no reply");
+    return decodeReply(request, step.reply);
+  }
+
+  bool usedUp() const { return steps_.empty(); }
+  const std::string& mismatches() const { return mismatches_; }
+  int executed() const { return executed_; }
+
+ private:
+  struct Step {
+    Bytes request, reply;
+  };
+  std::deque<Step> steps_;
+  std::string mismatches_;
+  int executed_ = 0;
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,330 @@
+// Device models against a scripted transport, with the manuals' own frames.
+#include <gtest/gtest.h>
+
+#include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/devices/registry.h"
+#include "modbus_rtu_driver/devices/yespeed_pdu.h"
+#include "scripted_transport.h"
+
+using namespace modbus_rtu_driver;
+
+namespace {
+
+DeviceConfig config(const std::string& type, int address) {
+  DeviceConfig c;
+  c.name = "dev";
+  c.type = type;
+  c.address = address;
+  return c;
+}
+
+#define EXPECT_SCRIPT_DONE(bus)        \
+  do {                                 \
+    EXPECT_EQ((bus).mismatches(), ""); \
+    EXPECT_TRUE((bus).usedUp());       \
+  } while (0)
+
+}  // namespace
+
+TEST(Ld58a08, SlowPwmIsTheManualsFc16Frame) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expectEcho("01 10 00 00 00 03 06 01 F4 00 C8 FF FF D6 CA");
+  PwmSettings s;
+  s.channel = 0;
+  s.period = 50.0;
+  s.on_time = 20.0;
+  s.pulses = 0;  // continuous
+  const Result r = board.setPwm(bus, s);
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, FastPwmIsTheManualsFc16Frame) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expectEcho("01 10 00 60 00 03 06 27 10 00 1E 03 E8 42 92");
+  PwmSettings s;
+  s.channel = 6;
+  s.frequency = 10000;
+  s.duty_cycle = 30;
+  s.duration = 100.0;
+  EXPECT_TRUE(board.setPwm(bus, s).ok());
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, OutputsUseFc05ForOneAndFc15ForSeveral) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expect("01 05 00 05 FF 00 9C 3B", "01 05 00 05 FF 00 9C 3B");
+  EXPECT_TRUE(board.setOutputs(bus, {5}, {true}).ok());
+  // All eight at once: the manual's "channels 0,3,7 ON, others OFF".
+  bus.expect("01 0F 00 00 00 08 01 89 3F 33", "01 0F 00 00 00 08 54 0D");
+  EXPECT_TRUE(board
+                  .setOutputs(bus, {0, 1, 2, 3, 4, 5, 6, 7},
+                              {true, false, false, true, false, false, false, true})
+                  .ok());
+  EXPECT_EQ(board.outputs(), (std::vector<bool>{1, 0, 0, 1, 0, 0, 0, 1}));
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, ChannelsWithGapsReadFirstSoOthersKeepTheirState) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  // The device reports 0x7C (channels 2-6 on); set 0 on and 3 off: FC15 over 0..3.
+  bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 7C 50 69");
+  Request w = Request::writeMultipleCoils(1, 0, {true, false, true, false});
+  bus.expectEcho(toHex(encodeRequest(w)));
+  EXPECT_TRUE(board.setOutputs(bus, {0, 3}, {true, false}).ok());
+  EXPECT_EQ(board.outputs(), (std::vector<bool>{1, 0, 1, 0, 1, 1, 1, 0}));
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, PollDecodesOutputsAndPwm) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 7C 50 69");
+  for (uint16_t ch = 0; ch < 8; ++ch) {
+    const Request read = Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3);
+    const std::vector<uint16_t> regs =
+        ch == 0 ? std::vector<uint16_t>{500, 200, 0xFFFF}
+                : ch == 6 ? std::vector<uint16_t>{10000, 30, 1000} : std::vector<uint16_t>{0, 0, 0};
+    bus.expect(toHex(encodeRequest(read)), toHex(encodeReply(read, regs)));
+  }
+  ASSERT_TRUE(board.poll(bus).ok());
+  EXPECT_EQ(board.outputs(), (std::vector<bool>{0, 0, 1, 1, 1, 1, 1, 0}));
+  ASSERT_TRUE(board.pwmKnown());
+  EXPECT_DOUBLE_EQ(board.pwm()[0].period, 50.0);
+  EXPECT_DOUBLE_EQ(board.pwm()[0].on_time, 20.0);
+  EXPECT_EQ(board.pwm()[0].pulses, 0xFFFF);
+  EXPECT_TRUE(board.pwm()[0].running);
+  EXPECT_TRUE(board.pwm()[6].high_speed);
+  EXPECT_DOUBLE_EQ(board.pwm()[6].frequency, 10000);
+  EXPECT_DOUBLE_EQ(board.pwm()[6].duration, 100.0);
+  EXPECT_FALSE(board.pwm()[3].running);
+  // Later polls read the outputs and one channel's registers each.
+  bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 00 51 88");
+  const Request ch0 = Request::readHoldingRegisters(1, 0, 3);
+  bus.expect(toHex(encodeRequest(ch0)), toHex(encodeReply(ch0, {500, 200, 0})));
+  ASSERT_TRUE(board.poll(bus).ok());
+  EXPECT_FALSE(board.pwm()[0].running);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, BadPwmValuesNameTheFieldAndSendNothing) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  struct Case {
+    PwmSettings s;
+    std::string words;
+  };
+  auto slow = [](double period, double on, uint16_t pulses) {
+    PwmSettings s;
+    s.channel = 2;
+    s.period = period;
+    s.on_time = on;
+    s.pulses = pulses;
+    return s;
+  };
+  auto fast = [](double f, double duty, double duration) {
+    PwmSettings s;
+    s.channel = 7;
+    s.frequency = f;
+    s.duty_cycle = duty;
+    s.duration = duration;
+    return s;
+  };
+  PwmSettings bad_channel = slow(1, 0.5, 0);
+  bad_channel.channel = 8;
+  const std::vector<Case> cases = {
+      {slow(0.05, 0, 0), "period: 0.05 s is outside 0.1-6553.5 s"},
+      {slow(6553.6, 0, 0), "period"},
+      {slow(1.05, 0, 0), "period"},
+      {slow(1.0, 2.0, 0), "on_time: 2 s is longer than the period"},
+      {slow(1.0, -1, 0), "on_time"},
+      {slow(1.0, 0.5, 65535), "pulses"},
+      {fast(0, 50, 0), "frequency: 0 Hz is outside 1-20000 Hz"},
+      {fast(20001, 50, 0), "frequency"},
+      {fast(1000, 101, 0), "duty_cycle: 101 % is outside 0-100 %"},
+      {fast(1000, 50, 0.05), "duration"},
+      {fast(1000, 50, 6553.5), "duration"},
+      {bad_channel, "channel: 8 is outside 0-7"},
+  };
+  for (const auto& c : cases) {
+    const Result r = board.setPwm(bus, c.s);
+    EXPECT_EQ(r.error, ErrorKind::kInvalidArgument);
+    EXPECT_NE(r.message.find(c.words), std::string::npos) << r.message;
+  }
+  EXPECT_EQ(board.stopPwm(bus, 9).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(board.setReturnDelay(bus, 26).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(board.setOutputs(bus, {8}, {true}).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(board.setOutputs(bus, {1, 1}, {true, true}).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(board.setOutputs(bus, {1, 2}, {true}).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(bus.executed(), 0);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, StopAndReturnDelayFrames) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleRegister(1, 0x0062, 0))));
+  EXPECT_TRUE(board.stopPwm(bus, 6).ok());
+  bus.expect("01 06 00 FC 00 05 89 F9", "01 06 00 FC 00 05 89 F9");
+  EXPECT_TRUE(board.setReturnDelay(bus, 5).ok());
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, ADeviceThatDoesNotConfirmIsNotSuccess) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expect("01 05 00 00 FF 00 8C 3A");  // silence
+  EXPECT_EQ(board.setOutputs(bus, {0}, {true}).error, ErrorKind::kTimeout);
+  bus.expect("01 05 00 00 FF 00 8C 3A", toHex(encodeException(1, 5, 4)));
+  const Result r = board.setOutputs(bus, {0}, {true});
+  EXPECT_EQ(r.error, ErrorKind::kException);
+  EXPECT_NE(r.message.find("slave device failure"), std::string::npos);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(LcRelay8, ManualFramesAtAddress255) {
+  LcRelay8 board(config("lc_relay8", 255));
+  ScriptedTransport bus;
+  bus.expect("FF 05 00 00 FF 00 99 E4", "FF 05 00 00 FF 00 99 E4");
+  EXPECT_TRUE(board.setOutputs(bus, {0}, {true}).ok());
+  bus.expect("FF 0F 00 00 00 08 01 FF 30 1D", "FF 0F 00 00 00 08 41 D3");
+  EXPECT_TRUE(board.setOutputs(bus, {0, 1, 2, 3, 4, 5, 6, 7}, std::vector<bool>(8, true)).ok());
+  bus.expect("FF 01 00 00 00 08 28 12", "FF 01 01 01 A1 A0");
+  bus.expect("FF 02 00 00 00 08 6C 12", "FF 02 01 01 51 A0");
+  ASSERT_TRUE(board.poll(bus).ok());
+  EXPECT_EQ(board.outputs(), (std::vector<bool>{1, 0, 0, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(board.inputs(), (std::vector<bool>{1, 0, 0, 0, 0, 0, 0, 0}));
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(LcRelay8, FlashCloseAndFlashOpen) {
+  LcRelay8 board(config("lc_relay8", 255));
+  ScriptedTransport bus;
+  bus.expect("FF 10 00 03 00 02 04 00 04 00 14 C5 9F", "FF 10 00 03 00 02 A4 16");
+  EXPECT_TRUE(board.pulse(bus, 0, true, 2.0).ok());
+  bus.expect("FF 10 00 03 00 02 04 00 02 00 1E A5 99", "FF 10 00 03 00 02 A4 16");
+  EXPECT_TRUE(board.pulse(bus, 0, false, 3.0).ok());
+  // Relay #8 lives at 0x0026.
+  const Request r8 = Request::writeMultipleRegisters(255, 0x0026, {4, 1});
+  bus.expectEcho(toHex(encodeRequest(r8)));
+  EXPECT_TRUE(board.pulse(bus, 7, true, 0.1).ok());
+  EXPECT_NE(LcRelay8::validatePulse(0, 0.0).find("duration"), std::string::npos);
+  EXPECT_NE(LcRelay8::validatePulse(0, 6553.6).find("duration"), std::string::npos);
+  EXPECT_NE(LcRelay8::validatePulse(0, 1.25).find("steps of 0.1 s"), std::string::npos);
+  EXPECT_NE(LcRelay8::validatePulse(8, 1.0).find("channel"), std::string::npos);
+  EXPECT_EQ(board.pulse(bus, 8, true, 1.0).error, ErrorKind::kInvalidArgument);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(LcRelay8, AddressAndBaudCommands) {
+  LcRelay8 board(config("lc_relay8", 255));
+  ScriptedTransport bus;
+  bus.expect("00 03 00 00 00 01 85 DB", "00 03 02 00 FF C5 C4");
+  Result r = LcRelay8::readAddressAtZero(bus);
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(r.values, std::vector<uint16_t>{255});
+  bus.expect("00 10 00 00 00 01 02 00 FF EB 80", "00 10 00 00 00 01 02 00 FF EB 80");
+  r = LcRelay8::setAddressAtZero(bus, 255);
+  EXPECT_TRUE(r.ok()) << r.message;
+  bus.expect("FF 10 03 E9 00 01 02 00 03 8B CC", "FF 10 03 E9 00 01 C5 A7");
+  EXPECT_TRUE(board.writeBaudCode(bus, 3).ok());
+  bus.expect("FF 03 03 E8 00 01 11 A4", "FF 03 02 00 04 90 53");
+  uint16_t code = 0;
+  EXPECT_TRUE(board.readBaudCode(bus, &code).ok());
+  EXPECT_EQ(code, 4);
+  EXPECT_EQ(board.writeBaudCode(bus, 5).error, ErrorKind::kInvalidArgument);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(YespeedPdu, TelemetryInOneRequestAsTheManualReadsIt) {
+  YespeedPdu pdu(config("yespeed_pdu", 1));
+  ScriptedTransport bus;
+  bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 01 90 48");
+  bus.expect("01 04 00 00 00 05 30 09", "01 04 0A 00 DD 02 71 08 98 02 D5 06 3B 86 51");
+  bus.expect("01 03 00 00 00 03 05 CB", "01 03 06 09 C4 07 D0 06 40 D2 E0");
+  ASSERT_TRUE(pdu.poll(bus).ok());
+  EXPECT_TRUE(pdu.readingFresh());
+  EXPECT_NEAR(pdu.reading().temperature, 22.1, 1e-9);
+  EXPECT_NEAR(pdu.reading().humidity, 62.5, 1e-9);
+  EXPECT_NEAR(pdu.reading().voltage, 220.0, 1e-9);
+  EXPECT_NEAR(pdu.reading().current, 7.25, 1e-9);
+  EXPECT_NEAR(pdu.reading().power, 1595, 1e-9);
+  ASSERT_TRUE(pdu.limitsKnown());
+  EXPECT_NEAR(pdu.limits().over_voltage, 250.0, 1e-9);
+  EXPECT_NEAR(pdu.limits().under_voltage, 200.0, 1e-9);
+  EXPECT_NEAR(pdu.limits().over_current, 16.0, 1e-9);
+  EXPECT_EQ(pdu.outputs()[0], true);
+  // Negative temperatures are signed; a failed read leaves nothing fresh to publish.
+  bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 00 51 88");
+  const Request t = Request::readInputRegisters(1, 0, 5);
+  bus.expect(toHex(encodeRequest(t)), toHex(encodeReply(t, {0xFFC9, 300, 2203, 730, 1581})));
+  ASSERT_TRUE(pdu.poll(bus).ok());
+  EXPECT_NEAR(pdu.reading().temperature, -5.5, 1e-9);
+  bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 00 51 88");
+  bus.expect(toHex(encodeRequest(t)));  // silence
+  EXPECT_FALSE(pdu.poll(bus).ok());
+  EXPECT_FALSE(pdu.readingFresh());
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(YespeedPdu, LimitsAreOneFc16ThenReadBack) {
+  YespeedPdu pdu(config("yespeed_pdu", 1));
+  ScriptedTransport bus;
+  bus.expectEcho("01 10 00 00 00 03 06 0A 28 06 40 02 BC 87 A1");
+  const Request back = Request::readHoldingRegisters(1, 0, 3);
+  bus.expect(toHex(encodeRequest(back)), toHex(encodeReply(back, {2600, 1600, 700})));
+  // float32 values as they arrive from a ROS message
+  PduLimitValues l{static_cast<float>(260.0), static_cast<float>(160.0), static_cast<float>(7.0)};
+  const Result r = pdu.setLimits(bus, l);
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_NEAR(pdu.limits().over_current, 7.0, 1e-9);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(YespeedPdu, LimitRulesNameTheField) {
+  struct Case {
+    PduLimitValues l;
+    std::string words;
+  };
+  const std::vector<Case> cases = {
+      {{180.0, 100.0, 10.0}, "over_voltage: 180 V must be above 180 V"},
+      {{250.0, 280.0, 10.0}, "under_voltage: 280 V must be below 280 V"},
+      {{200.0, 210.0, 10.0}, "over_voltage: 200 V must be above under_voltage"},
+      {{250.0, 200.0, 5.0}, "over_current: 5 A must be between 5 A and 20 A"},
+      {{250.0, 200.0, 20.0}, "over_current"},
+      {{250.05, 200.0, 10.0}, "over_voltage: 250.05 V is outside 0-6553.5 V in steps of 0.1 V"},
+      {{250.0, 200.0, 10.001}, "over_current"},
+      {{-1.0, 200.0, 10.0}, "over_voltage"},
+  };
+  for (const auto& c : cases) {
+    const std::string e = YespeedPdu::validateLimits(c.l);
+    EXPECT_NE(e.find(c.words), std::string::npos) << "got: " << e;
+  }
+  EXPECT_EQ(YespeedPdu::validateLimits({260.0, 160.0, 7.0}), "");
+  EXPECT_EQ(YespeedPdu::validateLimits({180.1, 100.0, 19.99}), "");
+  YespeedPdu pdu(config("yespeed_pdu", 1));
+  ScriptedTransport bus;
+  EXPECT_EQ(pdu.setLimits(bus, {170.0, 160.0, 10.0}).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(bus.executed(), 0);
+}
+
+TEST(Registry, TypesAddressesAndNames) {
+  EXPECT_EQ(knownDeviceTypes(), (std::vector<std::string>{"ld58a08", "lc_relay8", "yespeed_pdu"}));
+  std::string error;
+  EXPECT_NE(createDevice(config("lc_relay8", 255), &error), nullptr) << error;
+  EXPECT_EQ(createDevice(config("ld58a08", 255), &error), nullptr);
+  EXPECT_NE(error.find("devices/dev/address: 255 is outside 1-247 for ld58a08"), std::string::npos)
+      << error;
+  EXPECT_EQ(createDevice(config("relay", 3), &error), nullptr);
+  EXPECT_NE(error.find("devices/dev/type: 'relay'"), std::string::npos) << error;
+  DeviceConfig c = config("yespeed_pdu", 3);
+  c.inputs = {"a", "b", "c", "d", "e", "f", "g", "h"};
+  EXPECT_NE(validateDeviceConfig(c).find("has no inputs"), std::string::npos);
+  c = config("ld58a08", 3);
+  EXPECT_EQ(createDevice(c, &error)->outputNames()[7], "out7");
+}
