@@ -48,6 +48,14 @@ class SimControl:
     def silence(self, device, on=True):
         self.command("silence %s %d" % (device, 1 if on else 0))
 
+    def fail(self, device, on=True):
+        """The device answers every request with exception 04 (slave device failure)."""
+        self.command("fail %s %d" % (device, 1 if on else 0))
+
+    def corrupt(self, device, replies=1):
+        """The next `replies` replies of the device carry a bad CRC."""
+        self.command("corrupt %s %d" % (device, replies))
+
     def info(self):
         """[(index, type, address, baud, parity)]"""
         out = []

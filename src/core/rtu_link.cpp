@@ -266,7 +266,7 @@ Result RtuLink::sendBroadcast(const Request& request) {
 
 Result RtuLink::fromErrno(const Request& request, int error) const {
   const std::string what = request.describe() + ": ";
-  if (error > MODBUS_ENOBASE && error <= MODBUS_ENOBASE + EMBXGTAR) {
+  if (error > MODBUS_ENOBASE && error <= EMBXGTAR) {
     const auto code = static_cast<uint8_t>(error - MODBUS_ENOBASE);
     return Result::failure(ErrorKind::kException, what + "device answered " + exceptionName(code),
                            code);

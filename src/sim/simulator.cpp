@@ -250,34 +250,43 @@ void Simulator::processFrame(const Bytes& frame) {
   for (auto& d : devices_) {
     if (d->silenced || d->line().baud != line.baud || d->line().parity != line.parity) continue;
     std::optional<Bytes> reply;
+    const double delay = d->replyDelay();  // a new return delay applies from the next request
     if (slave == kBroadcastAddress) {
       if (!request) continue;
       if (auto* lc = dynamic_cast<SimLcRelay8*>(d.get())) reply = lc->handleAtZero(*request);
       if (!reply) d->handle(*request, now);  // broadcast: applied, not answered
       wrote = wrote || !isReadFunction(request->function);
       if (reply) {
-        answer(*d, frame, *reply);
+        answer(*d, frame, *reply, delay);
         wrote = true;
         break;
       }
       continue;
     }
-    if (!d->answersTo(slave)) continue;
+    if (!d->answersTo(slave, request ? &*request : nullptr)) continue;
     if (!request) {
-      answer(*d, frame, d->unknownFunction(slave, frame[1]));
+      answer(*d, frame, d->unknownFunction(slave, frame[1]), delay);
+    } else if (d->failing) {
+      answer(*d, frame, encodeException(slave, frame[1], kSlaveDeviceFailure), delay);
     } else {
       reply = d->handle(*request, now);
       wrote = !isReadFunction(request->function);
-      if (reply) answer(*d, frame, *reply);
+      if (reply) answer(*d, frame, *reply, delay);
     }
     break;  // one device answers an address
   }
   if (wrote) saveState();
 }
 
-void Simulator::answer(SimDevice& device, const Bytes& request, const Bytes& reply) {
+void Simulator::answer(SimDevice& device, const Bytes& request, const Bytes& sent,
+                       double delay) {
+  Bytes reply = sent;
+  if (device.corrupt_replies > 0) {
+    --device.corrupt_replies;
+    reply.back() ^= 0xA5;
+  }
   const SimLineSettings line = device.line();
-  auto ready = SimClock::now() + secs(device.replyDelay());
+  auto ready = SimClock::now() + secs(delay);
   if (config_.pace) {
     // The request took its wire time to arrive, then the line rests t3.5 before the reply.
     ready = std::max(ready, busy_until_) + secs(request.size() * charTime(line) + gapOf(line));
@@ -367,10 +376,12 @@ std::string Simulator::doCommand(const std::string& line) {
   in >> name;
   SimDevice* d = find(name);
   if (!d) return "error no device '" + name + "'";
-  if (verb == "silence") {
-    int on = 1;
-    in >> on;
-    d->silenced = on != 0;
+  if (verb == "silence" || verb == "fail" || verb == "corrupt") {
+    int n = 1;
+    in >> n;
+    if (verb == "silence") d->silenced = n != 0;
+    if (verb == "fail") d->failing = n != 0;
+    if (verb == "corrupt") d->corrupt_replies = n;
     return "ok";
   }
   Table table;

@@ -37,11 +37,19 @@ class SimDevice {
   virtual const char* type() const = 0;
   uint8_t address() const { return address_; }
   const SimLineSettings& line() const { return line_; }
-  bool silenced = false;  // fault injection: answers nothing
+  // Fault injection (control socket): answer nothing; corrupt the CRC of the next N replies;
+  // answer every request with exception 04 (slave device failure).
+  bool silenced = false;
+  int corrupt_replies = 0;
+  bool failing = false;
 
   // True when a frame with this slave byte is for this device (its address; some devices also
   // answer 0xFF or address 0 commands). Broadcast writes (0) reach every device anyway.
-  virtual bool answersTo(uint8_t slave) const { return slave == address_; }
+  // `request` is null when the frame could not be decoded (unknown function).
+  virtual bool answersTo(uint8_t slave, const Request* request) const {
+    (void)request;
+    return slave == address_;
+  }
   // The reply to a request for this device (or a broadcast), or nothing (silence).
   std::optional<Bytes> handle(const Request& request, SimClock::time_point now);
   // An exception reply for a request whose function this device does not know.

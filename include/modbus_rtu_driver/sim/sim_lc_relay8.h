@@ -14,7 +14,6 @@ class SimLcRelay8 : public SimDevice {
  public:
   SimLcRelay8(uint8_t address, SimLineSettings line);
   const char* type() const override { return "lc_relay8"; }
-  bool answersTo(uint8_t slave) const override { return slave == address_; }
   // Address commands at slave 0 (the board answers them: "single device on the bus").
   std::optional<Bytes> handleAtZero(const Request& request);
   void tick(SimClock::time_point now) override;

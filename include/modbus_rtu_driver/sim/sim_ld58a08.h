@@ -12,8 +12,14 @@ class SimLd58a08 : public SimDevice {
  public:
   SimLd58a08(uint8_t address, SimLineSettings line);
   const char* type() const override { return "ld58a08"; }
-  // "Only one module on the bus": it also answers requests sent to 0xFF.
-  bool answersTo(uint8_t slave) const override { return slave == address_ || slave == 0xFF; }
+  // "Only one module on the bus": it also answers its special registers (0x00FA-0x00FF) at
+  // 0xFF, as the manual shows. Reading it as answering everything at 0xFF would make it
+  // collide with an LC relay board at its factory address 255 on every poll.
+  bool answersTo(uint8_t slave, const Request* request) const override {
+    return slave == address_ ||
+           (slave == 0xFF && request && !isBitFunction(request->function) &&
+            request->address >= 0x00FA);
+  }
   double replyDelay() const override { return return_delay_ * 0.040; }
   void tick(SimClock::time_point now) override;
   void powerCycle() override;

@@ -54,7 +54,7 @@ class Simulator {
   void processInput(SimClock::time_point now, bool silence);
   void processFrame(const Bytes& frame);
   bool tryFrame(const Bytes& frame);
-  void answer(SimDevice& device, const Bytes& request, const Bytes& reply);
+  void answer(SimDevice& device, const Bytes& request, const Bytes& reply, double delay);
   SimLineSettings lineSettings() const;
   SimDevice* find(const std::string& name);
   void powerCycle();

@@ -1,0 +1,170 @@
+// The link against a scripted device on a pty: every kind of failure is told apart, and
+// nothing from one transaction is read as the answer to the next.
+#include <gtest/gtest.h>
+
+#include <future>
+#include <thread>
+
+#include "modbus_rtu_driver/core/rtu_link.h"
+#include "pty_pair.h"
+
+using namespace modbus_rtu_driver;
+
+namespace {
+
+class RtuLinkFaults : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    LinkConfig c;
+    c.port = pty_.path();
+    c.response_timeout = 0.3;
+    c.retries = 0;
+    link_ = std::make_unique<RtuLink>(c);
+    std::string error;
+    ASSERT_TRUE(link_->connect(&error)) << error;
+  }
+  // Runs `request` while the device side reads it and answers `reply` after `delay_ms`.
+  Result exchange(const Request& request, const Bytes& reply, int delay_ms = 0) {
+    auto device = std::async(std::launch::async, [&] {
+      pty_.read(encodeRequest(request).size());
+      std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+      pty_.write(reply);
+    });
+    Result r = link_->execute(request);
+    device.get();
+    return r;
+  }
+  static Bytes withCrc(Bytes b) {
+    appendCrc(b);
+    return b;
+  }
+
+  PtyPair pty_;
+  std::unique_ptr<RtuLink> link_;
+};
+
+}  // namespace
+
+TEST_F(RtuLinkFaults, ExceptionsAreNamed) {
+  const char* names[] = {"", "illegal function", "illegal data address", "illegal data value",
+                         "slave device failure"};
+  for (uint8_t code = 1; code <= 4; ++code) {
+    for (uint8_t slave : {1, 255}) {  // libmodbus path and raw path
+      const Request req = Request::readHoldingRegisters(slave, 0x0100, 2);
+      const Result r = exchange(req, encodeException(slave, 0x03, code));
+      EXPECT_EQ(r.error, ErrorKind::kException) << r.message;
+      EXPECT_EQ(r.exception_code, code);
+      EXPECT_NE(r.message.find(names[code]), std::string::npos) << r.message;
+      EXPECT_NE(r.message.find("FC03"), std::string::npos) << r.message;
+      EXPECT_NE(r.message.find("0x0100"), std::string::npos) << r.message;
+    }
+  }
+  EXPECT_EQ(link_->stats().exceptions, 8u);
+}
+
+TEST_F(RtuLinkFaults, TimeoutCrcAndWrongAddressAreToldApart) {
+  for (uint8_t slave : {1, 255}) {
+    const Request req = Request::readCoils(slave, 0, 8);
+    EXPECT_EQ(exchange(req, {}).error, ErrorKind::kTimeout);
+    Bytes bad = withCrc({slave, 0x01, 0x01, 0x05});
+    bad.back() ^= 0x55;
+    EXPECT_EQ(exchange(req, bad).error, ErrorKind::kCrc) << int(slave);
+    const uint8_t other = slave == 1 ? 2 : 254;
+    EXPECT_EQ(exchange(req, withCrc({other, 0x01, 0x01, 0x05})).error, ErrorKind::kWrongAddress)
+        << int(slave);
+    // Truncated: half a frame then silence.
+    EXPECT_EQ(exchange(req, {slave, 0x01, 0x01}).error, ErrorKind::kTimeout) << int(slave);
+  }
+  const LinkStats s = link_->stats();
+  EXPECT_EQ(s.timeouts, 4u);
+  EXPECT_EQ(s.crc_errors, 2u);
+  EXPECT_EQ(s.wrong_address, 2u);
+}
+
+TEST_F(RtuLinkFaults, AWriteWhoseEchoDiffersIsNotConfirmed) {
+  for (uint8_t slave : {1, 255}) {
+    const Request req = Request::writeSingleCoil(slave, 3, true);
+    const Result r = exchange(req, withCrc({slave, 0x05, 0x00, 0x03, 0x00, 0x00}));
+    EXPECT_EQ(r.error, ErrorKind::kMalformed) << r.message;
+  }
+}
+
+TEST_F(RtuLinkFaults, ALateReplyIsNotTheAnswerToTheNextRequest) {
+  const Request first = Request::readHoldingRegisters(1, 0, 1);
+  // The reply to the first request arrives after its timeout (0.3 s) ...
+  EXPECT_EQ(exchange(first, withCrc({1, 0x03, 0x02, 0x11, 0x11}), 450).error, ErrorKind::kTimeout);
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  // ... and must not be taken as the answer to the second.
+  const Result second = exchange(first, withCrc({1, 0x03, 0x02, 0x22, 0x22}));
+  ASSERT_TRUE(second.ok()) << second.message;
+  EXPECT_EQ(second.values, std::vector<uint16_t>{0x2222});
+}
+
+TEST_F(RtuLinkFaults, StrayBytesBeforeARequestAreFlushed) {
+  pty_.write({0xFF, 0x10, 0x00, 0x00, 0x00});  // e.g. the tail of a long echo
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  for (uint8_t slave : {1, 255}) {
+    const Result r = exchange(Request::readCoils(slave, 0, 8), withCrc({slave, 0x01, 0x01, 0x81}));
+    ASSERT_TRUE(r.ok()) << r.message;
+    EXPECT_EQ(r.values[0], 1);
+    EXPECT_EQ(r.values[7], 1);
+  }
+}
+
+TEST_F(RtuLinkFaults, RetriesRepeatAfterATimeoutButNotAfterAnException) {
+  LinkConfig c;
+  c.port = pty_.path();
+  c.response_timeout = 0.2;
+  c.retries = 2;
+  RtuLink link(c);
+  ASSERT_TRUE(link.connect(nullptr));
+  const Request req = Request::readCoils(1, 0, 8);
+  const size_t n = encodeRequest(req).size();
+  auto device = std::async(std::launch::async, [&] {
+    pty_.read(n);  // first attempt: silence
+    pty_.read(n);  // second attempt: answered
+    pty_.write(withCrc({1, 0x01, 0x01, 0x01}));
+  });
+  const Result r = link.execute(req);
+  device.get();
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(link.stats().retries, 1u);
+  EXPECT_EQ(link.stats().attempts, 2u);
+  auto device2 = std::async(std::launch::async, [&] {
+    pty_.read(n);
+    pty_.write(encodeException(1, 0x01, 0x02));
+  });
+  EXPECT_EQ(link.execute(req).error, ErrorKind::kException);
+  device2.get();
+  EXPECT_EQ(link.stats().attempts, 3u);  // no retry after an exception
+}
+
+TEST_F(RtuLinkFaults, BroadcastIsSentAndNotWaitedFor) {
+  const Request req = Request::writeSingleCoil(0, 2, true);
+  auto device = std::async(std::launch::async, [&] { return pty_.read(8); });
+  const auto t0 = std::chrono::steady_clock::now();
+  const Result r = link_->execute(req);
+  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_LT(took, 0.3) << "a broadcast must not wait for the response timeout";
+  EXPECT_EQ(toHex(device.get()), toHex(encodeRequest(req)));
+  EXPECT_EQ(link_->stats().broadcasts, 1u);
+}
+
+TEST_F(RtuLinkFaults, InvalidRequestsNeverReachTheLine) {
+  Request bad = Request::readHoldingRegisters(1, 0, 200);
+  const Result r = link_->execute(bad);
+  EXPECT_EQ(r.error, ErrorKind::kInvalidArgument);
+  EXPECT_NE(r.message.find("count"), std::string::npos);
+  EXPECT_TRUE(pty_.read(1, 100).empty());
+}
+
+TEST(RtuLink, ConnectNamesTheMissingPort) {
+  LinkConfig c;
+  c.port = "/nonexistent/ttyUSB9";
+  RtuLink link(c);
+  std::string error;
+  EXPECT_FALSE(link.connect(&error));
+  EXPECT_NE(error.find("/nonexistent/ttyUSB9"), std::string::npos) << error;
+  EXPECT_EQ(link.execute(Request::readCoils(1, 0, 1)).error, ErrorKind::kNotConnected);
+}
