@@ -141,6 +141,8 @@ void BusScheduler::run() {
         std::string error;
         const bool ok = transport_.connect(&error);
         lock.lock();
+        // Never retry faster than the initial delay, even if a transport misreports itself.
+        next_connect = Clock::now() + seconds(options_.reconnect_initial);
         connected_ = ok;
         connection_error_ = ok ? "" : error;
         if (ok) {
