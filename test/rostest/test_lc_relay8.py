@@ -9,6 +9,8 @@ import rostest
 from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
 
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+
 from modbus_rtu_driver.msg import DigitalStates
 from modbus_rtu_driver.srv import Pulse, SetOutputs
 
@@ -86,6 +88,26 @@ class LcRelay8Test(unittest.TestCase):
                            "estop/state true")
         self.sim.set(BOARD, "input", 1, 0)
         self.inputs.wait(5, lambda m: not m.states[1], "estop released in inputs")
+
+    def test_diagnostics_per_bus_and_device(self):
+        def complete(msg):
+            names = [s.name for s in msg.status]
+            return any("device relays" in n for n in names) and any("bus " in n for n in names)
+        msg = helpers.wait_until(
+            lambda: (lambda m: m if complete(m) else None)(
+                rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=5)),
+            15, "bus and device statuses on /diagnostics")
+        by_name = {s.name.split(": ", 1)[-1]: s for s in msg.status}
+        relays = next(s for n, s in by_name.items() if "device relays" in n)
+        self.assertEqual(relays.level, DiagnosticStatus.OK, relays.message)
+        values = {kv.key: kv.value for kv in relays.values}
+        self.assertEqual(values["address"], "255")
+        self.assertEqual(values["online"], "True")
+        bus = next(s for n, s in by_name.items() if n.startswith("bus "))
+        bus_values = {kv.key: kv.value for kv in bus.values}
+        self.assertGreater(int(bus_values["requests"]), 0)
+        for key in ("timeouts", "crc errors", "wrong address", "exceptions", "latency mean [ms]"):
+            self.assertIn(key, bus_values)
 
     def test_bad_values_are_refused_and_nothing_is_written(self):
         before = self.coils()
