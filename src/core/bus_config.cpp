@@ -47,7 +47,8 @@ int getInt(const YAML::Node& n, const std::string& key) {
   return static_cast<int>(v);
 }
 
-void checkKeys(const YAML::Node& map, const std::string& where, const std::set<std::string>& known) {
+void checkKeys(const YAML::Node& map, const std::string& where,
+               const std::set<std::string>& known) {
   for (const auto& kv : map) {
     const std::string key = kv.first.as<std::string>();
     if (!known.count(key)) {
@@ -75,11 +76,12 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
   DeviceConfig d;
   d.name = name;
   if (!n["type"]) {
-    fail(where + "type", "missing (one of " + [] {
-      std::string s;
-      for (const auto& t : knownDeviceTypes()) s += (s.empty() ? "" : ", ") + t;
-      return s;
-    }() + ")");
+    fail(
+        where + "type", "missing (one of " + [] {
+          std::string s;
+          for (const auto& t : knownDeviceTypes()) s += (s.empty() ? "" : ", ") + t;
+          return s;
+        }() + ")");
   }
   d.type = get<std::string>(n["type"], where + "type", "a device type");
   if (!n["address"]) fail(where + "address", "missing (the device's slave address, 1-255)");
@@ -95,9 +97,10 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
 
 void parse(const YAML::Node& root, BusConfig* out) {
   if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
-  checkKeys(root, "", {"port", "baud", "parity", "data_bits", "stop_bits", "response_timeout",
-                       "byte_timeout", "retries", "min_gap", "direction", "low_latency", "role",
-                       "diagnostic_period", "devices"});
+  checkKeys(
+      root, "",
+      {"port", "baud", "parity", "data_bits", "stop_bits", "response_timeout", "byte_timeout",
+       "retries", "min_gap", "direction", "low_latency", "role", "diagnostic_period", "devices"});
   LinkConfig& link = out->link;
   if (root["port"]) link.port = get<std::string>(root["port"], "port", "a device path");
   if (root["baud"]) link.baud = getInt(root["baud"], "baud");
@@ -115,11 +118,16 @@ void parse(const YAML::Node& root, BusConfig* out) {
   if (root["low_latency"])
     link.low_latency = get<bool>(root["low_latency"], "low_latency", "true or false");
   if (root["direction"]) {
-    const std::string d = get<std::string>(root["direction"], "direction", "auto, rts_high, rts_low");
-    if (d == "auto") link.direction = DirectionControl::kAuto;
-    else if (d == "rts_high") link.direction = DirectionControl::kRtsHigh;
-    else if (d == "rts_low") link.direction = DirectionControl::kRtsLow;
-    else fail("direction", "'" + d + "' is not auto, rts_high or rts_low");
+    const std::string d =
+        get<std::string>(root["direction"], "direction", "auto, rts_high, rts_low");
+    if (d == "auto")
+      link.direction = DirectionControl::kAuto;
+    else if (d == "rts_high")
+      link.direction = DirectionControl::kRtsHigh;
+    else if (d == "rts_low")
+      link.direction = DirectionControl::kRtsLow;
+    else
+      fail("direction", "'" + d + "' is not auto, rts_high or rts_low");
   }
   const std::string link_problem = validateLinkConfig(link);
   if (!link_problem.empty()) throw ConfigError{link_problem};

@@ -23,7 +23,9 @@ BusScheduler::BusScheduler(Transport& transport) : BusScheduler(transport, Optio
 BusScheduler::BusScheduler(Transport& transport, Options options)
     : transport_(transport), options_(options) {}
 
-BusScheduler::~BusScheduler() { stop(); }
+BusScheduler::~BusScheduler() {
+  stop();
+}
 
 void BusScheduler::start() {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -154,8 +156,8 @@ void BusScheduler::run() {
       }
       // Nobody waits for a bus that is not there: queued writes fail now.
       while (!writes_.empty()) {
-        writes_.front().promise.set_value(Result::failure(
-            ErrorKind::kNotConnected, "port not open: " + connection_error_));
+        writes_.front().promise.set_value(
+            Result::failure(ErrorKind::kNotConnected, "port not open: " + connection_error_));
         writes_.pop_front();
       }
       wake_.wait_until(lock, next_connect);
@@ -181,7 +183,8 @@ void BusScheduler::run() {
     for (Poll& p : polls_) {
       auto t = p.due;
       auto b = backoff_until_.find(p.device);
-      if (b != backoff_until_.end() && health_[p.device].online == false) t = std::max(t, b->second);
+      if (b != backoff_until_.end() && health_[p.device].online == false)
+        t = std::max(t, b->second);
       if (!next || t < when) {
         next = &p;
         when = t;

@@ -9,7 +9,8 @@ uint16_t crc16(const uint8_t* data, size_t length) {
   uint16_t crc = 0xFFFF;
   for (size_t i = 0; i < length; ++i) {
     crc ^= data[i];
-    for (int bit = 0; bit < 8; ++bit) crc = (crc & 1) ? static_cast<uint16_t>((crc >> 1) ^ 0xA001) : crc >> 1;
+    for (int bit = 0; bit < 8; ++bit)
+      crc = (crc & 1) ? static_cast<uint16_t>((crc >> 1) ^ 0xA001) : crc >> 1;
   }
   return crc;
 }
@@ -46,7 +47,8 @@ std::optional<Bytes> fromHex(const std::string& text) {
       continue;
     }
     if (!std::isxdigit(static_cast<unsigned char>(c))) return std::nullopt;
-    const int v = std::isdigit(static_cast<unsigned char>(c)) ? c - '0' : std::toupper(c) - 'A' + 10;
+    const int v =
+        std::isdigit(static_cast<unsigned char>(c)) ? c - '0' : std::toupper(c) - 'A' + 10;
     current = static_cast<uint8_t>((current << 4) | v);
     if (++nibbles == 2) {
       out.push_back(current);
@@ -126,10 +128,13 @@ Bytes encodeRequest(const Request& r) {
 size_t expectedReplyLength(const Request& r) {
   switch (r.function) {
     case FunctionCode::kReadCoils:
-    case FunctionCode::kReadDiscreteInputs: return 5 + (r.count + 7u) / 8;
+    case FunctionCode::kReadDiscreteInputs:
+      return 5 + (r.count + 7u) / 8;
     case FunctionCode::kReadHoldingRegisters:
-    case FunctionCode::kReadInputRegisters: return 5 + 2u * r.count;
-    default: return r.reply_echoes_request ? encodeRequest(r).size() : 8;
+    case FunctionCode::kReadInputRegisters:
+      return 5 + 2u * r.count;
+    default:
+      return r.reply_echoes_request ? encodeRequest(r).size() : 8;
   }
 }
 
@@ -149,8 +154,8 @@ Result decodeReply(const Request& r, const Bytes& reply) {
   if (!hasValidCrc(reply))
     return Result::failure(ErrorKind::kCrc, where(r) + ": bad CRC in reply " + toHex(reply));
   if (reply[0] != r.slave)
-    return Result::failure(ErrorKind::kWrongAddress, where(r) + ": reply came from slave " +
-                                                         std::to_string(reply[0]));
+    return Result::failure(ErrorKind::kWrongAddress,
+                           where(r) + ": reply came from slave " + std::to_string(reply[0]));
   const uint8_t fc = static_cast<uint8_t>(r.function);
   if (reply[1] == (fc | 0x80))
     return Result::failure(ErrorKind::kException,
@@ -160,9 +165,9 @@ Result decodeReply(const Request& r, const Bytes& reply) {
                            where(r) + ": reply has function " + std::to_string(reply[1]));
   const size_t expected = expectedReplyLength(r);
   if (reply.size() != expected)
-    return Result::failure(ErrorKind::kMalformed, where(r) + ": reply is " +
-                                                      std::to_string(reply.size()) +
-                                                      " bytes, expected " + std::to_string(expected));
+    return Result::failure(ErrorKind::kMalformed,
+                           where(r) + ": reply is " + std::to_string(reply.size()) +
+                               " bytes, expected " + std::to_string(expected));
   std::vector<uint16_t> values;
   switch (r.function) {
     case FunctionCode::kReadCoils:

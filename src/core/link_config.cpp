@@ -6,18 +6,25 @@ namespace modbus_rtu_driver {
 
 const char* parityName(Parity p) {
   switch (p) {
-    case Parity::kNone: return "none";
-    case Parity::kEven: return "even";
-    case Parity::kOdd: return "odd";
+    case Parity::kNone:
+      return "none";
+    case Parity::kEven:
+      return "even";
+    case Parity::kOdd:
+      return "odd";
   }
   return "?";
 }
 
 bool parseParity(const std::string& t, Parity* out) {
-  if (t == "none" || t == "N") *out = Parity::kNone;
-  else if (t == "even" || t == "E") *out = Parity::kEven;
-  else if (t == "odd" || t == "O") *out = Parity::kOdd;
-  else return false;
+  if (t == "none" || t == "N")
+    *out = Parity::kNone;
+  else if (t == "even" || t == "E")
+    *out = Parity::kEven;
+  else if (t == "odd" || t == "O")
+    *out = Parity::kOdd;
+  else
+    return false;
   return true;
 }
 
@@ -36,8 +43,7 @@ std::string validateLinkConfig(const LinkConfig& c) {
   if (c.stop_bits != 1 && c.stop_bits != 2)
     return "stop_bits: " + std::to_string(c.stop_bits) + " is not 1 or 2";
   if (!(c.response_timeout >= 0.001 && c.response_timeout <= 10.0))
-    return "response_timeout: " + std::to_string(c.response_timeout) +
-           " s is outside 0.001-10 s";
+    return "response_timeout: " + std::to_string(c.response_timeout) + " s is outside 0.001-10 s";
   if (!(c.byte_timeout >= 0.0 && c.byte_timeout <= 1.0))
     return "byte_timeout: " + std::to_string(c.byte_timeout) + " s is outside 0-1 s (0 = auto)";
   if (c.retries < 0 || c.retries > 10)
@@ -65,6 +71,8 @@ double effectiveByteTimeout(const LinkConfig& c) {
   return 1.5 * characterTime(c) + 0.005;
 }
 
-double effectiveMinGap(const LinkConfig& c) { return c.min_gap > 0 ? c.min_gap : frameGap(c); }
+double effectiveMinGap(const LinkConfig& c) {
+  return c.min_gap > 0 ? c.min_gap : frameGap(c);
+}
 
 }  // namespace modbus_rtu_driver

@@ -44,9 +44,13 @@ bool retryable(ErrorKind k) {
 
 RtuLink::RtuLink(LinkConfig config) : config_(std::move(config)) {}
 
-RtuLink::~RtuLink() { disconnect(); }
+RtuLink::~RtuLink() {
+  disconnect();
+}
 
-void RtuLink::setReplyDelay(uint8_t slave, double seconds) { reply_delay_[slave] = seconds; }
+void RtuLink::setReplyDelay(uint8_t slave, double seconds) {
+  reply_delay_[slave] = seconds;
+}
 
 LinkStats RtuLink::stats() const {
   std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -117,7 +121,8 @@ Result RtuLink::execute(const Request& request) {
   const std::string problem = request.validate();
   if (!problem.empty())
     return Result::failure(ErrorKind::kInvalidArgument, request.describe() + ": " + problem);
-  if (!ctx_) return Result::failure(ErrorKind::kNotConnected, "port " + config_.port + " is not open");
+  if (!ctx_)
+    return Result::failure(ErrorKind::kNotConnected, "port " + config_.port + " is not open");
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.requests;
@@ -186,8 +191,8 @@ Result RtuLink::readViaLibmodbus(const Request& request) {
   }
   if (rc == -1) return fromErrno(request, errno);
   if (rc != request.count)
-    return Result::failure(ErrorKind::kMalformed, request.describe() + ": " + std::to_string(rc) +
-                                                      " values in the reply");
+    return Result::failure(ErrorKind::kMalformed,
+                           request.describe() + ": " + std::to_string(rc) + " values in the reply");
   return Result::success(values);
 }
 
@@ -221,15 +226,16 @@ Result RtuLink::readReply(const Request& request) {
     FD_ZERO(&set);
     FD_SET(fd, &set);
     const double wait = buf.empty() ? first : between;
-    timeval tv{static_cast<time_t>(wait), static_cast<suseconds_t>((wait - std::floor(wait)) * 1e6)};
+    timeval tv{static_cast<time_t>(wait),
+               static_cast<suseconds_t>((wait - std::floor(wait)) * 1e6)};
     const int ready = select(fd + 1, &set, nullptr, nullptr, &tv);
     if (ready == -1 && errno == EINTR) continue;
     if (ready == -1) return fromErrno(request, errno);
     if (ready == 0) {
       if (buf.empty())
         return Result::failure(ErrorKind::kTimeout, request.describe() + ": no reply");
-      return Result::failure(ErrorKind::kTimeout, request.describe() + ": truncated reply " +
-                                                      toHex(buf));
+      return Result::failure(ErrorKind::kTimeout,
+                             request.describe() + ": truncated reply " + toHex(buf));
     }
     uint8_t chunk[MODBUS_RTU_MAX_ADU_LENGTH];
     const size_t want = need ? need - buf.size() : 1;
@@ -272,8 +278,10 @@ Result RtuLink::fromErrno(const Request& request, int error) const {
                            code);
   }
   switch (error) {
-    case ETIMEDOUT: return Result::failure(ErrorKind::kTimeout, what + "no reply");
-    case EMBBADCRC: return Result::failure(ErrorKind::kCrc, what + "bad CRC in reply");
+    case ETIMEDOUT:
+      return Result::failure(ErrorKind::kTimeout, what + "no reply");
+    case EMBBADCRC:
+      return Result::failure(ErrorKind::kCrc, what + "bad CRC in reply");
 #ifdef EMBBADSLAVE
     case EMBBADSLAVE:
       return Result::failure(ErrorKind::kWrongAddress, what + "reply came from another slave");
@@ -297,12 +305,24 @@ void RtuLink::account(const Result& r, double latency) {
       stats_.max_latency = std::max(stats_.max_latency, latency);
       break;
     }
-    case ErrorKind::kTimeout: ++stats_.timeouts; break;
-    case ErrorKind::kCrc: ++stats_.crc_errors; break;
-    case ErrorKind::kWrongAddress: ++stats_.wrong_address; break;
-    case ErrorKind::kException: ++stats_.exceptions; break;
-    case ErrorKind::kMalformed: ++stats_.malformed; break;
-    default: ++stats_.io_errors; break;
+    case ErrorKind::kTimeout:
+      ++stats_.timeouts;
+      break;
+    case ErrorKind::kCrc:
+      ++stats_.crc_errors;
+      break;
+    case ErrorKind::kWrongAddress:
+      ++stats_.wrong_address;
+      break;
+    case ErrorKind::kException:
+      ++stats_.exceptions;
+      break;
+    case ErrorKind::kMalformed:
+      ++stats_.malformed;
+      break;
+    default:
+      ++stats_.io_errors;
+      break;
   }
 }
 

@@ -4,10 +4,14 @@ namespace modbus_rtu_driver {
 
 const char* levelName(Level level) {
   switch (level) {
-    case Level::kOk: return "OK";
-    case Level::kWarn: return "WARN";
-    case Level::kError: return "ERROR";
-    case Level::kStale: return "STALE";
+    case Level::kOk:
+      return "OK";
+    case Level::kWarn:
+      return "WARN";
+    case Level::kError:
+      return "ERROR";
+    case Level::kStale:
+      return "STALE";
   }
   return "?";
 }

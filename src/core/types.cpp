@@ -6,14 +6,23 @@ namespace modbus_rtu_driver {
 
 bool isKnownFunction(uint8_t code) {
   switch (code) {
-    case 0x01: case 0x02: case 0x03: case 0x04: case 0x05: case 0x06: case 0x0F: case 0x10:
+    case 0x01:
+    case 0x02:
+    case 0x03:
+    case 0x04:
+    case 0x05:
+    case 0x06:
+    case 0x0F:
+    case 0x10:
       return true;
     default:
       return false;
   }
 }
 
-bool isReadFunction(FunctionCode fc) { return static_cast<uint8_t>(fc) <= 0x04; }
+bool isReadFunction(FunctionCode fc) {
+  return static_cast<uint8_t>(fc) <= 0x04;
+}
 
 bool isBitFunction(FunctionCode fc) {
   return fc == FunctionCode::kReadCoils || fc == FunctionCode::kReadDiscreteInputs ||
@@ -22,24 +31,36 @@ bool isBitFunction(FunctionCode fc) {
 
 const char* functionName(FunctionCode fc) {
   switch (fc) {
-    case FunctionCode::kReadCoils: return "read coils";
-    case FunctionCode::kReadDiscreteInputs: return "read discrete inputs";
-    case FunctionCode::kReadHoldingRegisters: return "read holding registers";
-    case FunctionCode::kReadInputRegisters: return "read input registers";
-    case FunctionCode::kWriteSingleCoil: return "write single coil";
-    case FunctionCode::kWriteSingleRegister: return "write single register";
-    case FunctionCode::kWriteMultipleCoils: return "write multiple coils";
-    case FunctionCode::kWriteMultipleRegisters: return "write multiple registers";
+    case FunctionCode::kReadCoils:
+      return "read coils";
+    case FunctionCode::kReadDiscreteInputs:
+      return "read discrete inputs";
+    case FunctionCode::kReadHoldingRegisters:
+      return "read holding registers";
+    case FunctionCode::kReadInputRegisters:
+      return "read input registers";
+    case FunctionCode::kWriteSingleCoil:
+      return "write single coil";
+    case FunctionCode::kWriteSingleRegister:
+      return "write single register";
+    case FunctionCode::kWriteMultipleCoils:
+      return "write multiple coils";
+    case FunctionCode::kWriteMultipleRegisters:
+      return "write multiple registers";
   }
   return "unknown function";
 }
 
 std::string exceptionName(uint8_t code) {
   switch (code) {
-    case kIllegalFunction: return "illegal function (01)";
-    case kIllegalDataAddress: return "illegal data address (02)";
-    case kIllegalDataValue: return "illegal data value (03)";
-    case kSlaveDeviceFailure: return "slave device failure (04)";
+    case kIllegalFunction:
+      return "illegal function (01)";
+    case kIllegalDataAddress:
+      return "illegal data address (02)";
+    case kIllegalDataValue:
+      return "illegal data value (03)";
+    case kSlaveDeviceFailure:
+      return "slave device failure (04)";
     default: {
       char buf[40];
       std::snprintf(buf, sizeof buf, "exception %02X", code);
@@ -50,15 +71,24 @@ std::string exceptionName(uint8_t code) {
 
 const char* errorKindName(ErrorKind kind) {
   switch (kind) {
-    case ErrorKind::kNone: return "ok";
-    case ErrorKind::kTimeout: return "timeout";
-    case ErrorKind::kCrc: return "crc error";
-    case ErrorKind::kWrongAddress: return "reply from wrong address";
-    case ErrorKind::kException: return "modbus exception";
-    case ErrorKind::kMalformed: return "malformed reply";
-    case ErrorKind::kIo: return "i/o error";
-    case ErrorKind::kInvalidArgument: return "invalid argument";
-    case ErrorKind::kNotConnected: return "not connected";
+    case ErrorKind::kNone:
+      return "ok";
+    case ErrorKind::kTimeout:
+      return "timeout";
+    case ErrorKind::kCrc:
+      return "crc error";
+    case ErrorKind::kWrongAddress:
+      return "reply from wrong address";
+    case ErrorKind::kException:
+      return "modbus exception";
+    case ErrorKind::kMalformed:
+      return "malformed reply";
+    case ErrorKind::kIo:
+      return "i/o error";
+    case ErrorKind::kInvalidArgument:
+      return "invalid argument";
+    case ErrorKind::kNotConnected:
+      return "not connected";
   }
   return "unknown";
 }
@@ -114,12 +144,21 @@ std::string Request::validate() const {
   uint16_t max = 1;
   switch (function) {
     case FunctionCode::kReadCoils:
-    case FunctionCode::kReadDiscreteInputs: max = kMaxReadBits; break;
+    case FunctionCode::kReadDiscreteInputs:
+      max = kMaxReadBits;
+      break;
     case FunctionCode::kReadHoldingRegisters:
-    case FunctionCode::kReadInputRegisters: max = kMaxReadRegisters; break;
-    case FunctionCode::kWriteMultipleCoils: max = kMaxWriteBits; break;
-    case FunctionCode::kWriteMultipleRegisters: max = kMaxWriteRegisters; break;
-    default: max = 1;
+    case FunctionCode::kReadInputRegisters:
+      max = kMaxReadRegisters;
+      break;
+    case FunctionCode::kWriteMultipleCoils:
+      max = kMaxWriteBits;
+      break;
+    case FunctionCode::kWriteMultipleRegisters:
+      max = kMaxWriteRegisters;
+      break;
+    default:
+      max = 1;
   }
   if (count < 1 || count > max)
     return "count: " + std::to_string(count) + " is outside 1-" + std::to_string(max);

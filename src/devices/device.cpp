@@ -56,7 +56,8 @@ Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& chan
   const size_t span = hi - lo + 1u;
   if (span != channels.size()) {
     // Gaps in the span keep their state: read the coils now rather than trust an old poll.
-    Result current = bus.execute(Request::readCoils(address(), 0, static_cast<uint16_t>(outputCount())));
+    Result current =
+        bus.execute(Request::readCoils(address(), 0, static_cast<uint16_t>(outputCount())));
     if (!current.ok()) return current;
     target.assign(current.values.begin(), current.values.end());
   } else if (target.size() != outputCount()) {
@@ -66,8 +67,8 @@ Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& chan
   const std::vector<bool> bits(target.begin() + lo, target.begin() + hi + 1);
   Result r = bus.execute(Request::writeMultipleCoils(address(), lo, bits));
   // The whole array is known only if it was read or already known before.
-  if (r.ok() && (span != channels.size() || span == outputCount() ||
-                  outputs_.size() == outputCount()))
+  if (r.ok() &&
+      (span != channels.size() || span == outputCount() || outputs_.size() == outputCount()))
     outputs_ = target;
   return r;
 }

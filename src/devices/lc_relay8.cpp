@@ -48,9 +48,9 @@ Result LcRelay8::readBaudCode(Transport& bus, uint16_t* code) {
 
 Result LcRelay8::writeBaudCode(Transport& bus, uint16_t code) {
   if (code < 2 || code > 4)
-    return Result::failure(ErrorKind::kInvalidArgument,
-                           "baud code: " + std::to_string(code) +
-                               " is outside 2-4 (4800, 9600, 19200 baud)");
+    return Result::failure(
+        ErrorKind::kInvalidArgument,
+        "baud code: " + std::to_string(code) + " is outside 2-4 (4800, 9600, 19200 baud)");
   return bus.execute(Request::writeMultipleRegisters(address(), kBaudWriteRegister, {code}));
 }
 

@@ -25,8 +25,7 @@ bool toTenths(double seconds, long* tenths) {
 }  // namespace
 
 std::string Ld58a08::validatePwm(const PwmSettings& s) {
-  if (s.channel >= kChannels)
-    return "channel: " + std::to_string(s.channel) + " is outside 0-7";
+  if (s.channel >= kChannels) return "channel: " + std::to_string(s.channel) + " is outside 0-7";
   long t = 0;
   if (s.channel < 6) {
     if (!(s.period >= 0.1 && s.period <= 6553.5) || !toTenths(s.period, &t))
@@ -36,8 +35,7 @@ std::string Ld58a08::validatePwm(const PwmSettings& s) {
     if (s.on_time > s.period + 1e-9)
       return "on_time: " + fmt(s.on_time) + " s is longer than the period (" + fmt(s.period) +
              " s)";
-    if (s.pulses == kContinuous)
-      return "pulses: 65535 is outside 0-65534 (0 = run continuously)";
+    if (s.pulses == kContinuous) return "pulses: 65535 is outside 0-65534 (0 = run continuously)";
     return {};
   }
   if (!(s.frequency >= 1 && s.frequency <= 20000) || s.frequency != std::floor(s.frequency))
@@ -88,18 +86,18 @@ Result Ld58a08::readPwmChannel(Transport& bus, uint8_t ch, PwmState* out) {
   PwmState& p = *out;
   p = PwmState{};
   p.channel = ch;
-    p.high_speed = ch >= 6;
-    const uint16_t enable = r.values[2];
-    p.running = enable != 0;
-    if (p.high_speed) {
-      p.frequency = r.values[0];
-      p.duty_cycle = r.values[1];
-      p.duration = enable / 10.0;
-    } else {
-      p.period = r.values[0] / 10.0;
-      p.on_time = r.values[1] / 10.0;
-      p.pulses = enable;
-    }
+  p.high_speed = ch >= 6;
+  const uint16_t enable = r.values[2];
+  p.running = enable != 0;
+  if (p.high_speed) {
+    p.frequency = r.values[0];
+    p.duty_cycle = r.values[1];
+    p.duration = enable / 10.0;
+  } else {
+    p.period = r.values[0] / 10.0;
+    p.on_time = r.values[1] / 10.0;
+    p.pulses = enable;
+  }
   return r;
 }
 
@@ -144,9 +142,9 @@ Result Ld58a08::readSettings(Transport& bus, Ld58a08Settings* out) {
 
 Result Ld58a08::setReturnDelay(Transport& bus, uint16_t units) {
   if (units > 25)
-    return Result::failure(ErrorKind::kInvalidArgument,
-                           "return_delay: " + std::to_string(units) +
-                               " is outside 0-25 (x 40 ms, up to 1000 ms)");
+    return Result::failure(
+        ErrorKind::kInvalidArgument,
+        "return_delay: " + std::to_string(units) + " is outside 0-25 (x 40 ms, up to 1000 ms)");
   return bus.execute(Request::writeSingleRegister(address(), kReturnDelayRegister, units));
 }
 

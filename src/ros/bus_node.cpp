@@ -53,8 +53,9 @@ bool BusNode::start() {
     diagnostics_->add("device " + a->name(),
                       [raw](diagnostic_updater::DiagnosticStatusWrapper& s) { raw->diagnose(s); });
   }
-  diagnostics_timer_ = nh_.createTimer(ros::Duration(config_.diagnostic_period),
-                                       [this](const ros::TimerEvent&) { diagnostics_->force_update(); });
+  diagnostics_timer_ =
+      nh_.createTimer(ros::Duration(config_.diagnostic_period),
+                      [this](const ros::TimerEvent&) { diagnostics_->force_update(); });
 
   for (auto& a : adapters_) a->start();
   bus_->start();

@@ -22,18 +22,18 @@ void DeviceAdapter::start() {
     command_subs_.push_back(nh_.subscribe<std_msgs::Bool>(
         names[i] + "/command", 10,
         [this, ch](const std_msgs::Bool::ConstPtr& msg) { onCommand(ch, msg); }));
-    services_.push_back(nh_.advertiseService<std_srvs::SetBool::Request, std_srvs::SetBool::Response>(
-        names[i] + "/set", [this, ch](std_srvs::SetBool::Request& req,
-                                      std_srvs::SetBool::Response& res) {
-          return onSet(ch, req, res);
-        }));
+    services_.push_back(
+        nh_.advertiseService<std_srvs::SetBool::Request, std_srvs::SetBool::Response>(
+            names[i] + "/set",
+            [this, ch](std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
+              return onSet(ch, req, res);
+            }));
   }
   services_.push_back(nh_.advertiseService("set_outputs", &DeviceAdapter::onSetOutputs, this));
   auto device = device_;
   bus_.addPoll(
       device_->name(), device_->config().poll_rate,
-      [device](Transport& t) { return device->poll(t); },
-      [this](const Result& r) { onPoll(r); });
+      [device](Transport& t) { return device->poll(t); }, [this](const Result& r) { onPoll(r); });
 }
 
 void DeviceAdapter::onPoll(const Result& result) {

@@ -60,9 +60,9 @@ class LcRelay8Adapter : public DeviceAdapter {
       return w;
     });
     res.success = r.ok();
-    res.message = answer(r, std::string(state ? "flash-close " : "flash-open ") +
-                                device_->outputNames()[channel] + " for " +
-                                std::to_string(duration) + " s");
+    res.message =
+        answer(r, std::string(state ? "flash-close " : "flash-open ") +
+                      device_->outputNames()[channel] + " for " + std::to_string(duration) + " s");
     return true;
   }
 

@@ -80,8 +80,8 @@ class Ld58a08Adapter : public DeviceAdapter {
   bool onStopPwm(StopPwm::Request& req, StopPwm::Response& res) {
     if (req.channel >= Ld58a08::kChannels) {
       res.success = false;
-      res.message = device_->name() + ": channel: " + std::to_string(req.channel) +
-                    " is outside 0-7";
+      res.message =
+          device_->name() + ": channel: " + std::to_string(req.channel) + " is outside 0-7";
       return true;
     }
     const uint8_t channel = req.channel;
@@ -103,8 +103,8 @@ class Ld58a08Adapter : public DeviceAdapter {
 
 }  // namespace
 
-std::unique_ptr<DeviceAdapter> makeLd58a08Adapter(std::shared_ptr<Device> device,
-                                                  BusScheduler& bus, const ros::NodeHandle& nh) {
+std::unique_ptr<DeviceAdapter> makeLd58a08Adapter(std::shared_ptr<Device> device, BusScheduler& bus,
+                                                  const ros::NodeHandle& nh) {
   return std::make_unique<Ld58a08Adapter>(std::move(device), bus, nh);
 }
 

@@ -7,11 +7,16 @@
 namespace modbus_rtu_driver {
 
 bool parseTable(const std::string& name, Table* out) {
-  if (name == "coil") *out = Table::kCoil;
-  else if (name == "input") *out = Table::kDiscreteInput;
-  else if (name == "holding") *out = Table::kHolding;
-  else if (name == "ireg") *out = Table::kInputRegister;
-  else return false;
+  if (name == "coil")
+    *out = Table::kCoil;
+  else if (name == "input")
+    *out = Table::kDiscreteInput;
+  else if (name == "holding")
+    *out = Table::kHolding;
+  else if (name == "ireg")
+    *out = Table::kInputRegister;
+  else
+    return false;
   return true;
 }
 
@@ -25,8 +30,8 @@ std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point no
     case FunctionCode::kReadHoldingRegisters:
     case FunctionCode::kReadInputRegisters: {
       if (broadcast) return std::nullopt;
-      const Table t = r.function == FunctionCode::kReadCoils            ? Table::kCoil
-                      : r.function == FunctionCode::kReadDiscreteInputs ? Table::kDiscreteInput
+      const Table t = r.function == FunctionCode::kReadCoils              ? Table::kCoil
+                      : r.function == FunctionCode::kReadDiscreteInputs   ? Table::kDiscreteInput
                       : r.function == FunctionCode::kReadHoldingRegisters ? Table::kHolding
                                                                           : Table::kInputRegister;
       const uint16_t max = isBitFunction(r.function) ? kMaxReadBits : kMaxReadRegisters;

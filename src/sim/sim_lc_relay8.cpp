@@ -5,7 +5,9 @@
 namespace modbus_rtu_driver {
 
 namespace {
-int baudOfCode(uint16_t code) { return code == 2 ? 4800 : code == 4 ? 19200 : 9600; }
+int baudOfCode(uint16_t code) {
+  return code == 2 ? 4800 : code == 4 ? 19200 : 9600;
+}
 }  // namespace
 
 SimLcRelay8::SimLcRelay8(uint8_t address, SimLineSettings line) : SimDevice(address, line) {

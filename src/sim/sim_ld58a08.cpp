@@ -75,14 +75,29 @@ uint8_t SimLd58a08::read(Table table, uint16_t a, SimClock::time_point now, uint
     return 0;
   }
   switch (a) {
-    case 0x0080: *v = outputs_; return 0;
-    case 0x00FA: *v = save_; return 0;
-    case 0x00FB: *v = 0; return 0;
-    case 0x00FC: *v = return_delay_; return 0;
-    case 0x00FD: *v = address_; return 0;
-    case 0x00FE: *v = baud_code_; return 0;
-    case 0x00FF: *v = parity_code_; return 0;
-    default: return kIllegalDataAddress;
+    case 0x0080:
+      *v = outputs_;
+      return 0;
+    case 0x00FA:
+      *v = save_;
+      return 0;
+    case 0x00FB:
+      *v = 0;
+      return 0;
+    case 0x00FC:
+      *v = return_delay_;
+      return 0;
+    case 0x00FD:
+      *v = address_;
+      return 0;
+    case 0x00FE:
+      *v = baud_code_;
+      return 0;
+    case 0x00FF:
+      *v = parity_code_;
+      return 0;
+    default:
+      return kIllegalDataAddress;
   }
 }
 
@@ -125,23 +140,34 @@ uint8_t SimLd58a08::writeHolding(uint16_t a, uint16_t v, SimClock::time_point no
     return 0;
   }
   switch (a) {
-    case 0x0080: outputs_ = static_cast<uint8_t>(v & 0xFF); return 0;
+    case 0x0080:
+      outputs_ = static_cast<uint8_t>(v & 0xFF);
+      return 0;
     case 0x00FA:
       if (v > 1) return kIllegalDataValue;
       save_ = v;
       return 0;
-    case 0x00FB: factoryReset(); return 0;
-    case 0x00FC: return_delay_ = v > 25 ? 0 : v; return 0;  // over 25: back to 0 (manual)
+    case 0x00FB:
+      factoryReset();
+      return 0;
+    case 0x00FC:
+      return_delay_ = v > 25 ? 0 : v;
+      return 0;  // over 25: back to 0 (manual)
     case 0x00FD:
       if (v < 1 || v > 247) return kIllegalDataValue;
       address_ = static_cast<uint8_t>(v);  // answers at the new address from the next request
       return 0;
     case 0x00FE:
-      if (v > 7) factoryReset();  // "Others: Factory reset"
-      else baud_code_ = v;
+      if (v > 7)
+        factoryReset();  // "Others: Factory reset"
+      else
+        baud_code_ = v;
       return 0;
-    case 0x00FF: parity_code_ = v; return 0;  // >2 becomes 0 at power-on
-    default: return kIllegalDataAddress;
+    case 0x00FF:
+      parity_code_ = v;
+      return 0;  // >2 becomes 0 at power-on
+    default:
+      return kIllegalDataAddress;
   }
 }
 

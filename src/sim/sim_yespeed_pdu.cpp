@@ -21,11 +21,17 @@ uint16_t SimYespeedPdu::telemetry(uint16_t index, SimClock::time_point now) cons
   const double voltage = 220.0 + 2.0 * std::sin(t / 7.0) + 0.3 * std::sin(t * 3.1);
   const double current = 0.25 + 0.9 * std::bitset<8>(relays_).count() + 0.05 * std::sin(t * 1.7);
   switch (index) {
-    case 0: return static_cast<uint16_t>(static_cast<int16_t>(std::lround((22.0 + 0.8 * std::sin(t / 30.0)) * 10)));
-    case 1: return static_cast<uint16_t>(std::lround((55.0 + 3.0 * std::sin(t / 45.0)) * 10));
-    case 2: return static_cast<uint16_t>(std::lround(voltage * 10));
-    case 3: return static_cast<uint16_t>(std::lround(current * 100));
-    default: return static_cast<uint16_t>(std::lround(voltage * current * 0.95));  // W, PF 0.95
+    case 0:
+      return static_cast<uint16_t>(
+          static_cast<int16_t>(std::lround((22.0 + 0.8 * std::sin(t / 30.0)) * 10)));
+    case 1:
+      return static_cast<uint16_t>(std::lround((55.0 + 3.0 * std::sin(t / 45.0)) * 10));
+    case 2:
+      return static_cast<uint16_t>(std::lround(voltage * 10));
+    case 3:
+      return static_cast<uint16_t>(std::lround(current * 100));
+    default:
+      return static_cast<uint16_t>(std::lround(voltage * current * 0.95));  // W, PF 0.95
   }
 }
 

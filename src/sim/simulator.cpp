@@ -22,15 +22,24 @@ namespace {
 
 int baudOf(speed_t s) {
   switch (s) {
-    case B1200: return 1200;
-    case B2400: return 2400;
-    case B4800: return 4800;
-    case B9600: return 9600;
-    case B19200: return 19200;
-    case B38400: return 38400;
-    case B57600: return 57600;
-    case B115200: return 115200;
-    default: return 0;
+    case B1200:
+      return 1200;
+    case B2400:
+      return 2400;
+    case B4800:
+      return 4800;
+    case B9600:
+      return 9600;
+    case B19200:
+      return 19200;
+    case B38400:
+      return 38400;
+    case B57600:
+      return 57600;
+    case B115200:
+      return 115200;
+    default:
+      return 0;
   }
 }
 
@@ -38,7 +47,9 @@ double charTime(const SimLineSettings& l) {
   return (l.parity == 'N' ? 10.0 : 11.0) / l.baud;
 }
 
-double gapOf(const SimLineSettings& l) { return l.baud > 19200 ? 0.00175 : 3.5 * charTime(l); }
+double gapOf(const SimLineSettings& l) {
+  return l.baud > 19200 ? 0.00175 : 3.5 * charTime(l);
+}
 
 SimClock::duration secs(double s) {
   return std::chrono::duration_cast<SimClock::duration>(std::chrono::duration<double>(s));
@@ -97,7 +108,9 @@ Simulator::Simulator(SimulatorConfig config, SimulatorOptions options)
     devices_.push_back(makeSimDevice(e.type, static_cast<uint8_t>(e.address), config_.factory));
 }
 
-Simulator::~Simulator() { stop(); }
+Simulator::~Simulator() {
+  stop();
+}
 
 bool Simulator::start(std::string* error) {
   auto fail = [&](const std::string& what) {
@@ -278,8 +291,7 @@ void Simulator::processFrame(const Bytes& frame) {
   if (wrote) saveState();
 }
 
-void Simulator::answer(SimDevice& device, const Bytes& request, const Bytes& sent,
-                       double delay) {
+void Simulator::answer(SimDevice& device, const Bytes& request, const Bytes& sent, double delay) {
   Bytes reply = sent;
   if (device.corrupt_replies > 0) {
     --device.corrupt_replies;
@@ -368,8 +380,8 @@ std::string Simulator::doCommand(const std::string& line) {
     std::string out = "ok";
     for (size_t i = 0; i < devices_.size(); ++i) {
       const auto& d = devices_[i];
-      out += " #" + std::to_string(i) + ":" + d->type() + ":" + std::to_string(d->address()) +
-             ":" + std::to_string(d->line().baud) + ":" + d->line().parity;
+      out += " #" + std::to_string(i) + ":" + d->type() + ":" + std::to_string(d->address()) + ":" +
+             std::to_string(d->line().baud) + ":" + d->line().parity;
     }
     return out;
   }
@@ -386,7 +398,8 @@ std::string Simulator::doCommand(const std::string& line) {
   }
   Table table;
   uint32_t address = 0;
-  if (!(in >> table_name) || !parseTable(table_name, &table) || !(in >> address) || address > 0xFFFF)
+  if (!(in >> table_name) || !parseTable(table_name, &table) || !(in >> address) ||
+      address > 0xFFFF)
     return "error usage: get|set DEVICE coil|input|holding|ireg ADDRESS [COUNT|VALUES]";
   if (verb == "get") {
     uint32_t count = 1;
@@ -403,7 +416,8 @@ std::string Simulator::doCommand(const std::string& line) {
   if (verb == "set") {
     uint32_t v = 0;
     for (uint32_t a = address; in >> v; ++a) {
-      const uint8_t e = d->setDirect(table, static_cast<uint16_t>(a), static_cast<uint16_t>(v), now);
+      const uint8_t e =
+          d->setDirect(table, static_cast<uint16_t>(a), static_cast<uint16_t>(v), now);
       if (e) return "error " + exceptionName(e) + " at " + std::to_string(a);
     }
     saveState();

@@ -32,14 +32,22 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
-    if (a == "--config") config_path = value();
-    else if (a == "--link") options.link = value();
-    else if (a == "--control") options.control = value();
-    else if (a == "--state-file") options.state_file = value();
-    else if (a == "--pace") pace = true;
-    else if (a == "--verbose") options.verbose = true;
-    else if (a.rfind("__", 0) == 0 || a.find(":=") != std::string::npos) continue;  // roslaunch
-    else return usage(("unknown option " + a).c_str());
+    if (a == "--config")
+      config_path = value();
+    else if (a == "--link")
+      options.link = value();
+    else if (a == "--control")
+      options.control = value();
+    else if (a == "--state-file")
+      options.state_file = value();
+    else if (a == "--pace")
+      pace = true;
+    else if (a == "--verbose")
+      options.verbose = true;
+    else if (a.rfind("__", 0) == 0 || a.find(":=") != std::string::npos)
+      continue;  // roslaunch
+    else
+      return usage(("unknown option " + a).c_str());
   }
   if (config_path.empty() || options.link.empty()) return usage("--config and --link are needed");
   SimulatorConfig config;
@@ -57,8 +65,7 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, [](int) { g_stop = 1; });
   std::signal(SIGTERM, [](int) { g_stop = 1; });
   std::signal(SIGHUP, [](int) { g_power_cycle = 1; });
-  std::printf("simulator ready on %s (%s)\n", options.link.c_str(),
-              sim.command("info").c_str());
+  std::printf("simulator ready on %s (%s)\n", options.link.c_str(), sim.command("info").c_str());
   std::fflush(stdout);
   while (!g_stop) {
     if (g_power_cycle) {

@@ -40,7 +40,8 @@ class ScriptedTransport : public Transport {
       return Result::failure(ErrorKind::kMalformed, "unexpected request");
     }
     if (!request.expectsReply()) return Result::success(request.values);
-    if (step.reply.empty()) return Result::failure(ErrorKind::kTimeout, request.describe() + ": no reply");
+    if (step.reply.empty())
+      return Result::failure(ErrorKind::kTimeout, request.describe() + ": no reply");
     return decodeReply(request, step.reply);
   }
 

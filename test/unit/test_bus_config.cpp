@@ -65,8 +65,8 @@ TEST(BusConfig, TheIssueExampleParses) {
 TEST(BusConfig, MissingOptionalKeysTakeDefaults) {
   BusConfig c;
   std::string error;
-  ASSERT_TRUE(parseBusConfig(YAML::Load("devices: {r: {type: lc_relay8, address: 255}}"), &c,
-                             &error))
+  ASSERT_TRUE(
+      parseBusConfig(YAML::Load("devices: {r: {type: lc_relay8, address: 255}}"), &c, &error))
       << error;
   EXPECT_EQ(c.link.port, "/dev/ttyUSB0");
   EXPECT_EQ(c.link.baud, 9600);
@@ -105,13 +105,15 @@ TEST(BusConfig, EachBadValueIsNamed) {
       {"[pump, valve,", "[pump, 2valve,", {"devices/relays/outputs", "2valve"}},
       {"[pump, valve,", "[pump, pump,", {"devices/relays/outputs", "pump"}},
       {"[door, estop, in2, in3, in4, in5, in6, in7]", "[door]", {"devices/relays/inputs", "8"}},
-      {"    poll_rate: 10.0", "    poll_rate: 10.0\n    colour: red",
+      {"    poll_rate: 10.0",
+       "    poll_rate: 10.0\n    colour: red",
        {"devices/relays/colour", "unknown key"}},
   };
   for (const auto& c : cases) {
     const std::string error = errorOf(replaced(c.from, c.to));
     ASSERT_FALSE(error.empty()) << c.to;
-    for (const auto& w : c.words) EXPECT_NE(error.find(w), std::string::npos) << c.to << " -> " << error;
+    for (const auto& w : c.words)
+      EXPECT_NE(error.find(w), std::string::npos) << c.to << " -> " << error;
   }
 }
 

@@ -1,11 +1,11 @@
 // The bus thread: writes before polls, fair polling, offline devices backed off, reconnects.
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <algorithm>
+#include <atomic>
 #include <map>
-#include <set>
 #include <mutex>
+#include <set>
 #include <thread>
 
 #include "modbus_rtu_driver/core/bus_scheduler.h"
@@ -63,9 +63,8 @@ TEST(BusScheduler, WritesGoAheadOfPolls) {
   std::this_thread::sleep_for(50ms);
   std::vector<std::future<Result>> writes;
   for (int i = 0; i < 5; ++i)
-    writes.push_back(s.submit("a", [](Transport& t) {
-      return t.execute(Request::writeSingleCoil(1, 0, true));
-    }));
+    writes.push_back(s.submit(
+        "a", [](Transport& t) { return t.execute(Request::writeSingleCoil(1, 0, true)); }));
   for (auto& w : writes) EXPECT_TRUE(w.get().ok());
   s.stop();
   // The five writes were queued together: no poll ran between them.

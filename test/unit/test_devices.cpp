@@ -87,9 +87,9 @@ TEST(Ld58a08, PollDecodesOutputsAndPwm) {
   bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 7C 50 69");
   for (uint16_t ch = 0; ch < 8; ++ch) {
     const Request read = Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3);
-    const std::vector<uint16_t> regs =
-        ch == 0 ? std::vector<uint16_t>{500, 200, 0xFFFF}
-                : ch == 6 ? std::vector<uint16_t>{10000, 30, 1000} : std::vector<uint16_t>{0, 0, 0};
+    const std::vector<uint16_t> regs = ch == 0   ? std::vector<uint16_t>{500, 200, 0xFFFF}
+                                       : ch == 6 ? std::vector<uint16_t>{10000, 30, 1000}
+                                                 : std::vector<uint16_t>{0, 0, 0};
     bus.expect(toHex(encodeRequest(read)), toHex(encodeReply(read, regs)));
   }
   ASSERT_TRUE(board.poll(bus).ok());

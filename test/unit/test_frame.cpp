@@ -57,8 +57,7 @@ TEST(Frame, BuildersProduceManualFrames) {
             "01 0F 00 00 00 08 01 89 3F 33");
   EXPECT_EQ(toHex(encodeRequest(Request::writeMultipleRegisters(1, 0, {500, 200, 0xFFFF}))),
             "01 10 00 00 00 03 06 01 F4 00 C8 FF FF D6 CA");
-  EXPECT_EQ(toHex(encodeRequest(Request::readInputRegisters(1, 0, 5))),
-            "01 04 00 00 00 05 30 09");
+  EXPECT_EQ(toHex(encodeRequest(Request::readInputRegisters(1, 0, 5))), "01 04 00 00 00 05 30 09");
 }
 
 TEST(Frame, DecodeGoldenReplies) {
@@ -116,9 +115,9 @@ TEST(Frame, ErrorsAreToldApart) {
   EXPECT_NE(exc.message.find("FC03"), std::string::npos) << exc.message;
   EXPECT_NE(exc.message.find("0x00FD"), std::string::npos) << exc.message;
   // A write whose echo differs is not a confirmation.
-  EXPECT_EQ(decodeReply(Request::writeSingleCoil(1, 0, true), *fromHex("01 05 00 00 00 00 CD CA"))
-                .error,
-            ErrorKind::kMalformed);
+  EXPECT_EQ(
+      decodeReply(Request::writeSingleCoil(1, 0, true), *fromHex("01 05 00 00 00 00 CD CA")).error,
+      ErrorKind::kMalformed);
 }
 
 TEST(Frame, RequestValidationNamesTheField) {

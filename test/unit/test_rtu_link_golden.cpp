@@ -43,8 +43,9 @@ TEST(RtuLinkGolden, EveryRequestTheDriverSendsIsByteExact) {
     const Request request = requestFor(g);
     // Rows without a printed reply are answered as the device would (echo / register values).
     const Bytes reply = !g.response.empty() ? g.response
-                        : request.expectsReply() ? encodeReply(request, std::vector<uint16_t>(request.count, 0))
-                                                 : Bytes{};
+                        : request.expectsReply()
+                            ? encodeReply(request, std::vector<uint16_t>(request.count, 0))
+                            : Bytes{};
     auto device = std::async(std::launch::async, [&] {
       const Bytes got = pty.read(g.request.size());
       pty.write(reply);
@@ -77,9 +78,11 @@ TEST(RtuLinkGolden, RepliesDecodeToTheManualsValues) {
       {Request::readHoldingRegisters(255, 0x3E8, 1), "FF 03 02 00 04 90 53", {4}},
       {Request::readInputRegisters(1, 2, 1), "01 04 02 08 9B FF 5B", {2203}},
       {Request::readInputRegisters(1, 3, 1), "01 04 02 02 DA 39 CB", {730}},
-      {Request::readInputRegisters(1, 0, 5), "01 04 0A 00 DD 02 71 08 98 02 D5 06 3B 86 51",
+      {Request::readInputRegisters(1, 0, 5),
+       "01 04 0A 00 DD 02 71 08 98 02 D5 06 3B 86 51",
        {221, 625, 2200, 725, 1595}},
-      {Request::readHoldingRegisters(1, 0, 3), "01 03 06 09 C4 07 D0 06 40 D2 E0",
+      {Request::readHoldingRegisters(1, 0, 3),
+       "01 03 06 09 C4 07 D0 06 40 D2 E0",
        {2500, 2000, 1600}},
   };
   for (const auto& c : cases) {

@@ -1,7 +1,7 @@
 // The simulated devices: the manuals' frames, time behaviour, rules, power cycle, state file,
 // and the line over a real pty.
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -171,7 +171,8 @@ TEST(SimLcRelay8, AddressThroughZeroAndInputsFromOutside) {
   EXPECT_EQ(d.address(), 7);
   reply = ask(d, "00 03 00 00 00 01 85 DB");
   ASSERT_TRUE(reply.has_value());
-  EXPECT_EQ(toHex(*reply), toHex(encodeReply(*decodeRequest(*fromHex("00 03 00 00 00 01 85 DB")), {7})));
+  EXPECT_EQ(toHex(*reply),
+            toHex(encodeReply(*decodeRequest(*fromHex("00 03 00 00 00 01 85 DB")), {7})));
   EXPECT_EQ(d.setDirect(Table::kDiscreteInput, 3, 1, SimClock::now()), 0);
   uint16_t v = 0;
   d.read(Table::kDiscreteInput, 3, SimClock::now(), &v);

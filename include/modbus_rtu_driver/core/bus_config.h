@@ -17,7 +17,7 @@ namespace modbus_rtu_driver {
 
 struct BusConfig {
   LinkConfig link;
-  std::string role = "master";  // master: the node polls devices; slave: a master polls the node
+  std::string role = "master";     // master: the node polls devices; slave: a master polls the node
   double diagnostic_period = 1.0;  // s
   std::vector<DeviceConfig> devices;
 };

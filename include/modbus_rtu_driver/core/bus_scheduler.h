@@ -20,10 +20,10 @@
 namespace modbus_rtu_driver {
 
 struct DeviceHealth {
-  bool online = true;            // false after `offline_after` failed transactions in a row
+  bool online = true;  // false after `offline_after` failed transactions in a row
   uint32_t consecutive_failures = 0;
   uint64_t polls_ok = 0, polls_failed = 0, writes_ok = 0, writes_failed = 0;
-  std::string last_error;        // empty when none yet
+  std::string last_error;         // empty when none yet
   double achieved_poll_rate = 0;  // Hz over the last seconds
   bool rate_overrun = false;      // the bus could not keep the configured rate
 };

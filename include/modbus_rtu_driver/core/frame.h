@@ -16,13 +16,15 @@ namespace modbus_rtu_driver {
 using Bytes = std::vector<uint8_t>;
 
 uint16_t crc16(const uint8_t* data, size_t length);
-inline uint16_t crc16(const Bytes& data) { return crc16(data.data(), data.size()); }
+inline uint16_t crc16(const Bytes& data) {
+  return crc16(data.data(), data.size());
+}
 // Appends the CRC low byte first, as it travels on the wire.
 void appendCrc(Bytes& frame);
 // True when the last two bytes are the CRC of the rest.
 bool hasValidCrc(const Bytes& frame);
 
-std::string toHex(const Bytes& bytes);            // "01 03 00 FD"
+std::string toHex(const Bytes& bytes);             // "01 03 00 FD"
 std::optional<Bytes> fromHex(const std::string&);  // accepts spaces, upper or lower case
 
 // The request ADU (slave, PDU, CRC). The request must be valid (Request::validate()).

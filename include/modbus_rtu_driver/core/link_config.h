@@ -10,16 +10,16 @@ enum class DirectionControl { kAuto, kRtsHigh, kRtsLow };  // RTS modes: level w
 
 struct LinkConfig {
   std::string port = "/dev/ttyUSB0";
-  int baud = 9600;               // 1200-115200
+  int baud = 9600;  // 1200-115200
   Parity parity = Parity::kNone;
-  int data_bits = 8;             // 7 or 8
-  int stop_bits = 1;             // 1 or 2
+  int data_bits = 8;              // 7 or 8
+  int stop_bits = 1;              // 1 or 2
   double response_timeout = 0.5;  // s, wait for the first byte of a reply
   double byte_timeout = 0.0;      // s, silence that ends a reply; 0 = derived from the baud
   int retries = 1;                // extra attempts after a timeout/CRC/wrong-address error
   double min_gap = 0.0;           // s, silence kept between frames; 0 = t3.5 of the baud
   DirectionControl direction = DirectionControl::kAuto;
-  bool low_latency = true;        // ask the USB adapter driver for ASYNC_LOW_LATENCY
+  bool low_latency = true;  // ask the USB adapter driver for ASYNC_LOW_LATENCY
 };
 
 // Empty when valid, else one message naming the field, the value and the allowed range.

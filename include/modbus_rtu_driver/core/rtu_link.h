@@ -19,8 +19,8 @@ typedef struct _modbus modbus_t;  // NOLINT: libmodbus's own name
 namespace modbus_rtu_driver {
 
 struct LinkStats {
-  uint64_t requests = 0;       // transactions asked for (not counting retries)
-  uint64_t attempts = 0;       // frames sent, retries included
+  uint64_t requests = 0;  // transactions asked for (not counting retries)
+  uint64_t attempts = 0;  // frames sent, retries included
   uint64_t ok = 0;
   uint64_t broadcasts = 0;
   uint64_t timeouts = 0;

@@ -34,7 +34,8 @@ enum ExceptionCode : uint8_t {
 std::string exceptionName(uint8_t code);
 
 constexpr uint8_t kBroadcastAddress = 0;
-constexpr uint8_t kMaxStandardSlave = 247;  // 248-255 are reserved by the spec but used by real boards
+constexpr uint8_t kMaxStandardSlave =
+    247;  // 248-255 are reserved by the spec but used by real boards
 constexpr size_t kMaxAduLength = 256;
 constexpr uint16_t kMaxReadBits = 2000;
 constexpr uint16_t kMaxReadRegisters = 125;

@@ -14,13 +14,13 @@
 namespace modbus_rtu_driver {
 
 struct DeviceConfig {
-  std::string name;              // ROS namespace of the device under the node
-  std::string type;              // ld58a08 | lc_relay8 | yespeed_pdu
-  int address = 1;               // 1-255
-  double poll_rate = 1.0;        // Hz, 0 = never poll
+  std::string name;                  // ROS namespace of the device under the node
+  std::string type;                  // ld58a08 | lc_relay8 | yespeed_pdu
+  int address = 1;                   // 1-255
+  double poll_rate = 1.0;            // Hz, 0 = never poll
   std::vector<std::string> outputs;  // channel names; empty = out0..outN-1
   std::vector<std::string> inputs;   // channel names; empty = in0..inN-1
-  double reply_delay = 0.0;      // s the device waits before answering (LD58A08 0x00FC x 40 ms)
+  double reply_delay = 0.0;          // s the device waits before answering (LD58A08 0x00FC x 40 ms)
 };
 
 class Device {

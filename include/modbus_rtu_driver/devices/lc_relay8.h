@@ -36,7 +36,7 @@ class LcRelay8 : public Device {
   Result writeBaudCode(Transport& bus, uint16_t code);  // 2, 3, 4 = 4800, 9600, 19200
 
   // "Single device on the bus" operations at address 0 (any LC board answers them).
-  static Result readAddressAtZero(Transport& bus);                // values[0] = address
+  static Result readAddressAtZero(Transport& bus);                  // values[0] = address
   static Result setAddressAtZero(Transport& bus, uint8_t address);  // 1-255
 };
 
