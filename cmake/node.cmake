@@ -7,6 +7,7 @@ add_library(modbus_rtu_ros
   src/ros/lc_relay8_adapter.cpp
   src/ros/yespeed_pdu_adapter.cpp
   src/ros/bus_node.cpp
+  src/ros/slave_node.cpp
 )
 target_include_directories(modbus_rtu_ros PUBLIC include ${catkin_INCLUDE_DIRS})
 target_link_libraries(modbus_rtu_ros PUBLIC modbus_rtu_core ${catkin_LIBRARIES})

@@ -5,6 +5,7 @@ add_library(modbus_rtu_sim
   src/sim/sim_lc_relay8.cpp
   src/sim/sim_yespeed_pdu.cpp
   src/sim/simulator.cpp
+  src/sim/pty_link.cpp
 )
 target_link_libraries(modbus_rtu_sim PUBLIC modbus_rtu_core yaml-cpp Threads::Threads)
 

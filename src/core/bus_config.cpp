@@ -95,13 +95,12 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
   return d;
 }
 
-void parse(const YAML::Node& root, BusConfig* out) {
-  if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
-  checkKeys(
-      root, "",
-      {"port", "baud", "parity", "data_bits", "stop_bits", "response_timeout", "byte_timeout",
-       "retries", "min_gap", "direction", "low_latency", "role", "diagnostic_period", "devices"});
-  LinkConfig& link = out->link;
+const std::set<std::string> kLinkKeys = {"port",    "baud",         "parity",        "data_bits",
+                                         "stop_bits", "response_timeout", "byte_timeout", "retries",
+                                         "min_gap", "direction",    "low_latency"};
+
+void parseLink(const YAML::Node& root, LinkConfig* out) {
+  LinkConfig& link = *out;
   if (root["port"]) link.port = get<std::string>(root["port"], "port", "a device path");
   if (root["baud"]) link.baud = getInt(root["baud"], "baud");
   if (root["parity"]) {
@@ -120,26 +119,36 @@ void parse(const YAML::Node& root, BusConfig* out) {
   if (root["direction"]) {
     const std::string d =
         get<std::string>(root["direction"], "direction", "auto, rts_high, rts_low");
-    if (d == "auto")
-      link.direction = DirectionControl::kAuto;
-    else if (d == "rts_high")
-      link.direction = DirectionControl::kRtsHigh;
-    else if (d == "rts_low")
-      link.direction = DirectionControl::kRtsLow;
-    else
-      fail("direction", "'" + d + "' is not auto, rts_high or rts_low");
+    if (d == "auto") link.direction = DirectionControl::kAuto;
+    else if (d == "rts_high") link.direction = DirectionControl::kRtsHigh;
+    else if (d == "rts_low") link.direction = DirectionControl::kRtsLow;
+    else fail("direction", "'" + d + "' is not auto, rts_high or rts_low");
   }
   const std::string link_problem = validateLinkConfig(link);
   if (!link_problem.empty()) throw ConfigError{link_problem};
+}
+
+double parseDiagnosticPeriod(const YAML::Node& root) {
+  if (!root["diagnostic_period"]) return 1.0;
+  const double p = getNumber(root["diagnostic_period"], "diagnostic_period");
+  if (!(p >= 0.1 && p <= 60)) fail("diagnostic_period", std::to_string(p) + " s is outside 0.1-60 s");
+  return p;
+}
+
+std::set<std::string> with(std::set<std::string> keys, std::initializer_list<std::string> more) {
+  keys.insert(more.begin(), more.end());
+  return keys;
+}
+
+void parse(const YAML::Node& root, BusConfig* out) {
+  if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
+  checkKeys(root, "", with(kLinkKeys, {"role", "diagnostic_period", "devices"}));
+  parseLink(root, &out->link);
   if (root["role"]) {
-    out->role = get<std::string>(root["role"], "role", "master");
-    if (out->role != "master") fail("role", "'" + out->role + "' is not supported (master)");
+    out->role = get<std::string>(root["role"], "role", "master or slave");
+    if (out->role != "master") fail("role", "'" + out->role + "' is not master");
   }
-  if (root["diagnostic_period"]) {
-    out->diagnostic_period = getNumber(root["diagnostic_period"], "diagnostic_period");
-    if (!(out->diagnostic_period >= 0.1 && out->diagnostic_period <= 60))
-      fail("diagnostic_period", std::to_string(out->diagnostic_period) + " s is outside 0.1-60 s");
-  }
+  out->diagnostic_period = parseDiagnosticPeriod(root);
   const YAML::Node devices = root["devices"];
   if (!devices) fail("devices", "missing (a map of device name -> settings)");
   if (!devices.IsMap() || devices.size() == 0)
@@ -156,7 +165,72 @@ void parse(const YAML::Node& root, BusConfig* out) {
   }
 }
 
+uint16_t getTableSize(const YAML::Node& root, const char* key, uint16_t fallback) {
+  if (!root[key]) return fallback;
+  const int n = getInt(root[key], key);
+  if (n < 0 || n > 10000) fail(key, std::to_string(n) + " is outside 0-10000");
+  return static_cast<uint16_t>(n);
+}
+
+void parseNames(const YAML::Node& n, const std::string& key, uint16_t size,
+                std::map<uint16_t, std::string>* out) {
+  if (!n) return;
+  if (!n.IsMap()) fail(key, show(n) + " is not a map of address -> name");
+  std::set<std::string> seen;
+  for (const auto& kv : n) {
+    const int address = getInt(kv.first, key);
+    const std::string name = get<std::string>(kv.second, key, "a name");
+    const std::string where = key + "/" + std::to_string(address);
+    if (address < 0 || address >= size)
+      fail(where, "address is outside the table (0-" + std::to_string(size - 1) + ")");
+    if (!isValidRosName(name))
+      fail(where, "'" + name + "' is not a valid ROS name (a letter, then letters, digits or '_')");
+    if (!seen.insert(name).second) fail(where, "'" + name + "' is given twice");
+    (*out)[static_cast<uint16_t>(address)] = name;
+  }
+}
+
+void parseSlave(const YAML::Node& root, SlaveConfig* out) {
+  if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
+  checkKeys(root, "", with(kLinkKeys, {"role", "diagnostic_period", "slave_id", "coils",
+                                       "discrete_inputs", "holding_registers", "input_registers",
+                                       "names"}));
+  parseLink(root, &out->link);
+  const std::string role = root["role"] ? get<std::string>(root["role"], "role", "slave") : "";
+  if (role != "slave") fail("role", "'" + role + "' is not slave");
+  out->diagnostic_period = parseDiagnosticPeriod(root);
+  if (!root["slave_id"]) fail("slave_id", "missing (the address this node answers, 1-247)");
+  out->slave_id = getInt(root["slave_id"], "slave_id");
+  if (out->slave_id < 1 || out->slave_id > 247)
+    fail("slave_id", std::to_string(out->slave_id) + " is outside 1-247");
+  out->coils = getTableSize(root, "coils", 64);
+  out->discrete_inputs = getTableSize(root, "discrete_inputs", 64);
+  out->holding_registers = getTableSize(root, "holding_registers", 64);
+  out->input_registers = getTableSize(root, "input_registers", 64);
+  const YAML::Node names = root["names"];
+  if (names) {
+    if (!names.IsMap()) fail("names", show(names) + " is not a map (coils, holding_registers)");
+    checkKeys(names, "names/", {"coils", "holding_registers"});
+    parseNames(names["coils"], "names/coils", out->coils, &out->coil_names);
+    parseNames(names["holding_registers"], "names/holding_registers", out->holding_registers,
+               &out->holding_names);
+  }
+}
+
 }  // namespace
+
+bool parseSlaveConfig(const YAML::Node& root, SlaveConfig* out, std::string* error) {
+  *out = SlaveConfig{};
+  try {
+    parseSlave(root, out);
+    return true;
+  } catch (const ConfigError& e) {
+    if (error) *error = e.message;
+  } catch (const YAML::Exception& e) {
+    if (error) *error = std::string("configuration: ") + e.what();
+  }
+  return false;
+}
 
 bool isValidRosName(const std::string& name) {
   if (name.empty() || !std::isalpha(static_cast<unsigned char>(name[0]))) return false;

@@ -1,15 +1,25 @@
-// modbus_rtu_bus: one node per serial bus. Configuration: YAML in the private namespace.
+// modbus_rtu_bus: one node per serial bus. Configuration: YAML in the private namespace;
+// `role: master` (default) polls devices, `role: slave` serves a Modbus master.
 #include <ros/ros.h>
 
 #include "modbus_rtu_driver/ros/bus_node.h"
+#include "modbus_rtu_driver/ros/slave_node.h"
 
-int main(int argc, char** argv) {
-  ros::init(argc, argv, "modbus_rtu_bus");
-  modbus_rtu_driver::BusNode node(ros::NodeHandle("~"));
+template <typename Node>
+int run(const ros::NodeHandle& nh) {
+  Node node(nh);
   if (!node.start()) return 1;
   // Service callbacks wait for the bus; several threads keep callers from queueing on each other.
   ros::AsyncSpinner spinner(4);
   spinner.start();
   ros::waitForShutdown();
   return 0;
+}
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "modbus_rtu_bus");
+  ros::NodeHandle nh("~");
+  const std::string role = nh.param<std::string>("role", "master");
+  if (role == "slave") return run<modbus_rtu_driver::SlaveNode>(nh);
+  return run<modbus_rtu_driver::BusNode>(nh);
 }

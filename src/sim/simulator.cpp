@@ -20,29 +20,6 @@ namespace modbus_rtu_driver {
 
 namespace {
 
-int baudOf(speed_t s) {
-  switch (s) {
-    case B1200:
-      return 1200;
-    case B2400:
-      return 2400;
-    case B4800:
-      return 4800;
-    case B9600:
-      return 9600;
-    case B19200:
-      return 19200;
-    case B38400:
-      return 38400;
-    case B57600:
-      return 57600;
-    case B115200:
-      return 115200;
-    default:
-      return 0;
-  }
-}
-
 double charTime(const SimLineSettings& l) {
   return (l.parity == 'N' ? 10.0 : 11.0) / l.baud;
 }
@@ -119,30 +96,10 @@ bool Simulator::start(std::string* error) {
     return false;
   };
   loadState();
-  master_fd_ = posix_openpt(O_RDWR | O_NOCTTY);
-  if (master_fd_ < 0 || grantpt(master_fd_) != 0 || unlockpt(master_fd_) != 0)
-    return fail("cannot create a pseudo-terminal");
-  const std::string pts = ptsname(master_fd_);
-  // Keep the slave side open: the line survives clients closing it, and its termios (set by
-  // the client) tells the line's baud and parity.
-  slave_fd_ = open(pts.c_str(), O_RDWR | O_NOCTTY);
-  if (slave_fd_ < 0) return fail("cannot open " + pts);
-  termios tio{};
-  tcgetattr(slave_fd_, &tio);
-  cfmakeraw(&tio);
-  const speed_t speed = config_.factory.baud == 19200 ? B19200 : B9600;
-  cfsetispeed(&tio, speed);
-  cfsetospeed(&tio, speed);
-  tcsetattr(slave_fd_, TCSANOW, &tio);
-  fcntl(master_fd_, F_SETFL, O_NONBLOCK);
-  const std::string dir = options_.link.substr(0, options_.link.find_last_of('/'));
-  if (!dir.empty() && dir != options_.link) {
-    std::string cmd = "mkdir -p '" + dir + "'";
-    if (std::system(cmd.c_str()) != 0) return fail("cannot create " + dir);
+  if (!pty_.open(options_.link, config_.factory.baud, error)) {
+    stop();
+    return false;
   }
-  unlink(options_.link.c_str());
-  if (symlink(pts.c_str(), options_.link.c_str()) != 0) return fail("cannot link " + options_.link);
-
   listen_fd_ = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK, 0);
   sockaddr_un addr{};
   addr.sun_family = AF_UNIX;
@@ -162,26 +119,17 @@ void Simulator::stop() {
   for (int fd : clients_) close(fd);
   clients_.clear();
   client_buffers_.clear();
-  for (int* fd : {&listen_fd_, &slave_fd_, &master_fd_}) {
-    if (*fd >= 0) close(*fd);
-    *fd = -1;
-  }
-  if (!options_.link.empty()) unlink(options_.link.c_str());
+  if (listen_fd_ >= 0) close(listen_fd_);
+  listen_fd_ = -1;
+  pty_.close();
   if (!options_.control.empty()) unlink(options_.control.c_str());
 }
 
-SimLineSettings Simulator::lineSettings() const {
-  termios tio{};
-  SimLineSettings l;
-  if (tcgetattr(slave_fd_, &tio) != 0) return l;
-  l.baud = baudOf(cfgetospeed(&tio));
-  l.parity = !(tio.c_cflag & PARENB) ? 'N' : (tio.c_cflag & PARODD) ? 'O' : 'E';
-  return l;
-}
+SimLineSettings Simulator::lineSettings() const { return pty_.lineSettings(); }
 
 void Simulator::run() {
   while (running_) {
-    std::vector<pollfd> fds{{master_fd_, POLLIN, 0}, {listen_fd_, POLLIN, 0}};
+    std::vector<pollfd> fds{{pty_.fd(), POLLIN, 0}, {listen_fd_, POLLIN, 0}};
     for (int c : clients_) fds.push_back({c, POLLIN, 0});
     poll(fds.data(), fds.size(), 2);
     std::lock_guard<std::mutex> lock(mutex_);
@@ -191,7 +139,7 @@ void Simulator::run() {
     bool got = false;
     if (fds[0].revents & POLLIN) {
       uint8_t buf[512];
-      const ssize_t n = read(master_fd_, buf, sizeof buf);
+      const ssize_t n = read(pty_.fd(), buf, sizeof buf);
       if (n > 0) {
         input_.insert(input_.end(), buf, buf + n);
         last_byte_ = now;
@@ -307,7 +255,7 @@ void Simulator::answer(SimDevice& device, const Bytes& request, const Bytes& sen
   if (options_.verbose) std::printf("tx %s\n", toHex(reply).c_str());
   size_t off = 0;
   while (off < reply.size()) {
-    const ssize_t n = write(master_fd_, reply.data() + off, reply.size() - off);
+    const ssize_t n = write(pty_.fd(), reply.data() + off, reply.size() - off);
     if (n <= 0) break;
     off += static_cast<size_t>(n);
   }

@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "modbus_rtu_driver/sim/pty_link.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 
 namespace modbus_rtu_driver {
@@ -70,7 +71,8 @@ class Simulator {
   std::thread thread_;
   std::atomic<bool> running_{false};
   std::atomic<bool> power_cycle_requested_{false};
-  int master_fd_ = -1, slave_fd_ = -1, listen_fd_ = -1;
+  PtyLink pty_;
+  int listen_fd_ = -1;
   std::vector<int> clients_;
   std::vector<std::string> client_buffers_;
   Bytes input_;
