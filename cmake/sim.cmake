@@ -6,8 +6,12 @@ add_library(modbus_rtu_sim
   src/sim/sim_yespeed_pdu.cpp
   src/sim/simulator.cpp
   src/sim/pty_link.cpp
+  src/sim/dm500_master.cpp
 )
 target_link_libraries(modbus_rtu_sim PUBLIC modbus_rtu_core yaml-cpp Threads::Threads)
 
 add_executable(modbus_rtu_simulator src/sim/simulator_main.cpp)
 target_link_libraries(modbus_rtu_simulator modbus_rtu_sim)
+
+add_executable(modbus_rtu_dm500_sim src/sim/dm500_main.cpp)
+target_link_libraries(modbus_rtu_dm500_sim modbus_rtu_sim)

@@ -178,8 +178,12 @@ void parseNames(const YAML::Node& n, const std::string& key, uint16_t size,
   if (!n.IsMap()) fail(key, show(n) + " is not a map of address -> name");
   std::set<std::string> seen;
   for (const auto& kv : n) {
-    const int address = getInt(kv.first, key);
-    const std::string name = get<std::string>(kv.second, key, "a name");
+    // address: name as in the DM500 docs; ROS parameter keys are strings, so a launch file
+    // writes "6": name (quoted) or name: 6, and all three forms are accepted.
+    const std::string k = kv.first.as<std::string>();
+    const bool address_first = !k.empty() && std::isdigit(static_cast<unsigned char>(k[0]));
+    const int address = getInt(address_first ? kv.first : kv.second, key);
+    const std::string name = address_first ? get<std::string>(kv.second, key, "a name") : k;
     const std::string where = key + "/" + std::to_string(address);
     if (address < 0 || address >= size)
       fail(where, "address is outside the table (0-" + std::to_string(size - 1) + ")");

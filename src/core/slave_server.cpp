@@ -265,8 +265,14 @@ void SlaveServer::serve(const Bytes& frame) {
     return;
   }
   const uint8_t exception = predictException(frame);
-  // libmodbus writes the mapping and the reply (none for a broadcast).
-  modbus_reply(ctx_, frame.data(), static_cast<int>(frame.size()), mapping_);
+  if (exception == kIllegalFunction) {
+    // modbus_reply would sleep a response timeout and flush the input first, losing whatever
+    // the master sends next; this call answers at once.
+    if (!broadcast) modbus_reply_exception(ctx_, frame.data(), MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+  } else {
+    // libmodbus writes the mapping and the reply (none for a broadcast).
+    modbus_reply(ctx_, frame.data(), static_cast<int>(frame.size()), mapping_);
+  }
   {
     std::lock_guard<std::mutex> lock(mutex_);
     last_heard_ = Clock::now();
