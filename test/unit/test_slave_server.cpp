@@ -1,0 +1,166 @@
+// The slave role's core over a real pty: the DM500's frames, exceptions, broadcasts, and valid
+// requests right after frames for other ids or with bad CRCs.
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <mutex>
+#include <thread>
+
+#include "modbus_rtu_driver/core/slave_server.h"
+#include "pty_pair.h"
+
+using namespace modbus_rtu_driver;
+using namespace std::chrono_literals;
+
+namespace {
+
+class SlaveServerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    SlaveConfig c;
+    c.link.port = pty_.path();
+    c.slave_id = 1;
+    c.coils = c.discrete_inputs = c.holding_registers = c.input_registers = 64;
+    server_ = std::make_unique<SlaveServer>(c, [this](const SlaveWrite& w) {
+      std::lock_guard<std::mutex> lock(m_);
+      writes_.push_back(w);
+    });
+    server_->start();
+    // Wait until the server has the port open.
+    for (int i = 0; i < 100 && !server_->stats().port_open; ++i) std::this_thread::sleep_for(10ms);
+    ASSERT_TRUE(server_->stats().port_open);
+  }
+  // Sends `hex`, returns what came back within `ms`.
+  Bytes ask(const Bytes& frame, size_t expect, int ms = 500) {
+    pty_.read(256, 1);  // drop anything stale
+    pty_.write(frame);
+    return pty_.read(expect, ms);
+  }
+  Bytes ask(const std::string& hex, size_t expect, int ms = 500) { return ask(*fromHex(hex), expect, ms); }
+  std::vector<SlaveWrite> writes() {
+    std::lock_guard<std::mutex> lock(m_);
+    return writes_;
+  }
+
+  PtyPair pty_;
+  std::unique_ptr<SlaveServer> server_;
+  std::mutex m_;
+  std::vector<SlaveWrite> writes_;
+};
+
+}  // namespace
+
+TEST_F(SlaveServerTest, TheManualsTwoFrames) {
+  EXPECT_EQ(toHex(ask("01 0F 00 06 00 0C 02 03 04 E4 E5", 8)),
+            toHex(encodeReply(*decodeRequest(*fromHex("01 0F 00 06 00 0C 02 03 04 E4 E5")), {})));
+  EXPECT_EQ(toHex(ask("01 10 00 05 00 02 04 08 07 0A 09 46 97", 8)),
+            toHex(encodeReply(*decodeRequest(*fromHex("01 10 00 05 00 02 04 08 07 0A 09 46 97")), {})));
+  const auto w = writes();
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_EQ(w[0].table, SlaveTable::kCoils);
+  EXPECT_EQ(w[0].address, 6);
+  EXPECT_EQ(w[0].values, (std::vector<uint16_t>{1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0}));
+  EXPECT_EQ(w[1].table, SlaveTable::kHoldingRegisters);
+  EXPECT_EQ(w[1].address, 5);
+  EXPECT_EQ(w[1].values, (std::vector<uint16_t>{0x0807, 0x0A09}));
+  EXPECT_EQ(registersToMacroBytes(w[1].values), (std::vector<uint8_t>{7, 8, 9, 10}));
+  // And the master reads back what it wrote.
+  const Request read = Request::readHoldingRegisters(1, 5, 2);
+  EXPECT_EQ(toHex(ask(encodeRequest(read), 9)), toHex(encodeReply(read, {0x0807, 0x0A09})));
+}
+
+TEST_F(SlaveServerTest, SettersAreWhatTheMasterReads) {
+  EXPECT_EQ(server_->set(SlaveTable::kInputRegisters, 10, {500, 600}), "");
+  EXPECT_EQ(server_->set(SlaveTable::kDiscreteInputs, 0, {1, 0, 1}), "");
+  std::this_thread::sleep_for(20ms);
+  const Request ir = Request::readInputRegisters(1, 10, 2);
+  EXPECT_EQ(toHex(ask(encodeRequest(ir), 9)), toHex(encodeReply(ir, {500, 600})));
+  const Request di = Request::readDiscreteInputs(1, 0, 3);
+  EXPECT_EQ(toHex(ask(encodeRequest(di), 6)), toHex(encodeReply(di, {1, 0, 1})));
+  const std::string e = server_->set(SlaveTable::kHoldingRegisters, 63, {1, 2});
+  EXPECT_NE(e.find("holding_registers 0-63"), std::string::npos) << e;
+  EXPECT_NE(server_->set(SlaveTable::kCoils, 0, {2}), "");
+}
+
+TEST_F(SlaveServerTest, OutOfRangeGetsException02AndNoWrite) {
+  const Request r = Request::readHoldingRegisters(1, 64, 1);
+  EXPECT_EQ(toHex(ask(encodeRequest(r), 5)), toHex(encodeException(1, 0x03, kIllegalDataAddress)));
+  const Request w = Request::writeMultipleRegisters(1, 63, {1, 2});
+  EXPECT_EQ(toHex(ask(encodeRequest(w), 5)), toHex(encodeException(1, 0x10, kIllegalDataAddress)));
+  EXPECT_TRUE(writes().empty());
+  EXPECT_EQ(server_->stats().exceptions_sent, 2u);
+}
+
+TEST_F(SlaveServerTest, BroadcastIsAppliedNotAnswered) {
+  EXPECT_TRUE(ask(encodeRequest(Request::writeSingleRegister(0, 20, 4242)), 1, 300).empty());
+  const Request r = Request::readHoldingRegisters(1, 20, 1);
+  EXPECT_EQ(toHex(ask(encodeRequest(r), 7)), toHex(encodeReply(r, {4242})));
+  ASSERT_EQ(writes().size(), 1u);
+  EXPECT_TRUE(writes()[0].broadcast);
+}
+
+TEST_F(SlaveServerTest, ValidRequestsAfterOtherIdsAndBadCrcsAreAnswered) {
+  const Request mine = Request::readHoldingRegisters(1, 0, 2);
+  const Bytes reply = encodeReply(mine, {0, 0});
+  for (int round = 0; round < 5; ++round) {
+    Bytes burst = encodeRequest(Request::readHoldingRegisters(2, 0, 1));  // another id
+    const Bytes valid = encodeRequest(mine);
+    burst.insert(burst.end(), valid.begin(), valid.end());  // back to back, no gap
+    EXPECT_EQ(toHex(ask(burst, reply.size())), toHex(reply)) << "after another id, round " << round;
+    Bytes bad = encodeRequest(Request::readCoils(1, 0, 8));
+    bad.back() ^= 0x5A;
+    bad.insert(bad.end(), valid.begin(), valid.end());
+    EXPECT_EQ(toHex(ask(bad, reply.size())), toHex(reply)) << "after a bad CRC, round " << round;
+    Bytes noise{0x00, 0xFF, 0x13, 0x37};
+    noise.insert(noise.end(), valid.begin(), valid.end());
+    EXPECT_EQ(toHex(ask(noise, reply.size())), toHex(reply)) << "after noise, round " << round;
+  }
+  const SlaveStats s = server_->stats();
+  EXPECT_GE(s.other_slave, 5u);
+  EXPECT_GE(s.crc_errors, 5u);
+  EXPECT_GE(s.requests_served, 15u);
+  EXPECT_GE(s.since_last_heard, 0.0);
+}
+
+TEST(SlaveConfig, ParsesTheIssueExampleAndNamesBadKeys) {
+  const char* yaml = R"(
+port: /dev/ttyS1
+baud: 9600
+role: slave
+slave_id: 1
+coils: 64
+discrete_inputs: 64
+holding_registers: 64
+input_registers: 64
+names:
+  coils: {6: spindle_ready}
+  holding_registers: {5: job_number}
+)";
+  SlaveConfig c;
+  std::string error;
+  ASSERT_TRUE(parseSlaveConfig(YAML::Load(yaml), &c, &error)) << error;
+  EXPECT_EQ(c.link.port, "/dev/ttyS1");
+  EXPECT_EQ(c.slave_id, 1);
+  EXPECT_EQ(c.coil_names.at(6), "spindle_ready");
+  EXPECT_EQ(c.holding_names.at(5), "job_number");
+  ASSERT_TRUE(parseSlaveConfig(YAML::Load("role: slave\nslave_id: 3\nnames: {coils: {ready: 2}}"),
+                               &c, &error))
+      << error;
+  EXPECT_EQ(c.coil_names.at(2), "ready");
+  auto errorOf = [](const std::string& y) {
+    SlaveConfig c;
+    std::string e;
+    return parseSlaveConfig(YAML::Load(y), &c, &e) ? std::string() : e;
+  };
+  EXPECT_NE(errorOf("role: slave\nslave_id: 248").find("slave_id: 248 is outside 1-247"),
+            std::string::npos);
+  EXPECT_NE(errorOf("role: slave").find("slave_id"), std::string::npos);
+  EXPECT_NE(errorOf("role: slave\nslave_id: 1\ncoils: 70000").find("coils"), std::string::npos);
+  EXPECT_NE(errorOf("role: slave\nslave_id: 1\ncoils: 8\nnames: {coils: {9: x}}")
+                .find("names/coils/9"),
+            std::string::npos);
+  EXPECT_NE(errorOf("role: slave\nslave_id: 1\nnames: {coils: {1: 2bad}}").find("2bad"),
+            std::string::npos);
+  EXPECT_NE(errorOf("role: slave\nslave_id: 1\ndevices: {}").find("devices"), std::string::npos);
+  EXPECT_NE(errorOf("role: slave\nslave_id: 1\nbaud: 7").find("baud"), std::string::npos);
+}
