@@ -95,9 +95,9 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
   return d;
 }
 
-const std::set<std::string> kLinkKeys = {"port",    "baud",         "parity",        "data_bits",
-                                         "stop_bits", "response_timeout", "byte_timeout", "retries",
-                                         "min_gap", "direction",    "low_latency"};
+const std::set<std::string> kLinkKeys = {
+    "port",         "baud",    "parity",  "data_bits", "stop_bits",  "response_timeout",
+    "byte_timeout", "retries", "min_gap", "direction", "low_latency"};
 
 void parseLink(const YAML::Node& root, LinkConfig* out) {
   LinkConfig& link = *out;
@@ -119,10 +119,14 @@ void parseLink(const YAML::Node& root, LinkConfig* out) {
   if (root["direction"]) {
     const std::string d =
         get<std::string>(root["direction"], "direction", "auto, rts_high, rts_low");
-    if (d == "auto") link.direction = DirectionControl::kAuto;
-    else if (d == "rts_high") link.direction = DirectionControl::kRtsHigh;
-    else if (d == "rts_low") link.direction = DirectionControl::kRtsLow;
-    else fail("direction", "'" + d + "' is not auto, rts_high or rts_low");
+    if (d == "auto")
+      link.direction = DirectionControl::kAuto;
+    else if (d == "rts_high")
+      link.direction = DirectionControl::kRtsHigh;
+    else if (d == "rts_low")
+      link.direction = DirectionControl::kRtsLow;
+    else
+      fail("direction", "'" + d + "' is not auto, rts_high or rts_low");
   }
   const std::string link_problem = validateLinkConfig(link);
   if (!link_problem.empty()) throw ConfigError{link_problem};
@@ -131,7 +135,8 @@ void parseLink(const YAML::Node& root, LinkConfig* out) {
 double parseDiagnosticPeriod(const YAML::Node& root) {
   if (!root["diagnostic_period"]) return 1.0;
   const double p = getNumber(root["diagnostic_period"], "diagnostic_period");
-  if (!(p >= 0.1 && p <= 60)) fail("diagnostic_period", std::to_string(p) + " s is outside 0.1-60 s");
+  if (!(p >= 0.1 && p <= 60))
+    fail("diagnostic_period", std::to_string(p) + " s is outside 0.1-60 s");
   return p;
 }
 
@@ -196,9 +201,9 @@ void parseNames(const YAML::Node& n, const std::string& key, uint16_t size,
 
 void parseSlave(const YAML::Node& root, SlaveConfig* out) {
   if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
-  checkKeys(root, "", with(kLinkKeys, {"role", "diagnostic_period", "slave_id", "coils",
-                                       "discrete_inputs", "holding_registers", "input_registers",
-                                       "names"}));
+  checkKeys(root, "",
+            with(kLinkKeys, {"role", "diagnostic_period", "slave_id", "coils", "discrete_inputs",
+                             "holding_registers", "input_registers", "names"}));
   parseLink(root, &out->link);
   const std::string role = root["role"] ? get<std::string>(root["role"], "role", "slave") : "";
   if (role != "slave") fail("role", "'" + role + "' is not slave");

@@ -14,10 +14,14 @@ using Clock = std::chrono::steady_clock;
 
 const char* slaveTableName(SlaveTable t) {
   switch (t) {
-    case SlaveTable::kCoils: return "coils";
-    case SlaveTable::kDiscreteInputs: return "discrete_inputs";
-    case SlaveTable::kHoldingRegisters: return "holding_registers";
-    case SlaveTable::kInputRegisters: return "input_registers";
+    case SlaveTable::kCoils:
+      return "coils";
+    case SlaveTable::kDiscreteInputs:
+      return "discrete_inputs";
+    case SlaveTable::kHoldingRegisters:
+      return "holding_registers";
+    case SlaveTable::kInputRegisters:
+      return "input_registers";
   }
   return "?";
 }
@@ -34,14 +38,20 @@ std::vector<uint8_t> registersToMacroBytes(const std::vector<uint16_t>& register
 SlaveServer::SlaveServer(SlaveConfig config, WriteCallback on_write)
     : config_(std::move(config)), on_write_(std::move(on_write)) {}
 
-SlaveServer::~SlaveServer() { stop(); }
+SlaveServer::~SlaveServer() {
+  stop();
+}
 
 uint16_t SlaveServer::tableSize(SlaveTable t) const {
   switch (t) {
-    case SlaveTable::kCoils: return config_.coils;
-    case SlaveTable::kDiscreteInputs: return config_.discrete_inputs;
-    case SlaveTable::kHoldingRegisters: return config_.holding_registers;
-    case SlaveTable::kInputRegisters: return config_.input_registers;
+    case SlaveTable::kCoils:
+      return config_.coils;
+    case SlaveTable::kDiscreteInputs:
+      return config_.discrete_inputs;
+    case SlaveTable::kHoldingRegisters:
+      return config_.holding_registers;
+    case SlaveTable::kInputRegisters:
+      return config_.input_registers;
   }
   return 0;
 }
@@ -52,8 +62,8 @@ std::string SlaveServer::set(SlaveTable table, uint16_t address,
   if (values.empty()) return std::string("values: empty, give at least one value");
   if (static_cast<uint32_t>(address) + values.size() > size)
     return std::string("address: ") + std::to_string(address) + " with " +
-           std::to_string(values.size()) + " value(s) is outside " + slaveTableName(table) +
-           " 0-" + std::to_string(static_cast<int>(size) - 1);
+           std::to_string(values.size()) + " value(s) is outside " + slaveTableName(table) + " 0-" +
+           std::to_string(static_cast<int>(size) - 1);
   const bool bits = table == SlaveTable::kCoils || table == SlaveTable::kDiscreteInputs;
   if (bits)
     for (uint16_t v : values)
@@ -66,7 +76,8 @@ std::string SlaveServer::set(SlaveTable table, uint16_t address,
 SlaveStats SlaveServer::stats() const {
   std::lock_guard<std::mutex> lock(mutex_);
   SlaveStats s = stats_;
-  if (heard_) s.since_last_heard = std::chrono::duration<double>(Clock::now() - last_heard_).count();
+  if (heard_)
+    s.since_last_heard = std::chrono::duration<double>(Clock::now() - last_heard_).count();
   return s;
 }
 
@@ -93,8 +104,8 @@ bool SlaveServer::open(std::string* error) {
   }
   modbus_set_slave(ctx_, config_.slave_id);
   if (!mapping_)
-    mapping_ = modbus_mapping_new(config_.coils, config_.discrete_inputs,
-                                  config_.holding_registers, config_.input_registers);
+    mapping_ = modbus_mapping_new(config_.coils, config_.discrete_inputs, config_.holding_registers,
+                                  config_.input_registers);
   return mapping_ != nullptr;
 }
 
@@ -116,12 +127,18 @@ void SlaveServer::applyChanges() {
     for (size_t i = 0; i < c.values.size(); ++i) {
       const size_t a = c.address + i;
       switch (c.table) {
-        case SlaveTable::kCoils: mapping_->tab_bits[a] = static_cast<uint8_t>(c.values[i]); break;
+        case SlaveTable::kCoils:
+          mapping_->tab_bits[a] = static_cast<uint8_t>(c.values[i]);
+          break;
         case SlaveTable::kDiscreteInputs:
           mapping_->tab_input_bits[a] = static_cast<uint8_t>(c.values[i]);
           break;
-        case SlaveTable::kHoldingRegisters: mapping_->tab_registers[a] = c.values[i]; break;
-        case SlaveTable::kInputRegisters: mapping_->tab_input_registers[a] = c.values[i]; break;
+        case SlaveTable::kHoldingRegisters:
+          mapping_->tab_registers[a] = c.values[i];
+          break;
+        case SlaveTable::kInputRegisters:
+          mapping_->tab_input_registers[a] = c.values[i];
+          break;
       }
     }
   }
@@ -223,7 +240,10 @@ uint8_t SlaveServer::predictException(const Bytes& f) const {
   SlaveTable table = SlaveTable::kCoils;
   uint16_t max = 0;
   switch (r.function) {
-    case FunctionCode::kReadCoils: table = SlaveTable::kCoils; max = MODBUS_MAX_READ_BITS; break;
+    case FunctionCode::kReadCoils:
+      table = SlaveTable::kCoils;
+      max = MODBUS_MAX_READ_BITS;
+      break;
     case FunctionCode::kReadDiscreteInputs:
       table = SlaveTable::kDiscreteInputs;
       max = MODBUS_MAX_READ_BITS;
@@ -241,7 +261,10 @@ uint8_t SlaveServer::predictException(const Bytes& f) const {
       table = SlaveTable::kCoils;
       max = 1;
       break;
-    case FunctionCode::kWriteSingleRegister: table = SlaveTable::kHoldingRegisters; max = 1; break;
+    case FunctionCode::kWriteSingleRegister:
+      table = SlaveTable::kHoldingRegisters;
+      max = 1;
+      break;
     case FunctionCode::kWriteMultipleCoils:
       table = SlaveTable::kCoils;
       max = MODBUS_MAX_WRITE_BITS;

@@ -35,9 +35,8 @@ bool SlaveNode::start() {
   }
   auto bits = [this](const char* name, SlaveTable table) {
     services_.push_back(nh_.advertiseService<SetBits::Request, SetBits::Response>(
-        name, [this, table](SetBits::Request& q, SetBits::Response& s) {
-          return setBits(table, q, s);
-        }));
+        name,
+        [this, table](SetBits::Request& q, SetBits::Response& s) { return setBits(table, q, s); }));
   };
   auto regs = [this](const char* name, SlaveTable table) {
     services_.push_back(nh_.advertiseService<SetRegisters::Request, SetRegisters::Response>(
@@ -54,8 +53,9 @@ bool SlaveNode::start() {
   diagnostics_->setHardwareID(config_.link.port);
   diagnostics_->add("slave " + std::to_string(config_.slave_id) + " on " + config_.link.port, this,
                     &SlaveNode::diagnose);
-  diagnostics_timer_ = nh_.createTimer(ros::Duration(config_.diagnostic_period),
-                                       [this](const ros::TimerEvent&) { diagnostics_->force_update(); });
+  diagnostics_timer_ =
+      nh_.createTimer(ros::Duration(config_.diagnostic_period),
+                      [this](const ros::TimerEvent&) { diagnostics_->force_update(); });
 
   server_ = std::make_unique<SlaveServer>(config_, [this](const SlaveWrite& w) { onWrite(w); });
   server_->start();

@@ -15,12 +15,18 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
-    if (a == "--link") link = value();
-    else if (a == "--script") script = value();
-    else if (a == "--report") report = value();
-    else if (a == "--baud") baud = std::stoi(value());
-    else if (a == "--timeout") timeout = std::stod(value());
-    else if (a.rfind("__", 0) == 0 || a.find(":=") != std::string::npos) continue;
+    if (a == "--link")
+      link = value();
+    else if (a == "--script")
+      script = value();
+    else if (a == "--report")
+      report = value();
+    else if (a == "--baud")
+      baud = std::stoi(value());
+    else if (a == "--timeout")
+      timeout = std::stod(value());
+    else if (a.rfind("__", 0) == 0 || a.find(":=") != std::string::npos)
+      continue;
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
@@ -45,12 +51,13 @@ int main(int argc, char** argv) {
   int passed = 0, failed = 0, number = 0;
   for (std::string line; std::getline(steps, line);) {
     ++number;
-    if (line.find_first_not_of(" \t") == std::string::npos || line[line.find_first_not_of(" \t")] == '#')
+    if (line.find_first_not_of(" \t") == std::string::npos ||
+        line[line.find_first_not_of(" \t")] == '#')
       continue;
     std::string why;
     const bool ok = master.step(line, &why);
-    const std::string out = (ok ? "PASS " : "FAIL ") + std::to_string(number) + ": " + line +
-                            (ok ? "" : " -- " + why);
+    const std::string out =
+        (ok ? "PASS " : "FAIL ") + std::to_string(number) + ": " + line + (ok ? "" : " -- " + why);
     std::printf("%s\n", out.c_str());
     std::fflush(stdout);
     results += out + "\n";

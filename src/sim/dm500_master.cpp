@@ -39,7 +39,8 @@ Bytes Dm500Master::readFor(double seconds, size_t max_bytes, const Request* requ
       if (need && in.size() >= need) break;
     }
     pollfd p{pty_.fd(), POLLIN, 0};
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
     if (poll(&p, 1, static_cast<int>(std::max<long>(1, left.count()))) <= 0) continue;
     uint8_t buf[256];
     const ssize_t n = read(pty_.fd(), buf, sizeof buf);
@@ -83,8 +84,10 @@ bool Dm500Master::step(const std::string& line, std::string* why) {
     }
     if (op == "raw") {
       Bytes bytes;
-      for (size_t i = 1; i < w.size(); ++i) bytes.push_back(static_cast<uint8_t>(std::stoul(w[i], nullptr, 16)));
-      if (write(pty_.fd(), bytes.data(), bytes.size()) < 0) throw std::runtime_error("write failed");
+      for (size_t i = 1; i < w.size(); ++i)
+        bytes.push_back(static_cast<uint8_t>(std::stoul(w[i], nullptr, 16)));
+      if (write(pty_.fd(), bytes.data(), bytes.size()) < 0)
+        throw std::runtime_error("write failed");
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       return true;
     }
@@ -101,11 +104,16 @@ bool Dm500Master::step(const std::string& line, std::string* why) {
     bool silence = false, check_values = false;
     double within = 0;
     for (size_t i = tail; i < w.size(); ++i) {
-      if (w[i] == "expect" || w[i] == "equals") check_values = true;
-      else if (w[i] == "exception") exception = static_cast<int>(num(++i));
-      else if (w[i] == "silence") silence = true;
-      else if (w[i] == "within") within = std::stod(w.at(++i));
-      else expected.push_back(static_cast<uint16_t>(num(i)));
+      if (w[i] == "expect" || w[i] == "equals")
+        check_values = true;
+      else if (w[i] == "exception")
+        exception = static_cast<int>(num(++i));
+      else if (w[i] == "silence")
+        silence = true;
+      else if (w[i] == "within")
+        within = std::stod(w.at(++i));
+      else
+        expected.push_back(static_cast<uint16_t>(num(i)));
     }
     const auto id = static_cast<uint8_t>(num(1));
     Request req;
@@ -136,11 +144,16 @@ bool Dm500Master::step(const std::string& line, std::string* why) {
       } else {
         const auto count = static_cast<uint16_t>(num(3));
         const std::string what = op.substr(op.find('_') + 1);
-        if (what == "coils") req = Request::readCoils(id, addr, count);
-        else if (what == "discrete") req = Request::readDiscreteInputs(id, addr, count);
-        else if (what == "holding") req = Request::readHoldingRegisters(id, addr, count);
-        else if (what == "input") req = Request::readInputRegisters(id, addr, count);
-        else throw std::runtime_error("unknown step '" + op + "'");
+        if (what == "coils")
+          req = Request::readCoils(id, addr, count);
+        else if (what == "discrete")
+          req = Request::readDiscreteInputs(id, addr, count);
+        else if (what == "holding")
+          req = Request::readHoldingRegisters(id, addr, count);
+        else if (what == "input")
+          req = Request::readInputRegisters(id, addr, count);
+        else
+          throw std::runtime_error("unknown step '" + op + "'");
       }
     }
     const bool waiting = op.rfind("wait_", 0) == 0;
@@ -153,8 +166,8 @@ bool Dm500Master::step(const std::string& line, std::string* why) {
         if (!quiet) problem = "expected silence, got an answer";
       } else if (exception) {
         if (r.exception_code != exception)
-          problem = "expected exception " + std::to_string(exception) + ", got: " +
-                    (r.ok() ? "a normal reply" : r.message);
+          problem = "expected exception " + std::to_string(exception) +
+                    ", got: " + (r.ok() ? "a normal reply" : r.message);
       } else if (!r.ok()) {
         problem = r.message;
       } else if (check_values && r.values != expected) {

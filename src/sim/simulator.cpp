@@ -125,7 +125,9 @@ void Simulator::stop() {
   if (!options_.control.empty()) unlink(options_.control.c_str());
 }
 
-SimLineSettings Simulator::lineSettings() const { return pty_.lineSettings(); }
+SimLineSettings Simulator::lineSettings() const {
+  return pty_.lineSettings();
+}
 
 void Simulator::run() {
   while (running_) {

@@ -36,7 +36,9 @@ class SlaveServerTest : public ::testing::Test {
     pty_.write(frame);
     return pty_.read(expect, ms);
   }
-  Bytes ask(const std::string& hex, size_t expect, int ms = 500) { return ask(*fromHex(hex), expect, ms); }
+  Bytes ask(const std::string& hex, size_t expect, int ms = 500) {
+    return ask(*fromHex(hex), expect, ms);
+  }
   std::vector<SlaveWrite> writes() {
     std::lock_guard<std::mutex> lock(m_);
     return writes_;
@@ -53,8 +55,9 @@ class SlaveServerTest : public ::testing::Test {
 TEST_F(SlaveServerTest, TheManualsTwoFrames) {
   EXPECT_EQ(toHex(ask("01 0F 00 06 00 0C 02 03 04 E4 E5", 8)),
             toHex(encodeReply(*decodeRequest(*fromHex("01 0F 00 06 00 0C 02 03 04 E4 E5")), {})));
-  EXPECT_EQ(toHex(ask("01 10 00 05 00 02 04 08 07 0A 09 46 97", 8)),
-            toHex(encodeReply(*decodeRequest(*fromHex("01 10 00 05 00 02 04 08 07 0A 09 46 97")), {})));
+  EXPECT_EQ(
+      toHex(ask("01 10 00 05 00 02 04 08 07 0A 09 46 97", 8)),
+      toHex(encodeReply(*decodeRequest(*fromHex("01 10 00 05 00 02 04 08 07 0A 09 46 97")), {})));
   const auto w = writes();
   ASSERT_EQ(w.size(), 2u);
   EXPECT_EQ(w[0].table, SlaveTable::kCoils);
@@ -156,9 +159,9 @@ names:
             std::string::npos);
   EXPECT_NE(errorOf("role: slave").find("slave_id"), std::string::npos);
   EXPECT_NE(errorOf("role: slave\nslave_id: 1\ncoils: 70000").find("coils"), std::string::npos);
-  EXPECT_NE(errorOf("role: slave\nslave_id: 1\ncoils: 8\nnames: {coils: {9: x}}")
-                .find("names/coils/9"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf("role: slave\nslave_id: 1\ncoils: 8\nnames: {coils: {9: x}}").find("names/coils/9"),
+      std::string::npos);
   EXPECT_NE(errorOf("role: slave\nslave_id: 1\nnames: {coils: {1: 2bad}}").find("2bad"),
             std::string::npos);
   EXPECT_NE(errorOf("role: slave\nslave_id: 1\ndevices: {}").find("devices"), std::string::npos);

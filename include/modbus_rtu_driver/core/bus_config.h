@@ -30,12 +30,12 @@ bool parseBusConfig(const YAML::Node& root, BusConfig* out, std::string* error);
 // Slave role: the node serves a Modbus master (such as the DM500 controller).
 struct SlaveConfig {
   LinkConfig link;
-  int slave_id = 1;                   // 1-247
-  uint16_t coils = 64;                // size of each table the master may use, 0-10000
+  int slave_id = 1;     // 1-247
+  uint16_t coils = 64;  // size of each table the master may use, 0-10000
   uint16_t discrete_inputs = 64;
   uint16_t holding_registers = 64;
   uint16_t input_registers = 64;
-  double diagnostic_period = 1.0;     // s
+  double diagnostic_period = 1.0;                 // s
   std::map<uint16_t, std::string> coil_names;     // address -> ROS name
   std::map<uint16_t, std::string> holding_names;  // address -> ROS name
 };

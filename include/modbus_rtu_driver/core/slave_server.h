@@ -16,7 +16,7 @@
 #include "modbus_rtu_driver/core/bus_config.h"
 #include "modbus_rtu_driver/core/frame.h"
 
-typedef struct _modbus modbus_t;                  // NOLINT: libmodbus's names
+typedef struct _modbus modbus_t;                    // NOLINT: libmodbus's names
 typedef struct _modbus_mapping_t modbus_mapping_t;  // NOLINT
 
 namespace modbus_rtu_driver {
