@@ -1,4 +1,4 @@
-install(TARGETS modbus_rtu_core modbus_rtu_sim modbus_rtu_simulator modbus_rtu_dm500_sim modbus_rtu_ros modbus_rtu_bus
+install(TARGETS modbus_rtu_core modbus_rtu_sim modbus_rtu_simulator modbus_rtu_dm500_sim modbus_rtu_commission modbus_rtu_commission_lib modbus_rtu_ros modbus_rtu_bus
   ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})

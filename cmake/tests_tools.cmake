@@ -1,0 +1,4 @@
+catkin_add_gtest(test_commission test/unit/test_commission.cpp)
+target_link_libraries(test_commission modbus_rtu_commission_lib modbus_rtu_sim gtest_main)
+target_compile_definitions(test_commission PRIVATE COMMISSION_EXE="$<TARGET_FILE:modbus_rtu_commission>")
+add_dependencies(test_commission modbus_rtu_commission)
