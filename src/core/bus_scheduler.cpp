@@ -181,7 +181,9 @@ void BusScheduler::run() {
     Poll* next = nullptr;
     Clock::time_point when{};
     for (Poll& p : polls_) {
-      auto t = p.due;
+      // A late device claims at most one period of priority: it catches up after a stall
+      // without starving the others, and a rate the bus cannot carry only takes what is left.
+      auto t = std::max(p.due, now - p.period);
       auto b = backoff_until_.find(p.device);
       if (b != backoff_until_.end() && health_[p.device].online == false)
         t = std::max(t, b->second);
@@ -204,17 +206,15 @@ void BusScheduler::run() {
     lock.lock();
     record(next->device, r, true);
     if (r.error == ErrorKind::kIo) transport_.disconnect();
-    // Keep the schedule; when the bus fell more than a period behind, restart from now and say
-    // that the rate is not kept.
+    // Keep the schedule, so a poll delayed by a slow transaction (an offline device's probe)
+    // is caught up and the average rate holds. Lagging more than 1 s means the bus cannot carry
+    // the rate: say so; past 3 s give up catching up.
     now = Clock::now();
     next->due += next->period;
     DeviceHealth& h = health_[next->device];
-    if (next->due + next->period < now) {
-      next->due = now;
-      h.rate_overrun = h.online;
-    } else if (next->due > now) {
-      h.rate_overrun = false;
-    }
+    const auto lag = now - next->due;
+    h.rate_overrun = h.online && lag > std::chrono::seconds(1);
+    if (lag > std::chrono::seconds(3)) next->due = now;
   }
 }
 

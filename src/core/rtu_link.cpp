@@ -2,6 +2,7 @@
 
 #include <linux/serial.h>
 #include <modbus/modbus.h>
+#include <sys/file.h>
 #include <sys/ioctl.h>
 #include <sys/select.h>
 #include <termios.h>
@@ -70,6 +71,12 @@ bool RtuLink::connect(std::string* error) {
   }
   if (modbus_connect(ctx_) == -1) {
     if (error) *error = "cannot open " + config_.port + ": " + modbus_strerror(errno);
+    disconnect();
+    return false;
+  }
+  // One owner per port: two drivers on one bus would answer each other's requests.
+  if (flock(modbus_get_socket(ctx_), LOCK_EX | LOCK_NB) != 0) {
+    if (error) *error = config_.port + " is in use by another process (it holds the port's lock)";
     disconnect();
     return false;
   }

@@ -2,6 +2,7 @@
 
 #include <modbus/modbus.h>
 #include <poll.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -99,6 +100,11 @@ bool SlaveServer::open(std::string* error) {
   ctx_ = modbus_new_rtu(l.port.c_str(), l.baud, parity, l.data_bits, l.stop_bits);
   if (!ctx_ || modbus_connect(ctx_) == -1) {
     *error = "cannot open " + l.port + ": " + modbus_strerror(errno);
+    close();
+    return false;
+  }
+  if (flock(modbus_get_socket(ctx_), LOCK_EX | LOCK_NB) != 0) {
+    *error = l.port + " is in use by another process (it holds the port's lock)";
     close();
     return false;
   }

@@ -99,7 +99,7 @@ TEST(BusScheduler, ARateTheBusCannotCarryIsReported) {
   BusScheduler s(bus);
   s.addPoll("greedy", 500.0, read(1), nullptr);
   s.start();
-  std::this_thread::sleep_for(600ms);
+  std::this_thread::sleep_for(1500ms);
   const DeviceHealth h = s.health("greedy");
   s.stop();
   EXPECT_TRUE(h.rate_overrun);

@@ -116,6 +116,7 @@ TEST_F(RtuLinkFaults, RetriesRepeatAfterATimeoutButNotAfterAnException) {
   c.port = pty_.path();
   c.response_timeout = 0.2;
   c.retries = 2;
+  link_->disconnect();  // one owner per port
   RtuLink link(c);
   ASSERT_TRUE(link.connect(nullptr));
   const Request req = Request::readCoils(1, 0, 8);
@@ -167,4 +168,15 @@ TEST(RtuLink, ConnectNamesTheMissingPort) {
   EXPECT_FALSE(link.connect(&error));
   EXPECT_NE(error.find("/nonexistent/ttyUSB9"), std::string::npos) << error;
   EXPECT_EQ(link.execute(Request::readCoils(1, 0, 1)).error, ErrorKind::kNotConnected);
+}
+
+TEST_F(RtuLinkFaults, OneOwnerPerPort) {
+  LinkConfig c;
+  c.port = pty_.path();
+  RtuLink second(c);
+  std::string error;
+  EXPECT_FALSE(second.connect(&error));
+  EXPECT_NE(error.find("in use by another process"), std::string::npos) << error;
+  link_->disconnect();
+  EXPECT_TRUE(second.connect(&error)) << error;
 }
