@@ -1,15 +1,14 @@
 # ROS adapters and the node executables.
 add_library(modbus_rtu_ros
-  src/ros/yaml_params.cpp
-  src/ros/device_adapter.cpp
   src/ros/adapter_registry.cpp
-  src/ros/ld58a08_adapter.cpp
-  src/ros/lc_relay8_adapter.cpp
-  src/ros/yespeed_pdu_adapter.cpp
   src/ros/bus_node.cpp
+  src/ros/device_adapter.cpp
+  src/ros/lc_relay8_adapter.cpp
+  src/ros/ld58a08_adapter.cpp
   src/ros/slave_node.cpp
+  src/ros/yaml_params.cpp
+  src/ros/yespeed_pdu_adapter.cpp
 )
-target_include_directories(modbus_rtu_ros PUBLIC include ${catkin_INCLUDE_DIRS})
 target_link_libraries(modbus_rtu_ros PUBLIC modbus_rtu_core ${catkin_LIBRARIES})
 add_dependencies(modbus_rtu_ros ${PROJECT_NAME}_generate_messages_cpp)
 

@@ -1,12 +1,12 @@
 # ROS-free simulator: device models, line emulation on a pty, executable.
 add_library(modbus_rtu_sim
+  src/sim/dm500_master.cpp
+  src/sim/pty_link.cpp
   src/sim/sim_device.cpp
-  src/sim/sim_ld58a08.cpp
   src/sim/sim_lc_relay8.cpp
+  src/sim/sim_ld58a08.cpp
   src/sim/sim_yespeed_pdu.cpp
   src/sim/simulator.cpp
-  src/sim/pty_link.cpp
-  src/sim/dm500_master.cpp
 )
 target_link_libraries(modbus_rtu_sim PUBLIC modbus_rtu_core yaml-cpp Threads::Threads)
 

@@ -1,6 +1,7 @@
 # Tests of the node: configuration parsing (gtest) and rostests against the simulator.
 catkin_add_gtest(test_bus_config test/unit/test_bus_config.cpp)
 target_link_libraries(test_bus_config modbus_rtu_core gtest_main)
+target_compile_definitions(test_bus_config PRIVATE REPO_DIR="${REPO_REAL_DIR}")
 
 find_package(rostest REQUIRED)
 find_package(roslaunch REQUIRED)

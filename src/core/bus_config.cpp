@@ -13,6 +13,14 @@ namespace modbus_rtu_driver {
 
 namespace {
 
+const std::set<std::string> kDeviceKeys = {"type",    "address", "poll_rate",
+                                           "outputs", "inputs",  "reply_delay"};
+const std::set<std::string> kSlaveKeys = {"slave_id",          "coils",           "discrete_inputs",
+                                          "holding_registers", "input_registers", "names"};
+const std::set<std::string> kLinkKeys = {
+    "port",         "baud",    "parity",  "data_bits", "stop_bits",  "response_timeout",
+    "byte_timeout", "retries", "min_gap", "direction", "low_latency"};
+
 struct ConfigError {
   std::string message;
 };
@@ -72,7 +80,7 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
     fail("devices/" + name,
          "device name is not a valid ROS name (a letter, then letters, digits or '_')");
   if (!n.IsMap()) fail("devices/" + name, show(n) + " is not a map of device settings");
-  checkKeys(n, where, {"type", "address", "poll_rate", "outputs", "inputs", "reply_delay"});
+  checkKeys(n, where, kDeviceKeys);
   DeviceConfig d;
   d.name = name;
   if (!n["type"]) {
@@ -94,10 +102,6 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
   if (!problem.empty()) throw ConfigError{problem};
   return d;
 }
-
-const std::set<std::string> kLinkKeys = {
-    "port",         "baud",    "parity",  "data_bits", "stop_bits",  "response_timeout",
-    "byte_timeout", "retries", "min_gap", "direction", "low_latency"};
 
 void parseLink(const YAML::Node& root, LinkConfig* out) {
   LinkConfig& link = *out;
@@ -140,7 +144,7 @@ double parseDiagnosticPeriod(const YAML::Node& root) {
   return p;
 }
 
-std::set<std::string> with(std::set<std::string> keys, std::initializer_list<std::string> more) {
+std::set<std::string> with(std::set<std::string> keys, const std::set<std::string>& more) {
   keys.insert(more.begin(), more.end());
   return keys;
 }
@@ -201,9 +205,7 @@ void parseNames(const YAML::Node& n, const std::string& key, uint16_t size,
 
 void parseSlave(const YAML::Node& root, SlaveConfig* out) {
   if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
-  checkKeys(root, "",
-            with(kLinkKeys, {"role", "diagnostic_period", "slave_id", "coils", "discrete_inputs",
-                             "holding_registers", "input_registers", "names"}));
+  checkKeys(root, "", with(with(kLinkKeys, {"role", "diagnostic_period"}), kSlaveKeys));
   parseLink(root, &out->link);
   const std::string role = root["role"] ? get<std::string>(root["role"], "role", "slave") : "";
   if (role != "slave") fail("role", "'" + role + "' is not slave");
@@ -239,6 +241,14 @@ bool parseSlaveConfig(const YAML::Node& root, SlaveConfig* out, std::string* err
     if (error) *error = std::string("configuration: ") + e.what();
   }
   return false;
+}
+
+std::vector<std::string> configKeys() {
+  std::vector<std::string> keys(kLinkKeys.begin(), kLinkKeys.end());
+  keys.insert(keys.end(), {"role", "diagnostic_period", "devices"});
+  for (const auto& k : kDeviceKeys) keys.push_back("devices/D/" + k);
+  keys.insert(keys.end(), kSlaveKeys.begin(), kSlaveKeys.end());
+  return keys;
 }
 
 bool isValidRosName(const std::string& name) {

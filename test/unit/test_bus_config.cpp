@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <fstream>
+#include <sstream>
+
 #include "modbus_rtu_driver/core/bus_config.h"
 
 using namespace modbus_rtu_driver;
@@ -132,4 +135,28 @@ TEST(BusConfig, RosNames) {
   EXPECT_FALSE(isValidRosName("a-b"));
   EXPECT_FALSE(isValidRosName(""));
   EXPECT_FALSE(isValidRosName("a/b"));
+}
+
+TEST(BusConfig, EveryKeyIsDocumentedAndEveryExampleParses) {
+  std::ifstream doc(std::string(REPO_DIR) + "/docs/ros_api.md");
+  std::stringstream text;
+  text << doc.rdbuf();
+  ASSERT_FALSE(text.str().empty());
+  for (const auto& key : configKeys())
+    EXPECT_NE(text.str().find("`" + key + "`"), std::string::npos)
+        << key << " is accepted by the code but missing from docs/ros_api.md";
+  for (const char* file : {"bus_example.yaml", "demo.yaml", "lc_relay8.yaml", "ld58a08.yaml",
+                           "yespeed_pdu.yaml", "slave_dm500.yaml"}) {
+    const YAML::Node root = YAML::LoadFile(std::string(REPO_DIR) + "/config/" + file);
+    std::string error;
+    bool ok = false;
+    if (root["role"] && root["role"].as<std::string>() == "slave") {
+      SlaveConfig c;
+      ok = parseSlaveConfig(root, &c, &error);
+    } else {
+      BusConfig c;
+      ok = parseBusConfig(root, &c, &error);
+    }
+    EXPECT_TRUE(ok) << file << ": " << error;
+  }
 }

@@ -42,6 +42,9 @@ struct SlaveConfig {
 
 bool parseSlaveConfig(const YAML::Node& root, SlaveConfig* out, std::string* error);
 
+// Every key either role accepts ("devices/D/type" for device keys), for documentation checks.
+std::vector<std::string> configKeys();
+
 // True when `name` is a valid ROS graph name segment: a letter, then letters, digits, '_'.
 bool isValidRosName(const std::string& name);
 
