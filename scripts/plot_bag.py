@@ -6,6 +6,7 @@ current and temperature over time, and every device's outputs as step lines.
 """
 import argparse
 import collections
+import os
 import sys
 
 import matplotlib
@@ -76,7 +77,7 @@ def main():
     if not telemetry and not outputs:
         print(f"{args.bag}: no telemetry or outputs under {args.node}/", file=sys.stderr)
         return 1
-    plot(telemetry, outputs, args.output, args.bag)
+    plot(telemetry, outputs, args.output, os.path.basename(args.bag))
     print(f"wrote {args.output}: {sum(map(len, telemetry.values()))} telemetry samples, "
           f"{sum(map(len, outputs.values()))} output messages")
     return 0
