@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Plots a bag recorded by bus.launch / demo.launch (record:=true) to a PNG: PDU power, voltage,
 current and temperature over time, and every device's outputs as step lines.
 
