@@ -228,12 +228,13 @@ void parseSlave(const YAML::Node& root, SlaveConfig* out) {
   }
 }
 
-}  // namespace
-
-bool parseSlaveConfig(const YAML::Node& root, SlaveConfig* out, std::string* error) {
-  *out = SlaveConfig{};
+// Runs a parser; its first error becomes the message.
+template <typename Config>
+bool parseWith(void (*parser)(const YAML::Node&, Config*), const YAML::Node& root, Config* out,
+               std::string* error) {
+  *out = Config{};
   try {
-    parseSlave(root, out);
+    parser(root, out);
     return true;
   } catch (const ConfigError& e) {
     if (error) *error = e.message;
@@ -241,6 +242,12 @@ bool parseSlaveConfig(const YAML::Node& root, SlaveConfig* out, std::string* err
     if (error) *error = std::string("configuration: ") + e.what();
   }
   return false;
+}
+
+}  // namespace
+
+bool parseSlaveConfig(const YAML::Node& root, SlaveConfig* out, std::string* error) {
+  return parseWith(parseSlave, root, out, error);
 }
 
 std::vector<std::string> configKeys() {
@@ -259,16 +266,7 @@ bool isValidRosName(const std::string& name) {
 }
 
 bool parseBusConfig(const YAML::Node& root, BusConfig* out, std::string* error) {
-  *out = BusConfig{};
-  try {
-    parse(root, out);
-    return true;
-  } catch (const ConfigError& e) {
-    if (error) *error = e.message;
-  } catch (const YAML::Exception& e) {
-    if (error) *error = std::string("configuration: ") + e.what();
-  }
-  return false;
+  return parseWith(parse, root, out, error);
 }
 
 }  // namespace modbus_rtu_driver

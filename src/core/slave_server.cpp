@@ -180,7 +180,7 @@ void SlaveServer::run() {
         continue;
       }
       if (n > 0) {
-        input_.insert(input_.end(), buf, buf + n);
+        framer_.push(buf, static_cast<size_t>(n));
         last_byte_ = Clock::now();
         got = true;
       }
@@ -188,53 +188,11 @@ void SlaveServer::run() {
     // t3.5 ends a frame; ptys and USB adapters deliver in bursts, so never less than 4 ms.
     const double gap = std::max(effectiveMinGap(config_.link), 0.004);
     const bool silence =
-        !got && !input_.empty() && Clock::now() - last_byte_ > std::chrono::duration<double>(gap);
-    cutFrames(silence);
+        !got && framer_.pending() && Clock::now() - last_byte_ > std::chrono::duration<double>(gap);
+    for (const Bytes& frame : framer_.take(silence)) serve(frame);
+    std::lock_guard<std::mutex> lock(mutex_);
+    stats_.crc_errors = framer_.dropped();
   }
-}
-
-// Frames are cut by the length their header announces; noise, bad CRCs and unknown layouts
-// are judged when the line falls silent, looking for a valid frame at every offset.
-void SlaveServer::cutFrames(bool silence) {
-  while (!input_.empty()) {
-    const int length = requestLengthFromHeader(input_);
-    if (length <= 0 || input_.size() < static_cast<size_t>(length)) break;
-    const Bytes frame(input_.begin(), input_.begin() + length);
-    if (!hasValidCrc(frame)) break;
-    input_.erase(input_.begin(), input_.begin() + length);
-    serve(frame);
-  }
-  if (!silence || input_.empty()) return;
-  Bytes chunk;
-  chunk.swap(input_);
-  for (size_t i = 0; i < chunk.size(); ++i) {
-    if (tryFrame(Bytes(chunk.begin() + static_cast<long>(i), chunk.end()))) {
-      if (i > 0) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        ++stats_.crc_errors;
-      }
-      return;
-    }
-  }
-  std::lock_guard<std::mutex> lock(mutex_);
-  ++stats_.crc_errors;
-}
-
-bool SlaveServer::tryFrame(const Bytes& data) {
-  const int length = requestLengthFromHeader(data);
-  if (length > 0 && data.size() >= static_cast<size_t>(length)) {
-    const Bytes frame(data.begin(), data.begin() + length);
-    if (!hasValidCrc(frame)) return false;
-    serve(frame);
-    input_.assign(data.begin() + length, data.end());
-    cutFrames(true);
-    return true;
-  }
-  if (length < 0 && data.size() >= 4 && hasValidCrc(data)) {  // unknown function code
-    serve(data);
-    return true;
-  }
-  return false;
 }
 
 // The exception modbus_reply will send for this frame (0 = a normal reply), so it is counted

@@ -143,68 +143,22 @@ void Simulator::run() {
       uint8_t buf[512];
       const ssize_t n = read(pty_.fd(), buf, sizeof buf);
       if (n > 0) {
-        input_.insert(input_.end(), buf, buf + n);
+        framer_.push(buf, static_cast<size_t>(n));
         last_byte_ = now;
         got = true;
       }
     }
     const double gap = std::max(gapOf(lineSettings()), 0.004);  // ptys deliver in bursts
-    processInput(now, !got && !input_.empty() && now - last_byte_ > secs(gap));
+    const bool silence = !got && framer_.pending() && now - last_byte_ > secs(gap);
+    for (const Bytes& frame : framer_.take(silence)) processFrame(frame);
+    bad_crc_ = framer_.dropped();
     serveControl();
   }
-}
-
-// Frames are cut by the length their header announces; what cannot be cut that way (unknown
-// function, noise) is judged when the line falls silent.
-void Simulator::processInput(SimClock::time_point, bool silence) {
-  while (!input_.empty()) {
-    const int length = requestLengthFromHeader(input_);
-    if (length <= 0 || input_.size() < static_cast<size_t>(length)) break;
-    const Bytes frame(input_.begin(), input_.begin() + length);
-    if (!hasValidCrc(frame)) break;  // maybe noise in front: wait for silence and resync
-    input_.erase(input_.begin(), input_.begin() + length);
-    processFrame(frame);
-  }
-  if (!silence || input_.empty()) return;
-  Bytes chunk;
-  chunk.swap(input_);
-  // Noise before a frame: find the first offset where a valid frame starts.
-  for (size_t i = 0; i < chunk.size(); ++i) {
-    const Bytes rest(chunk.begin() + i, chunk.end());
-    if (tryFrame(rest)) return;
-  }
-  ++frames_;
-  ++bad_crc_;
-  if (options_.verbose) std::printf("dropped %s\n", toHex(chunk).c_str());
-}
-
-bool Simulator::tryFrame(const Bytes& data) {
-  const int length = requestLengthFromHeader(data);
-  if (length > 0 && data.size() >= static_cast<size_t>(length)) {
-    const Bytes frame(data.begin(), data.begin() + length);
-    if (!hasValidCrc(frame)) return false;
-    processFrame(frame);
-    const Bytes rest(data.begin() + length, data.end());
-    if (!rest.empty()) {
-      input_ = rest;  // more after it: cut again
-      processInput(SimClock::now(), true);
-    }
-    return true;
-  }
-  if (length < 0 && data.size() >= 4 && hasValidCrc(data)) {  // unknown function, whole chunk
-    processFrame(data);
-    return true;
-  }
-  return false;
 }
 
 void Simulator::processFrame(const Bytes& frame) {
   ++frames_;
   if (options_.verbose) std::printf("rx %s\n", toHex(frame).c_str());
-  if (!hasValidCrc(frame)) {
-    ++bad_crc_;
-    return;
-  }
   const uint8_t slave = frame[0];
   const auto request = decodeRequest(frame);
   const SimLineSettings line = lineSettings();

@@ -15,6 +15,7 @@
 
 #include "modbus_rtu_driver/core/bus_config.h"
 #include "modbus_rtu_driver/core/frame.h"
+#include "modbus_rtu_driver/core/request_framer.h"
 
 typedef struct _modbus modbus_t;                    // NOLINT: libmodbus's names
 typedef struct _modbus_mapping_t modbus_mapping_t;  // NOLINT
@@ -75,8 +76,6 @@ class SlaveServer {
   void close();
   void run();
   void applyChanges();
-  void cutFrames(bool silence);
-  bool tryFrame(const Bytes& data);
   void serve(const Bytes& frame);
   uint8_t predictException(const Bytes& frame) const;
   uint16_t tableSize(SlaveTable table) const;
@@ -92,7 +91,7 @@ class SlaveServer {
   SlaveStats stats_;
   std::chrono::steady_clock::time_point last_heard_{};
   bool heard_ = false;
-  Bytes input_;
+  RequestFramer framer_;
   std::chrono::steady_clock::time_point last_byte_{};
 };
 

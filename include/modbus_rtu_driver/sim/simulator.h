@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "modbus_rtu_driver/core/request_framer.h"
 #include "modbus_rtu_driver/sim/pty_link.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 
@@ -52,9 +53,7 @@ class Simulator {
 
  private:
   void run();
-  void processInput(SimClock::time_point now, bool silence);
   void processFrame(const Bytes& frame);
-  bool tryFrame(const Bytes& frame);
   void answer(SimDevice& device, const Bytes& request, const Bytes& reply, double delay);
   SimLineSettings lineSettings() const;
   SimDevice* find(const std::string& name);
@@ -75,7 +74,7 @@ class Simulator {
   int listen_fd_ = -1;
   std::vector<int> clients_;
   std::vector<std::string> client_buffers_;
-  Bytes input_;
+  RequestFramer framer_;
   SimClock::time_point last_byte_{}, busy_until_{};
   uint64_t frames_ = 0, answered_ = 0, bad_crc_ = 0;
 };
