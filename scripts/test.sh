@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what is missing, builds, runs every test (gtest unit tests, then the rostests one
-# after another) and ends with "N passed, N failed". Exit code 0 only when all passed.
+# after another, then the unit tests under ASan/UBSan and a short fuzz run) and ends with
+# "N passed, N failed". Exit code 0 only when all passed.
 source "$(dirname "$0")/common.sh"
 install_deps
 build_workspace
@@ -10,4 +11,8 @@ rm -rf "$WS/build/test_results"
 # -j1: rostests each start their own master and must not run in parallel.
 catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests 2>&1 | tee "$WS/run_tests.log" |
   grep -E '^\[ *(RUN|FAILED|PASSED|OK) |^\[Testcase|FAILURE|ERROR:|^Ran |testcase|^\[ROSUNIT\]|^ *\* ' || true
+# The ROS-free unit tests again under AddressSanitizer + UndefinedBehaviorSanitizer, and a short
+# fuzz run of the frame and request handling (scripts/fuzz.sh 3600 for a long one).
+"$REPO/scripts/sanitized_tests.sh" "$WS/build/test_results/sanitizers" || true
+"$REPO/scripts/fuzz.sh" 20 "$WS/build/test_results/fuzz" || true
 exec /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$WS/build/test_results"

@@ -92,6 +92,8 @@ void SlaveServer::stop() {
   running_ = false;
   if (thread_.joinable()) thread_.join();
   close();
+  if (mapping_) modbus_mapping_free(mapping_);
+  mapping_ = nullptr;
 }
 
 bool SlaveServer::open(std::string* error) {
