@@ -1,250 +1,323 @@
 // Command line of modbus_rtu_commission: every value is checked against the manuals' ranges
-// before anything is opened or sent.
+// before anything is opened or sent, and each refusal names the option and its range.
 #include <algorithm>
+#include <cctype>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "modbus_rtu_driver/tools/commission.h"
+#include "modbus_rtu_driver/tools/commission_session.h"
 
 namespace modbus_rtu_driver {
 
 namespace {
 
-const int kLdBauds[] = {1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200};
+struct BadArgument {
+  std::string message;
+};
+[[noreturn]] void bad(const std::string& message) {
+  throw BadArgument{message};
+}
 
-bool toInt(const std::string& s, int* out) {
-  try {
-    size_t used = 0;
-    const long v = std::stol(s, &used, 0);
-    if (used != s.size()) return false;
-    *out = static_cast<int>(v);
-    return true;
-  } catch (...) {
-    return false;
+const char kAllBauds[] = "1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200";
+
+// Decimal, or hexadecimal with 0x; the whole text must be the number.
+bool toLong(const std::string& text, long* out) {
+  const bool hex = text.size() > 2 && text[0] == '0' && (text[1] == 'x' || text[1] == 'X');
+  const std::string digits = hex ? text.substr(2) : text;
+  if (digits.empty() || digits.size() > 9) return false;
+  for (size_t i = 0; i < digits.size(); ++i) {
+    const auto c = static_cast<unsigned char>(digits[i]);
+    const bool sign = i == 0 && c == '-' && !hex && digits.size() > 1;
+    if (!(hex ? std::isxdigit(c) : std::isdigit(c)) && !sign) return false;
+  }
+  *out = std::stol(digits, nullptr, hex ? 16 : 10);
+  return true;
+}
+
+int intIn(const std::string& what, const std::string& text, int lo, int hi) {
+  long v = 0;
+  if (!toLong(text, &v) || v < lo || v > hi)
+    bad(what + ": '" + text + "' is outside " + std::to_string(lo) + "-" + std::to_string(hi));
+  return static_cast<int>(v);
+}
+
+double secondsIn(const std::string& what, const std::string& text, double lo, double hi) {
+  std::istringstream in(text);
+  double v = 0;
+  char rest = 0;
+  if (!(in >> v) || in >> rest || !(v >= lo && v <= hi)) {
+    std::ostringstream range;
+    range << lo << "-" << hi;
+    bad(what + ": '" + text + "' is outside " + range.str() + " s");
+  }
+  return v;
+}
+
+// "a, b,c" -> {"a", "b", "c"}
+std::vector<std::string> splitList(const std::string& text) {
+  std::vector<std::string> items;
+  std::istringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    const size_t first = item.find_first_not_of(' '), last = item.find_last_not_of(' ');
+    items.push_back(first == std::string::npos ? "" : item.substr(first, last - first + 1));
+  }
+  return items;
+}
+
+// The command line split into --options and positional words.
+class Words {
+ public:
+  explicit Words(const std::vector<std::string>& args) {
+    static const std::set<std::string> kFlags = {"json", "yes", "first", "multiple"};
+    for (size_t i = 0; i < args.size(); ++i) {
+      const std::string& a = args[i];
+      if (a.size() < 3 || a.compare(0, 2, "--") != 0) {
+        positional_.push_back(a);
+        continue;
+      }
+      const std::string key = a.substr(2);
+      if (kFlags.count(key)) {
+        options_[key] = "";
+      } else if (i + 1 < args.size() && args[i + 1].compare(0, 2, "--") != 0) {
+        options_[key] = args[++i];
+      } else {
+        bad(a + ": missing value");
+      }
+    }
+  }
+  bool has(const std::string& key) const { return options_.count(key) != 0; }
+  std::string get(const std::string& key) const { return has(key) ? options_.at(key) : ""; }
+  // The command line without the options; [0] is the command.
+  const std::vector<std::string>& positional() const { return positional_; }
+
+  void allowOnly(const std::string& command, const std::set<std::string>& allowed) const {
+    static const std::set<std::string> kGlobal = {"port",    "baud", "parity",
+                                                  "timeout", "json", "yes"};
+    for (const auto& kv : options_)
+      if (!kGlobal.count(kv.first) && !allowed.count(kv.first))
+        bad("--" + kv.first + ": not an option of " + command + " (see --help)");
+  }
+  const std::string& word(size_t n, const std::string& what, const std::string& hint) const {
+    if (n >= positional_.size()) bad(what + ": missing (" + hint + ")");
+    return positional_[n];
+  }
+  void atMost(size_t n) const {
+    if (positional_.size() > n) bad("unexpected argument '" + positional_[n] + "'");
+  }
+
+ private:
+  std::map<std::string, std::string> options_;
+  std::vector<std::string> positional_;
+};
+
+const std::map<std::string, std::set<std::string>>& commandOptions() {
+  static const std::set<std::string> kTyped = {"type", "address"};
+  static const std::map<std::string, std::set<std::string>> kCommands = {
+      {"scan", {"from", "to", "addresses", "bauds", "parities", "first"}},
+      {"info", {"address"}},
+      {"get-address", kTyped},
+      {"set-address", kTyped},
+      {"get-baud", kTyped},
+      {"set-baud", kTyped},
+      {"get-parity", kTyped},
+      {"set-parity", kTyped},
+      {"get-return-delay", kTyped},
+      {"set-return-delay", kTyped},
+      {"get-save", kTyped},
+      {"set-save", kTyped},
+      {"factory-reset", kTyped},
+      {"read", {"address"}},
+      {"write", {"address", "multiple"}},
+      {"watch", {"address", "interval", "count"}},
+  };
+  return kCommands;
+}
+
+void parseLink(const Words& w, CommissionCommand& c) {
+  if (!w.has("port")) bad("--port: missing (the serial device, e.g. /dev/ttyUSB0)");
+  c.link.port = w.get("port");
+  if (w.has("baud")) {
+    c.link.baud = intIn("--baud", w.get("baud"), 1200, 115200);
+    if (!isStandardBaud(c.link.baud))
+      bad("--baud: '" + w.get("baud") + "' is not one of " + kAllBauds);
+  }
+  if (w.has("parity") && !parseParity(w.get("parity"), &c.link.parity))
+    bad("--parity: '" + w.get("parity") + "' is not none, even or odd");
+  c.link.retries = 0;
+  // Scans try many silent addresses: wait little. Other commands wait out an LD58A08's return
+  // delay (up to 1000 ms) too.
+  const double wire = 30.0 * bitsPerCharacter(c.link) / c.link.baud;
+  c.link.response_timeout = (c.command == "scan" ? 0.05 : 1.05) + wire;
+  if (w.has("timeout"))
+    c.link.response_timeout = secondsIn("--timeout", w.get("timeout"), 0.005, 10);
+}
+
+void parseScan(const Words& w, CommissionCommand& c) {
+  w.atMost(1);
+  if (w.has("addresses")) {
+    if (w.has("from") || w.has("to")) bad("--addresses: give it or --from/--to, not both");
+    for (const std::string& item : splitList(w.get("addresses"))) {
+      const size_t dash = item.find('-', 1);
+      const int lo = intIn("--addresses", item.substr(0, dash), 1, 255);
+      const int hi =
+          dash == std::string::npos ? lo : intIn("--addresses", item.substr(dash + 1), lo, 255);
+      for (int a = lo; a <= hi; ++a)
+        if (std::find(c.addresses.begin(), c.addresses.end(), a) == c.addresses.end())
+          c.addresses.push_back(a);
+    }
+  } else {
+    const int from = w.has("from") ? intIn("--from", w.get("from"), 1, 255) : 1;
+    const int to = w.has("to") ? intIn("--to", w.get("to"), from, 255) : 255;
+    for (int a = from; a <= to; ++a) c.addresses.push_back(a);
+  }
+  const std::string bauds = w.has("bauds") ? w.get("bauds") : std::to_string(c.link.baud);
+  for (const std::string& b : splitList(bauds == "all" ? kAllBauds : bauds)) {
+    long v = 0;
+    if (!toLong(b, &v) || !isStandardBaud(static_cast<int>(v)))
+      bad("--bauds: '" + b + "' is not one of " + kAllBauds + " (or all)");
+    c.bauds.push_back(static_cast<int>(v));
+  }
+  const std::string parities = w.has("parities") ? w.get("parities") : parityName(c.link.parity);
+  for (const std::string& p : splitList(parities == "all" ? "none,even,odd" : parities)) {
+    Parity parity;
+    if (!parseParity(p, &parity)) bad("--parities: '" + p + "' is not none, even or odd (or all)");
+    c.parities.push_back(parity);
+  }
+  if (c.addresses.empty() || c.bauds.empty() || c.parities.empty())
+    bad("--addresses / --bauds / --parities: empty list");
+  c.first_only = w.has("first");
+}
+
+// A baud rate or a code, as the board's own code.
+int baudCode(const std::string& text, bool lc) {
+  const int lo = lc ? 2 : 0, hi = lc ? 4 : 7;
+  long v = -1;
+  if (toLong(text, &v)) {
+    if (v >= lo && v <= hi) return static_cast<int>(v);
+    for (int code = lo; code <= hi; ++code)
+      if (baudOfCode(code) == v) return code;
+  }
+  bad("baud: '" + text + "' is neither a code " + std::to_string(lo) + "-" + std::to_string(hi) +
+      " nor one of " + (lc ? "4800, 9600, 19200" : kAllBauds) + " (" +
+      (lc ? "lc_relay8" : "ld58a08") + ")");
+}
+
+// The settings commands: --type (ld58a08 unless the command fits both boards), --address and
+// the new value in the board's units.
+void parseDevice(const Words& w, CommissionCommand& c) {
+  const std::string& cmd = c.command;
+  const bool both_boards =
+      cmd == "get-address" || cmd == "set-address" || cmd == "get-baud" || cmd == "set-baud";
+  if (w.has("type")) {
+    c.type = w.get("type");
+    if (c.type != "ld58a08" && c.type != "lc_relay8")
+      bad("--type: '" + c.type + "' is not ld58a08 or lc_relay8");
+    if (!both_boards && c.type != "ld58a08")
+      bad("--type: " + cmd + " is an ld58a08 command; the LC relay board has no such setting");
+  } else if (both_boards) {
+    bad("--type: missing (ld58a08 or lc_relay8)");
+  } else {
+    c.type = "ld58a08";
+  }
+  const bool lc = c.type == "lc_relay8";
+  const int max_address = lc ? 255 : 247;
+  if (w.has("address")) c.address = intIn("--address", w.get("address"), 1, max_address);
+  const bool address_optional =
+      cmd == "get-address" || cmd == "set-address" || cmd == "factory-reset";
+  if (c.address < 0 && !address_optional)
+    bad("--address: missing (1-" + std::to_string(max_address) + ")");
+  const bool setter = cmd.compare(0, 4, "set-") == 0;
+  w.atMost(setter ? 2 : 1);
+  if (!setter) return;
+  const std::string& v = w.word(1, "value", "see --help");
+  if (cmd == "set-address") {
+    c.new_value = intIn("new address", v, 1, max_address);
+  } else if (cmd == "set-baud") {
+    c.new_value = baudCode(v, lc);
+  } else if (cmd == "set-parity") {
+    Parity p;
+    if (!parseParity(v, &p)) bad("parity: '" + v + "' is not none, even or odd");
+    c.new_value = p == Parity::kEven ? 1 : p == Parity::kOdd ? 2 : 0;
+  } else if (cmd == "set-return-delay") {
+    const int ms = intIn("return delay", v, 0, 1000);
+    if (ms % 40) bad("return delay: " + v + " ms is not a multiple of 40 ms (0-1000)");
+    c.new_value = ms / 40;
+  } else if (cmd == "set-save") {
+    if (v != "on" && v != "off" && v != "1" && v != "0")
+      bad("power-down save: '" + v + "' is not on or off");
+    c.new_value = v == "on" || v == "1";
   }
 }
 
-struct Problem {
-  std::string message;
-};
-
-int intOption(const std::map<std::string, std::string>& o, const std::string& key, int fallback,
-              int lo, int hi) {
-  auto it = o.find(key);
-  if (it == o.end()) return fallback;
-  int v = 0;
-  if (!toInt(it->second, &v) || v < lo || v > hi)
-    throw Problem{"--" + key + ": '" + it->second + "' is outside " + std::to_string(lo) + "-" +
-                  std::to_string(hi)};
-  return v;
+// info, read, write, watch: any device type, so any address a board can have.
+void parseAnyAddress(const Words& w, CommissionCommand& c) {
+  if (!w.has("address")) bad("--address: missing (1-255)");
+  c.address = intIn("--address", w.get("address"), 1, 255);
 }
 
-int positionalInt(const std::vector<std::string>& p, size_t i, const std::string& what, int lo,
-                  int hi) {
-  if (i >= p.size())
-    throw Problem{what + ": missing (" + std::to_string(lo) + "-" + std::to_string(hi) + ")"};
-  int v = 0;
-  if (!toInt(p[i], &v) || v < lo || v > hi)
-    throw Problem{what + ": '" + p[i] + "' is outside " + std::to_string(lo) + "-" +
-                  std::to_string(hi)};
-  return v;
+void parseTable(const Words& w, CommissionCommand& c) {
+  parseAnyAddress(w, c);
+  c.table = w.word(1, "table", "coils, discrete-inputs, holding or input-registers");
+  const bool bits = c.table == "coils" || c.table == "discrete-inputs";
+  if (!bits && c.table != "holding" && c.table != "input-registers")
+    bad("table: '" + c.table + "' is not coils, discrete-inputs, holding or input-registers");
+  c.start = intIn("start", w.word(2, "start", "0-65535"), 0, 65535);
+  if (c.command == "write") {
+    if (c.table != "coils" && c.table != "holding")
+      bad("table: " + c.table + " cannot be written (coils or holding)");
+    const size_t n = w.positional().size();
+    if (n < 4) bad("value: missing (" + std::string(bits ? "0 or 1" : "0-65535") + ")");
+    const size_t max = bits ? kMaxWriteBits : kMaxWriteRegisters;
+    if (n - 3 > max)
+      bad("value: " + std::to_string(n - 3) + " values, at most " + std::to_string(max));
+    for (size_t i = 3; i < n; ++i)
+      c.values.push_back(
+          static_cast<uint16_t>(intIn("value", w.positional()[i], 0, bits ? 1 : 65535)));
+    c.count = static_cast<int>(c.values.size());
+    c.multiple = w.has("multiple");
+  } else {
+    w.atMost(4);
+    const int max = bits ? kMaxReadBits : kMaxReadRegisters;
+    if (w.positional().size() > 3) c.count = intIn("count", w.positional()[3], 1, max);
+  }
+  if (c.start + c.count > 65536)
+    bad("start: " + std::to_string(c.start) + " + " + std::to_string(c.count) + " passes 65535");
+  if (c.command == "watch") {
+    if (w.has("interval")) c.interval = secondsIn("--interval", w.get("interval"), 0.01, 3600);
+    if (w.has("count")) c.polls = intIn("--count", w.get("count"), 1, 100000000);
+  }
 }
 
 }  // namespace
 
-std::string commissionUsage() {
-  return R"(usage: modbus_rtu_commission --port PORT [--baud B] [--parity none|even|odd]
-         [--timeout S] [--json] [--yes] COMMAND ...
-commands:
-  scan [--from A] [--to B] [--bauds 9600,19200|all] [--parities none,even,odd|all] [--first]
-  info --address A
-  get-address --type ld58a08|lc_relay8 [--address A]  (without --address: the board must be
-                                                         alone on the bus; LD via 0xFF, LC via 0)
-  set-address --type ld58a08|lc_relay8 [--address A] NEW
-  get-baud --type T --address A          set-baud --type T --address A BAUD
-  get-parity --address A                 set-parity --address A none|even|odd   (ld58a08)
-  set-return-delay --address A MS        (ld58a08, 0-1000 ms in steps of 40)
-  set-save --address A on|off            (ld58a08 power-down save of PWM settings)
-  factory-reset [--address A]            (ld58a08; without --address through 0xFF)
-  read --address A coils|discrete-inputs|holding|input-registers START [COUNT]
-  write --address A coils|holding START VALUE...
-  watch --address A TABLE START [COUNT] [--interval S] [--count N]
-Changes to how a device answers (address, baud, parity, return delay, factory reset) ask for
-confirmation unless --yes. Baud and parity take effect after the device is powered off and on.
-exit codes: 0 ok, 2 bad arguments, 3 not found / no answer, 4 refused by the device (Modbus
-exception), 5 other bus error (CRC, I/O, port), 6 not confirmed
-)";
-}
-
 bool parseCommission(const std::vector<std::string>& args, CommissionCommand* out,
                      std::string* error) {
-  static const std::vector<std::string> kFlags = {"json", "yes", "first"};
-  std::map<std::string, std::string> o;
-  std::vector<std::string> p;
   try {
-    for (size_t i = 0; i < args.size(); ++i) {
-      const std::string& a = args[i];
-      if (a.rfind("--", 0) != 0) {
-        p.push_back(a);
-        continue;
-      }
-      const std::string key = a.substr(2);
-      if (std::find(kFlags.begin(), kFlags.end(), key) != kFlags.end()) {
-        o[key] = "1";
-      } else if (i + 1 < args.size()) {
-        o[key] = args[++i];
-      } else {
-        throw Problem{a + ": missing value"};
-      }
-    }
-    static const std::vector<std::string> kKnown = {
-        "port", "baud",  "parity",   "timeout", "json",    "yes",      "first", "from",
-        "to",   "bauds", "parities", "type",    "address", "interval", "count"};
-    for (const auto& kv : o)
-      if (std::find(kKnown.begin(), kKnown.end(), kv.first) == kKnown.end())
-        throw Problem{"--" + kv.first + ": unknown option"};
+    const Words w(args);
     CommissionCommand c;
-    if (!o.count("port")) throw Problem{"--port: missing (the serial device, e.g. /dev/ttyUSB0)"};
-    c.link.port = o["port"];
-    c.link.baud = intOption(o, "baud", 9600, 1200, 115200);
-    if (!isStandardBaud(c.link.baud))
-      throw Problem{"--baud: " + o["baud"] + " is not a standard rate"};
-    if (o.count("parity") && !parseParity(o["parity"], &c.link.parity))
-      throw Problem{"--parity: '" + o["parity"] + "' is not none, even or odd"};
-    c.link.retries = 0;
-    c.link.response_timeout = 0.05 + 30.0 * 11 / c.link.baud;  // short: scans try many addresses
-    if (o.count("timeout")) {
-      std::istringstream t(o["timeout"]);
-      if (!(t >> c.link.response_timeout) || c.link.response_timeout < 0.005 ||
-          c.link.response_timeout > 10)
-        throw Problem{"--timeout: '" + o["timeout"] + "' is outside 0.005-10 s"};
-    }
-    c.json = o.count("json");
-    c.yes = o.count("yes");
-    if (p.empty()) throw Problem{"command: missing (see --help)"};
-    c.command = p[0];
-    if (o.count("type")) {
-      c.type = o["type"];
-      if (c.type != "ld58a08" && c.type != "lc_relay8")
-        throw Problem{"--type: '" + c.type + "' is not ld58a08 or lc_relay8"};
-    }
-    const bool lc = c.type == "lc_relay8";
-    c.address = intOption(o, "address", -1, 1, 255);
-    auto needType = [&] {
-      if (c.type.empty()) throw Problem{"--type: missing (ld58a08 or lc_relay8)"};
-    };
-    auto needAddress = [&](int hi) {
-      if (c.address < 0) throw Problem{"--address: missing (1-" + std::to_string(hi) + ")"};
-      if (c.address > hi)
-        throw Problem{"--address: " + std::to_string(c.address) + " is outside 1-" +
-                      std::to_string(hi)};
-    };
-    const std::string& cmd = c.command;
-    if (cmd == "scan") {
-      c.from = intOption(o, "from", 1, 1, 255);
-      c.to = intOption(o, "to", 247, 1, 255);
-      if (c.to < c.from) throw Problem{"--to: " + std::to_string(c.to) + " is below --from"};
-      c.first_only = o.count("first");
-      const std::string bauds = o.count("bauds") ? o["bauds"] : std::to_string(c.link.baud);
-      if (bauds == "all") {
-        c.bauds.assign(std::begin(kLdBauds), std::end(kLdBauds));
-      } else {
-        std::istringstream in(bauds);
-        for (std::string b; std::getline(in, b, ',');) {
-          int v = 0;
-          if (!toInt(b, &v) || !isStandardBaud(v))
-            throw Problem{"--bauds: '" + b + "' is not one of 1200 ... 115200"};
-          c.bauds.push_back(v);
-        }
-      }
-      const std::string parities = o.count("parities") ? o["parities"] : parityName(c.link.parity);
-      std::istringstream in(parities == "all" ? "none,even,odd" : parities);
-      for (std::string s; std::getline(in, s, ',');) {
-        Parity par;
-        if (!parseParity(s, &par))
-          throw Problem{"--parities: '" + s + "' is not none, even or odd"};
-        c.parities.push_back(par);
-      }
-    } else if (cmd == "get-address") {
-      needType();
-      if (c.address >= 0) needAddress(lc ? 255 : 247);
-    } else if (cmd == "set-address") {
-      needType();
-      if (c.address >= 0) needAddress(lc ? 255 : 247);
-      c.new_value = positionalInt(p, 1, "new address", 1, lc ? 255 : 247);
-    } else if (cmd == "get-baud" || cmd == "set-baud") {
-      needType();
-      needAddress(lc ? 255 : 247);
-      if (cmd == "set-baud") {
-        const int baud = positionalInt(p, 1, "baud", 1200, 115200);
-        const int* codes = std::find(std::begin(kLdBauds), std::end(kLdBauds), baud);
-        const int code = static_cast<int>(codes - std::begin(kLdBauds));
-        if (lc ? (code < 2 || code > 4) : codes == std::end(kLdBauds))
-          throw Problem{
-              "baud: " + std::to_string(baud) + " is not one of " +
-              (lc ? "4800, 9600, 19200" : "1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200")};
-        c.new_value = code;  // the LC board uses the same codes 2-4
-      }
-    } else if (cmd == "get-parity" || cmd == "set-parity") {
-      needAddress(247);
-      if (cmd == "set-parity") {
-        Parity par;
-        if (p.size() < 2 || !parseParity(p[1], &par))
-          throw Problem{"parity: '" + (p.size() < 2 ? std::string() : p[1]) +
-                        "' is not none, even or odd"};
-        c.new_value = par == Parity::kEven ? 1 : par == Parity::kOdd ? 2 : 0;
-      }
-    } else if (cmd == "set-return-delay") {
-      needAddress(247);
-      const int ms = positionalInt(p, 1, "delay", 0, 1000);
-      if (ms % 40) throw Problem{"delay: " + std::to_string(ms) + " ms is not a multiple of 40 ms"};
-      c.new_value = ms / 40;
-    } else if (cmd == "set-save") {
-      needAddress(247);
-      if (p.size() < 2 || (p[1] != "on" && p[1] != "off"))
-        throw Problem{"save: '" + (p.size() < 2 ? std::string() : p[1]) + "' is not on or off"};
-      c.new_value = p[1] == "on";
-    } else if (cmd == "factory-reset") {
-      if (c.address >= 0) needAddress(247);
-    } else if (cmd == "info") {
-      needAddress(255);
-    } else if (cmd == "read" || cmd == "write" || cmd == "watch") {
-      needAddress(255);
-      if (p.size() < 2)
-        throw Problem{"table: missing (coils, discrete-inputs, holding, input-registers)"};
-      c.table = p[1];
-      const bool bits = c.table == "coils" || c.table == "discrete-inputs";
-      if (!bits && c.table != "holding" && c.table != "input-registers")
-        throw Problem{"table: '" + c.table +
-                      "' is not coils, discrete-inputs, holding or input-registers"};
-      c.start = positionalInt(p, 2, "start", 0, 65535);
-      if (cmd == "write") {
-        if (c.table != "coils" && c.table != "holding")
-          throw Problem{"table: '" + c.table + "' cannot be written (coils or holding)"};
-        if (p.size() < 4) throw Problem{"values: missing"};
-        for (size_t i = 3; i < p.size(); ++i)
-          c.values.push_back(
-              static_cast<uint16_t>(positionalInt(p, i, "value", 0, bits ? 1 : 65535)));
-        c.count = static_cast<int>(c.values.size());
-        if (c.count > (bits ? 1968 : 123)) throw Problem{"values: too many for one request"};
-      } else {
-        c.count = p.size() > 3 ? positionalInt(p, 3, "count", 1, bits ? 2000 : 125) : 1;
-      }
-      if (c.start + c.count > 65536) throw Problem{"start: range passes 65535"};
-      if (cmd == "watch") {
-        c.polls = intOption(o, "count", 0, 0, 1000000);
-        if (o.count("interval")) {
-          std::istringstream t(o["interval"]);
-          if (!(t >> c.interval) || c.interval < 0.01 || c.interval > 3600)
-            throw Problem{"--interval: '" + o["interval"] + "' is outside 0.01-3600 s"};
-        }
-      }
+    c.json = w.has("json");
+    c.yes = w.has("yes");
+    c.command = w.word(0, "command", "see --help");
+    const auto known = commandOptions().find(c.command);
+    if (known == commandOptions().end())
+      bad("command: '" + c.command + "' is not known (see --help)");
+    w.allowOnly(c.command, known->second);
+    parseLink(w, c);
+    if (c.command == "scan") {
+      parseScan(w, c);
+    } else if (c.command == "read" || c.command == "write" || c.command == "watch") {
+      parseTable(w, c);
+    } else if (c.command == "info") {
+      parseAnyAddress(w, c);
+      w.atMost(1);
     } else {
-      throw Problem{"command: '" + cmd + "' is not known (see --help)"};
+      parseDevice(w, c);
     }
     *out = c;
     return true;
-  } catch (const Problem& e) {
+  } catch (const BadArgument& e) {
     *error = e.message;
     return false;
   }

@@ -4,12 +4,12 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <iosfwd>
 #include <string>
 #include <vector>
 
 #include "modbus_rtu_driver/core/link_config.h"
-#include "modbus_rtu_driver/core/transport.h"
 
 namespace modbus_rtu_driver {
 
@@ -23,23 +23,26 @@ enum CommissionExit {
 };
 
 struct CommissionCommand {
-  LinkConfig link;
+  LinkConfig link;  // --port, --baud, --parity, --timeout; no retries: say what happened
   bool json = false, yes = false;
   std::string command;  // scan, get-address, set-address, ...
-  std::string type;     // ld58a08 | lc_relay8 (commands that depend on the board)
-  int address = -1;     // -1 = not given
-  std::string table;    // coils | discrete-inputs | holding | input-registers
+  std::string type;     // ld58a08 | lc_relay8 for the commands that depend on the board
+  int address = -1;     // --address; -1 = not given
+  // set-*: the new value in the device's own units: address, baud code, parity code (0 none,
+  // 1 even, 2 odd), return delay in 40 ms steps, power-down save 0/1.
+  int new_value = -1;
+  // read / write / watch
+  std::string table;  // coils | discrete-inputs | holding | input-registers
   int start = 0, count = 1;
   std::vector<uint16_t> values;
-  int new_value = 0;  // new address, baud code, parity code, delay units, save flag
+  bool multiple = false;  // write: FC15/FC16 even for one value
+  double interval = 0.5;  // watch: s between polls
+  int polls = 0;          // watch: 0 = until interrupted
   // scan
-  int from = 1, to = 247;
+  std::vector<int> addresses;
   std::vector<int> bauds;
   std::vector<Parity> parities;
   bool first_only = false;
-  // watch
-  double interval = 0.5;
-  int polls = 0;  // 0 = until interrupted
 };
 
 std::string commissionUsage();
@@ -47,8 +50,15 @@ std::string commissionUsage();
 bool parseCommission(const std::vector<std::string>& args, CommissionCommand* out,
                      std::string* error);
 
-// Runs a parsed command. `stop` ends long scans and watches early (SIGINT).
-int runCommission(const CommissionCommand& command, std::istream& in, std::ostream& out,
-                  std::ostream& err, const std::atomic<bool>& stop);
+struct CommissionIo {
+  std::istream& in;               // answers to confirmation questions
+  std::ostream& out;              // results (human or JSON)
+  std::ostream& err;              // progress, questions, reminders, human error messages
+  const std::atomic<bool>& stop;  // set by SIGINT: ends scans and watches early
+  bool err_is_terminal = false;   // progress redrawn in place instead of line by line
+};
+
+// Opens the port and runs a parsed command; returns the exit code.
+int runCommission(const CommissionCommand& command, const CommissionIo& io);
 
 }  // namespace modbus_rtu_driver

@@ -1,0 +1,43 @@
+// Running a parsed modbus_rtu_commission command: open the port, hand over to the command group.
+#include "modbus_rtu_driver/tools/commission_session.h"
+
+#include <istream>
+#include <ostream>
+
+#include "modbus_rtu_driver/core/rtu_link.h"
+
+namespace modbus_rtu_driver {
+
+int baudOfCode(int code) {
+  static const int kBauds[] = {1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200};
+  return code >= 0 && code < 8 ? kBauds[code] : 0;
+}
+
+std::string lineName(int baud, Parity parity) {
+  const char p = parity == Parity::kEven ? 'E' : parity == Parity::kOdd ? 'O' : 'N';
+  return std::to_string(baud) + " 8" + p + "1";
+}
+
+bool Session::confirm(const std::string& question) {
+  if (cmd.yes) return true;
+  out.err() << question << " [y/N] " << std::flush;
+  std::string answer;
+  if (!std::getline(in, answer)) {
+    out.err() << "\n";
+    return false;
+  }
+  return answer == "y" || answer == "Y" || answer == "yes";
+}
+
+int runCommission(const CommissionCommand& cmd, const CommissionIo& io) {
+  Output out(cmd.json, io.out, io.err);
+  if (cmd.command == "scan") return runScan(cmd, out, io.stop, io.err_is_terminal);
+  RtuLink link(cmd.link);
+  std::string error;
+  if (!link.connect(&error)) return out.fail(kExitBusError, error);
+  Session session{cmd, link, out, io.in, io.stop};
+  const bool table = cmd.command == "read" || cmd.command == "write" || cmd.command == "watch";
+  return table ? runTableCommand(session) : runDeviceCommand(session);
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,144 @@
+// read / write / watch of any Modbus table at any address.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <sstream>
+#include <thread>
+
+#include "modbus_rtu_driver/tools/commission_session.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+class TableCommands {
+ public:
+  explicit TableCommands(Session& s) : s_(s), c_(s.cmd), slave_(static_cast<uint8_t>(c_.address)) {}
+
+  int run() {
+    if (c_.command == "read") return read();
+    if (c_.command == "write") return write();
+    return watch();
+  }
+
+ private:
+  bool bits() const { return c_.table == "coils" || c_.table == "discrete-inputs"; }
+
+  // "holding 253 (0x00FD)"
+  std::string item(int offset) const {
+    const int a = c_.start + offset;
+    char hex[16];
+    std::snprintf(hex, sizeof hex, " (0x%04X)", a);
+    return c_.table + " " + std::to_string(a) + (bits() ? "" : hex);
+  }
+
+  Json fields() const {
+    return Json().add("address", c_.address).add("table", c_.table).add("start", c_.start);
+  }
+
+  Request readRequest() const {
+    const auto start = static_cast<uint16_t>(c_.start);
+    const auto n = static_cast<uint16_t>(c_.count);
+    if (c_.table == "coils") return Request::readCoils(slave_, start, n);
+    if (c_.table == "discrete-inputs") return Request::readDiscreteInputs(slave_, start, n);
+    if (c_.table == "holding") return Request::readHoldingRegisters(slave_, start, n);
+    return Request::readInputRegisters(slave_, start, n);
+  }
+
+  int read() {
+    const Result r = s_.bus.execute(readRequest());
+    if (!r.ok()) return s_.out.fail(r);
+    std::ostringstream human;
+    for (size_t i = 0; i < r.values.size(); ++i)
+      human << (i ? "\n" : "") << item(static_cast<int>(i)) << ": " << r.values[i];
+    s_.out.result(human.str(), fields().add("values", r.values));
+    return kExitOk;
+  }
+
+  int write() {
+    const auto start = static_cast<uint16_t>(c_.start);
+    const bool one = c_.values.size() == 1 && !c_.multiple;
+    Request req;
+    if (c_.table == "coils")
+      req = one ? Request::writeSingleCoil(slave_, start, c_.values[0] != 0)
+                : Request::writeMultipleCoils(
+                      slave_, start, std::vector<bool>(c_.values.begin(), c_.values.end()));
+    else
+      req = one ? Request::writeSingleRegister(slave_, start, c_.values[0])
+                : Request::writeMultipleRegisters(slave_, start, c_.values);
+    const Result r = s_.bus.execute(req);
+    if (!r.ok()) return s_.out.fail(r);
+    const int fc = static_cast<int>(req.function);
+    const std::string span = c_.table + " " + std::to_string(c_.start) +
+                             (c_.count > 1 ? "-" + std::to_string(c_.start + c_.count - 1) : "");
+    s_.out.result(
+        "wrote " + span + " with function " + std::to_string(fc) + "; the device confirmed",
+        fields().add("count", c_.count).add("function", fc));
+    return kExitOk;
+  }
+
+  // Sleeps `seconds` unless stopped first.
+  void pause(double seconds) {
+    const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                          std::chrono::duration<double>(seconds));
+    while (!s_.stop && Clock::now() < until)
+      std::this_thread::sleep_for(
+          std::min<Clock::duration>(until - Clock::now(), std::chrono::milliseconds(20)));
+  }
+
+  // Prints the values when they differ from `last` (all of them the first time).
+  void report(double t, const std::vector<uint16_t>& values, const std::vector<uint16_t>& last) {
+    std::ostringstream human;
+    std::vector<uint16_t> changed;
+    char stamp[32];
+    std::snprintf(stamp, sizeof stamp, "+%.2f s  ", t);
+    human << stamp;
+    for (size_t i = 0; i < values.size(); ++i) {
+      if (!last.empty() && values[i] == last[i]) continue;
+      human << (changed.empty() ? "" : ", ") << item(static_cast<int>(i)) << ": ";
+      if (!last.empty()) human << last[i] << " -> ";
+      human << values[i];
+      changed.push_back(static_cast<uint16_t>(c_.start + i));
+    }
+    s_.out.event(human.str(), fields().add("t", t).add("values", values).add("changed", changed));
+  }
+
+  int watch() {
+    const auto t0 = Clock::now();
+    std::vector<uint16_t> last;
+    int exit_code = kExitNotFound;
+    bool failing = false;
+    for (int n = 0; !s_.stop && (c_.polls == 0 || n < c_.polls); ++n) {
+      if (n) pause(c_.interval);
+      if (s_.stop) break;
+      const Result r = s_.bus.execute(readRequest());
+      const double t = std::chrono::duration<double>(Clock::now() - t0).count();
+      if (!r.ok()) {
+        if (!failing) s_.out.note("read failed: " + r.message);  // once, not every poll
+        failing = true;
+        if (last.empty()) exit_code = exitCodeFor(r);
+        continue;
+      }
+      if (failing) s_.out.note("answering again");
+      failing = false;
+      exit_code = kExitOk;
+      if (r.values != last) report(t, r.values, last);
+      last = r.values;
+    }
+    return exit_code;
+  }
+
+  Session& s_;
+  const CommissionCommand& c_;
+  uint8_t slave_;
+};
+
+}  // namespace
+
+int runTableCommand(Session& session) {
+  return TableCommands(session).run();
+}
+
+}  // namespace modbus_rtu_driver
