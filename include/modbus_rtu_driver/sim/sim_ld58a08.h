@@ -17,7 +17,7 @@ class SimLd58a08 : public SimDevice {
   // collide with an LC relay board at its factory address 255 on every poll.
   bool answersTo(uint8_t slave, const Request* request) const override {
     return slave == address_ || (slave == 0xFF && request && !isBitFunction(request->function) &&
-                                 request->address >= 0x00FA);
+                                 request->address >= 0x00FA && request->address <= 0x00FF);
   }
   double replyDelay() const override { return return_delay_ * 0.040; }
   void tick(SimClock::time_point now) override;
