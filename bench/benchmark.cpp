@@ -1,0 +1,163 @@
+// modbus_rtu_benchmark: this package's bus layer against a plain libmodbus loop, and achieved
+// transactions per second against the line's theoretical limit, all against the simulator on a
+// pty in one run. Prints markdown tables and writes CSV; figures are ratios for a noisy machine.
+//   modbus_rtu_benchmark [--seconds S] [--csv FILE]
+#include <modbus/modbus.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/sim/simulator.h"
+
+using namespace modbus_rtu_driver;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+struct Op {
+  const char* name;
+  Request request;
+};
+
+// Transactions per second of `once` over `seconds` (0 when one of them failed).
+double rate(double seconds, const std::function<bool()>& once) {
+  const auto end = Clock::now() + std::chrono::duration<double>(seconds);
+  long n = 0;
+  const auto start = Clock::now();
+  while (Clock::now() < end) {
+    if (!once()) return 0;
+    ++n;
+  }
+  return n / std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+bool plainLibmodbus(modbus_t* ctx, const Request& r) {
+  uint8_t bits[16];
+  uint16_t regs[16];
+  switch (r.function) {
+    case FunctionCode::kReadCoils:
+      return modbus_read_bits(ctx, r.address, r.count, bits) == r.count;
+    case FunctionCode::kReadHoldingRegisters:
+      return modbus_read_registers(ctx, r.address, r.count, regs) == r.count;
+    case FunctionCode::kReadInputRegisters:
+      return modbus_read_input_registers(ctx, r.address, r.count, regs) == r.count;
+    case FunctionCode::kWriteSingleCoil:
+      return modbus_write_bit(ctx, r.address, r.values[0]) == 1;
+    case FunctionCode::kWriteMultipleCoils:
+      for (size_t i = 0; i < r.values.size(); ++i) bits[i] = static_cast<uint8_t>(r.values[i]);
+      return modbus_write_bits(ctx, r.address, r.count, bits) == r.count;
+    case FunctionCode::kWriteMultipleRegisters:
+      return modbus_write_registers(ctx, r.address, r.count, r.values.data()) == r.count;
+    default:
+      return false;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  double seconds = 2.0;
+  std::string csv_path = "benchmark.csv";
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--seconds") seconds = std::stod(argv[i + 1]);
+    if (a == "--csv") csv_path = argv[i + 1];
+  }
+  std::ofstream csv(csv_path);
+  csv << "table,case,a,b,ratio\n";
+  const std::string dir = "/tmp/modbus_rtu_benchmark_" + std::to_string(getpid());
+  const std::vector<Op> ops = {
+      {"01 read 8 coils", Request::readCoils(2, 0, 8)},
+      {"03 read 3 holding", Request::readHoldingRegisters(2, 0, 3)},
+      {"04 read 5 input", Request::readInputRegisters(2, 0, 5)},
+      {"05 write coil", Request::writeSingleCoil(2, 1, true)},
+      {"15 write 8 coils", Request::writeMultipleCoils(2, 0, std::vector<bool>(8, false))},
+      {"16 write 3 holding", Request::writeMultipleRegisters(2, 0, {2500, 2000, 1600})},
+  };
+
+  // 1. Software overhead: the simulator answers at once; 115200 baud.
+  {
+    SimulatorConfig config;
+    config.factory.baud = 115200;
+    config.devices = {{"yespeed_pdu", 2}};
+    SimulatorOptions options;
+    options.link = dir + "/fast";
+    Simulator sim(config, options);
+    std::string error;
+    if (!sim.start(&error)) {
+      std::fprintf(stderr, "%s\n", error.c_str());
+      return 1;
+    }
+    std::printf("## Software overhead (simulator answering at once, pty, %g s per cell)\n\n",
+                seconds);
+    std::printf(
+        "| function | plain libmodbus [tx/s] | RtuLink, gap 1 us [tx/s] | ratio | RtuLink, t3.5 "
+        "gap [tx/s] |\n");
+    std::printf("|---|---|---|---|---|\n");
+    for (const Op& op : ops) {
+      modbus_t* ctx = modbus_new_rtu(options.link.c_str(), 115200, 'N', 8, 1);
+      modbus_connect(ctx);
+      modbus_set_slave(ctx, 2);
+      modbus_set_response_timeout(ctx, 0, 500000);
+      const double plain = rate(seconds, [&] { return plainLibmodbus(ctx, op.request); });
+      modbus_close(ctx);
+      modbus_free(ctx);
+      LinkConfig lc;
+      lc.port = options.link;
+      lc.baud = 115200;
+      lc.min_gap = 1e-6;
+      RtuLink fast(lc);
+      fast.connect(nullptr);
+      const double ours = rate(seconds, [&] { return fast.execute(op.request).ok(); });
+      fast.disconnect();
+      lc.min_gap = 0;  // t3.5 = 1.75 ms
+      RtuLink spec(lc);
+      spec.connect(nullptr);
+      const double with_gap = rate(seconds, [&] { return spec.execute(op.request).ok(); });
+      spec.disconnect();
+      std::printf("| %s | %.0f | %.0f | %.2f | %.0f |\n", op.name, plain, ours,
+                  ours > 0 ? plain / ours : 0.0, with_gap);
+      csv << "overhead," << op.name << "," << plain << "," << ours << ","
+          << (ours > 0 ? plain / ours : 0.0) << "\n";
+    }
+    std::printf(
+        "\nratio = plain libmodbus / RtuLink transactions per second (time per transaction of "
+        "RtuLink over libmodbus's).\n\n");
+  }
+
+  // 2. Line utilisation: the simulator paces the line at its baud.
+  std::printf("## Line utilisation (simulator pacing the line, FC03 one register, 8N1)\n\n");
+  std::printf("| baud | theoretical [tx/s] | achieved [tx/s] | utilisation |\n|---|---|---|---|\n");
+  for (int baud : {9600, 115200}) {
+    SimulatorConfig config;
+    config.factory.baud = baud;
+    config.pace = true;
+    config.devices = {{"yespeed_pdu", 2}};
+    SimulatorOptions options;
+    options.link = dir + "/paced" + std::to_string(baud);
+    Simulator sim(config, options);
+    if (!sim.start(nullptr)) return 1;
+    LinkConfig lc;
+    lc.port = options.link;
+    lc.baud = baud;
+    RtuLink link(lc);
+    link.connect(nullptr);
+    const Request r = Request::readHoldingRegisters(2, 0, 1);
+    const double ch = characterTime(lc), gap = frameGap(lc);
+    // request (8 bytes), t3.5, reply (7 bytes), t3.5 before the next request
+    const double theoretical = 1.0 / ((8 + 7) * ch + 2 * gap);
+    const double achieved = rate(std::max(seconds, 3.0), [&] { return link.execute(r).ok(); });
+    std::printf("| %d | %.1f | %.1f | %.1f %% |\n", baud, theoretical, achieved,
+                100.0 * achieved / theoretical);
+    csv << "line," << baud << "," << theoretical << "," << achieved << "," << achieved / theoretical
+        << "\n";
+  }
+  std::printf("\nCSV: %s\n", csv_path.c_str());
+  return 0;
+}
