@@ -1,5 +1,5 @@
 install(TARGETS
-  modbus_rtu_bus modbus_rtu_commission modbus_rtu_commission_lib modbus_rtu_core
+  modbus_rtu_benchmark modbus_rtu_bus modbus_rtu_commission modbus_rtu_commission_lib modbus_rtu_core
   modbus_rtu_dm500_sim modbus_rtu_ros modbus_rtu_sim modbus_rtu_simulator
   ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
