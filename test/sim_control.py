@@ -1,12 +1,28 @@
 #!/usr/bin/env python3
-"""Client of the simulator's control socket (standard library only).
+"""Client of modbus_rtu_simulator's control socket (Python 3 standard library only).
 
-    python3 test/sim_control.py SOCKET get 255 coil 0 8
+    python3 test/sim_control.py SOCKET get '#0' coil 0 8       -> 0 0 1 0 0 0 0 0
     python3 test/sim_control.py SOCKET set 255 input 1 1
     python3 test/sim_control.py SOCKET power_cycle
 
-Devices are named by current address or by index (#0, #1, ...); tables: coil, input, holding,
-ireg."""
+The socket is the simulator's --control path (default: the link path + ".ctl"). One command per
+line, one reply line each: "ok ..." or "error <message>". The command line prints what follows
+"ok" (exit 0) or the error on stderr (exit 1).
+
+Devices: "#<index>" in config order, or the current address (decimal or 0x hex).
+Tables: coil, input (discrete inputs), holding, ireg (input registers).
+Commands:
+    get DEV TABLE ADDR [COUNT]       values
+    set DEV TABLE ADDR V1 [V2 ...]   coils/holding: one bus write with the device's checks;
+                                     input/ireg: state from outside (-32768..65535)
+    silence DEV 0|1                  the device hears and answers nothing (unplugged)
+    fail DEV 0|1                     the device answers everything with exception 04
+    corrupt DEV N                    the next N replies of the device carry a bad CRC
+    power_cycle                      every device off and on
+    info                             #INDEX:TYPE:ADDRESS:BAUD:PARITY per device
+    frames                           frames received, replies sent, byte runs dropped
+    help
+"""
 import socket
 import sys
 
@@ -21,6 +37,7 @@ class SimControl:
         self.timeout = timeout
 
     def command(self, line):
+        """Sends one command; returns the words after "ok", raises SimError on "error"."""
         with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
             s.settimeout(self.timeout)
             s.connect(self.path)
@@ -32,7 +49,7 @@ class SimControl:
                     break
                 reply += chunk
         text = reply.decode().strip()
-        if not text.startswith("ok"):
+        if text != "ok" and not text.startswith("ok "):
             raise SimError("%s -> %s" % (line, text))
         return text[2:].split()
 
@@ -40,6 +57,8 @@ class SimControl:
         return [int(v) for v in self.command("get %s %s %d %d" % (device, table, address, count))]
 
     def set(self, device, table, address, *values):
+        if not values:
+            raise ValueError("set needs at least one value")
         self.command("set %s %s %d %s" % (device, table, address, " ".join(str(v) for v in values)))
 
     def power_cycle(self):
@@ -65,16 +84,24 @@ class SimControl:
         return out
 
     def frames(self):
-        """(frames received, frames answered, frames dropped for a bad CRC)"""
+        """(frames received, replies sent, runs of bytes dropped: bad CRC or noise)"""
         return tuple(int(v) for v in self.command("frames"))
 
 
-if __name__ == "__main__":
-    if len(sys.argv) < 3:
+def main(argv):
+    if len(argv) < 3 or argv[1] in ("-h", "--help"):
         print(__doc__)
-        sys.exit(2)
+        return 2
     try:
-        print(" ".join(SimControl(sys.argv[1]).command(" ".join(sys.argv[2:]))))
+        print(" ".join(SimControl(argv[1]).command(" ".join(argv[2:]))))
     except SimError as e:
         print(e, file=sys.stderr)
-        sys.exit(1)
+        return 1
+    except OSError as e:
+        print("%s: %s" % (argv[1], e), file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

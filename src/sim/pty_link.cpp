@@ -69,7 +69,7 @@ bool makeDirs(const std::string& path) {
 
 }  // namespace
 
-bool PtyLink::open(const std::string& link, int baud, std::string* error) {
+bool PtyLink::open(const std::string& link, int baud, std::string* error, char parity) {
   auto fail = [&](const std::string& what) {
     if (error) *error = what + ": " + std::strerror(errno);
     close();
@@ -86,6 +86,10 @@ bool PtyLink::open(const std::string& link, int baud, std::string* error) {
   cfmakeraw(&tio);
   cfsetispeed(&tio, speedOf(baud));
   cfsetospeed(&tio, speedOf(baud));
+  if (parity != 'N') {
+    tio.c_cflag |= PARENB | (parity == 'O' ? PARODD : 0);
+    tio.c_iflag |= INPCK;
+  }
   tcsetattr(slave_fd_, TCSANOW, &tio);
   fcntl(master_fd_, F_SETFL, O_NONBLOCK);
   const size_t slash = link.find_last_of('/');
@@ -111,7 +115,13 @@ SimLineSettings PtyLink::lineSettings() const {
   SimLineSettings l;
   if (tcgetattr(slave_fd_, &tio) != 0) return l;
   l.baud = baudOf(cfgetospeed(&tio));
-  l.parity = !(tio.c_cflag & PARENB) ? 'N' : (tio.c_cflag & PARODD) ? 'O' : 'E';
+  // Linux forces CS8 and clears PARENB on a pty; INPCK (parity checking, which libmodbus sets
+  // for even and odd) and PARODD survive, so they tell the parity.
+  const bool parity = (tio.c_cflag & PARENB) || (tio.c_iflag & INPCK);
+  l.parity = !parity ? 'N' : (tio.c_cflag & PARODD) ? 'O' : 'E';
+  const tcflag_t size = tio.c_cflag & CSIZE;
+  l.data_bits = size == CS5 ? 5 : size == CS6 ? 6 : size == CS7 ? 7 : 8;
+  l.stop_bits = (tio.c_cflag & CSTOPB) ? 2 : 1;
   return l;
 }
 

@@ -20,6 +20,32 @@ bool parseTable(const std::string& name, Table* out) {
   return true;
 }
 
+double simCharacterTime(const SimLineSettings& l) {
+  const int bits = 1 + l.data_bits + (l.parity == 'N' ? 0 : 1) + l.stop_bits;
+  return static_cast<double>(bits) / (l.baud > 0 ? l.baud : 9600);
+}
+
+double simFrameGap(const SimLineSettings& l) {
+  return l.baud > 19200 ? 0.00175 : 3.5 * simCharacterTime(l);
+}
+
+namespace {
+
+Table readTable(FunctionCode fc) {
+  switch (fc) {
+    case FunctionCode::kReadCoils:
+      return Table::kCoil;
+    case FunctionCode::kReadDiscreteInputs:
+      return Table::kDiscreteInput;
+    case FunctionCode::kReadHoldingRegisters:
+      return Table::kHolding;
+    default:
+      return Table::kInputRegister;
+  }
+}
+
+}  // namespace
+
 std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point now) {
   const bool broadcast = r.slave == kBroadcastAddress;
   uint8_t exception = 0;
@@ -29,11 +55,7 @@ std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point no
     case FunctionCode::kReadDiscreteInputs:
     case FunctionCode::kReadHoldingRegisters:
     case FunctionCode::kReadInputRegisters: {
-      if (broadcast) return std::nullopt;
-      const Table t = r.function == FunctionCode::kReadCoils              ? Table::kCoil
-                      : r.function == FunctionCode::kReadDiscreteInputs   ? Table::kDiscreteInput
-                      : r.function == FunctionCode::kReadHoldingRegisters ? Table::kHolding
-                                                                          : Table::kInputRegister;
+      if (broadcast) return std::nullopt;  // a read cannot be broadcast
       const uint16_t max = isBitFunction(r.function) ? kMaxReadBits : kMaxReadRegisters;
       if (r.count < 1 || r.count > max) {
         exception = kIllegalDataValue;
@@ -42,20 +64,22 @@ std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point no
       for (uint32_t a = r.address; a < r.address + r.count && !exception; ++a) {
         uint16_t v = 0;
         exception = a > 0xFFFF ? static_cast<uint8_t>(kIllegalDataAddress)
-                               : read(t, static_cast<uint16_t>(a), now, &v);
+                               : read(readTable(r.function), static_cast<uint16_t>(a), now, &v);
         values.push_back(v);
       }
       break;
     }
     case FunctionCode::kWriteSingleCoil:
     case FunctionCode::kWriteMultipleCoils:
+      if (r.values.empty() || r.values.size() > kMaxWriteBits) exception = kIllegalDataValue;
       for (uint16_t v : r.values)
         if (v > 1) exception = kIllegalDataValue;  // FC05 value not FF00/0000
       if (!exception) exception = write(Table::kCoil, r.address, r.values, now);
       break;
     case FunctionCode::kWriteSingleRegister:
     case FunctionCode::kWriteMultipleRegisters:
-      exception = write(Table::kHolding, r.address, r.values, now);
+      if (r.values.empty() || r.values.size() > kMaxWriteRegisters) exception = kIllegalDataValue;
+      if (!exception) exception = write(Table::kHolding, r.address, r.values, now);
       break;
   }
   if (broadcast) return std::nullopt;  // applied, never answered
@@ -79,6 +103,12 @@ std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t addres
   if (type == "lc_relay8") return std::make_unique<SimLcRelay8>(address, line);
   if (type == "yespeed_pdu") return std::make_unique<SimYespeedPdu>(address, line);
   return nullptr;
+}
+
+int maxSimAddress(const std::string& type) {
+  if (type == "lc_relay8") return 255;
+  if (type == "ld58a08" || type == "yespeed_pdu") return 247;
+  return 0;
 }
 
 }  // namespace modbus_rtu_driver

@@ -2,62 +2,81 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <cmath>
-
 namespace modbus_rtu_driver {
 
 namespace {
+
 constexpr uint16_t kContinuous = 0xFFFF;
+constexpr int64_t kTenth = 100'000'000;  // 0.1 s in ns: the unit of periods and output times
 const int kBauds[] = {1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200};
 
-double since(SimClock::time_point from, SimClock::time_point now) {
-  return std::chrono::duration<double>(now - from).count();
+bool isPwmRegister(uint32_t r) {
+  return r < 0x80 && (r & 0x0F) <= 2;
 }
+bool isSpecialRegister(uint32_t r) {
+  return r == 0x0080 || (r >= 0x00FA && r <= 0x00FF);
+}
+char parityOfCode(uint16_t code) {
+  return code == 1 ? 'E' : code == 2 ? 'O' : 'N';
+}
+
 }  // namespace
 
 SimLd58a08::SimLd58a08(uint8_t address, SimLineSettings line) : SimDevice(address, line) {
-  for (int i = 0; i < 8; ++i)
-    if (kBauds[i] == line.baud) baud_code_ = static_cast<uint16_t>(i);
+  for (uint16_t i = 0; i < 8; ++i)
+    if (kBauds[i] == line.baud) baud_code_ = i;
   parity_code_ = line.parity == 'E' ? 1 : line.parity == 'O' ? 2 : 0;
 }
 
-void SimLd58a08::start(uint8_t ch, SimClock::time_point now) {
-  pwm_[ch].started = now;
-  pwm_[ch].started_with = pwm_[ch].reg[2];
+void SimLd58a08::setOutput(uint8_t ch, bool on) {
+  const uint8_t bit = static_cast<uint8_t>(1u << ch);
+  outputs_ = on ? (outputs_ | bit) : (outputs_ & static_cast<uint8_t>(~bit));
 }
 
+void SimLd58a08::anchor(uint8_t ch, SimClock::time_point now) {
+  pwm_[ch].anchor = now;
+  pwm_[ch].anchored_with = pwm_[ch].reg[2];
+}
+
+void SimLd58a08::stopChannel(uint8_t ch) {
+  pwm_[ch].reg[2] = 0;
+  setOutput(ch, false);
+}
+
+// Pulses and output times follow from the time since the anchor, so the result does not
+// depend on how often tick() runs.
 void SimLd58a08::tick(SimClock::time_point now) {
   for (uint8_t ch = 0; ch < 8; ++ch) {
     Channel& c = pwm_[ch];
-    const uint8_t bit = static_cast<uint8_t>(1u << ch);
     if (c.reg[2] == 0) continue;  // PWM off: the output is a plain DO
-    const double elapsed = since(c.started, now);
-    if (ch >= 6) {  // fast: on while the output time runs (a 20 kHz wave cannot be sampled)
-      if (c.started_with != kContinuous) {
-        const double left = c.started_with * 0.1 - elapsed;
+    const int64_t elapsed =
+        std::chrono::duration_cast<std::chrono::nanoseconds>(now - c.anchor).count();
+    if (ch >= 6) {  // fast: on while the output time runs (a 10 kHz wave cannot be sampled)
+      if (c.anchored_with != kContinuous) {
+        const int64_t left = c.anchored_with * kTenth - elapsed;
         if (left <= 0) {
-          c.reg[2] = 0;
-          outputs_ &= static_cast<uint8_t>(~bit);
+          stopChannel(ch);
           continue;
         }
-        c.reg[2] = static_cast<uint16_t>(std::ceil(left * 10.0 - 1e-9));
+        c.reg[2] = static_cast<uint16_t>((left + kTenth - 1) / kTenth);  // counts down
       }
-      outputs_ |= bit;
+      setOutput(ch, c.reg[1] > 0);
       continue;
     }
-    const double period = c.reg[0] * 0.1, on = c.reg[1] * 0.1;
-    if (period <= 0) continue;
-    const auto done = static_cast<long>(elapsed / period);
-    if (c.started_with != kContinuous) {
-      if (done >= c.started_with) {  // the set number of pulses is out: stop
-        c.reg[2] = 0;
-        outputs_ &= static_cast<uint8_t>(~bit);
+    const int64_t period = c.reg[0] * kTenth;
+    if (period <= 0) {  // only a hand-edited state file gets here
+      stopChannel(ch);
+      continue;
+    }
+    const int64_t done = elapsed / period;
+    if (c.anchored_with != kContinuous) {
+      if (done >= c.anchored_with) {  // the set number of pulses is out: stop
+        stopChannel(ch);
         continue;
       }
-      c.reg[2] = static_cast<uint16_t>(c.started_with - done);
+      c.reg[2] = static_cast<uint16_t>(c.anchored_with - done);
     }
-    const bool high = std::fmod(elapsed, period) < on;
-    outputs_ = high ? (outputs_ | bit) : (outputs_ & static_cast<uint8_t>(~bit));
+    setOutput(ch, elapsed % period < c.reg[1] * kTenth);
   }
 }
 
@@ -69,8 +88,7 @@ uint8_t SimLd58a08::read(Table table, uint16_t a, SimClock::time_point now, uint
     return 0;
   }
   if (table != Table::kHolding) return kIllegalFunction;  // FC02/FC04 are not supported
-  if (a < 0x80) {
-    if ((a & 0x0F) > 2) return kIllegalDataAddress;
+  if (isPwmRegister(a)) {
     *v = pwm_[a >> 4].reg[a & 0x0F];
     return 0;
   }
@@ -106,68 +124,94 @@ uint8_t SimLd58a08::write(Table table, uint16_t a, const std::vector<uint16_t>& 
   tick(now);
   if (table == Table::kCoil) {
     if (a + values.size() > 8) return kIllegalDataAddress;
-    for (size_t i = 0; i < values.size(); ++i) {
-      const uint8_t bit = static_cast<uint8_t>(1u << (a + i));
-      outputs_ = values[i] ? (outputs_ | bit) : (outputs_ & static_cast<uint8_t>(~bit));
-    }
+    for (size_t i = 0; i < values.size(); ++i)
+      setOutput(static_cast<uint8_t>(a + i), values[i] != 0);
+    tick(now);  // a running PWM keeps its output
     return 0;
   }
   if (table != Table::kHolding) return kIllegalFunction;
-  // Check every address first so a bad one changes nothing.
+  const uint8_t e = checkHolding(a, values);
+  if (e) return e;
+  for (size_t i = 0; i < values.size(); ++i)
+    writeHolding(static_cast<uint16_t>(a + i), values[i], now);
+  tick(now);
+  return 0;
+}
+
+// The whole write against the state it would leave: unknown addresses (02) first, then values.
+uint8_t SimLd58a08::checkHolding(uint16_t a, const std::vector<uint16_t>& values) const {
+  for (size_t i = 0; i < values.size(); ++i)
+    if (!isPwmRegister(a + i) && !isSpecialRegister(a + i)) return kIllegalDataAddress;
+  std::array<Registers, 8> next;
+  std::array<uint8_t, 8> touched{};  // bit n: register n of the channel written
+  for (uint8_t ch = 0; ch < 8; ++ch) next[ch] = pwm_[ch].reg;
   for (size_t i = 0; i < values.size(); ++i) {
     const uint32_t r = a + i;
-    const bool pwm = r < 0x80 && (r & 0x0F) <= 2;
-    if (!pwm && r != 0x80 && (r < 0xFA || r > 0xFF)) return kIllegalDataAddress;
+    const uint16_t v = values[i];
+    if (isPwmRegister(r)) {
+      const uint8_t ch = static_cast<uint8_t>(r >> 4), sub = static_cast<uint8_t>(r & 0x0F);
+      next[ch][sub] = v;
+      touched[ch] = static_cast<uint8_t>(touched[ch] | (1u << sub));
+      const bool fast = ch >= 6;
+      if (sub == 0 && (v == 0 || (fast && v > 20000))) return kIllegalDataValue;
+      if (sub == 1 && (fast ? v > 100 : v == 0xFFFF)) return kIllegalDataValue;
+    } else if ((r == 0x0080 && v > 0xFF) || (r == 0x00FA && v > 1) ||
+               (r == 0x00FD && (v < 1 || v > 247))) {
+      return kIllegalDataValue;
+    }
   }
-  for (size_t i = 0; i < values.size(); ++i) {
-    const uint8_t e = writeHolding(static_cast<uint16_t>(a + i), values[i], now);
-    if (e) return e;
+  for (uint8_t ch = 0; ch < 8; ++ch) {
+    if (!touched[ch]) continue;
+    const Registers& n = next[ch];
+    const bool running = n[2] != 0;
+    if (running && n[0] == 0) return kIllegalDataValue;  // no period / frequency to run at
+    // On-time longer than the period: refused when the channel runs or both come together.
+    if (ch < 6 && n[1] > n[0] && (running || (touched[ch] & 0x3) == 0x3)) return kIllegalDataValue;
   }
   return 0;
 }
 
-uint8_t SimLd58a08::writeHolding(uint16_t a, uint16_t v, SimClock::time_point now) {
-  if (a < 0x80) {
-    const uint8_t ch = static_cast<uint8_t>(a >> 4);
-    pwm_[ch].reg[a & 0x0F] = v;
-    if ((a & 0x0F) == 2) {
-      if (v != 0) {
-        start(ch, now);
-      } else {
-        outputs_ &= static_cast<uint8_t>(~(1u << ch));
-      }
+void SimLd58a08::writeHolding(uint16_t a, uint16_t v, SimClock::time_point now) {
+  if (isPwmRegister(a)) {
+    const uint8_t ch = static_cast<uint8_t>(a >> 4), sub = static_cast<uint8_t>(a & 0x0F);
+    Channel& c = pwm_[ch];
+    const bool was_running = c.reg[2] != 0;
+    c.reg[sub] = v;
+    c.stored[sub] = v;
+    if (sub == 2 && v == 0) {
+      if (was_running) stopChannel(ch);
+    } else if (sub == 2 || was_running) {
+      anchor(ch, now);  // (re)start; new timing restarts the current pulse with what is left
     }
-    return 0;
+    return;
   }
   switch (a) {
     case 0x0080:
-      outputs_ = static_cast<uint8_t>(v & 0xFF);
-      return 0;
+      for (uint8_t ch = 0; ch < 8; ++ch) setOutput(ch, (v >> ch) & 1);
+      return;
     case 0x00FA:
-      if (v > 1) return kIllegalDataValue;
       save_ = v;
-      return 0;
+      return;
     case 0x00FB:
       factoryReset();
-      return 0;
+      return;
     case 0x00FC:
-      return_delay_ = v > 25 ? 0 : v;
-      return 0;  // over 25: back to 0 (manual)
+      return_delay_ = v > 25 ? 0 : v;  // over 25: back to 0 (manual)
+      return;
     case 0x00FD:
-      if (v < 1 || v > 247) return kIllegalDataValue;
       address_ = static_cast<uint8_t>(v);  // answers at the new address from the next request
-      return 0;
+      return;
     case 0x00FE:
       if (v > 7)
-        factoryReset();  // "Others: Factory reset"
+        factoryReset();  // "8: Factory reset", "Others: Factory reset"
       else
         baud_code_ = v;
-      return 0;
+      return;
     case 0x00FF:
-      parity_code_ = v;
-      return 0;  // >2 becomes 0 at power-on
+      parity_code_ = v;  // > 2 becomes 0 at power-on (manual)
+      return;
     default:
-      return kIllegalDataAddress;
+      return;
   }
 }
 
@@ -177,23 +221,30 @@ void SimLd58a08::factoryReset() {
   parity_code_ = 0;
   return_delay_ = 0;
   save_ = 0;
-  pwm_ = {};
-  outputs_ = 0;
+  for (uint8_t ch = 0; ch < 8; ++ch) {
+    if (pwm_[ch].reg[2]) stopChannel(ch);
+    pwm_[ch] = Channel{};
+  }
 }
 
-void SimLd58a08::powerCycle() {
-  line_.baud = kBauds[baud_code_ < 8 ? baud_code_ : 3];
-  if (parity_code_ > 2) parity_code_ = 0;
-  line_.parity = parity_code_ == 1 ? 'E' : parity_code_ == 2 ? 'O' : 'N';
-  outputs_ = 0;
-  const auto now = SimClock::now();
+void SimLd58a08::restartSaved(SimClock::time_point now) {
   for (uint8_t ch = 0; ch < 8; ++ch) {
-    if (!save_) {
-      pwm_[ch] = Channel{};
-    } else if (pwm_[ch].reg[2]) {
-      start(ch, now);  // saved parameters run again after power-on
-    }
+    pwm_[ch].reg = pwm_[ch].stored;
+    if (pwm_[ch].reg[2]) anchor(ch, now);  // saved parameters run again after power-on
   }
+}
+
+void SimLd58a08::powerCycle(SimClock::time_point now) {
+  if (parity_code_ > 2) parity_code_ = 0;
+  line_.baud = kBauds[baud_code_ < 8 ? baud_code_ : 3];
+  line_.parity = parityOfCode(parity_code_);
+  outputs_ = 0;
+  if (save_) {
+    restartSaved(now);
+  } else {
+    pwm_ = {};
+  }
+  tick(now);
 }
 
 void SimLd58a08::saveState(YAML::Node& n) const {
@@ -205,24 +256,23 @@ void SimLd58a08::saveState(YAML::Node& n) const {
   n["return_delay"] = return_delay_;
   n["save"] = save_;
   if (save_)
-    for (uint8_t ch = 0; ch < 8; ++ch)
-      for (int r = 0; r < 3; ++r) n["pwm"].push_back(pwm_[ch].reg[r]);
+    for (const Channel& c : pwm_)
+      for (uint16_t r : c.stored) n["pwm"].push_back(r);
 }
 
-void SimLd58a08::loadState(const YAML::Node& n) {
-  address_ = static_cast<uint8_t>(n["address"].as<int>(address_));
+void SimLd58a08::loadState(const YAML::Node& n, SimClock::time_point now) {
+  const int address = n["address"].as<int>(address_);
+  if (address >= 1 && address <= 247) address_ = static_cast<uint8_t>(address);
   baud_code_ = n["baud_code"].as<uint16_t>(baud_code_);
   parity_code_ = n["parity_code"].as<uint16_t>(parity_code_);
   line_.baud = n["baud"].as<int>(line_.baud);
-  line_.parity = n["parity"].as<std::string>(std::string(1, line_.parity))[0];
+  line_.parity = n["parity"].as<std::string>(std::string(1, line_.parity)).c_str()[0];
   return_delay_ = n["return_delay"].as<uint16_t>(return_delay_);
-  save_ = n["save"].as<uint16_t>(save_);
-  if (n["pwm"] && n["pwm"].size() == 24) {
-    const auto now = SimClock::now();
-    for (uint8_t ch = 0; ch < 8; ++ch) {
-      for (int r = 0; r < 3; ++r) pwm_[ch].reg[r] = n["pwm"][ch * 3 + r].as<uint16_t>();
-      if (pwm_[ch].reg[2]) start(ch, now);
-    }
+  save_ = n["save"].as<uint16_t>(save_) ? 1 : 0;
+  if (save_ && n["pwm"] && n["pwm"].IsSequence() && n["pwm"].size() == 24) {
+    for (size_t ch = 0; ch < 8; ++ch)
+      for (size_t r = 0; r < 3; ++r) pwm_[ch].stored[r] = n["pwm"][ch * 3 + r].as<uint16_t>(0);
+    restartSaved(now);
   }
 }
 

@@ -16,10 +16,15 @@ class PtyLink {
   PtyLink(const PtyLink&) = delete;
   PtyLink& operator=(const PtyLink&) = delete;
 
-  // Creates the pty (raw, at `baud`) and the link (and its directory). False with a message.
-  bool open(const std::string& link, int baud, std::string* error);
+  // Creates the pty (raw, 8 data bits, 1 stop bit, at `baud` and `parity` N/E/O) and the link
+  // (and its directory), replacing a stale link. False with a message.
+  bool open(const std::string& link, int baud, std::string* error, char parity = 'N');
   void close();
   int fd() const { return master_fd_; }  // non-blocking master side
+  // What the program on the other side set last (tcgetattr on the slave side we hold open).
+  // A Linux pty keeps the speed, PARODD, CSTOPB and INPCK but forces CS8 and clears PARENB:
+  // parity counts as on when PARENB or INPCK is set (libmodbus sets INPCK for even and odd; a
+  // client that sets only PARENB for even parity is seen as 8N1); data bits read as 8.
   SimLineSettings lineSettings() const;
 
  private:

@@ -1,5 +1,6 @@
 // A simulated slave: the register map and behaviour of one device type, driven by decoded
-// requests and by time. ROS-free; one subclass per device type.
+// requests and by time. ROS-free; one subclass per device type (sim_ld58a08.h, sim_lc_relay8.h,
+// sim_yespeed_pdu.h). The line (simulator.h) decides which device hears a frame.
 #pragma once
 
 #include <chrono>
@@ -23,11 +24,17 @@ bool parseTable(const std::string& name, Table* out);  // coil, input, holding, 
 
 using SimClock = std::chrono::steady_clock;
 
-// What the simulated line settings of a device are (what it listens and answers at).
+// Serial settings: what a device listens and answers at, or what the line currently runs at.
 struct SimLineSettings {
   int baud = 9600;
   char parity = 'N';  // N, E, O
+  int data_bits = 8;  // the line's; every simulated device uses 8
+  int stop_bits = 1;  // the line's; a receiver accepts 1 or 2
 };
+// Seconds one character takes on the wire (start, data, parity, stop bits).
+double simCharacterTime(const SimLineSettings& line);
+// The RTU inter-frame silence t3.5 (fixed 1.75 ms above 19200 baud).
+double simFrameGap(const SimLineSettings& line);
 
 class SimDevice {
  public:
@@ -37,6 +44,10 @@ class SimDevice {
   virtual const char* type() const = 0;
   uint8_t address() const { return address_; }
   const SimLineSettings& line() const { return line_; }
+  // A device only understands frames sent at its own baud and parity, 8 data bits.
+  bool understands(const SimLineSettings& l) const {
+    return l.baud == line_.baud && l.parity == line_.parity && l.data_bits == 8;
+  }
   // Fault injection (control socket): answer nothing; corrupt the CRC of the next N replies;
   // answer every request with exception 04 (slave device failure).
   bool silenced = false;
@@ -44,33 +55,37 @@ class SimDevice {
   bool failing = false;
 
   // True when a frame with this slave byte is for this device (its address; some devices also
-  // answer 0xFF or address 0 commands). Broadcast writes (0) reach every device anyway.
-  // `request` is null when the frame could not be decoded (unknown function).
+  // answer 0xFF). Broadcasts (0) are the line's business. `request` is null when the frame
+  // could not be decoded.
   virtual bool answersTo(uint8_t slave, const Request* request) const {
     (void)request;
     return slave == address_;
   }
-  // The reply to a request for this device (or a broadcast), or nothing (silence).
+  // The reply (or exception) to a request for this device, or nothing (silence: broadcasts).
   std::optional<Bytes> handle(const Request& request, SimClock::time_point now);
   // An exception reply for a request whose function this device does not know.
   Bytes unknownFunction(uint8_t slave, uint8_t function) const;
-  // How long the device waits before answering (LD58A08 return delay).
+  // Seconds the device waits before answering (LD58A08 return delay). Read before handling a
+  // request: a new delay applies from the next one.
   virtual double replyDelay() const { return 0.0; }
-  // Time-driven behaviour (PWM, flashes, telemetry).
+  // Time-driven behaviour (PWM, flashes, telemetry). Reads and writes tick first themselves.
   virtual void tick(SimClock::time_point now) { (void)now; }
   // Power off and on: pending settings take effect, volatile state is lost.
-  virtual void powerCycle() = 0;
-  // Persistent state (what survives a power cycle) for the state file.
+  virtual void powerCycle(SimClock::time_point now) = 0;
+  // Persistent state (what survives a power cycle) for the state file; loading it is a
+  // power-on with that state.
   virtual void saveState(YAML::Node& node) const = 0;
-  virtual void loadState(const YAML::Node& node) = 0;
+  virtual void loadState(const YAML::Node& node, SimClock::time_point now) = 0;
 
   // One value; 0 or a Modbus exception code.
   virtual uint8_t read(Table table, uint16_t address, SimClock::time_point now,
                        uint16_t* value) = 0;
-  // A whole write request (so rules over several registers can be checked together).
+  // A whole write request (rules over several registers are checked together; a refused write
+  // changes nothing). Coil values are 0/1.
   virtual uint8_t write(Table table, uint16_t address, const std::vector<uint16_t>& values,
                         SimClock::time_point now) = 0;
-  // The control socket's `set`: sets state from outside the bus (inputs, telemetry pins).
+  // The control socket's `set`: state from outside the bus (inputs, telemetry pins); coils and
+  // holding registers go through write().
   virtual uint8_t setDirect(Table table, uint16_t address, uint16_t value,
                             SimClock::time_point now);
 
@@ -78,9 +93,13 @@ class SimDevice {
   uint8_t address_;
   SimLineSettings line_;
 };
+// The brief calls the interface SimSlave; SimDevice is the name the rest of the code uses.
+using SimSlave = SimDevice;
 
 // Builds a device of `type` (ld58a08, lc_relay8, yespeed_pdu); null for an unknown type.
 std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t address,
                                          SimLineSettings line);
+// Highest address a device of `type` can have (LD58A08 and PDU 247, LC board 255); 0 = unknown.
+int maxSimAddress(const std::string& type);
 
 }  // namespace modbus_rtu_driver

@@ -1,7 +1,16 @@
 // The simulated RS485 line: a pseudo-terminal whose slave side is linked at a path the driver
 // opens like a serial port, several SimDevices on it, a control socket for tests, a power cycle
-// and a state file. One thread does everything, so devices need no locks of their own; the
-// in-process API (command) takes the same mutex.
+// and a state file. One thread runs the line, the devices and the control socket, so devices
+// need no locks of their own; the in-process API (command) takes the same mutex.
+//
+// The line: bytes are cut into frames by the length their header announces; what does not form
+// a valid frame is dropped when the line has been silent for t3.5 (at least 4 ms: a pty delivers
+// in bursts). A device hears a frame only at its own baud and parity (what the client set on the
+// pty); frames for nobody, and frames with a bad CRC, get silence. A device at the exact address
+// answers before one that answers 0xFF for itself (LD58A08). Broadcasts reach every device and
+// nobody answers, except the LC board's address commands at 0, which only the first LC board
+// takes and answers. With `pace`, the reply starts t3.5 after the request's wire time and its
+// bytes are written at the line's character rate.
 #pragma once
 
 #include <atomic>
@@ -18,7 +27,7 @@
 namespace modbus_rtu_driver {
 
 struct SimulatorConfig {
-  SimLineSettings factory;  // what the devices start at
+  SimLineSettings factory;  // what the devices start at (baud, parity)
   bool pace = false;        // give frames their real wire time
   struct Entry {
     std::string type;
@@ -29,12 +38,13 @@ struct SimulatorConfig {
 
 // False with a message naming the key when the YAML does not fit.
 bool loadSimulatorConfig(const std::string& path, SimulatorConfig* out, std::string* error);
+bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::string* error);
 
 struct SimulatorOptions {
   std::string link;        // path of the symlink to the pty's slave side
   std::string control;     // Unix socket path; empty = link + ".ctl"
   std::string state_file;  // empty = no persistence
-  bool verbose = false;    // print every frame
+  bool verbose = false;    // print every frame ("rx 01 03 ...", "tx 01 03 ...") on stdout
 };
 
 class Simulator {
@@ -44,24 +54,45 @@ class Simulator {
   Simulator(const Simulator&) = delete;
   Simulator& operator=(const Simulator&) = delete;
 
+  // Loads the state file, creates the pty, the link and the control socket, starts the thread.
   bool start(std::string* error);
+  // Stops the thread; removes the link and the socket. Replies still waiting are lost.
   void stop();
   // One control command, as on the socket ("get 255 coil 0 8" -> "ok 0 1 ..."). Thread-safe.
   std::string command(const std::string& line);
+  // Async-signal-safe: the line thread power-cycles the devices at its next turn.
   void requestPowerCycle() { power_cycle_requested_ = true; }
   const std::string& link() const { return options_.link; }
+  const std::string& controlPath() const { return options_.control; }
 
  private:
+  struct Outgoing {  // a reply on its way out
+    Bytes bytes;
+    size_t sent = 0;
+    SimClock::time_point start;
+    SimClock::duration per_byte{};  // zero: all at once
+  };
+  struct Client {
+    int fd;
+    std::string input;
+  };
+
   void run();
-  void processFrame(const Bytes& frame);
-  void answer(SimDevice& device, const Bytes& request, const Bytes& reply, double delay);
-  SimLineSettings lineSettings() const;
+  SimClock::duration waitTime(SimClock::time_point now) const;
+  void receive(SimClock::time_point now);
+  void processFrame(const Bytes& frame, SimClock::time_point now);
+  void broadcast(const std::optional<Request>& request, const std::vector<SimDevice*>& hearing,
+                 SimClock::time_point now, SimClock::time_point request_end);
+  void send(SimDevice& device, Bytes reply, double delay, SimClock::time_point request_end);
+  void flushOutgoing(SimClock::time_point now);
   SimDevice* find(const std::string& name);
-  void powerCycle();
+  void powerCycle(SimClock::time_point now);
   void saveState();
-  void loadState();
+  void loadState(SimClock::time_point now);
+  bool openControl(std::string* error);
   void serveControl();
   std::string doCommand(const std::string& line);
+  std::string deviceCommand(const std::string& verb, SimDevice& device, std::istream& args);
 
   SimulatorConfig config_;
   SimulatorOptions options_;
@@ -72,11 +103,13 @@ class Simulator {
   std::atomic<bool> power_cycle_requested_{false};
   PtyLink pty_;
   int listen_fd_ = -1;
-  std::vector<int> clients_;
-  std::vector<std::string> client_buffers_;
+  std::vector<Client> clients_;
   RequestFramer framer_;
-  SimClock::time_point last_byte_{}, busy_until_{};
-  uint64_t frames_ = 0, answered_ = 0, bad_crc_ = 0;
+  SimLineSettings line_;  // the line's settings when the last bytes came
+  SimClock::time_point last_byte_{}, rx_start_{}, line_free_{};
+  std::vector<Outgoing> outgoing_;
+  std::string state_text_;  // last written to the state file
+  uint64_t frames_ = 0, answered_ = 0;
 };
 
 }  // namespace modbus_rtu_driver

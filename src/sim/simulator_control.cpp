@@ -1,0 +1,194 @@
+// The simulator's control interface: a Unix stream socket, one text command per line, one reply
+// line each ("ok ..." or "error <message>"). Devices are named "#<index>" (config order) or by
+// their current address (decimal or 0x hex).
+//   get DEV coil|input|holding|ireg ADDR [COUNT]   -> ok V1 V2 ...
+//   set DEV coil|input|holding|ireg ADDR V1 [V2..] -> ok   (coils and holding registers as one
+//                         bus write with its checks; discrete inputs and input registers from
+//                         outside: optocouplers, telemetry pins; -32768..65535)
+//   silence DEV 0|1    the device stops / starts answering (and hearing) anything
+//   fail DEV 0|1       the device answers everything with exception 04
+//   corrupt DEV N      the next N replies of the device carry a bad CRC
+//   power_cycle        every device off and on (pending settings apply, outputs off)
+//   info               -> ok #0:TYPE:ADDRESS:BAUD:PARITY #1:...   (one item per device)
+//   frames             -> ok RECEIVED ANSWERED DROPPED   (valid frames in, replies out, runs of
+//                         bytes dropped: bad CRC or noise)
+//   help               -> ok <the command list>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+
+#include "modbus_rtu_driver/sim/simulator.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+constexpr size_t kMaxLine = 4096;
+const char* kUsage = "usage: get|set DEVICE coil|input|holding|ireg ADDRESS [COUNT | VALUES...]";
+
+bool parseNumber(const std::string& text, long min, long max, long* out) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text.c_str(), &end, 0);
+  if (errno || *end || v < min || v > max) return false;
+  *out = v;
+  return true;
+}
+
+}  // namespace
+
+bool Simulator::openControl(std::string* error) {
+  sockaddr_un addr{};
+  if (options_.control.size() >= sizeof addr.sun_path) {
+    if (error) *error = "control socket path too long: " + options_.control;
+    return false;
+  }
+  listen_fd_ = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  addr.sun_family = AF_UNIX;
+  std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", options_.control.c_str());
+  unlink(options_.control.c_str());  // a stale socket of an earlier run
+  if (listen_fd_ < 0 || bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
+      listen(listen_fd_, 16) != 0) {
+    if (error) *error = "cannot listen on " + options_.control + ": " + std::strerror(errno);
+    return false;
+  }
+  return true;
+}
+
+void Simulator::serveControl() {
+  for (int c; (c = accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC)) >= 0;)
+    clients_.push_back({c, {}});
+  for (size_t i = 0; i < clients_.size();) {
+    Client& client = clients_[i];
+    char buf[512];
+    const ssize_t n = read(client.fd, buf, sizeof buf);
+    bool drop = n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK);
+    if (n > 0) client.input.append(buf, static_cast<size_t>(n));
+    for (size_t nl; !drop && (nl = client.input.find('\n')) != std::string::npos;) {
+      const std::string reply = doCommand(client.input.substr(0, nl)) + "\n";
+      client.input.erase(0, nl + 1);
+      drop = ::send(client.fd, reply.data(), reply.size(), MSG_NOSIGNAL) !=
+             static_cast<ssize_t>(reply.size());
+    }
+    if (!drop && client.input.size() > kMaxLine) drop = true;  // no line end in sight
+    if (drop) {
+      close(client.fd);
+      clients_.erase(clients_.begin() + static_cast<long>(i));
+    } else {
+      ++i;
+    }
+  }
+}
+
+std::string Simulator::command(const std::string& line) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return doCommand(line);
+}
+
+SimDevice* Simulator::find(const std::string& name) {
+  long v = 0;
+  if (name.size() > 1 && name[0] == '#') {
+    if (!parseNumber(name.substr(1), 0, static_cast<long>(devices_.size()) - 1, &v)) return nullptr;
+    return devices_[static_cast<size_t>(v)].get();
+  }
+  if (!parseNumber(name, 0, 255, &v)) return nullptr;
+  for (auto& d : devices_)
+    if (d->address() == v) return d.get();
+  return nullptr;
+}
+
+std::string Simulator::doCommand(const std::string& line) {
+  std::istringstream in(line);
+  std::string verb, name;
+  in >> verb;
+  if (verb == "power_cycle") {
+    powerCycle(SimClock::now());
+    return "ok";
+  }
+  if (verb == "frames")
+    return "ok " + std::to_string(frames_) + " " + std::to_string(answered_) + " " +
+           std::to_string(framer_.dropped());
+  if (verb == "info") {
+    std::string out = "ok";
+    for (size_t i = 0; i < devices_.size(); ++i) {
+      const SimDevice& d = *devices_[i];
+      out += " #" + std::to_string(i) + ":" + d.type() + ":" + std::to_string(d.address()) + ":" +
+             std::to_string(d.line().baud) + ":" + d.line().parity;
+    }
+    return out;
+  }
+  if (verb == "help")
+    return "ok get set silence fail corrupt power_cycle info frames help; " + std::string(kUsage);
+  if (verb != "get" && verb != "set" && verb != "silence" && verb != "fail" && verb != "corrupt")
+    return "error unknown command '" + verb + "' (try help)";
+  in >> name;
+  SimDevice* d = find(name);
+  if (!d) return "error no device '" + name + "' (#index or address; see info)";
+  return deviceCommand(verb, *d, in);
+}
+
+std::string Simulator::deviceCommand(const std::string& verb, SimDevice& d, std::istream& in) {
+  const auto now = SimClock::now();
+  std::string a, b;
+  long n = 0, address = 0;
+  if (verb == "silence" || verb == "fail" || verb == "corrupt") {
+    in >> a;
+    if (a.empty()) a = "1";
+    if (!parseNumber(a, 0, verb == "corrupt" ? 1000000 : 1, &n))
+      return "error " + verb + ": '" + a + "' is not " + (verb == "corrupt" ? "a count" : "0 or 1");
+    if (verb == "silence") d.silenced = n != 0;
+    if (verb == "fail") d.failing = n != 0;
+    if (verb == "corrupt") d.corrupt_replies = static_cast<int>(n);
+    return "ok";
+  }
+  Table table;
+  if (!(in >> a) || !parseTable(a, &table)) return "error table '" + a + "'; " + kUsage;
+  if (!(in >> b) || !parseNumber(b, 0, 0xFFFF, &address))
+    return "error address '" + b + "' is not 0-65535; " + std::string(kUsage);
+  if (verb == "get") {
+    long count = 1;
+    if (in >> b && !parseNumber(b, 1, 2000, &count)) return "error count '" + b + "' is not 1-2000";
+    std::string out = "ok";
+    for (long i = address; i < address + count; ++i) {
+      uint16_t v = 0;
+      const uint8_t e = i > 0xFFFF ? static_cast<uint8_t>(kIllegalDataAddress)
+                                   : d.read(table, static_cast<uint16_t>(i), now, &v);
+      if (e) return "error " + exceptionName(e) + " at " + std::to_string(i);
+      out += " " + std::to_string(v);
+    }
+    return out;
+  }
+  std::vector<uint16_t> values;
+  while (in >> b) {
+    long v = 0;
+    if (!parseNumber(b, -32768, 65535, &v)) return "error value '" + b + "' is not 16 bits";
+    values.push_back(static_cast<uint16_t>(v));  // negative: two's complement (temperature)
+  }
+  if (values.empty()) return "error set needs at least one value; " + std::string(kUsage);
+  if (address + static_cast<long>(values.size()) > 0x10000)
+    return "error " + exceptionName(kIllegalDataAddress) + " at 65536";
+  if (table == Table::kCoil || table == Table::kHolding) {  // one write, checked as a whole
+    for (uint16_t v : values)
+      if (table == Table::kCoil && v > 1) return "error coil values are 0 or 1";
+    const uint8_t e = d.write(table, static_cast<uint16_t>(address), values, now);
+    if (e) return "error " + exceptionName(e) + " at " + std::to_string(address);
+    saveState();
+    return "ok";
+  }
+  for (size_t i = 0; i < values.size(); ++i) {
+    const long at = address + static_cast<long>(i);
+    const uint8_t e = d.setDirect(table, static_cast<uint16_t>(at), values[i], now);
+    if (e) return "error " + exceptionName(e) + " at " + std::to_string(at);
+  }
+  saveState();
+  return "ok";
+}
+
+}  // namespace modbus_rtu_driver
