@@ -66,6 +66,7 @@ class RtuLink : public Transport {
   Result sendBroadcast(const Request& request);
   Result fromErrno(const Request& request, int error) const;
   void keepGap();
+  void discardInput();
   void account(const Result& result, double latency);
 
   LinkConfig config_;
