@@ -26,3 +26,7 @@ target_link_libraries(test_sim_executable modbus_rtu_sim gtest_main)
 target_compile_definitions(test_sim_executable PRIVATE REPO_DIR="${REPO_REAL_DIR}"
   SIMULATOR_EXE="$<TARGET_FILE:modbus_rtu_simulator>")
 add_dependencies(test_sim_executable modbus_rtu_simulator)
+
+# Injected faults: what the wire carries and the counters.
+catkin_add_gtest(test_sim_faults test/unit/test_sim_faults.cpp)
+target_link_libraries(test_sim_faults modbus_rtu_sim gtest_main)

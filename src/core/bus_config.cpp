@@ -18,8 +18,8 @@ const std::set<std::string> kDeviceKeys = {"type",    "address", "poll_rate",
 const std::set<std::string> kSlaveKeys = {"slave_id",          "coils",           "discrete_inputs",
                                           "holding_registers", "input_registers", "names"};
 const std::set<std::string> kLinkKeys = {
-    "port",         "baud",    "parity",  "data_bits", "stop_bits",  "response_timeout",
-    "byte_timeout", "retries", "min_gap", "direction", "low_latency"};
+    "port",         "baud",    "parity",  "data_bits", "stop_bits",   "response_timeout",
+    "byte_timeout", "retries", "min_gap", "direction", "low_latency", "late_reply_guard"};
 
 struct ConfigError {
   std::string message;
@@ -117,6 +117,8 @@ void parseLink(const YAML::Node& root, LinkConfig* out) {
     link.response_timeout = getNumber(root["response_timeout"], "response_timeout");
   if (root["byte_timeout"]) link.byte_timeout = getNumber(root["byte_timeout"], "byte_timeout");
   if (root["retries"]) link.retries = getInt(root["retries"], "retries");
+  if (root["late_reply_guard"])
+    link.late_reply_guard = getNumber(root["late_reply_guard"], "late_reply_guard");
   if (root["min_gap"]) link.min_gap = getNumber(root["min_gap"], "min_gap");
   if (root["low_latency"])
     link.low_latency = get<bool>(root["low_latency"], "low_latency", "true or false");

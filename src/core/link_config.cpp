@@ -42,8 +42,11 @@ std::string validateLinkConfig(const LinkConfig& c) {
     return "data_bits: " + std::to_string(c.data_bits) + " is not 7 or 8";
   if (c.stop_bits != 1 && c.stop_bits != 2)
     return "stop_bits: " + std::to_string(c.stop_bits) + " is not 1 or 2";
-  if (!(c.response_timeout >= 0.001 && c.response_timeout <= 10.0))
-    return "response_timeout: " + std::to_string(c.response_timeout) + " s is outside 0.001-10 s";
+  if (!(c.response_timeout == 0.0 || (c.response_timeout >= 0.001 && c.response_timeout <= 10.0)))
+    return "response_timeout: " + std::to_string(c.response_timeout) +
+           " s is outside 0.001-10 s (0 = sized from the baud)";
+  if (!(c.late_reply_guard >= 0.0 && c.late_reply_guard <= 1.0))
+    return "late_reply_guard: " + std::to_string(c.late_reply_guard) + " s is outside 0-1 s";
   if (!(c.byte_timeout >= 0.0 && c.byte_timeout <= 1.0))
     return "byte_timeout: " + std::to_string(c.byte_timeout) + " s is outside 0-1 s (0 = auto)";
   if (c.retries < 0 || c.retries > 10)
@@ -73,6 +76,12 @@ double effectiveByteTimeout(const LinkConfig& c) {
 
 double effectiveMinGap(const LinkConfig& c) {
   return c.min_gap > 0 ? c.min_gap : frameGap(c);
+}
+
+double effectiveResponseTimeout(const LinkConfig& c, size_t request_bytes) {
+  if (c.response_timeout > 0) return c.response_timeout;
+  // The write returns before the request is on the wire: its own time counts.
+  return static_cast<double>(request_bytes) * characterTime(c) + frameGap(c) + kTurnaroundAllowance;
 }
 
 }  // namespace modbus_rtu_driver

@@ -140,7 +140,9 @@ Result RtuLink::execute(const Request& request) {
   Result r;
   for (int attempt_no = 0;; ++attempt_no) {
     r = attempt(request);
-    if (r.ok() || !retryable(r.error) || attempt_no >= config_.retries || !ctx_) break;
+    if (r.ok() || !retryable(r.error) || !request.repeatable || attempt_no >= config_.retries ||
+        !ctx_)
+      break;
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.retries;
   }
@@ -166,18 +168,52 @@ void RtuLink::keepGap() {
   std::this_thread::sleep_until(ready);
 }
 
-// Whatever is still in the input (a late reply, noise, a long echo) belongs to nobody now.
-// Asking first is cheaper than a flush on every request.
-void RtuLink::discardInput() {
+// Before a request: after a failure, wait out a late reply; keep the gap; whatever is still in
+// the input (a late reply, noise, a long echo) belongs to nobody now. Asking for the count
+// first is cheaper than a flush on every request.
+void RtuLink::prepareLine() {
+  if (unsettled_) awaitQuietLine();
+  unsettled_ = false;
+  keepGap();
   int pending = 0;
-  if (ioctl(modbus_get_socket(ctx_), FIONREAD, &pending) != 0 || pending > 0) modbus_flush(ctx_);
+  if (ioctl(modbus_get_socket(ctx_), FIONREAD, &pending) != 0 || pending > 0) {
+    modbus_flush(ctx_);
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.stale_bytes += static_cast<uint64_t>(std::max(pending, 0));
+  }
+}
+
+// Reads and drops bytes until the line has been quiet for late_reply_guard (1 s at most, so
+// a babbling line cannot stall the bus).
+void RtuLink::awaitQuietLine() {
+  if (config_.late_reply_guard <= 0) return;
+  const int fd = modbus_get_socket(ctx_);
+  const auto give_up = Clock::now() + std::chrono::seconds(1);
+  uint64_t dropped = 0;
+  while (Clock::now() < give_up) {
+    fd_set set;
+    FD_ZERO(&set);
+    FD_SET(fd, &set);
+    const double wait = config_.late_reply_guard;
+    timeval tv{static_cast<time_t>(wait),
+               static_cast<suseconds_t>((wait - std::floor(wait)) * 1e6)};
+    const int ready = select(fd + 1, &set, nullptr, nullptr, &tv);
+    if (ready == -1 && errno == EINTR) continue;
+    if (ready <= 0) break;
+    uint8_t junk[256];
+    const ssize_t n = read(fd, junk, sizeof junk);
+    if (n <= 0) break;
+    dropped += static_cast<uint64_t>(n);
+  }
+  last_activity_ = Clock::now();
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  stats_.stale_bytes += dropped;
 }
 
 Result RtuLink::attempt(const Request& request) {
-  keepGap();
-  discardInput();
+  prepareLine();
   uint32_t sec = 0, usec = 0;
-  toTimeval(config_.response_timeout + reply_delay_[request.slave], &sec, &usec);
+  toTimeval(responseTimeout(request), &sec, &usec);
   modbus_set_response_timeout(ctx_, sec, usec);
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -195,8 +231,14 @@ Result RtuLink::attempt(const Request& request) {
     r = exchangeRaw(request, false);
   }
   last_activity_ = Clock::now();
+  unsettled_ = !r.ok() && r.error != ErrorKind::kException;
   if (r.error == ErrorKind::kIo) disconnect();
   return r;
+}
+
+double RtuLink::responseTimeout(const Request& request) const {
+  return effectiveResponseTimeout(config_, 1 + encodeRequestPdu(request).size() + 2) +
+         reply_delay_[request.slave];
 }
 
 Result RtuLink::readViaLibmodbus(const Request& request) {
@@ -243,7 +285,7 @@ Result RtuLink::exchangeRaw(const Request& request, bool read_reply_ourselves) {
 // timeout, then byte timeouts, and stop as soon as the header says the frame is complete.
 Result RtuLink::readReply(const Request& request) {
   const int fd = modbus_get_socket(ctx_);
-  const double first = config_.response_timeout + reply_delay_[request.slave];
+  const double first = responseTimeout(request);
   const double between = effectiveByteTimeout(config_);
   Bytes buf;
   size_t need = 0;
@@ -275,8 +317,7 @@ Result RtuLink::readReply(const Request& request) {
 }
 
 Result RtuLink::sendBroadcast(const Request& request) {
-  keepGap();
-  discardInput();
+  prepareLine();
   Bytes raw{request.slave};
   const Bytes pdu = encodeRequestPdu(request);
   raw.insert(raw.end(), pdu.begin(), pdu.end());

@@ -50,6 +50,7 @@ std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point no
   const bool broadcast = r.slave == kBroadcastAddress;
   uint8_t exception = 0;
   std::vector<uint16_t> values;
+  const bool changed = !isReadFunction(r.function) && wouldChange(r, now);
   switch (r.function) {
     case FunctionCode::kReadCoils:
     case FunctionCode::kReadDiscreteInputs:
@@ -82,9 +83,22 @@ std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point no
       if (!exception) exception = write(Table::kHolding, r.address, r.values, now);
       break;
   }
+  if (!exception && !isReadFunction(r.function) && (changed || startsSomething(r))) ++changes;
   if (broadcast) return std::nullopt;  // applied, never answered
   if (exception) return encodeException(r.slave, static_cast<uint8_t>(r.function), exception);
   return encodeReply(r, values);
+}
+
+// True when a write would leave a coil or register other than it is now (counted in `changes`).
+bool SimDevice::wouldChange(const Request& r, SimClock::time_point now) {
+  const Table table = isBitFunction(r.function) ? Table::kCoil : Table::kHolding;
+  for (size_t i = 0; i < r.values.size(); ++i) {
+    uint16_t v = 0;
+    const uint32_t a = r.address + i;
+    if (a > 0xFFFF || read(table, static_cast<uint16_t>(a), now, &v) != 0 || v != r.values[i])
+      return true;
+  }
+  return false;
 }
 
 Bytes SimDevice::unknownFunction(uint8_t slave, uint8_t function) const {

@@ -81,6 +81,11 @@ uint8_t SimLcRelay8::read(Table table, uint16_t a, SimClock::time_point now, uin
   }
 }
 
+bool SimLcRelay8::startsSomething(const Request& r) const {
+  return r.function == FunctionCode::kWriteMultipleRegisters && r.address >= 3 &&
+         r.address < 3 + 5 * 8 && (r.address - 3) % 5 == 0;
+}
+
 uint8_t SimLcRelay8::write(Table table, uint16_t a, const std::vector<uint16_t>& values,
                            SimClock::time_point now) {
   tick(now);

@@ -80,6 +80,17 @@ void SimLd58a08::tick(SimClock::time_point now) {
   }
 }
 
+bool SimLd58a08::startsSomething(const Request& r) const {
+  if (isBitFunction(r.function)) return false;
+  for (size_t i = 0; i < r.values.size(); ++i) {
+    const uint32_t a = r.address + i;
+    if (a <= 0xFFFF && isPwmRegister(static_cast<uint16_t>(a)) && (a & 0x0F) == 2 &&
+        r.values[i] != 0)
+      return true;
+  }
+  return false;
+}
+
 uint8_t SimLd58a08::read(Table table, uint16_t a, SimClock::time_point now, uint16_t* v) {
   tick(now);
   if (table == Table::kCoil) {

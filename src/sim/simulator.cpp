@@ -144,6 +144,10 @@ void Simulator::processFrame(const Bytes& frame, SimClock::time_point now) {
     if (!target && d->answersTo(slave, request ? &*request : nullptr)) target = d;
   if (!target) return;  // nobody at that address: silence
 
+  if (chance(target->drop_request_percent)) {  // lost on the way: not heard, nothing done
+    ++target->dropped_requests;
+    return;
+  }
   const double delay = target->replyDelay();  // a new return delay applies from the next request
   if (target->failing)
     return send(*target, encodeException(slave, function, kSlaveDeviceFailure), delay, request_end);
@@ -176,11 +180,39 @@ void Simulator::broadcast(const std::optional<Request>& request,
   if (!isReadFunction(request->function)) saveState();
 }
 
+bool Simulator::chance(int percent) {
+  return percent > 0 && static_cast<int>(random_() % 100) < percent;
+}
+
+// The reply faults of the control socket, in wire order: lost, another slave's address (a valid
+// frame), cut short, bad CRC, noise after it, late.
 void Simulator::send(SimDevice& device, Bytes reply, double delay,
                      SimClock::time_point request_end) {
+  if (chance(device.drop_reply_percent)) {
+    ++device.dropped_replies;
+    return;
+  }
+  if (device.wrong_address_replies > 0) {
+    --device.wrong_address_replies;
+    reply[0] = static_cast<uint8_t>(reply[0] == 1 ? 2 : reply[0] - 1);
+    reply.resize(reply.size() - 2);
+    appendCrc(reply);
+  }
+  if (device.truncate_replies > 0) {
+    --device.truncate_replies;
+    reply.resize(std::max<size_t>(2, reply.size() / 2));
+  }
   if (device.corrupt_replies > 0) {
     --device.corrupt_replies;
     reply.back() ^= 0xA5;
+  }
+  if (device.noise_replies > 0) {
+    --device.noise_replies;
+    for (uint8_t b : {0x00, 0xFF, 0x55, 0x03, 0x13}) reply.push_back(b);
+  }
+  if (device.late_replies > 0) {
+    --device.late_replies;
+    delay += device.late_ms / 1000.0;
   }
   Outgoing o;
   o.start = request_end + secs(delay);

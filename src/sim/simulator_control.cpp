@@ -8,6 +8,14 @@
 //   silence DEV 0|1    the device stops / starts answering (and hearing) anything
 //   fail DEV 0|1       the device answers everything with exception 04
 //   corrupt DEV N      the next N replies of the device carry a bad CRC
+//   truncate DEV N     the next N replies are cut to half their length
+//   wrong_address DEV N  the next N replies name another address (a valid frame)
+//   noise DEV N        the next N replies are followed by 5 noise bytes
+//   late DEV N MS      the next N replies are sent MS milliseconds late
+//   drop DEV PERCENT request|reply   lose that share of the requests (the device does
+//                         nothing) or of the replies (the device acts, the reply is lost)
+//   stats DEV          -> ok changes N dropped_requests N dropped_replies N   (changes: writes
+//                         that changed the device's state or started a PWM run or a flash)
 //   power_cycle        every device off and on (pending settings apply, outputs off)
 //   info               -> ok #0:TYPE:ADDRESS:BAUD:PARITY #1:...   (one item per device)
 //   frames             -> ok RECEIVED ANSWERED DROPPED   (valid frames in, replies out, runs of
@@ -17,6 +25,7 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -125,8 +134,13 @@ std::string Simulator::doCommand(const std::string& line) {
     return out;
   }
   if (verb == "help")
-    return "ok get set silence fail corrupt power_cycle info frames help; " + std::string(kUsage);
-  if (verb != "get" && verb != "set" && verb != "silence" && verb != "fail" && verb != "corrupt")
+    return "ok get set silence fail corrupt truncate wrong_address noise late drop stats "
+           "power_cycle info frames help; " +
+           std::string(kUsage);
+  static const char* kDeviceVerbs[] = {"get",     "set",      "silence",       "fail",
+                                       "corrupt", "truncate", "wrong_address", "noise",
+                                       "late",    "drop",     "stats"};
+  if (std::find(std::begin(kDeviceVerbs), std::end(kDeviceVerbs), verb) == std::end(kDeviceVerbs))
     return "error unknown command '" + verb + "' (try help)";
   in >> name;
   SimDevice* d = find(name);
@@ -138,14 +152,40 @@ std::string Simulator::deviceCommand(const std::string& verb, SimDevice& d, std:
   const auto now = SimClock::now();
   std::string a, b;
   long n = 0, address = 0;
-  if (verb == "silence" || verb == "fail" || verb == "corrupt") {
+  if (verb == "stats")
+    return "ok changes " + std::to_string(d.changes) + " dropped_requests " +
+           std::to_string(d.dropped_requests) + " dropped_replies " +
+           std::to_string(d.dropped_replies);
+  if (verb == "silence" || verb == "fail") {
     in >> a;
     if (a.empty()) a = "1";
-    if (!parseNumber(a, 0, verb == "corrupt" ? 1000000 : 1, &n))
-      return "error " + verb + ": '" + a + "' is not " + (verb == "corrupt" ? "a count" : "0 or 1");
-    if (verb == "silence") d.silenced = n != 0;
-    if (verb == "fail") d.failing = n != 0;
-    if (verb == "corrupt") d.corrupt_replies = static_cast<int>(n);
+    if (!parseNumber(a, 0, 1, &n)) return "error " + verb + ": '" + a + "' is not 0 or 1";
+    (verb == "silence" ? d.silenced : d.failing) = n != 0;
+    return "ok";
+  }
+  if (verb == "drop") {
+    in >> a >> b;
+    if (!parseNumber(a, 0, 100, &n)) return "error drop: '" + a + "' is not a percentage 0-100";
+    if (b != "request" && b != "reply") return "error drop: say request or reply, not '" + b + "'";
+    (b == "request" ? d.drop_request_percent : d.drop_reply_percent) = static_cast<int>(n);
+    return "ok";
+  }
+  if (verb == "corrupt" || verb == "truncate" || verb == "wrong_address" || verb == "noise" ||
+      verb == "late") {
+    in >> a;
+    if (!parseNumber(a, 0, 1000000, &n)) return "error " + verb + ": '" + a + "' is not a count";
+    if (verb == "late") {
+      in >> b;
+      if (!parseNumber(b, 0, 60000, &address))
+        return "error late: '" + b + "' is not 0-60000 milliseconds";
+      d.late_ms = static_cast<int>(address);
+    }
+    int& counter = verb == "corrupt"    ? d.corrupt_replies
+                   : verb == "truncate" ? d.truncate_replies
+                   : verb == "noise"    ? d.noise_replies
+                   : verb == "late"     ? d.late_replies
+                                        : d.wrong_address_replies;
+    counter = static_cast<int>(n);
     return "ok";
   }
   Table table;

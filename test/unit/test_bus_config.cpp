@@ -75,7 +75,8 @@ TEST(BusConfig, MissingOptionalKeysTakeDefaults) {
   EXPECT_EQ(c.link.baud, 9600);
   EXPECT_EQ(c.link.data_bits, 8);
   EXPECT_EQ(c.link.stop_bits, 1);
-  EXPECT_DOUBLE_EQ(c.link.response_timeout, 0.5);
+  EXPECT_DOUBLE_EQ(c.link.response_timeout, 0.0);  // sized from the baud
+  EXPECT_DOUBLE_EQ(c.link.late_reply_guard, 0.05);
   EXPECT_EQ(c.link.retries, 1);
   EXPECT_DOUBLE_EQ(c.devices[0].poll_rate, 1.0);
   EXPECT_TRUE(c.devices[0].outputs.empty());
@@ -94,7 +95,8 @@ TEST(BusConfig, EachBadValueIsNamed) {
       {"parity: none", "parity: mark", {"parity", "mark", "none, even or odd"}},
       {"data_bits: 8", "data_bits: 9", {"data_bits", "9"}},
       {"stop_bits: 1", "stop_bits: 3", {"stop_bits", "3"}},
-      {"response_timeout: 0.5", "response_timeout: 0", {"response_timeout"}},
+      {"response_timeout: 0.5", "response_timeout: 0.0001", {"response_timeout"}},
+      {"response_timeout: 0.5", "response_timeout: -1", {"response_timeout", "0.001-10"}},
       {"retries: 1", "retries: -1", {"retries", "-1"}},
       {"port: /dev/ttyUSB0", "port: ''", {"port"}},
       {"port: /dev/ttyUSB0", "port: /dev/ttyUSB0\ncolour: red", {"colour", "unknown key"}},

@@ -29,11 +29,26 @@ TEST(LinkConfig, ValidationNamesTheField) {
   c.stop_bits = 3;
   EXPECT_NE(validateLinkConfig(c).find("stop_bits"), std::string::npos);
   c = LinkConfig{};
-  c.response_timeout = 0;
+  c.response_timeout = 0.0005;
   EXPECT_NE(validateLinkConfig(c).find("response_timeout"), std::string::npos);
   c = LinkConfig{};
   c.retries = 11;
   EXPECT_NE(validateLinkConfig(c).find("retries"), std::string::npos);
+  c = LinkConfig{};
+  c.late_reply_guard = 1.5;
+  EXPECT_NE(validateLinkConfig(c).find("late_reply_guard: 1.5"), std::string::npos);
+}
+
+TEST(LinkConfig, ResponseTimeoutIsSizedFromTheBaudUnlessSet) {
+  LinkConfig c;  // 9600 8N1: 10 bits a character
+  EXPECT_EQ(c.response_timeout, 0.0);
+  EXPECT_NEAR(effectiveResponseTimeout(c, 8), 8 * 10 / 9600.0 + 35 / 9600.0 + kTurnaroundAllowance,
+              1e-12);
+  c.baud = 115200;  // t3.5 fixed at 1.75 ms
+  EXPECT_NEAR(effectiveResponseTimeout(c, 100), 1000 / 115200.0 + 0.00175 + kTurnaroundAllowance,
+              1e-12);
+  c.response_timeout = 0.3;
+  EXPECT_EQ(effectiveResponseTimeout(c, 100), 0.3);
 }
 
 TEST(LinkConfig, Parity) {

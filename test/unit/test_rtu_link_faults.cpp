@@ -100,6 +100,45 @@ TEST_F(RtuLinkFaults, ALateReplyIsNotTheAnswerToTheNextRequest) {
   EXPECT_EQ(second.values, std::vector<uint16_t>{0x2222});
 }
 
+TEST_F(RtuLinkFaults, AReplyLateEnoughToMeetTheNextRequestIsNotItsAnswer) {
+  // The device answers channel 0's registers 350 ms after the request (timeout 0.3 s): without
+  // waiting for a quiet line the link would send channel 1's request at 0.3 s and take that late
+  // reply, which has the same shape, for channel 1's values.
+  const Request ch0 = Request::readHoldingRegisters(1, 0x00, 3);
+  const Request ch1 = Request::readHoldingRegisters(1, 0x10, 3);
+  auto device = std::async(std::launch::async, [&] {
+    pty_.read(encodeRequest(ch0).size());
+    std::this_thread::sleep_for(std::chrono::milliseconds(350));
+    pty_.write(withCrc({1, 0x03, 0x06, 0, 1, 0, 1, 0, 1}));
+    EXPECT_EQ(toHex(pty_.read(8, 2000)), toHex(encodeRequest(ch1)));
+    pty_.write(withCrc({1, 0x03, 0x06, 0, 2, 0, 2, 0, 2}));
+  });
+  EXPECT_EQ(link_->execute(ch0).error, ErrorKind::kTimeout);
+  const Result r = link_->execute(ch1);
+  device.get();
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(r.values, (std::vector<uint16_t>{2, 2, 2}));
+  EXPECT_EQ(link_->stats().stale_bytes, 11u);
+}
+
+TEST_F(RtuLinkFaults, ARequestThatIsNotRepeatableIsSentOnce) {
+  LinkConfig c;
+  c.port = pty_.path();
+  c.response_timeout = 0.1;
+  c.retries = 3;
+  link_->disconnect();  // one owner per port
+  RtuLink link(c);
+  ASSERT_TRUE(link.connect(nullptr));
+  Request req = Request::writeMultipleRegisters(1, 0x0000, {10, 5, 3});
+  req.repeatable = false;
+  EXPECT_EQ(link.execute(req).error, ErrorKind::kTimeout);
+  EXPECT_EQ(toHex(pty_.read(64, 300)), toHex(encodeRequest(req)));  // once, not four times
+  EXPECT_EQ(link.stats().attempts, 1u);
+  req.repeatable = true;
+  EXPECT_EQ(link.execute(req).error, ErrorKind::kTimeout);
+  EXPECT_EQ(link.stats().attempts, 5u);
+}
+
 TEST_F(RtuLinkFaults, StrayBytesBeforeARequestAreFlushed) {
   pty_.write({0xFF, 0x10, 0x00, 0x00, 0x00});  // e.g. the tail of a long echo
   std::this_thread::sleep_for(std::chrono::milliseconds(50));

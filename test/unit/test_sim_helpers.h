@@ -1,5 +1,5 @@
 // Helpers of the simulator tests: a device asked with hex frames, a client on the pty opened
-// with plain termios, a scratch directory.
+// with plain termios, a scratch directory, a simulated line in-process.
 #pragma once
 
 #include <fcntl.h>
@@ -14,6 +14,7 @@
 
 #include "modbus_rtu_driver/core/frame.h"
 #include "modbus_rtu_driver/sim/sim_lc_relay8.h"
+#include "modbus_rtu_driver/sim/simulator.h"
 
 namespace modbus_rtu_driver {
 namespace simtest {
@@ -124,6 +125,29 @@ class PtyClient {
 
  private:
   int fd_ = -1;
+};
+
+// A simulated line in-process with its control commands: line("silence 2 1") -> "ok".
+class Line {
+ public:
+  explicit Line(std::vector<SimulatorConfig::Entry> devices, bool pace = false, int baud = 9600) {
+    SimulatorConfig config;
+    config.devices = std::move(devices);
+    config.pace = pace;
+    config.factory.baud = baud;
+    SimulatorOptions options;
+    options.link = dir_ / "tty";
+    sim_ = std::make_unique<Simulator>(config, options);
+    std::string error;
+    EXPECT_TRUE(sim_->start(&error)) << error;
+  }
+  Simulator& sim() { return *sim_; }
+  std::string operator()(const std::string& command) { return sim_->command(command); }
+  std::string link() const { return dir_ / "tty"; }
+
+ private:
+  ScratchDir dir_;
+  std::unique_ptr<Simulator> sim_;
 };
 
 }  // namespace simtest

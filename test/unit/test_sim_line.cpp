@@ -15,28 +15,6 @@ using namespace modbus_rtu_driver::simtest;
 
 namespace {
 
-class Line {
- public:
-  explicit Line(std::vector<SimulatorConfig::Entry> devices, bool pace = false, int baud = 9600) {
-    SimulatorConfig config;
-    config.devices = std::move(devices);
-    config.pace = pace;
-    config.factory.baud = baud;
-    SimulatorOptions options;
-    options.link = dir_ / "tty";
-    sim_ = std::make_unique<Simulator>(config, options);
-    std::string error;
-    EXPECT_TRUE(sim_->start(&error)) << error;
-  }
-  Simulator& sim() { return *sim_; }
-  std::string operator()(const std::string& command) { return sim_->command(command); }
-  std::string link() const { return dir_ / "tty"; }
-
- private:
-  ScratchDir dir_;
-  std::unique_ptr<Simulator> sim_;
-};
-
 // Control commands that put a device in the state a printed read reply shows.
 std::vector<std::string> prepare(const GoldenFrame& g, const Request& r) {
   if (!isReadFunction(r.function)) return {};
@@ -181,28 +159,6 @@ TEST(SimLine, AnExactAddressBeatsTheLd58a08At0xFF) {
     EXPECT_EQ(client.exchange("FF 06 00 FD 00 02 8C 25", 8), "FF 06 00 FD 00 02 8C 25");
     EXPECT_EQ(line("get #" + std::to_string(lc_first ? 1 : 0) + " holding 253"), "ok 2");
   }
-}
-
-TEST(SimLine, FaultInjection) {
-  Line line({{"yespeed_pdu", 2}});
-  PtyClient client(line.link());
-  const Bytes read = encodeRequest(Request::readCoils(2, 0, 8));
-  const std::string good =
-      toHex(encodeReply(Request::readCoils(2, 0, 8), std::vector<uint16_t>(8)));
-  ASSERT_EQ(line("silence 2 1"), "ok");
-  EXPECT_EQ(client.exchange(read), "");
-  ASSERT_EQ(line("silence 2 0"), "ok");
-  EXPECT_EQ(client.exchange(read, 6), good);
-  ASSERT_EQ(line("fail 2 1"), "ok");
-  EXPECT_EQ(client.exchange(read, 5), exceptionHex(2, 0x01, kSlaveDeviceFailure));
-  ASSERT_EQ(line("fail 2 0"), "ok");
-  ASSERT_EQ(line("corrupt 2 2"), "ok");
-  for (int i = 0; i < 2; ++i) {
-    const auto reply = fromHex(client.exchange(read, 6));
-    ASSERT_TRUE(reply && reply->size() == 6);
-    EXPECT_FALSE(hasValidCrc(*reply));
-  }
-  EXPECT_EQ(client.exchange(read, 6), good);
 }
 
 TEST(SimLine, PacedLineTakesTheWireTimeAndSendsAtTheCharacterRate) {

@@ -1,6 +1,7 @@
 // Serial line settings of one bus, with the checks and the timing derived from them.
 #pragma once
 
+#include <cstddef>
 #include <string>
 
 namespace modbus_rtu_driver {
@@ -12,15 +13,24 @@ struct LinkConfig {
   std::string port = "/dev/ttyUSB0";
   int baud = 9600;  // 1200-115200
   Parity parity = Parity::kNone;
-  int data_bits = 8;              // 7 or 8
-  int stop_bits = 1;              // 1 or 2
-  double response_timeout = 0.5;  // s, wait for the first byte of a reply
-  double byte_timeout = 0.0;      // s, silence that ends a reply; 0 = derived from the baud
-  int retries = 1;                // extra attempts after a timeout/CRC/wrong-address error
-  double min_gap = 0.0;           // s, silence kept between frames; 0 = t3.5 of the baud
+  int data_bits = 8;  // 7 or 8
+  int stop_bits = 1;  // 1 or 2
+  // s, wait for the first byte of a reply; 0 = sized per request: its wire time + t3.5 +
+  // kTurnaroundAllowance (+ the device's reply delay in every case).
+  double response_timeout = 0.0;
+  double byte_timeout = 0.0;  // s, silence that ends a reply; 0 = derived from the baud
+  int retries = 1;            // extra attempts after a timeout/CRC/wrong-address error
+  // s of silence awaited after a failed transaction before the next request, so a reply that
+  // comes late is not taken as the answer to that request; 0 = do not wait.
+  double late_reply_guard = 0.05;
+  double min_gap = 0.0;  // s, silence kept between frames; 0 = t3.5 of the baud
   DirectionControl direction = DirectionControl::kAuto;
   bool low_latency = true;  // ask the USB adapter driver for ASYNC_LOW_LATENCY
 };
+
+// What a device may take to start answering once a request is on the wire, USB adapters' latency
+// included: the auto response timeout's allowance.
+constexpr double kTurnaroundAllowance = 0.05;
 
 // Empty when valid, else one message naming the field, the value and the allowed range.
 std::string validateLinkConfig(const LinkConfig& config);
@@ -39,5 +49,7 @@ double frameGap(const LinkConfig& config);
 // USB adapters and scheduler jitter.
 double effectiveByteTimeout(const LinkConfig& config);
 double effectiveMinGap(const LinkConfig& config);
+// Seconds to wait for the first byte of the reply to a request of `request_bytes` bytes.
+double effectiveResponseTimeout(const LinkConfig& config, size_t request_bytes);
 
 }  // namespace modbus_rtu_driver

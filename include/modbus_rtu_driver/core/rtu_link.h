@@ -3,7 +3,9 @@
 // cannot address or filters out, go through modbus_send_raw_request and a reply reader of our
 // own that checks the CRC. With libmodbus >= 3.1.7 its quirks are used instead.
 // Between transactions the link keeps a minimum silence (t3.5 by default) and flushes stale
-// input, so a late or long reply is never taken as the answer to the next request.
+// input; after a failed one it first waits until the line has been quiet for late_reply_guard,
+// so a late or long reply is not taken as the answer to the next request. Requests marked not
+// repeatable are never retried.
 #pragma once
 
 #include <chrono>
@@ -31,9 +33,10 @@ struct LinkStats {
   uint64_t io_errors = 0;
   uint64_t retries = 0;
   uint64_t reconnects = 0;
-  double last_latency = 0;  // s, request sent to reply decoded, successful transactions
-  double mean_latency = 0;  // s
-  double max_latency = 0;   // s
+  uint64_t stale_bytes = 0;  // thrown away before a request: late replies, noise
+  double last_latency = 0;   // s, request sent to reply decoded, successful transactions
+  double mean_latency = 0;   // s
+  double max_latency = 0;    // s
 };
 
 class RtuLink : public Transport {
@@ -65,8 +68,10 @@ class RtuLink : public Transport {
   Result readReply(const Request& request);
   Result sendBroadcast(const Request& request);
   Result fromErrno(const Request& request, int error) const;
+  void prepareLine();
+  void awaitQuietLine();
   void keepGap();
-  void discardInput();
+  double responseTimeout(const Request& request) const;
   void account(const Result& result, double latency);
 
   LinkConfig config_;
@@ -75,6 +80,7 @@ class RtuLink : public Transport {
   LinkStats stats_;
   bool low_latency_ = false;
   bool ever_connected_ = false;
+  bool unsettled_ = false;  // the last transaction failed: a late reply may still come
   double reply_delay_[256] = {};
   std::chrono::steady_clock::time_point last_activity_{};
 };

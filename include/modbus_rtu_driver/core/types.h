@@ -54,6 +54,9 @@ struct Request {
   bool single_device_at_zero = false;
   // The LC board answers its FC16 "set address" command by echoing the whole request.
   bool reply_echoes_request = false;
+  // False for a write that starts something (a PWM burst, a timed flash): sent once, never
+  // retried after a lost reply, since the device may have acted on it (the caller reads back).
+  bool repeatable = true;
 
   static Request readCoils(uint8_t slave, uint16_t address, uint16_t count);
   static Request readDiscreteInputs(uint8_t slave, uint16_t address, uint16_t count);

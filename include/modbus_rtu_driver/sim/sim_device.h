@@ -48,11 +48,25 @@ class SimDevice {
   bool understands(const SimLineSettings& l) const {
     return l.baud == line_.baud && l.parity == line_.parity && l.data_bits == 8;
   }
-  // Fault injection (control socket): answer nothing; corrupt the CRC of the next N replies;
-  // answer every request with exception 04 (slave device failure).
+  // Fault injection (control socket): answer nothing; answer every request with exception 04
+  // (slave device failure); spoil the next N replies (bad CRC, cut short, another slave's
+  // address, noise bytes after them, sent `late_ms` late); lose a share of the requests (not
+  // heard, nothing done) or of the replies (done, the reply lost), in percent.
   bool silenced = false;
-  int corrupt_replies = 0;
   bool failing = false;
+  int corrupt_replies = 0;
+  int truncate_replies = 0;
+  int wrong_address_replies = 0;
+  int noise_replies = 0;
+  int late_replies = 0;
+  int late_ms = 0;
+  int drop_request_percent = 0;
+  int drop_reply_percent = 0;
+  // What happened to it: writes that changed its state or started something (a PWM burst, a
+  // flash), requests it never heard and replies it lost by the drop faults.
+  uint64_t changes = 0;
+  uint64_t dropped_requests = 0;
+  uint64_t dropped_replies = 0;
 
   // True when a frame with this slave byte is for this device (its address; some devices also
   // answer 0xFF). Broadcasts (0) are the line's business. `request` is null when the frame
@@ -77,6 +91,12 @@ class SimDevice {
   virtual void saveState(YAML::Node& node) const = 0;
   virtual void loadState(const YAML::Node& node, SimClock::time_point now) = 0;
 
+  // True when this write starts something even if it leaves the registers as they were (a PWM
+  // burst, a timed flash): a retry of it would do it twice.
+  virtual bool startsSomething(const Request& request) const {
+    (void)request;
+    return false;
+  }
   // One value; 0 or a Modbus exception code.
   virtual uint8_t read(Table table, uint16_t address, SimClock::time_point now,
                        uint16_t* value) = 0;
@@ -90,6 +110,8 @@ class SimDevice {
                             SimClock::time_point now);
 
  protected:
+  bool wouldChange(const Request& request, SimClock::time_point now);
+
   uint8_t address_;
   SimLineSettings line_;
 };

@@ -29,6 +29,7 @@ class SimLcRelay8 : public SimDevice {
   void powerCycle(SimClock::time_point now) override;
   void saveState(YAML::Node& node) const override;
   void loadState(const YAML::Node& node, SimClock::time_point now) override;
+  bool startsSomething(const Request& request) const override;  // a timed flash
   uint8_t read(Table table, uint16_t address, SimClock::time_point now, uint16_t* value) override;
   uint8_t write(Table table, uint16_t address, const std::vector<uint16_t>& values,
                 SimClock::time_point now) override;

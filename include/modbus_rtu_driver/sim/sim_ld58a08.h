@@ -34,6 +34,7 @@ class SimLd58a08 : public SimDevice {
                                  request->address >= 0x00FA && request->address <= 0x00FF);
   }
   double replyDelay() const override { return return_delay_ * 0.040; }
+  bool startsSomething(const Request& request) const override;  // a PWM run (enable != 0)
   void tick(SimClock::time_point now) override;
   void powerCycle(SimClock::time_point now) override;
   void saveState(YAML::Node& node) const override;

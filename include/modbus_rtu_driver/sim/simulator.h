@@ -16,6 +16,7 @@
 #include <atomic>
 #include <memory>
 #include <mutex>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -85,6 +86,7 @@ class Simulator {
                  SimClock::time_point now, SimClock::time_point request_end);
   void send(SimDevice& device, Bytes reply, double delay, SimClock::time_point request_end);
   void flushOutgoing(SimClock::time_point now);
+  bool chance(int percent);  // the drop faults; a fixed seed, so a run can be repeated
   SimDevice* find(const std::string& name);
   void powerCycle(SimClock::time_point now);
   void saveState();
@@ -110,6 +112,7 @@ class Simulator {
   std::vector<Outgoing> outgoing_;
   std::string state_text_;  // last written to the state file
   uint64_t frames_ = 0, answered_ = 0;
+  std::mt19937 random_{20261124};
 };
 
 }  // namespace modbus_rtu_driver
