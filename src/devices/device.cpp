@@ -45,7 +45,8 @@ Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& chan
   std::vector<bool> target = outputs_;
   if (channels.size() == 1) {
     Result r = bus.execute(Request::writeSingleCoil(address(), channels[0], states[0]));
-    if (r.ok() && target.size() == outputCount()) {
+    if (!r.ok()) return confirmCoils(bus, std::move(r), channels, states);
+    if (target.size() == outputCount()) {
       target[channels[0]] = states[0];
       outputs_ = target;
     }
@@ -66,11 +67,40 @@ Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& chan
   for (size_t i = 0; i < channels.size(); ++i) target[channels[i]] = states[i];
   const std::vector<bool> bits(target.begin() + lo, target.begin() + hi + 1);
   Result r = bus.execute(Request::writeMultipleCoils(address(), lo, bits));
+  if (!r.ok()) return confirmCoils(bus, std::move(r), channels, states);
   // The whole array is known only if it was read or already known before.
   if (r.ok() &&
       (span != channels.size() || span == outputCount() || outputs_.size() == outputCount()))
     outputs_ = target;
   return r;
+}
+
+bool Device::mayHaveActed(const Result& r) {
+  return r.error == ErrorKind::kTimeout || r.error == ErrorKind::kCrc ||
+         r.error == ErrorKind::kWrongAddress || r.error == ErrorKind::kMalformed;
+}
+
+// A write whose reply was lost may still have been done: the coils read back tell. Success
+// only when they show every requested state; the snapshot takes what was read.
+Result Device::confirmCoils(Transport& bus, Result failed, const std::vector<uint8_t>& channels,
+                            const std::vector<bool>& states) {
+  if (!mayHaveActed(failed)) return failed;
+  Result now = bus.execute(Request::readCoils(address(), 0, static_cast<uint16_t>(outputCount())));
+  if (!now.ok()) {
+    failed.message += "; not confirmed: reading the outputs back failed too (" + now.message + ")";
+    return failed;
+  }
+  outputs_.assign(now.values.begin(), now.values.end());
+  for (size_t i = 0; i < channels.size(); ++i) {
+    if (outputs_[channels[i]] != states[i]) {
+      failed.message += "; read back: not done (output " + std::to_string(channels[i]) + " is " +
+                        (outputs_[channels[i]] ? "on" : "off") + ")";
+      return failed;
+    }
+  }
+  Result ok = Result::success();
+  ok.message = "confirmed by reading the outputs back (" + failed.message + ")";
+  return ok;
 }
 
 }  // namespace modbus_rtu_driver

@@ -36,8 +36,13 @@ Result LcRelay8::pulse(Transport& bus, uint8_t channel, bool state, double durat
   const std::string problem = validatePulse(channel, duration);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
   const auto tenths = static_cast<uint16_t>(std::lround(duration * 10.0));
-  return bus.execute(Request::writeMultipleRegisters(address(), flashRegister(channel),
-                                                     {state ? kFlashClose : kFlashOpen, tenths}));
+  Request write = Request::writeMultipleRegisters(address(), flashRegister(channel),
+                                                  {state ? kFlashClose : kFlashOpen, tenths});
+  write.repeatable = false;  // a second copy would start the timed flash again
+  Result r = bus.execute(write);
+  if (!r.ok() && mayHaveActed(r))
+    r.message += "; not confirmed: the board may have started the flash, so it is not sent again";
+  return r;
 }
 
 Result LcRelay8::readBaudCode(Transport& bus, uint16_t* code) {

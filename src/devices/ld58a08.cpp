@@ -70,7 +70,38 @@ Result Ld58a08::setPwm(Transport& bus, const PwmSettings& s) {
       regs.push_back(static_cast<uint16_t>(t));
     }
   }
-  return bus.execute(Request::writeMultipleRegisters(address(), pwmRegister(s.channel), regs));
+  Request write = Request::writeMultipleRegisters(address(), pwmRegister(s.channel), regs);
+  write.repeatable = false;  // a second copy would restart the run: more pulses than asked for
+  Result r = bus.execute(write);
+  if (r.ok() || !mayHaveActed(r)) return r;
+  return confirmPwm(bus, std::move(r), s.channel, regs);
+}
+
+// A PWM write whose reply was lost: the channel's registers tell whether it runs with what was
+// written (a burst counts its pulses down, a timed fast run its time). Never sent again.
+Result Ld58a08::confirmPwm(Transport& bus, Result failed, uint8_t ch,
+                           const std::vector<uint16_t>& written) {
+  PwmState state;
+  Result now = readPwmChannel(bus, ch, &state);
+  if (!now.ok()) {
+    failed.message += "; not confirmed: reading channel " + std::to_string(ch) +
+                      " back failed too (" + now.message + "); not sent again";
+    return failed;
+  }
+  pwm_[ch] = state;
+  const std::vector<uint16_t>& v = now.values;
+  const bool runs = v[0] == written[0] && v[1] == written[1] && v[2] != 0 &&
+                    (written[2] == kContinuous ? v[2] == kContinuous : v[2] <= written[2]);
+  if (!runs) {
+    failed.message += "; read back: channel " + std::to_string(ch) +
+                      " does not run these settings (not started, or already finished); not "
+                      "sent again, since a second copy could run it twice";
+    return failed;
+  }
+  Result ok = Result::success(written);
+  ok.message =
+      "confirmed by reading channel " + std::to_string(ch) + " back (" + failed.message + ")";
+  return ok;
 }
 
 Result Ld58a08::stopPwm(Transport& bus, uint8_t channel) {

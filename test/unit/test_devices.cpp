@@ -178,8 +178,11 @@ TEST(Ld58a08, StopAndReturnDelayFrames) {
 TEST(Ld58a08, ADeviceThatDoesNotConfirmIsNotSuccess) {
   Ld58a08 board(config("ld58a08", 1));
   ScriptedTransport bus;
-  bus.expect("01 05 00 00 FF 00 8C 3A");  // silence
-  EXPECT_EQ(board.setOutputs(bus, {0}, {true}).error, ErrorKind::kTimeout);
+  bus.expect("01 05 00 00 FF 00 8C 3A");                          // silence
+  bus.expect(toHex(encodeRequest(Request::readCoils(1, 0, 8))));  // and to the read-back
+  const Result silent = board.setOutputs(bus, {0}, {true});
+  EXPECT_EQ(silent.error, ErrorKind::kTimeout);
+  EXPECT_NE(silent.message.find("not confirmed"), std::string::npos) << silent.message;
   bus.expect("01 05 00 00 FF 00 8C 3A", toHex(encodeException(1, 5, 4)));
   const Result r = board.setOutputs(bus, {0}, {true});
   EXPECT_EQ(r.error, ErrorKind::kException);

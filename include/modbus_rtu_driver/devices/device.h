@@ -63,6 +63,12 @@ class Device {
   // channel, FC15 over the span otherwise (reading the coils first when the span has gaps).
   Result writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                           const std::vector<bool>& states);
+  // True for failures after which the device may have done the write (its reply was lost or
+  // garbled), as opposed to refusing it or never being asked.
+  static bool mayHaveActed(const Result& result);
+  // After a failed coil write: reads the coils back; success if they show `states`.
+  Result confirmCoils(Transport& bus, Result failed, const std::vector<uint8_t>& channels,
+                      const std::vector<bool>& states);
 
   std::vector<bool> outputs_;
   std::vector<bool> inputs_;

@@ -77,6 +77,8 @@ class Ld58a08 : public Device {
 
  private:
   Result readPwmChannel(Transport& bus, uint8_t channel, PwmState* out);
+  Result confirmPwm(Transport& bus, Result failed, uint8_t channel,
+                    const std::vector<uint16_t>& written);
 
   std::array<PwmState, kChannels> pwm_{};
   uint8_t poll_cursor_ = 0;

@@ -1,0 +1,120 @@
+// A write whose reply is lost: the device code reads back instead of guessing, reports what it
+// found, and never sends again what would start something twice. Scripted transport.
+#include <gtest/gtest.h>
+
+#include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/ld58a08.h"
+#include "scripted_transport.h"
+
+using namespace modbus_rtu_driver;
+
+namespace {
+
+DeviceConfig config(const std::string& type, int address) {
+  DeviceConfig c;
+  c.name = "dev";
+  c.type = type;
+  c.address = address;
+  return c;
+}
+
+std::string frame(const Request& r) {
+  return toHex(encodeRequest(r));
+}
+
+std::string coilsReply(uint8_t slave, unsigned bits) {
+  std::vector<uint16_t> values;
+  for (unsigned i = 0; i < 8; ++i) values.push_back(static_cast<uint16_t>(bits >> i & 1u));
+  return toHex(encodeReply(Request::readCoils(slave, 0, 8), values));
+}
+
+std::string registersReply(uint8_t slave, uint16_t address, std::vector<uint16_t> values) {
+  return toHex(encodeReply(
+      Request::readHoldingRegisters(slave, address, static_cast<uint16_t>(values.size())), values));
+}
+
+PwmSettings burst() {
+  PwmSettings s;
+  s.channel = 2;
+  s.period = 1.0;
+  s.on_time = 0.5;
+  s.pulses = 5;
+  return s;
+}
+
+}  // namespace
+
+TEST(ConfirmByReadBack, ACoilWriteWhoseReplyWasLostIsConfirmedByItsState) {
+  LcRelay8 board(config("lc_relay8", 255));
+  ScriptedTransport bus;
+  bus.expect(frame(Request::writeSingleCoil(255, 3, true)));  // reply lost
+  bus.expect(frame(Request::readCoils(255, 0, 8)), coilsReply(255, 0x08));
+  const Result r = board.setOutputs(bus, {3}, {true});
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_NE(r.message.find("confirmed by reading the outputs back"), std::string::npos);
+  EXPECT_TRUE(board.outputs()[3]);
+  EXPECT_EQ(bus.mismatches(), "");
+  EXPECT_TRUE(bus.usedUp());
+}
+
+TEST(ConfirmByReadBack, ACoilWriteTheDeviceNeverHeardIsAFailureThatSaysSo) {
+  LcRelay8 board(config("lc_relay8", 255));
+  ScriptedTransport bus;
+  bus.expect(frame(Request::writeMultipleCoils(255, 0, {true, true})));  // never heard
+  bus.expect(frame(Request::readCoils(255, 0, 8)), coilsReply(255, 0x01));
+  const Result r = board.setOutputs(bus, {0, 1}, {true, true});
+  EXPECT_EQ(r.error, ErrorKind::kTimeout);
+  EXPECT_NE(r.message.find("not done (output 1 is off)"), std::string::npos) << r.message;
+  EXPECT_FALSE(board.outputs()[1]) << "the snapshot shows what was read";
+  EXPECT_TRUE(bus.usedUp());
+}
+
+TEST(ConfirmByReadBack, AnExceptionIsTheAnswerAndNeedsNoReadBack) {
+  LcRelay8 board(config("lc_relay8", 255));
+  ScriptedTransport bus;
+  bus.expect(frame(Request::writeSingleCoil(255, 0, true)), toHex(encodeException(255, 5, 2)));
+  EXPECT_EQ(board.setOutputs(bus, {0}, {true}).error, ErrorKind::kException);
+  EXPECT_TRUE(bus.usedUp());
+  EXPECT_EQ(bus.executed(), 1);
+}
+
+TEST(ConfirmByReadBack, ABurstWhoseReplyWasLostIsReadBackNotSentAgain) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  const Request write = Request::writeMultipleRegisters(1, 0x0020, {10, 5, 5});
+  bus.expect(frame(write));                                       // reply lost
+  bus.expect(frame(Request::readHoldingRegisters(1, 0x0020, 3)),  // read back:
+             registersReply(1, 0x0020, {10, 5, 4}));              // one pulse done
+  const Result r = board.setPwm(bus, burst());
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_NE(r.message.find("confirmed by reading channel 2 back"), std::string::npos);
+  EXPECT_TRUE(board.pwm()[2].running);
+  EXPECT_EQ(board.pwm()[2].pulses, 4);
+  EXPECT_TRUE(bus.usedUp());
+  EXPECT_EQ(bus.mismatches(), "");
+}
+
+TEST(ConfirmByReadBack, ABurstThatDoesNotShowIsReportedAndNotSentAgain) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expect(frame(Request::writeMultipleRegisters(1, 0x0020, {10, 5, 5})));
+  bus.expect(frame(Request::readHoldingRegisters(1, 0x0020, 3)),
+             registersReply(1, 0x0020, {10, 5, 0}));  // stopped
+  const Result r = board.setPwm(bus, burst());
+  EXPECT_EQ(r.error, ErrorKind::kTimeout);
+  EXPECT_NE(r.message.find("does not run these settings"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("not sent again"), std::string::npos) << r.message;
+  EXPECT_TRUE(bus.usedUp()) << "exactly one write and one read";
+  EXPECT_EQ(bus.executed(), 2);
+}
+
+TEST(ConfirmByReadBack, ALostFlashReplyIsNotConfirmedAndNotSentAgain) {
+  LcRelay8 board(config("lc_relay8", 255));
+  ScriptedTransport bus;
+  bus.expect(frame(Request::writeMultipleRegisters(255, 0x0003, {4, 20})));
+  const Result r = board.pulse(bus, 0, true, 2.0);
+  EXPECT_FALSE(r.ok());
+  EXPECT_NE(r.message.find("not confirmed"), std::string::npos) << r.message;
+  EXPECT_EQ(bus.executed(), 1);
+  EXPECT_TRUE(bus.usedUp());
+}
