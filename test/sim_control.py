@@ -75,6 +75,22 @@ class SimControl:
         """The next `replies` replies of the device carry a bad CRC."""
         self.command("corrupt %s %d" % (device, replies))
 
+    def spoil(self, kind, device, replies=1, late_ms=0):
+        """The next `replies` replies of the device are spoilt: kind is corrupt, truncate,
+        wrong_address, noise or late (sent `late_ms` late)."""
+        extra = " %d" % late_ms if kind == "late" else ""
+        self.command("%s %s %d%s" % (kind, device, replies, extra))
+
+    def drop(self, device, percent, what):
+        """Lose `percent` % of the device's requests (what="request": nothing is done) or of
+        its replies (what="reply": done, the reply lost)."""
+        self.command("drop %s %d %s" % (device, percent, what))
+
+    def stats(self, device):
+        """{"changes": N, "dropped_requests": N, "dropped_replies": N}"""
+        words = self.command("stats %s" % device)
+        return {words[i]: int(words[i + 1]) for i in range(0, len(words), 2)}
+
     def info(self):
         """[(index, type, address, baud, parity)]"""
         out = []

@@ -88,6 +88,7 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   status.add("i/o errors", s.io_errors);
   status.add("retries", s.retries);
   status.add("reconnects", s.reconnects);
+  status.add("stale bytes", s.stale_bytes);
   status.add("latency last [ms]", s.last_latency * 1e3);
   status.add("latency mean [ms]", s.mean_latency * 1e3);
   status.add("latency max [ms]", s.max_latency * 1e3);

@@ -62,7 +62,7 @@ void DeviceAdapter::publishOutputs() {
 }
 
 std::string DeviceAdapter::answer(const Result& result, const std::string& what) const {
-  if (result.ok()) return what;
+  if (result.ok()) return result.message.empty() ? what : what + " (" + result.message + ")";
   std::string msg = device_->name() + ": " + result.message;
   if (result.error != ErrorKind::kInvalidArgument && !bus_.health(device_->name()).online)
     msg += " (device is offline)";

@@ -76,7 +76,7 @@ TEST(BusConfig, MissingOptionalKeysTakeDefaults) {
   EXPECT_EQ(c.link.data_bits, 8);
   EXPECT_EQ(c.link.stop_bits, 1);
   EXPECT_DOUBLE_EQ(c.link.response_timeout, 0.0);  // sized from the baud
-  EXPECT_DOUBLE_EQ(c.link.late_reply_guard, 0.05);
+  EXPECT_DOUBLE_EQ(c.link.late_reply_guard, 0.1);
   EXPECT_EQ(c.link.retries, 1);
   EXPECT_DOUBLE_EQ(c.devices[0].poll_rate, 1.0);
   EXPECT_TRUE(c.devices[0].outputs.empty());

@@ -22,7 +22,7 @@ struct LinkConfig {
   int retries = 1;            // extra attempts after a timeout/CRC/wrong-address error
   // s of silence awaited after a failed transaction before the next request, so a reply that
   // comes late is not taken as the answer to that request; 0 = do not wait.
-  double late_reply_guard = 0.05;
+  double late_reply_guard = 0.1;
   double min_gap = 0.0;  // s, silence kept between frames; 0 = t3.5 of the baud
   DirectionControl direction = DirectionControl::kAuto;
   bool low_latency = true;  // ask the USB adapter driver for ASYNC_LOW_LATENCY
