@@ -5,6 +5,7 @@ add_library(modbus_rtu_ros
   src/ros/device_adapter.cpp
   src/ros/lc_relay8_adapter.cpp
   src/ros/ld58a08_adapter.cpp
+  src/ros/raw_writes.cpp
   src/ros/slave_node.cpp
   src/ros/yaml_params.cpp
   src/ros/yespeed_pdu_adapter.cpp

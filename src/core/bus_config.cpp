@@ -153,8 +153,12 @@ std::set<std::string> with(std::set<std::string> keys, const std::set<std::strin
 
 void parse(const YAML::Node& root, BusConfig* out) {
   if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
-  checkKeys(root, "", with(kLinkKeys, {"role", "diagnostic_period", "devices"}));
+  checkKeys(root, "",
+            with(kLinkKeys, {"role", "diagnostic_period", "devices", "allow_raw_writes"}));
   parseLink(root, &out->link);
+  if (root["allow_raw_writes"])
+    out->allow_raw_writes =
+        get<bool>(root["allow_raw_writes"], "allow_raw_writes", "true or false");
   if (root["role"]) {
     out->role = get<std::string>(root["role"], "role", "master or slave");
     if (out->role != "master") fail("role", "'" + out->role + "' is not master");
@@ -254,7 +258,7 @@ bool parseSlaveConfig(const YAML::Node& root, SlaveConfig* out, std::string* err
 
 std::vector<std::string> configKeys() {
   std::vector<std::string> keys(kLinkKeys.begin(), kLinkKeys.end());
-  keys.insert(keys.end(), {"role", "diagnostic_period", "devices"});
+  keys.insert(keys.end(), {"role", "diagnostic_period", "devices", "allow_raw_writes"});
   for (const auto& k : kDeviceKeys) keys.push_back("devices/D/" + k);
   keys.insert(keys.end(), kSlaveKeys.begin(), kSlaveKeys.end());
   return keys;

@@ -45,6 +45,11 @@ bool BusNode::start() {
     adapters_.push_back(std::move(adapter));
   }
 
+  std::map<uint8_t, std::string> by_address;
+  for (const DeviceConfig& dc : config_.devices)
+    by_address[static_cast<uint8_t>(dc.address)] = dc.name;
+  raw_writes_ = std::make_unique<RawWrites>(nh_, *bus_, config_.allow_raw_writes, by_address);
+
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>();
   diagnostics_->setHardwareID(config_.link.port);
   diagnostics_->add("bus " + config_.link.port, this, &BusNode::diagnoseBus);

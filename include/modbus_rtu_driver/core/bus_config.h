@@ -21,6 +21,9 @@ struct BusConfig {
   LinkConfig link;
   std::string role = "master";     // master: the node polls devices; slave: a master polls the node
   double diagnostic_period = 1.0;  // s
+  // The write_registers / write_coils services reach any register of any slave, settings such as
+  // address and baud included: refused unless the configuration says so.
+  bool allow_raw_writes = false;
   std::vector<DeviceConfig> devices;
 };
 

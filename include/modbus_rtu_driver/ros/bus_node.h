@@ -13,6 +13,7 @@
 #include "modbus_rtu_driver/core/bus_scheduler.h"
 #include "modbus_rtu_driver/core/rtu_link.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
+#include "modbus_rtu_driver/ros/raw_writes.h"
 
 namespace modbus_rtu_driver {
 
@@ -31,6 +32,7 @@ class BusNode {
   std::unique_ptr<RtuLink> link_;
   std::unique_ptr<BusScheduler> bus_;
   std::vector<std::unique_ptr<DeviceAdapter>> adapters_;
+  std::unique_ptr<RawWrites> raw_writes_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::Timer diagnostics_timer_;
 };
