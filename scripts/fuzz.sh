@@ -7,26 +7,41 @@ SECONDS_TO_RUN=${1:-20}
 RESULTS=${2:-}
 OUT="$("$REPO/scripts/workspace.sh")/fuzz"
 mkdir -p "$OUT/corpus"
-SRC=(test/fuzz/fuzz_frames.cpp src/core/frame.cpp src/core/types.cpp src/core/request_framer.cpp
-  src/sim/sim_device.cpp src/sim/sim_ld58a08.cpp src/sim/sim_lc_relay8.cpp src/sim/sim_yespeed_pdu.cpp)
-(cd "$REPO" && clang++ -std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined \
-  -fno-sanitize-recover=all -Iinclude "${SRC[@]}" -lyaml-cpp -o "$OUT/fuzz_frames")
+# Two targets: frames through the framer, decoder and simulated devices; and the slave role's
+# request handling (framer + libmodbus's modbus_reply on a real pty).
+CORE=(src/core/frame.cpp src/core/types.cpp src/core/request_framer.cpp)
+build() {
+  local name=$1
+  shift
+  (cd "$REPO" && clang++ -std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined \
+    -fno-sanitize-recover=all -Iinclude -I/usr/include/modbus "test/fuzz/$name.cpp" "${CORE[@]}" "$@" \
+    -lmodbus -lyaml-cpp -o "$OUT/$name")
+}
+build fuzz_frames src/sim/sim_device.cpp src/sim/sim_ld58a08.cpp src/sim/sim_lc_relay8.cpp \
+  src/sim/sim_yespeed_pdu.cpp
+build fuzz_slave src/core/slave_server.cpp src/core/bus_config.cpp src/core/link_config.cpp \
+  src/devices/device.cpp src/devices/lc_relay8.cpp src/devices/ld58a08.cpp src/devices/registry.cpp \
+  src/devices/yespeed_pdu.cpp
 # Seed with the manuals' frames.
 grep -v '^#' "$REPO/../shared/golden-frames.tsv" 2>/dev/null | tail -n +2 | cut -f4 | while read -r hex; do
   printf '%s' "$hex" | xxd -r -p >"$OUT/corpus/$(printf '%s' "$hex" | md5sum | cut -c1-12)"
 done || true
-status=0
-"$OUT/fuzz_frames" -max_total_time="$SECONDS_TO_RUN" -print_final_stats=1 "$OUT/corpus" \
-  >"$OUT/fuzz.log" 2>&1 || status=$?
-runs=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$OUT/fuzz.log" | grep -oE '[0-9]+$' || echo 0)
-echo "fuzz_frames: $runs inputs in ${SECONDS_TO_RUN} s, exit $status"
-[ $status = 0 ] || tail -40 "$OUT/fuzz.log"
-if [ -n "$RESULTS" ]; then
-  mkdir -p "$RESULTS"
-  if [ $status = 0 ]; then
-    printf '<testsuite name="fuzz" tests="1"><testcase classname="fuzz" name="fuzz_frames_%s_inputs"/></testsuite>\n' "$runs" >"$RESULTS/fuzz-frames.xml"
-  else
-    printf '<testsuite name="fuzz" tests="1" failures="1"><testcase classname="fuzz" name="fuzz_frames"><failure message="crash or invariant broken, see %s"/></testcase></testsuite>\n' "$OUT/fuzz.log" >"$RESULTS/fuzz-frames.xml"
+overall=0
+for name in fuzz_frames fuzz_slave; do
+  status=0
+  mkdir -p "$OUT/corpus-$name"
+  "$OUT/$name" -max_total_time="$SECONDS_TO_RUN" -print_final_stats=1 "$OUT/corpus-$name" \
+    "$OUT/corpus" >"$OUT/$name.log" 2>&1 || status=$?
+  runs=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$OUT/$name.log" | grep -oE '[0-9]+$' || echo 0)
+  echo "$name: $runs inputs in ${SECONDS_TO_RUN} s, exit $status"
+  [ $status = 0 ] || { tail -40 "$OUT/$name.log"; overall=1; }
+  if [ -n "$RESULTS" ]; then
+    mkdir -p "$RESULTS"
+    if [ $status = 0 ]; then
+      printf '<testsuite name="fuzz" tests="1"><testcase classname="fuzz" name="%s_%s_inputs"/></testsuite>\n' "$name" "$runs" >"$RESULTS/$name.xml"
+    else
+      printf '<testsuite name="fuzz" tests="1" failures="1"><testcase classname="fuzz" name="%s"><failure message="crash or invariant broken, see %s"/></testcase></testsuite>\n' "$name" "$OUT/$name.log" >"$RESULTS/$name.xml"
+    fi
   fi
-fi
-exit $status
+done
+exit $overall

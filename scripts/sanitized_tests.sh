@@ -5,7 +5,9 @@ REPO=$(cd "$(dirname "$0")/.." && pwd)
 RESULTS=$1
 BUILD="$("$REPO/scripts/workspace.sh")/sanitizers"
 mkdir -p "$BUILD" "$RESULTS"
-cmake -S "$REPO/test/sanitizers" -B "$BUILD" -DCMAKE_CXX_COMPILER=g++ >/dev/null
+WS=$("$REPO/scripts/workspace.sh")
+cmake -S "$REPO/test/sanitizers" -B "$BUILD" -DCMAKE_CXX_COMPILER=g++ \
+  -DMSG_INCLUDE="$WS/devel/include" >/dev/null
 cmake --build "$BUILD" -j"$(nproc)" 2>&1 | grep -E "error|warning: " || true
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1
 status=0
@@ -24,4 +26,35 @@ for t in "$BUILD"/test_*; do
     echo "sanitizer report in $name"; status=1
   fi
 done
+
+# The node itself under the sanitizers: node_devices.test (every service and topic of the three
+# device types) with the sanitized build of modbus_rtu_bus in place of the normal one.
+node_case() {  # name, failure message or "" -> one JUnit case
+  local body="<testcase classname=\"sanitizers\" name=\"$1\"/>"
+  [ -z "$2" ] || body="<testcase classname=\"sanitizers\" name=\"$1\"><failure message=\"$2\"/></testcase>"
+  printf '<testsuite name="sanitized-node" tests="1">%s</testsuite>\n' "$body" >"$RESULTS/sanitized-node.xml"
+}
+set +u
+# shellcheck disable=SC1091
+source "$WS/devel/setup.bash"  # rostest must find the package (test.sh has it already)
+set -u
+export SANITIZED_NODE="$BUILD/modbus_rtu_bus_sanitized"
+rm -f "$BUILD"/logs/node.* "$SANITIZED_NODE.started"
+if [ -x "$SANITIZED_NODE" ]; then
+  echo "sanitized: rostest node_devices.test with $SANITIZED_NODE"
+  ASAN_OPTIONS="detect_leaks=1:log_path=$BUILD/logs/node" UBSAN_OPTIONS="print_stacktrace=1:log_path=$BUILD/logs/node" \
+    ROS_TEST_RESULTS_DIR="$RESULTS/node" rostest modbus_rtu_driver node_devices.test \
+    node_prefix:="$REPO/test/sanitizers/node_prefix.sh" dir:=/tmp/modbus_rtu_rostest_sanitized \
+    >"$BUILD/logs/node_rostest.log" 2>&1 || status=1
+  if [ ! -e "$SANITIZED_NODE.started" ]; then
+    node_case node_rostest_under_sanitizers "the sanitized node never started"; status=1
+  elif cat "$BUILD"/logs/node.* 2>/dev/null | grep -qE "ERROR: (AddressSanitizer|LeakSanitizer)|runtime error:"; then
+    node_case node_rostest_under_sanitizers "sanitizer report, see $BUILD/logs/node.*"; status=1
+    cat "$BUILD"/logs/node.* | head -40
+  else
+    node_case node_rostest_under_sanitizers_zero_reports ""
+  fi
+else
+  node_case node_rostest_under_sanitizers "no sanitized node was built"; status=1
+fi
 exit $status

@@ -14,5 +14,5 @@ catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests 2>&1 | tee "$WS/r
 # The ROS-free unit tests again under AddressSanitizer + UndefinedBehaviorSanitizer, and a short
 # fuzz run of the frame and request handling (scripts/fuzz.sh 3600 for a long one).
 "$REPO/scripts/sanitized_tests.sh" "$WS/build/test_results/sanitizers" || true
-"$REPO/scripts/fuzz.sh" 20 "$WS/build/test_results/fuzz" || true
+"$REPO/scripts/fuzz.sh" 15 "$WS/build/test_results/fuzz" || true
 exec /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$WS/build/test_results"

@@ -182,19 +182,28 @@ void SlaveServer::run() {
         continue;
       }
       if (n > 0) {
-        framer_.push(buf, static_cast<size_t>(n));
         last_byte_ = Clock::now();
         got = true;
+        handleInput(buf, static_cast<size_t>(n), false);
       }
     }
     // t3.5 ends a frame; ptys and USB adapters deliver in bursts, so never less than 4 ms.
     const double gap = std::max(effectiveMinGap(config_.link), 0.004);
     const bool silence =
         !got && framer_.pending() && Clock::now() - last_byte_ > std::chrono::duration<double>(gap);
-    for (const Bytes& frame : framer_.take(silence)) serve(frame);
-    std::lock_guard<std::mutex> lock(mutex_);
-    stats_.crc_errors = framer_.dropped();
+    if (silence) handleInput(nullptr, 0, true);
   }
+}
+
+bool SlaveServer::openPort(std::string* error) {
+  return ctx_ || open(error);
+}
+
+void SlaveServer::handleInput(const uint8_t* data, size_t size, bool silence) {
+  if (size) framer_.push(data, size);
+  for (const Bytes& frame : framer_.take(silence)) serve(frame);
+  std::lock_guard<std::mutex> lock(mutex_);
+  stats_.crc_errors = framer_.dropped();
 }
 
 // The exception modbus_reply will send for this frame (0 = a normal reply), so it is counted

@@ -64,6 +64,11 @@ class SlaveServer {
   // else a message naming the range.
   std::string set(SlaveTable table, uint16_t address, const std::vector<uint16_t>& values);
   SlaveStats stats() const;
+
+  // What the thread does with bytes from the line, callable without it (tests, fuzz target):
+  // opens the port; frames `data` (`silence`: the line went quiet after it) and answers them.
+  bool openPort(std::string* error);
+  void handleInput(const uint8_t* data, size_t size, bool silence);
   const SlaveConfig& config() const { return config_; }
 
  private:
