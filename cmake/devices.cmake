@@ -5,5 +5,6 @@ target_sources(modbus_rtu_core PRIVATE
   src/devices/lc_relay8.cpp
   src/devices/yespeed_pdu.cpp
   src/devices/registry.cpp
+  src/devices/output_batch.cpp
   src/core/bus_scheduler.cpp
 )

@@ -44,6 +44,20 @@ Result DeviceAdapter::runOnBus(BusScheduler::Job job) {
   return bus_.submit(device_->name(), std::move(job)).get();
 }
 
+Result DeviceAdapter::writeOutputs(const std::vector<uint8_t>& channels,
+                                   const std::vector<bool>& states) {
+  const std::string problem = device_->checkOutputs(channels, states);
+  if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
+  auto entry = batch_.add(channels, states);
+  auto device = device_;
+  return runOnBus([this, device, entry](Transport& t) {
+    const bool sent = !entry->result;
+    Result w = batch_.complete(*device, t, entry);
+    if (sent && w.ok()) publishOutputs();
+    return w;
+  });
+}
+
 void DeviceAdapter::publishOutputs() {
   const auto& states = device_->outputs();
   if (states.size() != device_->outputCount()) return;  // not known yet
@@ -71,27 +85,17 @@ std::string DeviceAdapter::answer(const Result& result, const std::string& what)
 
 bool DeviceAdapter::onSet(uint8_t channel, std_srvs::SetBool::Request& req,
                           std_srvs::SetBool::Response& res) {
-  auto device = device_;
   const bool state = req.data;
-  const Result r = runOnBus([this, device, channel, state](Transport& t) {
-    Result w = device->setOutputs(t, {channel}, {state});
-    if (w.ok()) publishOutputs();
-    return w;
-  });
+  const Result r = writeOutputs({channel}, {state});
   res.success = r.ok();
   res.message = answer(r, device_->outputNames()[channel] + (state ? " on" : " off"));
   return true;
 }
 
 bool DeviceAdapter::onSetOutputs(SetOutputs::Request& req, SetOutputs::Response& res) {
-  auto device = device_;
   std::vector<uint8_t> channels(req.channels.begin(), req.channels.end());
   std::vector<bool> states(req.states.begin(), req.states.end());
-  const Result r = runOnBus([this, device, channels, states](Transport& t) {
-    Result w = device->setOutputs(t, channels, states);
-    if (w.ok()) publishOutputs();
-    return w;
-  });
+  const Result r = writeOutputs(channels, states);
   res.success = r.ok();
   res.message = answer(r, std::to_string(channels.size()) + " output(s) set");
   return true;

@@ -50,6 +50,7 @@ class LoadTest(unittest.TestCase):
             except Exception as e:  # a lost call would end here
                 errors.append("client %d: %r" % (i, e))
 
+        frames_before = self.sim.frames()[0]
         t0 = time.time()
         threads = [threading.Thread(target=client, args=(i,)) for i in range(CLIENTS)]
         for t in threads:
@@ -60,7 +61,10 @@ class LoadTest(unittest.TestCase):
         self.assertEqual(errors, [])
         answered = sum(len(r) for r in results)
         succeeded = sum(sum(r) for r in results)
-        rospy.loginfo("%d calls answered, %d succeeded, in %.1f s", answered, succeeded, took)
+        frames = self.sim.frames()[0] - frames_before
+        print("load: %d calls answered, %d succeeded, in %.1f s; %d frames on the line (polls "
+              "included): queued writes merged" % (answered, succeeded, took, frames))
+        self.assertLess(frames, CLIENTS * CALLS, "queued writes to one board share frames")
         self.assertEqual(answered, CLIENTS * CALLS, "every call returns")
         self.assertEqual(succeeded, CLIENTS * CALLS, "no write failed on a healthy bus")
         # Each board output ends as its client's last call asked.

@@ -47,6 +47,12 @@ class Device {
   virtual Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                             const std::vector<bool>& states) = 0;
 
+  // Empty when setOutputs would accept these arguments, else a message naming the field.
+  std::string checkOutputs(const std::vector<uint8_t>& channels,
+                           const std::vector<bool>& states) const {
+    return validateChannels(channels, states);
+  }
+
   // Last confirmed states (from a poll or a confirmed write); empty until known.
   const std::vector<bool>& outputs() const { return outputs_; }
   const std::vector<bool>& inputs() const { return inputs_; }

@@ -18,6 +18,7 @@
 #include "modbus_rtu_driver/SetOutputs.h"
 #include "modbus_rtu_driver/core/bus_scheduler.h"
 #include "modbus_rtu_driver/devices/device.h"
+#include "modbus_rtu_driver/devices/output_batch.h"
 
 namespace modbus_rtu_driver {
 
@@ -42,6 +43,8 @@ class DeviceAdapter {
   Result runOnBus(BusScheduler::Job job);
   // Bus thread only: publish the outputs message and the per-channel states that changed.
   void publishOutputs();
+  // Service writes of outputs: checked, then merged with others queued for this device.
+  Result writeOutputs(const std::vector<uint8_t>& channels, const std::vector<bool>& states);
   // "ok" or "<device>: <message>" for service answers.
   std::string answer(const Result& result, const std::string& what) const;
 
@@ -61,6 +64,7 @@ class DeviceAdapter {
   std::vector<ros::Subscriber> command_subs_;
   std::vector<ros::ServiceServer> services_;
 
+  OutputBatch batch_;
   // Command topics: newest command per channel wins; one bus job drains them.
   std::mutex commands_mutex_;
   std::vector<std::optional<bool>> pending_commands_;

@@ -1,0 +1,35 @@
+// Output writes to one device that queue up while the bus is busy, merged into one frame.
+// Every caller adds its request and queues a bus job; the first of those jobs to run writes
+// everything pending at that moment with one setOutputs call (FC05 for one channel, FC15 over
+// the span otherwise), newest state per channel winning, and every merged caller gets that
+// outcome. The later jobs find their request done and send nothing. ROS-free.
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+#include "modbus_rtu_driver/devices/device.h"
+
+namespace modbus_rtu_driver {
+
+class OutputBatch {
+ public:
+  struct Entry {
+    std::vector<uint8_t> channels;
+    std::vector<bool> states;
+    std::optional<Result> result;  // set on the bus thread once written (or refused)
+  };
+
+  // Any thread: adds a request to the next write.
+  std::shared_ptr<Entry> add(std::vector<uint8_t> channels, std::vector<bool> states);
+  // Bus thread: the outcome of `entry`, writing the pending requests first if it is among them.
+  Result complete(Device& device, Transport& bus, const std::shared_ptr<Entry>& entry);
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::shared_ptr<Entry>> pending_;
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,51 @@
+#include "modbus_rtu_driver/devices/output_batch.h"
+
+#include <map>
+
+namespace modbus_rtu_driver {
+
+std::shared_ptr<OutputBatch::Entry> OutputBatch::add(std::vector<uint8_t> channels,
+                                                     std::vector<bool> states) {
+  auto entry = std::make_shared<Entry>();
+  entry->channels = std::move(channels);
+  entry->states = std::move(states);
+  std::lock_guard<std::mutex> lock(mutex_);
+  pending_.push_back(entry);
+  return entry;
+}
+
+Result OutputBatch::complete(Device& device, Transport& bus, const std::shared_ptr<Entry>& entry) {
+  if (entry->result) return *entry->result;
+  std::vector<std::shared_ptr<Entry>> batch;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    batch.swap(pending_);
+  }
+  std::map<uint8_t, bool> wanted;  // in call order: the newest state per channel wins
+  for (const auto& e : batch)
+    for (size_t i = 0; i < e->channels.size() && i < e->states.size(); ++i)
+      wanted[e->channels[i]] = e->states[i];
+  std::vector<uint8_t> channels;
+  std::vector<bool> states;
+  for (const auto& [channel, state] : wanted) {
+    channels.push_back(channel);
+    states.push_back(state);
+  }
+  Result r = device.setOutputs(bus, channels, states);
+  if (batch.size() > 1 && r.ok())
+    r.message = (r.message.empty() ? "" : r.message + "; ") + "merged with " +
+                std::to_string(batch.size() - 1) + " other request(s) into one write";
+  for (const auto& e : batch) {
+    e->result = r;
+    for (size_t i = 0; r.ok() && i < e->channels.size() && i < e->states.size(); ++i) {
+      if (wanted[e->channels[i]] == e->states[i]) continue;
+      e->result->message += "; output " + std::to_string(e->channels[i]) +
+                            " superseded by a newer request in the same write";
+      break;
+    }
+  }
+  // `entry` was in this batch: it was added before its job was queued, and jobs run in order.
+  return entry->result ? *entry->result : r;
+}
+
+}  // namespace modbus_rtu_driver

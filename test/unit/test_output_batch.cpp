@@ -1,0 +1,68 @@
+// Output writes queued for one device merged into one frame: scripted transport, byte exact.
+#include <gtest/gtest.h>
+
+#include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/output_batch.h"
+#include "scripted_transport.h"
+
+using namespace modbus_rtu_driver;
+
+namespace {
+
+DeviceConfig relays() {
+  DeviceConfig c;
+  c.name = "relays";
+  c.type = "lc_relay8";
+  c.address = 255;
+  return c;
+}
+
+}  // namespace
+
+TEST(OutputBatch, RequestsQueuedTogetherGoOutAsOneFc15) {
+  LcRelay8 board(relays());
+  OutputBatch batch;
+  auto a = batch.add({0}, {true});
+  auto b = batch.add({1}, {true});
+  auto c = batch.add({0, 2}, {false, true});  // newer than a for channel 0
+  ScriptedTransport bus;
+  bus.expectEcho(toHex(encodeRequest(Request::writeMultipleCoils(255, 0, {false, true, true}))));
+  const Result ra = batch.complete(board, bus, a);
+  EXPECT_TRUE(ra.ok()) << ra.message;
+  EXPECT_NE(ra.message.find("merged with 2 other request(s)"), std::string::npos) << ra.message;
+  EXPECT_NE(ra.message.find("output 0 superseded"), std::string::npos) << ra.message;
+  // b's and c's jobs find their request done: nothing more on the bus.
+  const Result rb = batch.complete(board, bus, b);
+  const Result rc = batch.complete(board, bus, c);
+  EXPECT_TRUE(rb.ok());
+  EXPECT_TRUE(rc.ok());
+  EXPECT_EQ(rc.message.find("superseded"), std::string::npos) << rc.message;
+  EXPECT_EQ(bus.executed(), 1);
+  EXPECT_TRUE(bus.usedUp());
+  EXPECT_EQ(bus.mismatches(), "");
+}
+
+TEST(OutputBatch, AFailedWriteFailsEveryMergedRequest) {
+  LcRelay8 board(relays());
+  OutputBatch batch;
+  auto a = batch.add({3}, {true});
+  auto b = batch.add({4}, {true});
+  ScriptedTransport bus;
+  bus.expect(toHex(encodeRequest(Request::writeMultipleCoils(255, 3, {true, true}))),
+             toHex(encodeException(255, 0x0F, 4)));
+  EXPECT_EQ(batch.complete(board, bus, a).error, ErrorKind::kException);
+  EXPECT_EQ(batch.complete(board, bus, b).error, ErrorKind::kException);
+  EXPECT_TRUE(bus.usedUp());
+}
+
+TEST(OutputBatch, ALoneRequestIsOneFc05) {
+  LcRelay8 board(relays());
+  OutputBatch batch;
+  auto a = batch.add({5}, {true});
+  ScriptedTransport bus;
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(255, 5, true))));
+  const Result r = batch.complete(board, bus, a);
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(r.message, "");
+  EXPECT_TRUE(bus.usedUp());
+}
