@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what is missing, builds, runs every test (gtest unit tests, then the rostests one
-# after another, then the unit tests under ASan/UBSan and a short fuzz run) and ends with
+# after another, then the unit tests and the node under ASan/UBSan, short fuzz runs and an
+# install-space check) and ends with
 # "N passed, N failed". Exit code 0 only when all passed.
 source "$(dirname "$0")/common.sh"
 install_deps
@@ -15,4 +16,6 @@ catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests 2>&1 | tee "$WS/r
 # fuzz run of the frame and request handling (scripts/fuzz.sh 3600 for a long one).
 "$REPO/scripts/sanitized_tests.sh" "$WS/build/test_results/sanitizers" || true
 "$REPO/scripts/fuzz.sh" 15 "$WS/build/test_results/fuzz" || true
+# catkin_make install gives an install space that works on its own.
+"$REPO/scripts/check_install.sh" "$WS/build/test_results/install" || true
 exec /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$WS/build/test_results"

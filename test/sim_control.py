@@ -18,6 +18,12 @@ Commands:
     silence DEV 0|1                  the device hears and answers nothing (unplugged)
     fail DEV 0|1                     the device answers everything with exception 04
     corrupt DEV N                    the next N replies of the device carry a bad CRC
+    truncate DEV N                   the next N replies are cut to half their length
+    wrong_address DEV N              the next N replies name another slave (valid CRC)
+    noise DEV N                      the next N replies are followed by 5 noise bytes
+    late DEV N MS                    the next N replies are sent MS milliseconds late
+    drop DEV PERCENT request|reply   lose that share of requests (nothing done) or replies
+    stats DEV                        changes N dropped_requests N dropped_replies N
     power_cycle                      every device off and on
     info                             #INDEX:TYPE:ADDRESS:BAUD:PARITY per device
     frames                           frames received, replies sent, byte runs dropped

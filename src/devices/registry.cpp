@@ -56,7 +56,7 @@ std::string checkNames(const std::string& key, const std::vector<std::string>& n
 
 std::vector<std::string> knownDeviceTypes() {
   std::vector<std::string> names;
-  for (const auto& t : kTypes) names.push_back(t.name);
+  for (const auto& t : kTypes) names.emplace_back(t.name);
   return names;
 }
 

@@ -64,7 +64,7 @@ Identity identifyDevice(Transport& bus, uint8_t address) {
   // the type open.
   bool unclear = false;
   auto probe = [&](const Request& request) {
-    const Result r = bus.execute(request);
+    Result r = bus.execute(request);
     unclear = unclear || !answered(r);
     return r;
   };

@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Installs the package (catkin_make install) and checks that the install space works on its
+# own: the package is found, the launch files resolve, and the installed simulator and
+# commissioning tool run (a scan finds the three simulated devices). Writes a JUnit case to $1.
+set -euo pipefail
+REPO=$(cd "$(dirname "$0")/.." && pwd)
+WS=$("$REPO/scripts/workspace.sh")
+RESULTS=$1
+mkdir -p "$RESULTS"
+LOG="$WS/check_install.log"
+(cd "$WS" && catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 install) >"$LOG" 2>&1
+check() {
+  # A clean environment: only Debian's ROS and the install space, not the devel space.
+  env -i HOME="$HOME" PATH=/usr/bin:/bin bash -c "source '$WS/install/setup.bash' && $1" >>"$LOG" 2>&1
+}
+problem=""
+check 'rospack find modbus_rtu_driver | grep -q "/install/share/modbus_rtu_driver$"' ||
+  problem="rospack does not find the installed package"
+[ -n "$problem" ] || check 'roslaunch --files modbus_rtu_driver demo.launch | grep -q bus.launch' ||
+  problem="demo.launch does not resolve from the install space"
+if [ -z "$problem" ]; then
+  dir=$(mktemp -d)
+  check "cd / && BIN=\$(catkin_find --first-only --libexec modbus_rtu_driver modbus_rtu_simulator) &&
+    case \$BIN in */install/*) ;; *) exit 1;; esac &&
+    { \$BIN --config \$(rospack find modbus_rtu_driver)/config/simulator.yaml --link $dir/tty & } &&
+    sleep 1 && rosrun modbus_rtu_driver modbus_rtu_commission --port $dir/tty scan --addresses 1,2,255 \
+      > $dir/scan.txt; status=\$?; kill %1; exit \$status" ||
+    problem="the installed simulator or commissioning tool failed"
+  [ -n "$problem" ] || [ "$(grep -cE 'lc_relay8|ld58a08|yespeed_pdu' "$dir/scan.txt")" -ge 3 ] ||
+    problem="the installed tool's scan did not find the three simulated devices"
+  cat "$dir/scan.txt" >>"$LOG" 2>/dev/null || true
+  rm -rf "$dir"
+fi
+if [ -z "$problem" ]; then
+  echo "install space: ok"
+  printf '<testsuite name="install" tests="1"><testcase classname="install" name="install_space_works"/></testsuite>\n' >"$RESULTS/install.xml"
+else
+  echo "install space: $problem (see $LOG)"
+  printf '<testsuite name="install" tests="1" failures="1"><testcase classname="install" name="install_space_works"><failure message="%s, see %s"/></testcase></testsuite>\n' "$problem" "$LOG" >"$RESULTS/install.xml"
+  exit 1
+fi
