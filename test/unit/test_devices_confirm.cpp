@@ -28,7 +28,7 @@ std::string coilsReply(uint8_t slave, unsigned bits) {
   return toHex(encodeReply(Request::readCoils(slave, 0, 8), values));
 }
 
-std::string registersReply(uint8_t slave, uint16_t address, std::vector<uint16_t> values) {
+std::string registersReply(uint8_t slave, uint16_t address, const std::vector<uint16_t>& values) {
   return toHex(encodeReply(
       Request::readHoldingRegisters(slave, address, static_cast<uint16_t>(values.size())), values));
 }

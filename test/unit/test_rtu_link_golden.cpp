@@ -47,7 +47,7 @@ TEST(RtuLinkGolden, EveryRequestTheDriverSendsIsByteExact) {
                             ? encodeReply(request, std::vector<uint16_t>(request.count, 0))
                             : Bytes{};
     auto device = std::async(std::launch::async, [&] {
-      const Bytes got = pty.read(g.request.size());
+      Bytes got = pty.read(g.request.size());
       pty.write(reply);
       return got;
     });

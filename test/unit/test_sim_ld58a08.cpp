@@ -70,7 +70,7 @@ TEST(SimLd58a08, EveryPwmRegisterReadsBackAndGapsAreIllegal) {
 
 TEST(SimLd58a08, PwmValuesOutsideTheManualAreRefusedAndChangeNothing) {
   SimLd58a08 d(1, {});
-  const auto refused = [&](uint16_t address, std::vector<uint16_t> values) {
+  const auto refused = [&](uint16_t address, const std::vector<uint16_t>& values) {
     const std::string reply = ask(d, Request::writeMultipleRegisters(1, address, values));
     return reply == exceptionHex(1, kFc10, kIllegalDataValue);
   };

@@ -25,7 +25,7 @@ Telemetry telemetry(SimDevice& d, SimClock::time_point now) {
           static_cast<double>(r[4])};
 }
 
-std::string refused(SimDevice& d, uint16_t address, std::vector<uint16_t> values) {
+std::string refused(SimDevice& d, uint16_t address, const std::vector<uint16_t>& values) {
   return ask(d, Request::writeMultipleRegisters(1, address, values)) ==
                  exceptionHex(1, 0x10, kIllegalDataValue)
              ? "refused"
