@@ -1,6 +1,7 @@
 # ROS-free simulator: device models, line emulation on a pty, executable. Never links roscpp.
 add_library(modbus_rtu_sim
   src/sim/dm500_master.cpp
+  src/sim/dm500_garbage.cpp
   src/sim/pty_link.cpp
   src/sim/sim_device.cpp
   src/sim/sim_lc_relay8.cpp

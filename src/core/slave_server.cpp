@@ -206,11 +206,12 @@ void SlaveServer::handleInput(const uint8_t* data, size_t size, bool silence) {
   stats_.crc_errors = framer_.dropped();
 }
 
-// The exception modbus_reply will send for this frame (0 = a normal reply), so it is counted
+// The exception this frame deserves (0 = a normal reply), sent by serve() itself, so it is counted
 // and a failed write is never reported as written.
 uint8_t SlaveServer::predictException(const Bytes& f) const {
   const auto request = decodeRequest(f);
-  if (!request) return kIllegalFunction;
+  // A known function whose layout does not add up (byte count vs quantity) is a bad value.
+  if (!request) return isKnownFunction(f[1]) ? kIllegalDataValue : kIllegalFunction;
   const Request& r = *request;
   SlaveTable table = SlaveTable::kCoils;
   uint16_t max = 0;
@@ -263,10 +264,11 @@ void SlaveServer::serve(const Bytes& frame) {
     return;
   }
   const uint8_t exception = predictException(frame);
-  if (exception == kIllegalFunction) {
-    // modbus_reply would sleep a response timeout and flush the input first, losing whatever
-    // the master sends next; this call answers at once.
-    if (!broadcast) modbus_reply_exception(ctx_, frame.data(), MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+  if (exception) {
+    // For an unknown function or a bad quantity, modbus_reply (3.1.6) sleeps a response timeout
+    // and flushes the input before answering, losing whatever the master sends next (found by
+    // the DM500 garbage rostest); this call answers at once.
+    if (!broadcast) modbus_reply_exception(ctx_, frame.data(), exception);
   } else {
     // libmodbus writes the mapping and the reply (none for a broadcast).
     modbus_reply(ctx_, frame.data(), static_cast<int>(frame.size()), mapping_);

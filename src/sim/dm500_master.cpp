@@ -91,6 +91,9 @@ bool Dm500Master::step(const std::string& line, std::string* why) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       return true;
     }
+    if (op == "garbage")
+      return garbage(static_cast<uint8_t>(num(1)), num(2), static_cast<unsigned>(num(3)),
+                     static_cast<uint16_t>(num(4)), static_cast<uint16_t>(num(5)), why);
     // Tail keywords: expect / equals V..., exception CODE, silence, within S.
     size_t tail = w.size();
     for (size_t i = 1; i < w.size(); ++i)

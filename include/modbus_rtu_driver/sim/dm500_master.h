@@ -8,6 +8,10 @@
 //   wait_coils|wait_discrete|wait_holding|wait_input ID ADDR COUNT equals V... within SECONDS
 //   wait_ready ID within SECONDS          until slave ID answers (the node opened the port)
 //   raw HEX...                            send bytes as they are
+//   garbage ID ROUNDS SEED ADDR VALUE     ROUNDS of random junk (noise, frames with bad CRCs,
+//                                         unknown functions, odd reads, frames for other ids),
+//                                         each followed by a read of holding ADDR that must
+//                                         answer VALUE
 //   sleep SECONDS
 // Any request step may end with `exception CODE` or `silence` instead of a normal answer.
 #pragma once
@@ -28,6 +32,8 @@ class Dm500Master {
   Result transact(const Request& request);
 
  private:
+  bool garbage(uint8_t id, long rounds, unsigned seed, uint16_t address, uint16_t value,
+               std::string* why);
   Bytes readFor(double seconds, size_t max_bytes, const Request* request);
 
   PtyLink& pty_;
