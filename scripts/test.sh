@@ -16,6 +16,8 @@ catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests 2>&1 | tee "$WS/r
 # fuzz run of the frame and request handling (scripts/fuzz.sh 3600 for a long one).
 "$REPO/scripts/sanitized_tests.sh" "$WS/build/test_results/sanitizers" || true
 "$REPO/scripts/fuzz.sh" 15 "$WS/build/test_results/fuzz" || true
+# catkin_lint (strict) and clang-format applied to every C++ file.
+"$REPO/scripts/check_conventions.sh" "$WS/build/test_results/conventions" || true
 # catkin_make install gives an install space that works on its own.
 "$REPO/scripts/check_install.sh" "$WS/build/test_results/install" || true
 exec /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$WS/build/test_results"

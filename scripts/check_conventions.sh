@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Conventions the test command checks: catkin_lint finds nothing (strict), and every C++ file is
+# formatted as .clang-format says. One JUnit case each in $1. (clang-tidy: scripts/tidy.sh.)
+set -uo pipefail
+REPO=$(cd "$(dirname "$0")/.." && pwd)
+RESULTS=$1
+mkdir -p "$RESULTS"
+status=0
+junit() {  # name, failure message or ""
+  local body="<testcase classname=\"conventions\" name=\"$1\"/>"
+  [ -z "$2" ] || body="<testcase classname=\"conventions\" name=\"$1\"><failure message=\"$2\"/></testcase>"
+  printf '<testsuite name="conventions" tests="1">%s</testsuite>\n' "$body" >"$RESULTS/$1.xml"
+}
+if out=$(cd "$REPO" && catkin_lint --strict . 2>&1); then
+  junit catkin_lint_strict ""
+else
+  echo "$out"; junit catkin_lint_strict "catkin_lint found problems"; status=1
+fi
+files=$(cd "$REPO" && find src include bench test -name '*.cpp' -o -name '*.h')
+if out=$(cd "$REPO" && clang-format --dry-run -Werror $files 2>&1); then
+  junit clang_format_applied ""
+else
+  echo "$out" | head -20; junit clang_format_applied "files differ from .clang-format"; status=1
+fi
+echo "conventions: catkin_lint and clang-format checked, exit $status"
+exit $status
