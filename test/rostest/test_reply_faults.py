@@ -12,7 +12,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from std_srvs.srv import SetBool
 
 from modbus_rtu_driver.msg import DigitalStates, PwmStates
-from modbus_rtu_driver.srv import SetPwm
+from modbus_rtu_driver.srv import SetPwm, StopPwm
 
 import helpers
 
@@ -88,16 +88,20 @@ class ReplyFaultsTest(unittest.TestCase):
         timeouts, ok = self.counter("timeouts"), self.counter("ok")
         seen = []  # the topic is published when something changes: a misread would show
         sub = rospy.Subscriber(NS + "pwm_board/pwm", PwmStates, seen.append)
+        stop = helpers.service(NS + "pwm_board/stop_pwm", StopPwm)
         for _ in range(4):
-            self.sim.spoil("late", PWM, 3, 130)
+            # Every reply late, then a stop: the node reads all 8 channels back to back, the
+            # same request shape 8 times in a row.
+            self.sim.spoil("late", PWM, 10, 90)  # between one and two timeouts (~62 ms)
+            stop(channel=7)
             time.sleep(1.0)
         sub.unregister()
-        self.counter_grows("timeouts", timeouts)
-        self.assertGreater(self.counter("ok") - ok, 40, "the bus kept polling")
         for m in seen:
             for c in range(6):
                 self.assertAlmostEqual(m.channels[c].period, expected[c], 6,
                                        "channel %d shows %.1f s" % (c, m.channels[c].period))
+        self.counter_grows("timeouts", timeouts)  # the late replies did come late
+        self.assertGreater(self.counter("ok") - ok, 40, "the bus kept polling")
 
     def test_3_a_device_with_a_1000_ms_return_delay_works(self):
         self.sim.set(SLOW, "holding", 0x00FC, 25)  # 25 x 40 ms
