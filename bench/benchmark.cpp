@@ -1,7 +1,8 @@
-// modbus_rtu_benchmark: this package's bus layer against a plain libmodbus loop, and achieved
-// transactions per second against the line's theoretical limit, all against the simulator on a
-// pty in one run. Prints markdown tables and writes CSV; figures are ratios for a noisy machine.
-//   modbus_rtu_benchmark [--seconds S] [--csv FILE]
+// modbus_rtu_benchmark: this package's bus layer against a plain libmodbus loop and a pymodbus
+// client, achieved transactions per second against the line's theoretical limit, and 1-32
+// devices on one line, all against the simulator on a pty in one run. Prints markdown tables and
+// writes CSV; figures are ratios for a noisy machine. (Node latency and CPU: node_bench.py.)
+//   modbus_rtu_benchmark [--seconds S] [--csv FILE] [--pymodbus CLIENT_SCRIPT]
 #include <modbus/modbus.h>
 #include <unistd.h>
 
@@ -9,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -59,15 +61,37 @@ bool plainLibmodbus(modbus_t* ctx, const Request& r) {
   }
 }
 
+// Transactions per second of Debian's pymodbus per function code ("01" -> rate), from
+// bench/pymodbus_client.py run against `port`; empty when it could not run.
+std::map<std::string, double> pymodbusRates(const std::string& script, const std::string& port,
+                                            double seconds) {
+  std::map<std::string, double> rates;
+  const std::string cmd =
+      "/usr/bin/python3 '" + script + "' '" + port + "' 2 " + std::to_string(seconds);
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return rates;
+  char code[8];
+  double rate = 0;
+  while (std::fscanf(p, "%7s %lf", code, &rate) == 2) rates[code] = rate;
+  pclose(p);
+  return rates;
+}
+
 }  // namespace
+
+namespace modbus_rtu_driver {
+void benchmarkScale(const std::string& dir, double seconds, std::ofstream& csv);
+}
 
 int main(int argc, char** argv) {
   double seconds = 2.0;
   std::string csv_path = "benchmark.csv";
+  std::string pymodbus_script = PYMODBUS_CLIENT;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--seconds") seconds = std::stod(argv[i + 1]);
     if (a == "--csv") csv_path = argv[i + 1];
+    if (a == "--pymodbus") pymodbus_script = argv[i + 1];
   }
   std::ofstream csv(csv_path);
   csv << "table,case,a,b,ratio\n";
@@ -96,10 +120,12 @@ int main(int argc, char** argv) {
     }
     std::printf("## Software overhead (simulator answering at once, pty, %g s per cell)\n\n",
                 seconds);
+    const auto py = pymodbusRates(pymodbus_script, options.link, seconds);
     std::printf(
-        "| function | plain libmodbus [tx/s] | RtuLink, gap 1 us [tx/s] | ratio | RtuLink, t3.5 "
-        "gap [tx/s] |\n");
-    std::printf("|---|---|---|---|---|\n");
+        "| function | plain libmodbus [tx/s] | RtuLink, gap 1 us [tx/s] | ratio | pymodbus "
+        "[tx/s] | us/tx RtuLink | us/tx pymodbus | pymodbus / RtuLink | RtuLink, t3.5 gap "
+        "[tx/s] |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|\n");
     for (const Op& op : ops) {
       modbus_t* ctx = modbus_new_rtu(options.link.c_str(), 115200, 'N', 8, 1);
       modbus_connect(ctx);
@@ -121,14 +147,22 @@ int main(int argc, char** argv) {
       spec.connect(nullptr);
       const double with_gap = rate(seconds, [&] { return spec.execute(op.request).ok(); });
       spec.disconnect();
-      std::printf("| %s | %.0f | %.0f | %.2f | %.0f |\n", op.name, plain, ours,
-                  ours > 0 ? plain / ours : 0.0, with_gap);
+      const auto found = py.find(std::string(op.name).substr(0, 2));
+      const double pym = found == py.end() ? 0.0 : found->second;
+      const double us_ours = ours > 0 ? 1e6 / ours : 0.0, us_py = pym > 0 ? 1e6 / pym : 0.0;
+      std::printf("| %s | %.0f | %.0f | %.2f | %.0f | %.1f | %.0f | %.1f | %.0f |\n", op.name,
+                  plain, ours, ours > 0 ? plain / ours : 0.0, pym, us_ours, us_py,
+                  us_ours > 0 ? us_py / us_ours : 0.0, with_gap);
       csv << "overhead," << op.name << "," << plain << "," << ours << ","
           << (ours > 0 ? plain / ours : 0.0) << "\n";
+      csv << "pymodbus," << op.name << "," << pym << "," << ours << ","
+          << (us_ours > 0 ? us_py / us_ours : 0.0) << "\n";
     }
     std::printf(
         "\nratio = plain libmodbus / RtuLink transactions per second (time per transaction of "
-        "RtuLink over libmodbus's).\n\n");
+        "RtuLink over libmodbus's). pymodbus: Debian's python3-pymodbus %s, synchronous serial "
+        "client (bench/pymodbus_client.py).\n\n",
+        py.empty() ? "(did not run)" : "3.0");
   }
 
   // 2. Line utilisation: the simulator paces the line at its baud.
@@ -158,6 +192,8 @@ int main(int argc, char** argv) {
     csv << "line," << baud << "," << theoretical << "," << achieved << "," << achieved / theoretical
         << "\n";
   }
-  std::printf("\nCSV: %s\n", csv_path.c_str());
+  std::printf("\n");
+  modbus_rtu_driver::benchmarkScale(dir, seconds, csv);
+  std::printf("CSV: %s\n", csv_path.c_str());
   return 0;
 }

@@ -187,7 +187,9 @@ void BusScheduler::run() {
       auto b = backoff_until_.find(p.device);
       if (b != backoff_until_.end() && health_[p.device].online == false)
         t = std::max(t, b->second);
-      if (!next || t < when) {
+      // Ties (every device late on a bus that cannot carry the rates) go to the one most
+      // behind, so an overloaded bus is shared in turn rather than by list order.
+      if (!next || t < when || (t == when && p.due < next->due)) {
         next = &p;
         when = t;
       }

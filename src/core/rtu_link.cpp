@@ -168,12 +168,24 @@ void RtuLink::keepGap() {
   std::this_thread::sleep_until(ready);
 }
 
-// Before a request: after a failure, wait out a late reply; keep the gap; whatever is still in
-// the input (a late reply, noise, a long echo) belongs to nobody now. Asking for the count
+// Before a request: if a transaction with this slave failed less than late_reply_guard ago,
+// its reply may still come, and a different request of the same shape would take it: wait
+// until the line has been quiet that long. A retry (the same request) need not wait: a late
+// answer to it is the right answer; another slave's request cannot take it (the address
+// differs), so a dead device costs the others nothing. Then keep the gap; whatever is still in
+// the input (a late reply, noise, a long echo) belongs to nobody. Asking for the byte count
 // first is cheaper than a flush on every request.
-void RtuLink::prepareLine() {
-  if (unsettled_) awaitQuietLine();
-  unsettled_ = false;
+void RtuLink::prepareLine(const Request& request) {
+  const auto now = Clock::now();
+  const auto guard = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(config_.late_reply_guard));
+  for (auto it = unsettled_.begin(); it != unsettled_.end();)
+    it = now - it->second.failed_at >= guard ? unsettled_.erase(it) : std::next(it);
+  const auto mine = unsettled_.find(request.slave);
+  if (mine != unsettled_.end() && mine->second.frame != encodeRequest(request)) {
+    awaitQuietLine(mine->second.failed_at + guard);
+    unsettled_.clear();  // the line was quiet: nothing late is on its way
+  }
   keepGap();
   int pending = 0;
   if (ioctl(modbus_get_socket(ctx_), FIONREAD, &pending) != 0 || pending > 0) {
@@ -183,18 +195,17 @@ void RtuLink::prepareLine() {
   }
 }
 
-// Reads and drops bytes until the line has been quiet for late_reply_guard (1 s at most, so
-// a babbling line cannot stall the bus).
-void RtuLink::awaitQuietLine() {
-  if (config_.late_reply_guard <= 0) return;
+// Reads and drops bytes until `until`, pushed back by late_reply_guard whenever bytes come
+// (1 s at most, so a babbling line cannot stall the bus).
+void RtuLink::awaitQuietLine(Clock::time_point until) {
   const int fd = modbus_get_socket(ctx_);
   const auto give_up = Clock::now() + std::chrono::seconds(1);
   uint64_t dropped = 0;
-  while (Clock::now() < give_up) {
+  for (auto now = Clock::now(); now < until && now < give_up; now = Clock::now()) {
     fd_set set;
     FD_ZERO(&set);
     FD_SET(fd, &set);
-    const double wait = config_.late_reply_guard;
+    const double wait = std::chrono::duration<double>(until - now).count();
     timeval tv{static_cast<time_t>(wait),
                static_cast<suseconds_t>((wait - std::floor(wait)) * 1e6)};
     const int ready = select(fd + 1, &set, nullptr, nullptr, &tv);
@@ -204,6 +215,8 @@ void RtuLink::awaitQuietLine() {
     const ssize_t n = read(fd, junk, sizeof junk);
     if (n <= 0) break;
     dropped += static_cast<uint64_t>(n);
+    until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                               std::chrono::duration<double>(config_.late_reply_guard));
   }
   last_activity_ = Clock::now();
   std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -211,7 +224,7 @@ void RtuLink::awaitQuietLine() {
 }
 
 Result RtuLink::attempt(const Request& request) {
-  prepareLine();
+  prepareLine(request);
   uint32_t sec = 0, usec = 0;
   toTimeval(responseTimeout(request), &sec, &usec);
   modbus_set_response_timeout(ctx_, sec, usec);
@@ -231,7 +244,10 @@ Result RtuLink::attempt(const Request& request) {
     r = exchangeRaw(request, false);
   }
   last_activity_ = Clock::now();
-  unsettled_ = !r.ok() && r.error != ErrorKind::kException;
+  // A failure (not an answer) may be followed by a late reply. A success keeps an earlier
+  // entry: after a retry, the first attempt's reply may be the one taken, the second's late.
+  if (!r.ok() && r.error != ErrorKind::kException)
+    unsettled_[request.slave] = {last_activity_, encodeRequest(request)};
   if (r.error == ErrorKind::kIo) disconnect();
   return r;
 }
@@ -317,7 +333,7 @@ Result RtuLink::readReply(const Request& request) {
 }
 
 Result RtuLink::sendBroadcast(const Request& request) {
-  prepareLine();
+  prepareLine(request);
   Bytes raw{request.slave};
   const Bytes pdu = encodeRequestPdu(request);
   raw.insert(raw.end(), pdu.begin(), pdu.end());

@@ -24,6 +24,7 @@ bool toUnits(double value, double step, long* units) {
 
 Result YespeedPdu::poll(Transport& bus) {
   Result relays = bus.execute(Request::readCoils(address(), 0, kRelays));
+  if (mayHaveActed(relays)) return relays;  // silent or garbled: do not spend more of the line
   if (relays.ok()) outputs_.assign(relays.values.begin(), relays.values.end());
   Result telemetry = readTelemetry(bus);
   if (relays.ok() && telemetry.ok() && !limits_known_) readLimits(bus);

@@ -24,9 +24,16 @@ SimClock::duration silenceOf(const SimLineSettings& line) {
   return secs(std::max(simFrameGap(line), 0.004));
 }
 
-void logFrame(bool verbose, const char* direction, const Bytes& frame) {
-  if (!verbose) return;
-  std::printf("%s %s\n", direction, toHex(frame).c_str());
+// steady_clock is CLOCK_MONOTONIC on Linux: the same clock as Python's time.monotonic(), so a
+// benchmark can put a frame on the line next to its own events.
+void logFrame(const SimulatorOptions& o, const char* direction, const Bytes& frame) {
+  if (!o.verbose) return;
+  if (o.timestamps)
+    std::printf("%s %.6f %s\n", direction,
+                std::chrono::duration<double>(SimClock::now().time_since_epoch()).count(),
+                toHex(frame).c_str());
+  else
+    std::printf("%s %s\n", direction, toHex(frame).c_str());
   std::fflush(stdout);
 }
 
@@ -123,7 +130,7 @@ void Simulator::receive(SimClock::time_point now) {
 
 void Simulator::processFrame(const Bytes& frame, SimClock::time_point now) {
   ++frames_;
-  logFrame(options_.verbose, "rx", frame);
+  logFrame(options_, "rx", frame);
   // Wire time of the request: it started with its first byte, or once the line was free.
   SimClock::time_point request_end = now;
   if (config_.pace) {
@@ -250,7 +257,7 @@ void Simulator::flushOutgoing(SimClock::time_point now) {
       continue;
     }
     ++answered_;
-    logFrame(options_.verbose, "tx", o.bytes);
+    logFrame(options_, "tx", o.bytes);
     it = outgoing_.erase(it);
   }
 }

@@ -17,13 +17,14 @@ volatile std::sig_atomic_t g_power_cycle = 0;
 
 const char* kUsage =
     "usage: modbus_rtu_simulator --config FILE --link PATH [--state-file FILE]\n"
-    "                            [--control SOCKET] [--pace] [--verbose]\n"
+    "                            [--control SOCKET] [--pace] [--verbose [--timestamps]]\n"
     "  --config FILE      devices and line settings (see config/simulator.yaml)\n"
     "  --link PATH        symlink to the pty's slave side (a stale link is replaced)\n"
     "  --state-file FILE  what the devices store (address, baud, parity, ...), loaded at start\n"
     "  --control SOCKET   Unix socket for test commands (default: PATH.ctl)\n"
     "  --pace             the line runs at its real speed (also `pace: true` in the config)\n"
     "  --verbose          print every frame: rx/tx followed by the bytes in hex\n"
+    "  --timestamps       with --verbose: CLOCK_MONOTONIC seconds after rx/tx\n"
     "SIGHUP power-cycles the devices; SIGINT/SIGTERM stop the simulator.\n";
 
 int usage(const std::string& why) {
@@ -62,6 +63,8 @@ int main(int argc, char** argv) {
       pace = true;
     else if (a == "--verbose")
       options.verbose = true;
+    else if (a == "--timestamps")
+      options.timestamps = true;
     else if (a == "--help" || a == "-h")
       return std::printf("%s", kUsage), 0;
     else if (a.rfind("__", 0) == 0 || a.find(":=") != std::string::npos || a.empty())

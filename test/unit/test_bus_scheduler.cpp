@@ -196,3 +196,26 @@ TEST(BusScheduler, StopFailsWhatIsStillQueued) {
   EXPECT_GE(stopped, 3);
   EXPECT_EQ(s.submit("a", read(1)).get().message, "bus stopped");
 }
+
+TEST(BusScheduler, AnOverloadedBusIsSharedInTurn) {
+  // Four devices each asking for more than the bus carries: none may take it all, whatever its
+  // place in the list.
+  FakeBus bus;
+  bus.latency = 1ms;
+  BusScheduler s(bus);
+  for (uint8_t a = 1; a <= 4; ++a) {
+    s.addDevice("d" + std::to_string(a));
+    s.addPoll("d" + std::to_string(a), 1000.0, read(a), nullptr);
+  }
+  s.start();
+  std::this_thread::sleep_for(400ms);
+  s.stop();
+  uint64_t least = UINT64_MAX, most = 0;
+  for (uint8_t a = 1; a <= 4; ++a) {
+    const uint64_t n = s.health("d" + std::to_string(a)).polls_ok;
+    least = std::min(least, n);
+    most = std::max(most, n);
+  }
+  EXPECT_GT(most, 20u);
+  EXPECT_GE(least * 2, most) << "fewest " << least << ", most " << most;
+}

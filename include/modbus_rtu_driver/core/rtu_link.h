@@ -3,16 +3,19 @@
 // cannot address or filters out, go through modbus_send_raw_request and a reply reader of our
 // own that checks the CRC. With libmodbus >= 3.1.7 its quirks are used instead.
 // Between transactions the link keeps a minimum silence (t3.5 by default) and flushes stale
-// input; after a failed one it first waits until the line has been quiet for late_reply_guard,
-// so a late or long reply is not taken as the answer to the next request. Requests marked not
-// repeatable are never retried.
+// input; after a failed one, before a different request to the same slave, it first waits
+// until the line has been quiet for late_reply_guard, so a late reply is not taken as that
+// answer.
+// Requests marked not repeatable are never retried.
 #pragma once
 
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <mutex>
 #include <string>
 
+#include "modbus_rtu_driver/core/frame.h"
 #include "modbus_rtu_driver/core/link_config.h"
 #include "modbus_rtu_driver/core/transport.h"
 
@@ -68,8 +71,8 @@ class RtuLink : public Transport {
   Result readReply(const Request& request);
   Result sendBroadcast(const Request& request);
   Result fromErrno(const Request& request, int error) const;
-  void prepareLine();
-  void awaitQuietLine();
+  void prepareLine(const Request& request);
+  void awaitQuietLine(std::chrono::steady_clock::time_point until);
   void keepGap();
   double responseTimeout(const Request& request) const;
   void account(const Result& result, double latency);
@@ -80,7 +83,11 @@ class RtuLink : public Transport {
   LinkStats stats_;
   bool low_latency_ = false;
   bool ever_connected_ = false;
-  bool unsettled_ = false;  // the last transaction failed: a late reply may still come
+  struct Unsettled {  // a failed transaction whose reply may still come
+    std::chrono::steady_clock::time_point failed_at;
+    Bytes frame;
+  };
+  std::map<uint8_t, Unsettled> unsettled_;  // by slave
   double reply_delay_[256] = {};
   std::chrono::steady_clock::time_point last_activity_{};
 };

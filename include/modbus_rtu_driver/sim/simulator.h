@@ -46,6 +46,7 @@ struct SimulatorOptions {
   std::string control;     // Unix socket path; empty = link + ".ctl"
   std::string state_file;  // empty = no persistence
   bool verbose = false;    // print every frame ("rx 01 03 ...", "tx 01 03 ...") on stdout
+  bool timestamps = false;  // verbose lines carry CLOCK_MONOTONIC seconds: "rx 12.345678 01 03"
 };
 
 class Simulator {
