@@ -187,9 +187,10 @@ void BusScheduler::run() {
       auto b = backoff_until_.find(p.device);
       if (b != backoff_until_.end() && health_[p.device].online == false)
         t = std::max(t, b->second);
-      // Ties (every device late on a bus that cannot carry the rates) go to the one most
-      // behind, so an overloaded bus is shared in turn rather than by list order.
-      if (!next || t < when || (t == when && p.due < next->due)) {
+      // Ties (devices late on a bus that cannot carry their rates) go to the one served least
+      // recently, so an overloaded bus is shared in turn rather than by list order or by who
+      // was reset last.
+      if (!next || t < when || (t == when && p.last_run < next->last_run)) {
         next = &p;
         when = t;
       }
@@ -212,6 +213,7 @@ void BusScheduler::run() {
     // is caught up and the average rate holds. Lagging more than 1 s means the bus cannot carry
     // the rate: say so; past 3 s give up catching up.
     now = Clock::now();
+    next->last_run = now;
     next->due += next->period;
     DeviceHealth& h = health_[next->device];
     const auto lag = now - next->due;

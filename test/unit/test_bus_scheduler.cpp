@@ -198,24 +198,24 @@ TEST(BusScheduler, StopFailsWhatIsStillQueued) {
 }
 
 TEST(BusScheduler, AnOverloadedBusIsSharedInTurn) {
-  // Four devices each asking for more than the bus carries: none may take it all, whatever its
-  // place in the list.
+  // 16 devices each asking for more than the bus carries: none may take more than its turn,
+  // whatever its place in the list, also after the schedule gives up catching up (3 s behind).
   FakeBus bus;
-  bus.latency = 1ms;
+  bus.latency = 2ms;
   BusScheduler s(bus);
-  for (uint8_t a = 1; a <= 4; ++a) {
+  for (uint8_t a = 1; a <= 16; ++a) {
     s.addDevice("d" + std::to_string(a));
     s.addPoll("d" + std::to_string(a), 1000.0, read(a), nullptr);
   }
   s.start();
-  std::this_thread::sleep_for(400ms);
+  std::this_thread::sleep_for(4500ms);
   s.stop();
   uint64_t least = UINT64_MAX, most = 0;
-  for (uint8_t a = 1; a <= 4; ++a) {
+  for (uint8_t a = 1; a <= 16; ++a) {
     const uint64_t n = s.health("d" + std::to_string(a)).polls_ok;
     least = std::min(least, n);
     most = std::max(most, n);
   }
   EXPECT_GT(most, 20u);
-  EXPECT_GE(least * 2, most) << "fewest " << least << ", most " << most;
+  EXPECT_GE(least * 5, most * 4) << "fewest " << least << ", most " << most;
 }

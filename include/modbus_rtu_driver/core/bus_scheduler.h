@@ -68,6 +68,7 @@ class BusScheduler {
     std::string device;
     std::chrono::steady_clock::duration period{};
     std::chrono::steady_clock::time_point due{};
+    std::chrono::steady_clock::time_point last_run{};  // when it was last polled
     Job job;
     ResultCallback on_result;
   };
