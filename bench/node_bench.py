@@ -85,8 +85,18 @@ class Node:
             if self._has_params() else None
         subprocess.check_call(["rosparam", "load", config, "/bench_bus"])
         subprocess.check_call(["rosparam", "set", "/bench_bus/port", port])
-        self.proc = subprocess.Popen([executable("modbus_rtu_bus"), "__name:=bench_bus"],
-                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        self.log = os.path.join(workdir, "node.log")
+        with open(self.log, "w") as log:
+            self.proc = subprocess.Popen([executable("modbus_rtu_bus"), "__name:=bench_bus"],
+                                         stdout=log, stderr=subprocess.STDOUT)
+
+    def wait_ready(self):
+        try:
+            rospy.wait_for_service("/bench_bus/relays/out0/set", 30)
+        except rospy.ROSException:
+            with open(self.log) as f:
+                sys.stderr.write(f.read())
+            raise
 
     @staticmethod
     def _has_params():
@@ -112,8 +122,8 @@ def latency(workdir, calls, csv):
     sim = Simulator(workdir, pace=True)
     node = Node(workdir, sim.link, 10.0)
     try:
-        rospy.wait_for_service("/bench_bus/relays/pump/set", 30)
-        pump = rospy.ServiceProxy("/bench_bus/relays/pump/set", SetBool, persistent=True)
+        node.wait_ready()
+        pump = rospy.ServiceProxy("/bench_bus/relays/out0/set", SetBool, persistent=True)
         time.sleep(2.0)  # polling under way
         wire, answer, failed = [], [], 0
         for i in range(calls):
@@ -169,7 +179,7 @@ def cpu(workdir, seconds, csv):
                     if kv.key == "poll rate achieved [Hz]":
                         rates[s.name.split("device ", 1)[1]] = float(kv.value)
     try:
-        rospy.wait_for_service("/bench_bus/relays/pump/set", 30)
+        node.wait_ready()
         sub = rospy.Subscriber("/diagnostics", DiagnosticArray, on_diag)
         time.sleep(3.0)
         c0, t0 = node.cpu_seconds(), time.monotonic()

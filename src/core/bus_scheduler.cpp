@@ -21,7 +21,7 @@ bool isSilence(ErrorKind k) {
 BusScheduler::BusScheduler(Transport& transport) : BusScheduler(transport, Options{}) {}
 
 BusScheduler::BusScheduler(Transport& transport, Options options)
-    : transport_(transport), options_(options) {}
+    : transport_(transport), options_(options), poll_transport_(*this) {}
 
 BusScheduler::~BusScheduler() {
   stop();
@@ -131,6 +131,31 @@ void BusScheduler::record(const std::string& device, const Result& result, bool 
   backoff_until_[device] = now + seconds(b);
 }
 
+// Runs the oldest queued write, if any, with `lock` held on entry and on return.
+bool BusScheduler::runOneWrite(std::unique_lock<std::mutex>& lock) {
+  if (writes_.empty()) return false;
+  Pending p = std::move(writes_.front());
+  writes_.pop_front();
+  lock.unlock();
+  Result r = p.job(transport_);
+  lock.lock();
+  record(p.device, r, false);
+  if (r.error == ErrorKind::kIo) transport_.disconnect();
+  p.promise.set_value(std::move(r));
+  return true;
+}
+
+// A poll of several transactions lets queued writes go first before each of them, so a write
+// waits for at most one transaction, not a whole poll.
+Result BusScheduler::PollTransport::execute(const Request& request) {
+  {
+    std::unique_lock<std::mutex> lock(owner.mutex_);
+    while (owner.transport_.connected() && owner.runOneWrite(lock)) {
+    }
+  }
+  return owner.transport_.execute(request);
+}
+
 void BusScheduler::run() {
   double reconnect_delay = options_.reconnect_initial;
   auto next_connect = Clock::now();
@@ -165,17 +190,7 @@ void BusScheduler::run() {
     }
     connected_ = true;
 
-    if (!writes_.empty()) {  // writes go ahead of polls
-      Pending p = std::move(writes_.front());
-      writes_.pop_front();
-      lock.unlock();
-      Result r = p.job(transport_);
-      lock.lock();
-      record(p.device, r, false);
-      if (r.error == ErrorKind::kIo) transport_.disconnect();
-      p.promise.set_value(std::move(r));
-      continue;
-    }
+    if (runOneWrite(lock)) continue;  // writes go ahead of polls
 
     // The poll due first; an offline device waits out its backoff.
     Poll* next = nullptr;
@@ -204,7 +219,7 @@ void BusScheduler::run() {
       continue;
     }
     lock.unlock();
-    Result r = next->job(transport_);
+    Result r = next->job(poll_transport_);
     if (next->on_result) next->on_result(r);
     lock.lock();
     record(next->device, r, true);

@@ -219,3 +219,34 @@ TEST(BusScheduler, AnOverloadedBusIsSharedInTurn) {
   EXPECT_GT(most, 20u);
   EXPECT_GE(least * 5, most * 4) << "fewest " << least << ", most " << most;
 }
+
+TEST(BusScheduler, AWriteWaitsForOneTransactionNotAWholePoll) {
+  FakeBus bus;
+  bus.latency = 30ms;
+  BusScheduler s(bus);
+  s.addDevice("slow");
+  s.addPoll(
+      "slow", 1.0,
+      [](Transport& t) {
+        for (int i = 0; i < 3; ++i) t.execute(Request::readCoils(1, 0, 8));
+        return Result::success();
+      },
+      nullptr);
+  s.start();
+  auto logged = [&] {
+    std::lock_guard<std::mutex> lock(bus.m);
+    return bus.log.size();
+  };
+  while (logged() == 0) std::this_thread::sleep_for(1ms);  // the poll's first read is on
+  auto write = s.submit(
+      "other", [](Transport& t) { return t.execute(Request::writeSingleCoil(2, 0, true)); });
+  EXPECT_TRUE(write.get().ok());
+  std::this_thread::sleep_for(100ms);  // the rest of the poll
+  s.stop();
+  std::lock_guard<std::mutex> lock(bus.m);
+  ASSERT_GE(bus.log.size(), 4u);
+  EXPECT_EQ(bus.log[0], "1r");
+  EXPECT_EQ(bus.log[1], "2w") << "the write goes between the poll's transactions";
+  EXPECT_EQ(bus.log[2], "1r");
+  EXPECT_EQ(bus.log[3], "1r");
+}

@@ -78,7 +78,18 @@ class BusScheduler {
     std::promise<Result> promise;
   };
 
+  // What poll jobs see: the transport, with queued writes run before each transaction.
+  struct PollTransport : Transport {
+    explicit PollTransport(BusScheduler& scheduler) : owner(scheduler) {}
+    Result execute(const Request& request) override;
+    bool connect(std::string* error) override { return owner.transport_.connect(error); }
+    bool connected() const override { return owner.transport_.connected(); }
+    void disconnect() override { owner.transport_.disconnect(); }
+    BusScheduler& owner;
+  };
+
   void run();
+  bool runOneWrite(std::unique_lock<std::mutex>& lock);
   void record(const std::string& device, const Result& result, bool is_poll);
 
   Transport& transport_;
@@ -91,6 +102,7 @@ class BusScheduler {
   std::map<std::string, std::chrono::steady_clock::time_point> backoff_until_;
   std::map<std::string, double> backoff_;
   std::map<std::string, std::deque<std::chrono::steady_clock::time_point>> poll_times_;
+  PollTransport poll_transport_;
   bool running_ = false;
   bool connected_ = false;
   std::string connection_error_;
