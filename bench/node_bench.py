@@ -7,6 +7,7 @@ from the sourced catkin workspace; prints markdown tables; appends CSV rows to -
     node_bench.py [--calls N] [--cpu-seconds S] [--csv FILE]
 """
 import argparse
+import logging
 import os
 import socket
 import statistics
@@ -212,6 +213,7 @@ def main():
     try:
         time.sleep(1.5)
         rospy.init_node("modbus_rtu_node_bench", anonymous=True, disable_signals=True)
+        logging.getLogger("rosout").setLevel(logging.ERROR)  # keep the tables clean
         with tempfile.TemporaryDirectory() as workdir, open(args.csv, "a") as csv:
             latency(workdir, args.calls, csv)
             cpu(workdir, args.cpu_seconds, csv)

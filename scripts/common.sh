@@ -10,7 +10,8 @@ WS=$("$REPO/scripts/workspace.sh")
 DEPS=(build-essential cmake pkg-config ros-core-dev libmodbus-dev libyaml-cpp-dev
   python3-rostest librostest-dev libstd-srvs-dev libdiagnostic-updater-dev librosbag-dev
   python3-rosbag ros-message-generation libgtest-dev googletest catkin-lint socat
-  python3-matplotlib python3-yaml clang clang-tidy libclang-rt-14-dev xxd)
+  python3-matplotlib python3-yaml clang clang-tidy libclang-rt-14-dev xxd python3-pymodbus
+  python3-serial-asyncio)
 
 install_deps() {
   local missing=()
