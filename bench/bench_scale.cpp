@@ -74,6 +74,7 @@ Outcome run(const std::string& dir, int devices, bool one_offline, double second
     return n;
   };
   std::vector<uint64_t> each0;
+  each0.reserve(pdus.size());
   for (const auto& d : pdus) each0.push_back(bus.health(d->name()).polls_ok);
   const uint64_t polls0 = polls(), ok0 = link.stats().ok, tries0 = link.stats().timeouts;
   std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
