@@ -42,10 +42,10 @@ bool loadSimulatorConfig(const std::string& path, SimulatorConfig* out, std::str
 bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::string* error);
 
 struct SimulatorOptions {
-  std::string link;        // path of the symlink to the pty's slave side
-  std::string control;     // Unix socket path; empty = link + ".ctl"
-  std::string state_file;  // empty = no persistence
-  bool verbose = false;    // print every frame ("rx 01 03 ...", "tx 01 03 ...") on stdout
+  std::string link;         // path of the symlink to the pty's slave side
+  std::string control;      // Unix socket path; empty = link + ".ctl"
+  std::string state_file;   // empty = no persistence
+  bool verbose = false;     // print every frame ("rx 01 03 ...", "tx 01 03 ...") on stdout
   bool timestamps = false;  // verbose lines carry CLOCK_MONOTONIC seconds: "rx 12.345678 01 03"
 };
 
