@@ -106,6 +106,11 @@ TEST_F(RtuLinkFaults, AReplyLateEnoughToMeetTheNextRequestIsNotItsAnswer) {
   // reply, which has the same shape, for channel 1's values.
   const Request ch0 = Request::readHoldingRegisters(1, 0x00, 3);
   const Request ch1 = Request::readHoldingRegisters(1, 0x10, 3);
+  LinkConfig c = link_->config();
+  c.late_reply_guard = 0.3;  // room for a loaded machine: the reply is due 50 ms after the timeout
+  link_->disconnect();
+  link_ = std::make_unique<RtuLink>(c);
+  ASSERT_TRUE(link_->connect(nullptr));
   auto device = std::async(std::launch::async, [&] {
     pty_.read(encodeRequest(ch0).size());
     std::this_thread::sleep_for(std::chrono::milliseconds(350));

@@ -87,7 +87,7 @@ TEST(SimFaults, ADropShareIsRoughlyKept) {
   PtyClient client(line.link());
   ASSERT_EQ(line("drop 2 20 reply"), "ok");
   int lost = 0;
-  for (int i = 0; i < 200; ++i) lost += client.exchange(encodeRequest(kRead), 6, 60ms).empty();
+  for (int i = 0; i < 200; ++i) lost += client.exchange(encodeRequest(kRead), 6, 150ms).empty();
   EXPECT_GT(lost, 15);
   EXPECT_LT(lost, 70);
   EXPECT_EQ(line("stats 2"),
