@@ -148,6 +148,7 @@ bool BusScheduler::runOneWrite(std::unique_lock<std::mutex>& lock) {
 // A poll of several transactions lets queued writes go first before each of them, so a write
 // waits for at most one transaction, not a whole poll.
 Result BusScheduler::PollTransport::execute(const Request& request) {
+  owner.transport_.awaitLineFree();  // a write that comes during the gap still goes first
   {
     std::unique_lock<std::mutex> lock(owner.mutex_);
     while (owner.transport_.connected() && owner.runOneWrite(lock)) {

@@ -53,6 +53,9 @@ class RtuLink : public Transport {
   bool connected() const override { return ctx_ != nullptr; }
   void disconnect() override;
   Result execute(const Request& request) override;
+  void awaitLineFree() override {
+    if (ctx_) keepGap();
+  }
 
   // Response timeout for one request to `slave`: the configured one, raised to cover a device's
   // reply delay (the LD58A08 can wait up to 1000 ms before answering).

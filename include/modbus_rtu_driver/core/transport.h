@@ -21,6 +21,9 @@ class Transport {
   }
   virtual bool connected() const { return true; }
   virtual void disconnect() {}
+  // Waits until the line may carry the next frame (the silence after the last one), so the
+  // scheduler can pick what goes next as late as possible.
+  virtual void awaitLineFree() {}
 };
 
 }  // namespace modbus_rtu_driver
