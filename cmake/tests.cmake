@@ -1,7 +1,7 @@
 # Unit tests (gtest) of the ROS-free core and simulator.
-# The golden frames live in shared/ beside the checkout (the workspace links to the repo).
+# Every frame the manuals print, kept in the repository as test data.
 get_filename_component(REPO_REAL_DIR ${PROJECT_SOURCE_DIR} REALPATH)
-set(GOLDEN_FRAMES ${REPO_REAL_DIR}/../shared/golden-frames.tsv)
+set(GOLDEN_FRAMES ${REPO_REAL_DIR}/test/data/golden_frames.tsv)
 catkin_add_gtest(test_frame test/unit/test_frame.cpp)
 target_link_libraries(test_frame modbus_rtu_core gtest_main)
 target_compile_definitions(test_frame PRIVATE

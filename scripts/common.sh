@@ -7,11 +7,8 @@ REPO=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # a workspace inside it would make rosrun and roslaunch walk in circles). One per checkout.
 WS=$("$REPO/scripts/workspace.sh")
 
-DEPS=(build-essential cmake pkg-config ros-core-dev libmodbus-dev libyaml-cpp-dev
-  python3-rostest librostest-dev libstd-srvs-dev libdiagnostic-updater-dev librosbag-dev
-  python3-rosbag ros-message-generation libgtest-dev googletest catkin-lint socat
-  python3-matplotlib python3-yaml clang clang-tidy libclang-rt-14-dev xxd python3-pymodbus
-  python3-serial-asyncio)
+# Every Debian package the project needs, one list (package.xml declares the same set).
+mapfile -t DEPS < <(sed -e 's/#.*//' -e 's/[[:space:]]*$//' -e '/^$/d' "$REPO/scripts/debian_packages.txt")
 
 install_deps() {
   local missing=()

@@ -16,6 +16,7 @@ install_deps
 build_workspace
 export ROS_MASTER_URI=${ROS_MASTER_URI:-http://localhost:11311}
 
+mkdir -p "$REPO/.build"
 LOG=$REPO/.build/demo.log
 roslaunch modbus_rtu_driver demo.launch "${LAUNCH_ARGS[@]}" >"$LOG" 2>&1 &
 LAUNCH_PID=$!

@@ -23,7 +23,7 @@ build fuzz_slave src/core/slave_server.cpp src/core/bus_config.cpp src/core/link
   src/devices/device.cpp src/devices/lc_relay8.cpp src/devices/ld58a08.cpp src/devices/registry.cpp \
   src/devices/yespeed_pdu.cpp
 # Seed with the manuals' frames.
-grep -v '^#' "$REPO/../shared/golden-frames.tsv" 2>/dev/null | tail -n +2 | cut -f4 | while read -r hex; do
+grep -v '^#' "$REPO/test/data/golden_frames.tsv" | tail -n +2 | cut -f4 | while read -r hex; do
   printf '%s' "$hex" | xxd -r -p >"$OUT/corpus/$(printf '%s' "$hex" | md5sum | cut -c1-12)"
 done || true
 overall=0

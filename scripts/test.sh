@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, runs every test (gtest unit tests, then the rostests one
-# after another, then the unit tests and the node under ASan/UBSan, short fuzz runs and an
+# Installs what is missing, builds, checks that everything the project uses comes from the
+# packages the scripts install, runs every test (gtest unit tests, then the rostests one after
+# another, then the unit tests and the node under ASan/UBSan, short fuzz runs and an
 # install-space check) and ends with
 # "N passed, N failed". Exit code 0 only when all passed.
 source "$(dirname "$0")/common.sh"
@@ -9,6 +10,12 @@ build_workspace
 cd "$WS"
 catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" tests
 rm -rf "$WS/build/test_results"
+# Everything used (Python modules, executables, headers the compiler read) comes from a package
+# on scripts/debian_packages.txt or its closure; and the check fails on the list of session 2.
+DEPS_RESULTS=$WS/build/test_results/dependencies
+/usr/bin/python3 "$REPO/scripts/check_deps.py" "$WS" "$DEPS_RESULTS" || true
+/usr/bin/python3 "$REPO/scripts/check_deps.py" "$WS" "$DEPS_RESULTS" --name check_fails_on_old_list \
+  --expect-missing python3-std-srvs,python3-diagnostic-msgs,rosbash,clang-format || true
 # -j1: rostests each start their own master and must not run in parallel.
 catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests 2>&1 | tee "$WS/run_tests.log" |
   grep -E '^\[ *(RUN|FAILED|PASSED|OK) |^\[Testcase|FAILURE|ERROR:|^Ran |testcase|^\[ROSUNIT\]|^ *\* ' || true

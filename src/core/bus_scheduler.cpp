@@ -41,12 +41,26 @@ void BusScheduler::stop() {
   }
   wake_.notify_all();
   if (thread_.joinable()) thread_.join();
-  std::deque<Pending> left;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    left.swap(writes_);
+  std::unique_lock<std::mutex> lock(mutex_);
+  refuseQueued(lock, "bus stopped");
+}
+
+Result BusScheduler::ClosedTransport::execute(const Request& /*request*/) {
+  return Result::failure(ErrorKind::kNotConnected, reason);
+}
+
+void BusScheduler::refuseQueued(std::unique_lock<std::mutex>& lock, const std::string& reason) {
+  ClosedTransport closed;
+  closed.reason = reason;
+  while (!writes_.empty()) {
+    Pending p = std::move(writes_.front());
+    writes_.pop_front();
+    lock.unlock();
+    Result r = p.job(closed);
+    lock.lock();
+    if (!r.ok()) ++health_[p.device].writes_refused;
+    p.promise.set_value(std::move(r));
   }
-  for (auto& p : left) p.promise.set_value(Result::failure(ErrorKind::kIo, "bus stopped"));
 }
 
 void BusScheduler::addDevice(const std::string& device) {
@@ -180,12 +194,9 @@ void BusScheduler::run() {
         next_connect = Clock::now() + seconds(reconnect_delay);
         reconnect_delay = std::min(options_.reconnect_max, reconnect_delay * 2);
       }
-      // Nobody waits for a bus that is not there: queued writes fail now.
-      while (!writes_.empty()) {
-        writes_.front().promise.set_value(
-            Result::failure(ErrorKind::kNotConnected, "port not open: " + connection_error_));
-        writes_.pop_front();
-      }
+      // Nobody waits for a bus that is not there: queued writes fail now, and what they took
+      // from shared queues fails with them (never sent later).
+      refuseQueued(lock, "port not open: " + connection_error_);
       wake_.wait_until(lock, next_connect);
       continue;
     }

@@ -152,6 +152,7 @@ void DeviceAdapter::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("polls failed", h.polls_failed);
   status.add("writes ok", h.writes_ok);
   status.add("writes failed", h.writes_failed);
+  status.add("writes refused unsent (port not open)", h.writes_refused);
   status.add("consecutive failures", h.consecutive_failures);
   status.add("last error", h.last_error.empty() ? "none" : h.last_error);
 }

@@ -11,6 +11,7 @@ import rospkg
 import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
 
 from modbus_rtu_driver.msg import DigitalStates, PduTelemetry
@@ -115,6 +116,52 @@ class FaultsTest(unittest.TestCase):
         self.assertEqual(self.sim.get("255", "coil", 0), [1])
         helpers.wait_until(lambda: self.status("bus ").level != DiagnosticStatus.ERROR, 15,
                            "the bus reported up again")
+
+    def refused(self):
+        s = self.status("device relays")
+        values = {v.key: v.value for v in s.values} if s else {}
+        return int(values.get("writes refused unsent (port not open)", 0))
+
+    def test_writes_refused_while_the_port_is_gone_are_never_sent(self):
+        """Review defect A: a refused write went out later, merged into the next one, and one
+        command during the outage silenced the command topics for good."""
+        helpers.Latest(NS + "relays/outputs", DigitalStates).wait(30, what="relay board polls")
+        set_out3 = helpers.service(NS + "relays/out3/set", SetBool)
+        set_out7 = helpers.service(NS + "relays/out7/set", SetBool)
+        out4 = rospy.Publisher(NS + "relays/out4/command", Bool, queue_size=1)
+        out5 = rospy.Publisher(NS + "relays/out5/command", Bool, queue_size=1)
+        helpers.wait_until(lambda: out4.get_num_connections() and out5.get_num_connections(), 10,
+                           "the node to subscribe to the command topics")
+        helpers.wait_until(lambda: self.status("device relays") is not None, 10, "diagnostics")
+        before = self.refused()
+
+        self.sim_proc.terminate()
+        self.sim_proc.wait(10)
+        self.sim_proc = None
+        helpers.wait_until(lambda: self.status("bus ") is not None and
+                           self.status("bus ").level == DiagnosticStatus.ERROR, 15,
+                           "the bus reported down")
+        res = set_out3(True)
+        self.assertFalse(res.success)
+        self.assertIn("port not open", res.message)
+        out4.publish(Bool(True))
+        # Both refused (the service's and the command's job) before the port comes back.
+        helpers.wait_until(lambda: self.refused() >= before + 2, 15, "two writes refused unsent")
+
+        self.start_sim()
+        helpers.wait_until(lambda: self.status("bus ").level != DiagnosticStatus.ERROR, 30,
+                           "the bus reported up again")
+        # Command topics still work after the outage ...
+        out5.publish(Bool(True))
+        helpers.wait_until(lambda: self.sim.get("255", "coil", 5) == [1], 15, "out5 on by command")
+        # ... and services too; the refused out3 and out4 never reach the board.
+        res = set_out7(True)
+        self.assertTrue(res.success, res.message)
+        self.assertNotIn("merged", res.message)
+        self.assertEqual(self.sim.get("255", "coil", 0, 8), [0, 0, 0, 0, 0, 1, 0, 1])
+        outputs = helpers.Latest(NS + "relays/outputs", DigitalStates)
+        outputs.wait(10, lambda m: list(m.states) == [False] * 5 + [True, False, True],
+                     "outputs published as on the board")
 
 
 if __name__ == "__main__":

@@ -1,8 +1,9 @@
-// Loads ../shared/golden-frames.tsv: every literal frame the device manuals print.
+// Loads test/data/golden_frames.tsv: every literal frame the device manuals print.
 #pragma once
 
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,8 @@ struct GoldenFrame {
 inline std::vector<GoldenFrame> loadGoldenFrames(const std::string& path) {
   std::vector<GoldenFrame> rows;
   std::ifstream in(path);
+  // A missing file must fail the tests that loop over the rows, not let them pass on none.
+  if (!in) throw std::runtime_error("cannot read the golden frames at " + path);
   std::string line;
   while (std::getline(in, line)) {
     if (line.empty() || line[0] == '#' || line.rfind("seed\t", 0) == 0) continue;
@@ -39,6 +42,7 @@ inline std::vector<GoldenFrame> loadGoldenFrames(const std::string& path) {
     g.request_crc_printed_wrong = g.meaning.find("wrong CRC") != std::string::npos;
     rows.push_back(g);
   }
+  if (rows.empty()) throw std::runtime_error("no golden frames in " + path);
   return rows;
 }
 

@@ -1,4 +1,4 @@
-// Framing against every frame the manuals print (../shared/golden-frames.tsv).
+// Framing against every frame the manuals print (test/data/golden_frames.tsv).
 #include <gtest/gtest.h>
 
 #include "golden_frames.h"

@@ -1,6 +1,12 @@
 // Output writes queued for one device merged into one frame: scripted transport, byte exact.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <thread>
+
+#include "modbus_rtu_driver/core/bus_scheduler.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/output_batch.h"
 #include "scripted_transport.h"
@@ -65,4 +71,62 @@ TEST(OutputBatch, ALoneRequestIsOneFc05) {
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(r.message, "");
   EXPECT_TRUE(bus.usedUp());
+}
+
+namespace {
+
+// The scripted device behind a port that can be taken away and given back.
+class UnpluggableTransport : public ScriptedTransport {
+ public:
+  bool connect(std::string* error) override {
+    open_ = plugged_;
+    if (!open_ && error) *error = "no such device";
+    return open_;
+  }
+  bool connected() const override { return open_; }
+  void disconnect() override { open_ = false; }
+  std::atomic<bool> plugged_{false};
+
+ private:
+  std::atomic<bool> open_{false};
+};
+
+bool waitFor(const std::function<bool()>& condition, double seconds) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (!condition()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return true;
+}
+
+}  // namespace
+
+// A write refused while the port was gone must never go out later, merged into another one
+// (review defect: relay 3 switched on after its caller was told it failed).
+TEST(OutputBatch, ARequestRefusedWhileThePortIsGoneIsNeverSentLater) {
+  auto board = std::make_shared<LcRelay8>(relays());
+  OutputBatch batch;
+  UnpluggableTransport port;
+  BusScheduler::Options o;
+  o.reconnect_initial = 0.01;
+  o.reconnect_max = 0.01;
+  BusScheduler bus(port, o);
+  bus.addDevice("relays");
+  bus.start();
+  auto job = [&](const std::shared_ptr<OutputBatch::Entry>& e) {
+    return [&, e](Transport& t) { return batch.complete(*board, t, e); };
+  };
+  const Result refused = bus.submit("relays", job(batch.add({3}, {true}))).get();
+  EXPECT_EQ(refused.error, ErrorKind::kNotConnected) << refused.message;
+
+  port.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(255, 7, true))));
+  port.plugged_ = true;
+  ASSERT_TRUE(waitFor([&] { return bus.connected(); }, 10.0));
+  const Result later = bus.submit("relays", job(batch.add({7}, {true}))).get();
+  EXPECT_TRUE(later.ok()) << later.message;
+  EXPECT_EQ(later.message, "");  // not "merged with 1 other request(s)"
+  bus.stop();
+  EXPECT_TRUE(port.usedUp());
+  EXPECT_EQ(port.mismatches(), "");  // only channel 7 went out: FC05, not FC15 over 3-7
 }

@@ -23,6 +23,7 @@ struct DeviceHealth {
   bool online = true;  // false after `offline_after` failed transactions in a row
   uint32_t consecutive_failures = 0;
   uint64_t polls_ok = 0, polls_failed = 0, writes_ok = 0, writes_failed = 0;
+  uint64_t writes_refused = 0;    // failed unsent: the port was not open or the bus stopped
   std::string last_error;         // empty when none yet
   double achieved_poll_rate = 0;  // Hz over the last seconds
   bool rate_overrun = false;      // the bus could not keep the configured rate
@@ -57,6 +58,9 @@ class BusScheduler {
   // Runs `job` on the bus thread ahead of every poll. The future holds the real outcome. When
   // the device is offline the job still runs once (a write is how a user probes too), but the
   // transport's retries are what they are: the answer comes after one attempt cycle.
+  // Every submitted job runs exactly once: while the port is not open (or once the bus stops)
+  // it runs against a transport that refuses every request, so a job that took requests from a
+  // shared queue (merged writes, command topics) fails them all and keeps nothing for later.
   std::future<Result> submit(const std::string& device, Job job);
 
   DeviceHealth health(const std::string& device) const;
@@ -88,8 +92,17 @@ class BusScheduler {
     BusScheduler& owner;
   };
 
+  // What jobs see while the port is not open: every request fails with `reason`, unsent.
+  struct ClosedTransport : Transport {
+    Result execute(const Request& request) override;
+    bool connected() const override { return false; }
+    std::string reason;
+  };
+
   void run();
   bool runOneWrite(std::unique_lock<std::mutex>& lock);
+  // Runs every queued job against a ClosedTransport saying `reason`; `lock` held on entry/exit.
+  void refuseQueued(std::unique_lock<std::mutex>& lock, const std::string& reason);
   void record(const std::string& device, const Result& result, bool is_poll);
 
   Transport& transport_;

@@ -1,0 +1,89 @@
+#!/usr/bin/env bash
+# The fresh-machine proof (not part of the test command: it takes 20-30 minutes). For each of
+# the README's two commands it builds a new bare Debian 12 root with mmdebstrap (minbase: the
+# Essential packages and apt), clones the committed repository into it alone (no ../shared),
+# and runs the command there as root:
+#   demo: scripts/demo.sh --duration 20   passes when it printed live PDU telemetry;
+#   test: scripts/test.sh                 passes when it ended "N passed, 0 failed".
+# Usage: scripts/fresh_check.sh [demo|test|both] (default both). Needs root (or sudo). Logs and
+# the summary go to $FRESH_OUT (default /tmp/modbus_rtu_fresh). Only committed work is checked.
+set -euo pipefail
+export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
+REPO=$(cd "$(dirname "$0")/.." && pwd)
+WHAT=${1:-both}
+OUT=${FRESH_OUT:-/tmp/modbus_rtu_fresh}
+SUITE=bookworm
+MIRROR=${FRESH_MIRROR:-http://deb.debian.org/debian}
+SUDO=""
+[ "$(id -u)" = 0 ] || SUDO=sudo
+mkdir -p "$OUT"
+
+for tool in mmdebstrap git; do
+  command -v "$tool" >/dev/null || {
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends mmdebstrap git
+  }
+done
+
+ROOT=""
+cleanup_root() {
+  [ -n "$ROOT" ] || return 0
+  for m in dev/pts dev sys proc; do $SUDO umount -l "$ROOT/$m" 2>/dev/null || true; done
+  $SUDO rm -rf --one-file-system "$ROOT"
+  ROOT=""
+}
+trap cleanup_root EXIT
+
+# A new root with a new clone; prints nothing, sets ROOT.
+new_root() {
+  cleanup_root
+  ROOT=$(mktemp -d /tmp/modbus_rtu_root.XXXXXX)
+  $SUDO mmdebstrap --variant=minbase --quiet "$SUITE" "$ROOT" \
+    "deb $MIRROR $SUITE main" "deb $MIRROR $SUITE-updates main" \
+    "deb ${MIRROR%/debian}/debian-security $SUITE-security main"
+  # A bare root has no name resolution for localhost or this host; roslaunch needs both.
+  printf '127.0.0.1 localhost\n127.0.1.1 %s\n::1 localhost ip6-localhost\n' "$(hostname)" |
+    $SUDO tee "$ROOT/etc/hosts" >/dev/null
+  $SUDO cp -L /etc/resolv.conf "$ROOT/etc/resolv.conf"
+  for m in proc sys dev dev/pts; do $SUDO mount --bind "/$m" "$ROOT/$m"; done
+  $SUDO git clone --quiet --no-local "$REPO" "$ROOT/root/modbus_rtu_driver"
+}
+
+# Runs a command in the root as a user's login shell would: root, HOME=/root, Debian's PATH.
+in_root() {
+  $SUDO chroot "$ROOT" /usr/bin/env -i HOME=/root TERM=dumb \
+    PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
+    /bin/bash -c "cd /root/modbus_rtu_driver && $1"
+}
+
+status=0
+summary=()
+if [ "$WHAT" = demo ] || [ "$WHAT" = both ]; then
+  new_root
+  start=$(date +%s)
+  in_root "scripts/demo.sh --duration 20" >"$OUT/demo.log" 2>&1 || true
+  secs=$(($(date +%s) - start))
+  # Live telemetry: rostopic echo printed several PDU messages after the demo's own calls.
+  n=$(grep -c '^power: ' "$OUT/demo.log" || true)
+  if [ "$n" -ge 3 ] && grep -q 'success: True' "$OUT/demo.log"; then
+    summary+=("demo: passed ($n telemetry messages, ${secs} s including installs and build)")
+  else
+    summary+=("demo: FAILED (see $OUT/demo.log)"); status=1
+    tail -30 "$OUT/demo.log"
+  fi
+fi
+if [ "$WHAT" = test ] || [ "$WHAT" = both ]; then
+  new_root
+  start=$(date +%s)
+  in_root "scripts/test.sh" >"$OUT/test.log" 2>&1 || true
+  secs=$(($(date +%s) - start))
+  last=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$OUT/test.log" | tail -1 || true)
+  if [[ "$last" =~ ^[1-9][0-9]*\ passed,\ 0\ failed ]]; then
+    summary+=("test: passed: $last (${secs} s including installs and build)")
+  else
+    summary+=("test: FAILED: ${last:-no summary line} (see $OUT/test.log)"); status=1
+    tail -40 "$OUT/test.log"
+  fi
+fi
+printf '%s\n' "${summary[@]}" | tee "$OUT/summary.txt"
+exit $status
