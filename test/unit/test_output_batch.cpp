@@ -3,13 +3,12 @@
 
 #include <atomic>
 #include <chrono>
-#include <functional>
-#include <thread>
 
 #include "modbus_rtu_driver/core/bus_scheduler.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/output_batch.h"
 #include "scripted_transport.h"
+#include "wait_for.h"
 
 using namespace modbus_rtu_driver;
 
@@ -79,7 +78,7 @@ namespace {
 class UnpluggableTransport : public ScriptedTransport {
  public:
   bool connect(std::string* error) override {
-    open_ = plugged_;
+    open_ = plugged_.load();
     if (!open_ && error) *error = "no such device";
     return open_;
   }
@@ -90,15 +89,6 @@ class UnpluggableTransport : public ScriptedTransport {
  private:
   std::atomic<bool> open_{false};
 };
-
-bool waitFor(const std::function<bool()>& condition, double seconds) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-  while (!condition()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  return true;
-}
 
 }  // namespace
 

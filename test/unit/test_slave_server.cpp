@@ -8,6 +8,7 @@
 
 #include "modbus_rtu_driver/core/slave_server.h"
 #include "pty_pair.h"
+#include "wait_for.h"
 
 using namespace modbus_rtu_driver;
 using namespace std::chrono_literals;
@@ -26,17 +27,15 @@ class SlaveServerTest : public ::testing::Test {
       writes_.push_back(w);
     });
     server_->start();
-    // Wait until the server has the port open.
-    for (int i = 0; i < 100 && !server_->stats().port_open; ++i) std::this_thread::sleep_for(10ms);
-    ASSERT_TRUE(server_->stats().port_open);
+    ASSERT_TRUE(waitFor([this] { return server_->stats().port_open; }));
   }
-  // Sends `hex`, returns what came back within `ms`.
-  Bytes ask(const Bytes& frame, size_t expect, int ms = 500) {
+  // Sends `hex`, returns what came back within `ms` (as soon as `expect` bytes are there).
+  Bytes ask(const Bytes& frame, size_t expect, int ms = 3000) {
     pty_.read(256, 1);  // drop anything stale
     pty_.write(frame);
     return pty_.read(expect, ms);
   }
-  Bytes ask(const std::string& hex, size_t expect, int ms = 500) {
+  Bytes ask(const std::string& hex, size_t expect, int ms = 3000) {
     return ask(*fromHex(hex), expect, ms);
   }
   std::vector<SlaveWrite> writes() {
@@ -58,6 +57,8 @@ TEST_F(SlaveServerTest, TheManualsTwoFrames) {
   EXPECT_EQ(
       toHex(ask("01 10 00 05 00 02 04 08 07 0A 09 46 97", 8)),
       toHex(encodeReply(*decodeRequest(*fromHex("01 10 00 05 00 02 04 08 07 0A 09 46 97")), {})));
+  // The server hands a write on after it has sent the reply.
+  ASSERT_TRUE(waitFor([this] { return writes().size() >= 2; })) << writes().size();
   const auto w = writes();
   ASSERT_EQ(w.size(), 2u);
   EXPECT_EQ(w[0].table, SlaveTable::kCoils);
@@ -90,8 +91,10 @@ TEST_F(SlaveServerTest, OutOfRangeGetsException02AndNoWrite) {
   EXPECT_EQ(toHex(ask(encodeRequest(r), 5)), toHex(encodeException(1, 0x03, kIllegalDataAddress)));
   const Request w = Request::writeMultipleRegisters(1, 63, {1, 2});
   EXPECT_EQ(toHex(ask(encodeRequest(w), 5)), toHex(encodeException(1, 0x10, kIllegalDataAddress)));
-  EXPECT_TRUE(writes().empty());
+  // The server counts an exception after it has written it.
+  EXPECT_TRUE(waitFor([this] { return server_->stats().exceptions_sent >= 2; }));
   EXPECT_EQ(server_->stats().exceptions_sent, 2u);
+  EXPECT_TRUE(writes().empty());
 }
 
 TEST_F(SlaveServerTest, BroadcastIsAppliedNotAnswered) {
@@ -138,7 +141,7 @@ TEST_F(SlaveServerTest, ARequestRightAfterABadQuantityIsStillAnswered) {
     pty_.write(frame);
     std::this_thread::sleep_for(std::chrono::milliseconds(15));
     pty_.write(encodeRequest(mine));
-    EXPECT_EQ(toHex(pty_.read(5 + reply.size(), 200)),
+    EXPECT_EQ(toHex(pty_.read(5 + reply.size(), 3000)),
               toHex(encodeException(1, function, kIllegalDataValue)) + " " + toHex(reply))
         << bad;
   }
