@@ -186,11 +186,16 @@ def owners(paths):
             if path in chunk:
                 result.setdefault(path, pkgs.split(",")[0].strip().split(":")[0])
     for p in paths:
-        if p not in result:
-            real = os.path.realpath(p)
-            out = sh("dpkg", "-S", real) if real != p else ""
-            line = out.splitlines()[0] if out else ""
-            result[p] = line.split(": ", 1)[0].split(",")[0].split(":")[0] if ": " in line else None
+        if p in result:
+            continue
+        result[p] = None
+        # Merged /usr: dpkg may know /bin/cat as /bin/cat only; a symlink by its target.
+        for alias in (os.path.realpath(p), re.sub(r"^/usr/(s?bin|lib)/", r"/\1/", p),
+                      re.sub(r"^/(s?bin|lib)/", r"/usr/\1/", p)):
+            line = next(iter(sh("dpkg", "-S", alias).splitlines()), "") if alias != p else ""
+            if ": " in line:
+                result[p] = line.split(": ", 1)[0].split(",")[0].strip().split(":")[0]
+                break
     return result
 
 
