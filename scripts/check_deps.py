@@ -10,7 +10,7 @@ What the project uses:
 Each one is traced to the Debian package that owns it (dpkg -S). The check fails, naming those
 packages, unless the package is on scripts/debian_packages.txt, in that list's dependency closure
 (apt-cache depends --recurse, no recommends: the scripts install without them), or part of every
-Debian root (Essential or Priority required). It also checks that package.xml declares the list.
+Debian root (the Essential packages and apt, as in a minbase root). It also checks that package.xml declares the list.
 
 Usage: check_deps.py WORKSPACE RESULTS_DIR [--without PKG,PKG]   (--without: drop packages from
 the list, to show that the check fails on the list as it was before they were added).
@@ -209,8 +209,10 @@ def closure(packages):
 
 
 def base_packages():
-    out = sh("dpkg-query", "-W", "-f", "${Package} ${Essential} ${Priority}\n")
-    return {l.split()[0] for l in out.splitlines() if " yes " in l + " " or l.endswith(" required")}
+    """What every Debian root has: the Essential packages and apt (mmdebstrap's minbase)."""
+    out = sh("dpkg-query", "-W", "-f", "${Package} ${Essential}\n")
+    essential = [l.split()[0] for l in out.splitlines() if l.endswith(" yes")]
+    return closure(essential + ["apt"])
 
 
 def read_list(without):
