@@ -3,6 +3,7 @@ add_library(modbus_rtu_core
   src/core/bus_config.cpp
   src/core/frame.cpp
   src/core/link_config.cpp
+  src/core/port_claim.cpp
   src/core/request_framer.cpp
   src/core/slave_server.cpp
   src/core/status.cpp

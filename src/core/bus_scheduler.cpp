@@ -5,8 +5,6 @@
 namespace modbus_rtu_driver {
 
 namespace {
-using Clock = std::chrono::steady_clock;
-
 Clock::duration seconds(double s) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
 }
@@ -21,7 +19,10 @@ bool isSilence(ErrorKind k) {
 BusScheduler::BusScheduler(Transport& transport) : BusScheduler(transport, Options{}) {}
 
 BusScheduler::BusScheduler(Transport& transport, Options options)
-    : transport_(transport), options_(options), poll_transport_(*this) {}
+    : BusScheduler(transport, options, Clock::steady()) {}
+
+BusScheduler::BusScheduler(Transport& transport, Options options, Clock& clock)
+    : transport_(transport), options_(options), clock_(clock), poll_transport_(*this) {}
 
 BusScheduler::~BusScheduler() {
   stop();
@@ -39,7 +40,7 @@ void BusScheduler::stop() {
     std::lock_guard<std::mutex> lock(mutex_);
     running_ = false;
   }
-  wake_.notify_all();
+  clock_.notifyAll(wake_);
   if (thread_.joinable()) thread_.join();
   std::unique_lock<std::mutex> lock(mutex_);
   refuseQueued(lock, "bus stopped");
@@ -76,7 +77,7 @@ void BusScheduler::addPoll(const std::string& device, double rate_hz, Job poll,
   Poll p;
   p.device = device;
   p.period = seconds(1.0 / rate_hz);
-  p.due = Clock::now();
+  p.due = clock_.now();
   p.job = std::move(poll);
   p.on_result = std::move(on_result);
   polls_.push_back(std::move(p));
@@ -95,7 +96,7 @@ std::future<Result> BusScheduler::submit(const std::string& device, Job job) {
       p.promise.set_value(Result::failure(ErrorKind::kIo, "bus stopped"));
     }
   }
-  wake_.notify_all();
+  clock_.notifyAll(wake_);
   return f;
 }
 
@@ -117,7 +118,7 @@ std::string BusScheduler::connectionError() const {
 
 void BusScheduler::record(const std::string& device, const Result& result, bool is_poll) {
   if (result.error == ErrorKind::kInvalidArgument) return;  // never reached the bus
-  const auto now = Clock::now();
+  const auto now = clock_.now();
   DeviceHealth& h = health_[device];
   if (is_poll) {
     (result.ok() ? h.polls_ok : h.polls_failed)++;
@@ -131,6 +132,7 @@ void BusScheduler::record(const std::string& device, const Result& result, bool 
   }
   if (!result.ok()) h.last_error = result.message;
   if (!isSilence(result.error)) {  // it answered, even if with an exception
+    h.answered = true;
     h.consecutive_failures = 0;
     h.online = true;
     backoff_.erase(device);
@@ -173,10 +175,10 @@ Result BusScheduler::PollTransport::execute(const Request& request) {
 
 void BusScheduler::run() {
   double reconnect_delay = options_.reconnect_initial;
-  auto next_connect = Clock::now();
+  auto next_connect = clock_.now();
   std::unique_lock<std::mutex> lock(mutex_);
   while (running_) {
-    auto now = Clock::now();
+    auto now = clock_.now();
     if (!transport_.connected()) {
       if (now >= next_connect) {
         lock.unlock();
@@ -184,20 +186,20 @@ void BusScheduler::run() {
         const bool ok = transport_.connect(&error);
         lock.lock();
         // Never retry faster than the initial delay, even if a transport misreports itself.
-        next_connect = Clock::now() + seconds(options_.reconnect_initial);
+        next_connect = clock_.now() + seconds(options_.reconnect_initial);
         connected_ = ok;
         connection_error_ = ok ? "" : error;
         if (ok) {
           reconnect_delay = options_.reconnect_initial;
           continue;
         }
-        next_connect = Clock::now() + seconds(reconnect_delay);
+        next_connect = clock_.now() + seconds(reconnect_delay);
         reconnect_delay = std::min(options_.reconnect_max, reconnect_delay * 2);
       }
       // Nobody waits for a bus that is not there: queued writes fail now, and what they took
       // from shared queues fails with them (never sent later).
       refuseQueued(lock, "port not open: " + connection_error_);
-      wake_.wait_until(lock, next_connect);
+      clock_.waitUntil(lock, wake_, next_connect);
       continue;
     }
     connected_ = true;
@@ -223,11 +225,11 @@ void BusScheduler::run() {
       }
     }
     if (!next) {
-      wake_.wait(lock);
+      clock_.waitUntil(lock, wake_, Clock::time_point::max());
       continue;
     }
     if (when > now) {
-      wake_.wait_until(lock, when);
+      clock_.waitUntil(lock, wake_, when);
       continue;
     }
     lock.unlock();
@@ -239,7 +241,7 @@ void BusScheduler::run() {
     // Keep the schedule, so a poll delayed by a slow transaction (an offline device's probe)
     // is caught up and the average rate holds. Lagging more than 1 s means the bus cannot carry
     // the rate: say so; past 3 s give up catching up.
-    now = Clock::now();
+    now = clock_.now();
     next->last_run = now;
     next->due += next->period;
     DeviceHealth& h = health_[next->device];

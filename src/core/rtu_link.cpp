@@ -2,7 +2,6 @@
 
 #include <linux/serial.h>
 #include <modbus/modbus.h>
-#include <sys/file.h>
 #include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
@@ -12,6 +11,7 @@
 #include <cstring>
 
 #include "modbus_rtu_driver/core/frame.h"
+#include "modbus_rtu_driver/core/port_claim.h"
 
 namespace modbus_rtu_driver {
 
@@ -68,13 +68,12 @@ bool RtuLink::connect(std::string* error) {
     return false;
   }
   if (modbus_connect(ctx_) == -1) {
-    if (error) *error = "cannot open " + config_.port + ": " + modbus_strerror(errno);
+    if (error) *error = openError(config_.port, errno);
     disconnect();
     return false;
   }
   // One owner per port: two drivers on one bus would answer each other's requests.
-  if (flock(modbus_get_socket(ctx_), LOCK_EX | LOCK_NB) != 0) {
-    if (error) *error = config_.port + " is in use by another process (it holds the port's lock)";
+  if (!claimPort(modbus_get_socket(ctx_), config_.port, error)) {
     disconnect();
     return false;
   }
@@ -117,6 +116,7 @@ bool RtuLink::connect(std::string* error) {
 
 void RtuLink::disconnect() {
   if (!ctx_) return;
+  releasePort(modbus_get_socket(ctx_));
   modbus_close(ctx_);
   modbus_free(ctx_);
   ctx_ = nullptr;

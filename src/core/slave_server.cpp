@@ -2,10 +2,11 @@
 
 #include <modbus/modbus.h>
 #include <poll.h>
-#include <sys/file.h>
 #include <unistd.h>
 
 #include <cerrno>
+
+#include "modbus_rtu_driver/core/port_claim.h"
 
 namespace modbus_rtu_driver {
 
@@ -101,12 +102,11 @@ bool SlaveServer::open(std::string* error) {
   const char parity = l.parity == Parity::kEven ? 'E' : l.parity == Parity::kOdd ? 'O' : 'N';
   ctx_ = modbus_new_rtu(l.port.c_str(), l.baud, parity, l.data_bits, l.stop_bits);
   if (!ctx_ || modbus_connect(ctx_) == -1) {
-    *error = "cannot open " + l.port + ": " + modbus_strerror(errno);
+    *error = openError(l.port, errno);
     close();
     return false;
   }
-  if (flock(modbus_get_socket(ctx_), LOCK_EX | LOCK_NB) != 0) {
-    *error = l.port + " is in use by another process (it holds the port's lock)";
+  if (!claimPort(modbus_get_socket(ctx_), l.port, error)) {
     close();
     return false;
   }
@@ -119,6 +119,7 @@ bool SlaveServer::open(std::string* error) {
 
 void SlaveServer::close() {
   if (ctx_) {
+    releasePort(modbus_get_socket(ctx_));
     modbus_close(ctx_);
     modbus_free(ctx_);
     ctx_ = nullptr;

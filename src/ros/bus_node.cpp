@@ -74,6 +74,9 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const LinkStats s = link_->stats();
   if (!bus_->connected()) {
     status.summary(DiagnosticStatus::ERROR, "port not open: " + bus_->connectionError());
+    // A wrong port or a second node on it must show in the log, not only in /diagnostics.
+    ROS_ERROR_THROTTLE(10.0, "bus %s: port not open: %s (retrying with backoff)",
+                       config_.link.port.c_str(), bus_->connectionError().c_str());
   } else if (s.timeouts + s.crc_errors + s.wrong_address + s.malformed + s.io_errors > 0) {
     status.summary(DiagnosticStatus::WARN, "link up, errors seen");
   } else {

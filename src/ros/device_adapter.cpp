@@ -130,11 +130,31 @@ void DeviceAdapter::onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& m
   });
 }
 
+// Going offline and coming back are logged when they happen, and an offline device again every
+// 30 s (throttled per device: the ROS_*_THROTTLE macros throttle per call site).
+void DeviceAdapter::logOnlineChange(const DeviceHealth& h) {
+  const ros::WallTime now = ros::WallTime::now();
+  if (h.online) {
+    if (!logged_online_.value_or(true)) ROS_INFO("%s: back online", device_->name().c_str());
+    logged_online_ = true;
+    return;
+  }
+  if (logged_online_.value_or(true) || (now - last_offline_log_).toSec() >= 30.0) {
+    ROS_WARN("%s (%s @%d): offline: %s", device_->name().c_str(), device_->type(),
+             device_->config().address, h.last_error.c_str());
+    last_offline_log_ = now;
+  }
+  logged_online_ = false;
+}
+
 void DeviceAdapter::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const DeviceHealth h = bus_.health(device_->name());
   using diagnostic_msgs::DiagnosticStatus;
+  logOnlineChange(h);
   if (!h.online) {
     status.summary(DiagnosticStatus::ERROR, "offline: " + h.last_error);
+  } else if (!h.answered) {
+    status.summary(DiagnosticStatus::WARN, "not heard from yet");
   } else if (h.rate_overrun) {
     status.summary(DiagnosticStatus::WARN, "bus cannot keep the configured poll rate");
   } else if (h.consecutive_failures > 0) {
@@ -145,7 +165,7 @@ void DeviceAdapter::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.hardware_id = device_->type() + std::string(" @") + std::to_string(device_->address());
   status.add("type", device_->type());
   status.add("address", device_->config().address);
-  status.add("online", h.online);
+  status.add("online", h.online && h.answered);
   status.add("poll rate configured [Hz]", device_->config().poll_rate);
   status.add("poll rate achieved [Hz]", h.achieved_poll_rate);
   status.add("polls ok", h.polls_ok);

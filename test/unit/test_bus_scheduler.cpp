@@ -1,43 +1,64 @@
 // The bus thread: writes before polls, fair polling, offline devices backed off, reconnects.
+// Every test runs on a ManualClock: time moves only when the test jumps it to the moment the
+// idle bus thread wakes, or when a transaction on the FakeBus takes its time. Counts and times
+// are exact and no test sleeps; real-time deadlines are only a safety net against hangs.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <atomic>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <set>
 #include <thread>
 
 #include "modbus_rtu_driver/core/bus_scheduler.h"
+#include "modbus_rtu_driver/core/clock.h"
 
 using namespace modbus_rtu_driver;
 using namespace std::chrono_literals;
 
 namespace {
 
-// Answers every request after `latency`; slaves listed in `dead` time out (after `timeout`).
+constexpr auto kSafetyNet = 10s;  // real time; only reached when something hangs
+
+// Answers every request after `latency` of clock time; slaves listed in `dead` time out (after
+// `timeout`). Transactions that would start at or after the hold time wait, asleep on the
+// clock, until the hold moves: how a test catches a bus that never idles, or keeps a
+// transaction on the bus while it queues writes. It starts held: nothing goes on the bus
+// before the test runs the clock (runUntil) or releases it.
 class FakeBus : public Transport {
  public:
-  std::chrono::milliseconds latency{2}, timeout{20};
+  explicit FakeBus(ManualClock& clock) : clock_(clock), hold_from_(clock.now()) {}
+
+  Clock::duration latency = 2ms, timeout = 20ms;
   std::atomic<bool> up{true};
   std::atomic<int> connects{0};
   std::set<uint8_t> dead;
   std::mutex m;
-  std::vector<std::string> log;
+  std::vector<std::string> log;                  // "<slave>r" / "<slave>w" per transaction
+  std::vector<Clock::time_point> started;        // when each of them started
+  std::vector<Clock::time_point> connect_times;  // when each connect() was tried
 
   Result execute(const Request& r) override {
+    waitWhileHeld();
     bool is_dead;
     {
       std::lock_guard<std::mutex> lock(m);
       log.push_back(std::to_string(r.slave) + (isReadFunction(r.function) ? "r" : "w"));
+      started.push_back(clock_.now());
       is_dead = dead.count(r.slave) > 0;
     }
     if (!up) return Result::failure(ErrorKind::kIo, "port gone");
-    std::this_thread::sleep_for(is_dead ? timeout : latency);
+    clock_.advance(is_dead ? timeout : latency);
     if (is_dead) return Result::failure(ErrorKind::kTimeout, "no reply");
     return Result::success({1});
   }
   bool connect(std::string* error) override {
+    {
+      std::lock_guard<std::mutex> lock(m);
+      connect_times.push_back(clock_.now());
+    }
     ++connects;
     if (!up && error) *error = "cannot open /dev/fake: No such file or directory";
     connected_ = up.load();
@@ -46,184 +67,315 @@ class FakeBus : public Transport {
   bool connected() const override { return connected_; }
   void disconnect() override { connected_ = false; }
   std::atomic<bool> connected_{true};
+
+  void holdFrom(Clock::time_point t) {
+    {
+      std::lock_guard<std::mutex> lock(gate_m_);
+      hold_from_ = t;
+    }
+    clock_.notifyAll(gate_cv_);
+  }
+  void hold() { holdFrom(clock_.now()); }  // the next transaction waits
+  void release() { holdFrom(Clock::time_point::max()); }
+
+ private:
+  void waitWhileHeld() {
+    std::unique_lock<std::mutex> lock(gate_m_);
+    while (clock_.now() >= hold_from_) clock_.waitUntil(lock, gate_cv_, Clock::time_point::max());
+  }
+
+  ManualClock& clock_;
+  std::mutex gate_m_;
+  std::condition_variable gate_cv_;
+  Clock::time_point hold_from_;
 };
 
 BusScheduler::Job read(uint8_t slave) {
   return [slave](Transport& t) { return t.execute(Request::readCoils(slave, 0, 8)); };
 }
 
+BusScheduler::Job writeCoil(uint8_t slave) {
+  return [slave](Transport& t) { return t.execute(Request::writeSingleCoil(slave, 0, true)); };
+}
+
+class BusSchedulerTest : public ::testing::Test {
+ protected:
+  ~BusSchedulerTest() override {
+    bus.release();
+    scheduler.reset();
+  }
+
+  BusScheduler& make(BusScheduler::Options o = {}) { return make(bus, o); }
+  BusScheduler& make(Transport& transport, BusScheduler::Options o = {}) {
+    scheduler = std::make_unique<BusScheduler>(transport, o, clock);
+    return *scheduler;
+  }
+
+  // Runs the bus until clock time t0 + `t`: each time its thread is idle (asleep on the
+  // clock), time jumps to when it wakes. What is due before that time has run on return; what
+  // is due at or after it has not started (a bus that never idles is held by the FakeBus).
+  ::testing::AssertionResult runUntil(Clock::duration t) {
+    const Clock::time_point end = t0 + t;
+    bus.holdFrom(end);
+    for (;;) {
+      if (!clock.awaitSleepers(1, kSafetyNet))
+        return ::testing::AssertionFailure() << "the bus thread did not go idle";
+      const Clock::time_point next = clock.nextDeadline();
+      if (next >= end) return ::testing::AssertionSuccess();
+      clock.advanceTo(next);
+    }
+  }
+
+  // Clock times (ms after t0) at which transactions to `slave` started.
+  std::vector<long> startsOf(uint8_t slave) {
+    std::lock_guard<std::mutex> lock(bus.m);
+    std::vector<long> out;
+    for (size_t i = 0; i < bus.log.size(); ++i)
+      if (bus.log[i].substr(0, bus.log[i].size() - 1) == std::to_string(slave))
+        out.push_back(ms(bus.started[i]));
+    return out;
+  }
+  long ms(Clock::time_point t) const {
+    return static_cast<long>(std::chrono::duration_cast<std::chrono::milliseconds>(t - t0).count());
+  }
+
+  ManualClock clock;
+  const Clock::time_point t0 = clock.now();
+  FakeBus bus{clock};
+  std::unique_ptr<BusScheduler> scheduler;
+};
+
+bool ready(std::future<Result>& f) {
+  return f.wait_for(kSafetyNet) == std::future_status::ready;
+}
+
 }  // namespace
 
-TEST(BusScheduler, WritesGoAheadOfPolls) {
-  FakeBus bus;
-  BusScheduler s(bus);
+TEST_F(BusSchedulerTest, WritesGoAheadOfPolls) {
+  BusScheduler& s = make();
   std::atomic<int> polls{0};
   s.addPoll("a", 200.0, read(1), [&](const Result&) { ++polls; });
   s.start();
-  std::this_thread::sleep_for(50ms);
+  ASSERT_TRUE(runUntil(50ms));
+  EXPECT_EQ(polls.load(), 10);  // 0, 5, ..., 45 ms
+  // Five writes queued together while the bus is busy (the first one is held on it).
+  bus.hold();
   std::vector<std::future<Result>> writes;
-  for (int i = 0; i < 5; ++i)
-    writes.push_back(s.submit(
-        "a", [](Transport& t) { return t.execute(Request::writeSingleCoil(1, 0, true)); }));
-  for (auto& w : writes) EXPECT_TRUE(w.get().ok());
+  for (int i = 0; i < 5; ++i) writes.push_back(s.submit("a", writeCoil(1)));
+  bus.release();
+  for (auto& w : writes) {
+    ASSERT_TRUE(ready(w));
+    EXPECT_TRUE(w.get().ok());
+  }
   s.stop();
-  // The five writes were queued together: no poll ran between them.
+  // No poll ran between them, though the one due at 50 ms was due during them.
   std::lock_guard<std::mutex> lock(bus.m);
   auto first = std::find(bus.log.begin(), bus.log.end(), "1w");
-  ASSERT_NE(first, bus.log.end());
+  ASSERT_EQ(first - bus.log.begin(), 10);
+  ASSERT_GE(bus.log.end() - first, 5);
   EXPECT_TRUE(std::all_of(first, first + 5, [](const std::string& e) { return e == "1w"; }));
   EXPECT_GT(polls.load(), 3);
 }
 
-TEST(BusScheduler, PollRatesAreSharedAndAchievedRateIsReported) {
-  FakeBus bus;
-  BusScheduler s(bus);
+TEST_F(BusSchedulerTest, PollRatesAreSharedAndAchievedRateIsReported) {
+  BusScheduler& s = make();
   s.addPoll("fast", 50.0, read(1), nullptr);
   s.addPoll("slow", 10.0, read(2), nullptr);
   s.start();
-  std::this_thread::sleep_for(1500ms);
-  s.stop();
+  ASSERT_TRUE(runUntil(1500ms));
   const DeviceHealth fast = s.health("fast"), slow = s.health("slow");
-  // Generous bounds: a shared 2-core machine.
-  EXPECT_GT(fast.polls_ok, 40u);
-  EXPECT_LT(fast.polls_ok, 90u);
-  EXPECT_GT(slow.polls_ok, 8u);
-  EXPECT_LT(slow.polls_ok, 20u);
-  EXPECT_GT(fast.achieved_poll_rate, 30.0);
+  EXPECT_EQ(fast.polls_ok, 75u);  // due at 0, 20, ..., 1480 ms
+  EXPECT_EQ(slow.polls_ok, 15u);  // due at 0, 100, ..., 1400 ms
+  // 74 intervals between the first reply (2 ms) and the last one (1482 ms).
+  EXPECT_NEAR(fast.achieved_poll_rate, 50.0, 1e-9);
   EXPECT_TRUE(fast.online);
+  EXPECT_FALSE(fast.rate_overrun);
+  EXPECT_FALSE(slow.rate_overrun);
 }
 
-TEST(BusScheduler, ARateTheBusCannotCarryIsReported) {
-  FakeBus bus;
-  bus.latency = 20ms;  // at most ~50 transactions per second
-  BusScheduler s(bus);
+TEST_F(BusSchedulerTest, DevicesWithTheSameRateAreEachPolledAtIt) {
+  BusScheduler& s = make();
+  for (uint8_t a = 1; a <= 3; ++a) s.addPoll("d" + std::to_string(a), 10.0, read(a), nullptr);
+  s.start();
+  ASSERT_TRUE(runUntil(1500ms));
+  for (uint8_t a = 1; a <= 3; ++a) {
+    const DeviceHealth h = s.health("d" + std::to_string(a));
+    EXPECT_EQ(h.polls_ok, 15u) << int(a);
+    EXPECT_NEAR(h.achieved_poll_rate, 10.0, 1e-9) << int(a);
+    // One after the other at each period, in the same order every time.
+    std::vector<long> expected;
+    for (long k = 0; k < 15; ++k) expected.push_back(k * 100 + 2 * (a - 1));
+    EXPECT_EQ(startsOf(a), expected) << int(a);
+  }
+}
+
+TEST_F(BusSchedulerTest, ARateTheBusCannotCarryIsReported) {
+  bus.latency = 20ms;  // at most 50 transactions per second
+  BusScheduler& s = make();
   s.addPoll("greedy", 500.0, read(1), nullptr);
   s.start();
-  std::this_thread::sleep_for(1500ms);
+  ASSERT_TRUE(runUntil(1500ms));
   const DeviceHealth h = s.health("greedy");
-  s.stop();
+  EXPECT_EQ(h.polls_ok, 75u);  // back to back
   EXPECT_TRUE(h.rate_overrun);
+  EXPECT_NEAR(h.achieved_poll_rate, 50.0, 1e-9);
   EXPECT_LT(h.achieved_poll_rate, 100.0);
 }
 
-TEST(BusScheduler, AnOfflineDeviceIsBackedOffAndDoesNotStallOthers) {
-  FakeBus bus;
+TEST_F(BusSchedulerTest, AnOfflineDeviceIsBackedOffAndDoesNotStallOthers) {
   bus.dead = {2};
   BusScheduler::Options o;
   o.offline_after = 2;
   o.backoff_initial = 0.2;
   o.backoff_max = 0.4;
-  BusScheduler s(bus, o);
+  BusScheduler& s = make(o);
   s.addPoll("alive", 20.0, read(1), nullptr);
   s.addPoll("dead", 20.0, read(2), nullptr);
   s.start();
-  std::this_thread::sleep_for(1500ms);
+  ASSERT_TRUE(runUntil(1500ms));
   const DeviceHealth alive = s.health("alive"), dead = s.health("dead");
   EXPECT_FALSE(dead.online);
-  EXPECT_GE(dead.consecutive_failures, 2u);
+  EXPECT_EQ(dead.consecutive_failures, 5u);
   EXPECT_EQ(dead.last_error, "no reply");
-  // Backed off: a dead device polled at 20 Hz would be tried ~30 times.
-  EXPECT_LT(dead.polls_failed, 12u);
-  EXPECT_GT(alive.polls_ok, 22u);  // ~30 expected at 20 Hz
-  // It comes back by itself.
+  // Two failures (each a 20 ms timeout) at its rate, then probes after 200, 400 and 400 ms
+  // (the maximum) of backoff, counted from the end of the failed probe.
+  EXPECT_EQ(startsOf(2), (std::vector<long>{2, 52, 72 + 200, 292 + 400, 712 + 400}));
+  EXPECT_EQ(dead.polls_failed, 5u);  // a dead device polled at 20 Hz would be tried 30 times
+  EXPECT_EQ(alive.polls_ok, 30u);    // all of them: due at 0, 50, ..., 1450 ms
+  EXPECT_FALSE(alive.rate_overrun);
+  // It comes back by itself, at the next probe.
   {
     std::lock_guard<std::mutex> lock(bus.m);
     bus.dead.clear();
   }
-  std::this_thread::sleep_for(800ms);
+  ASSERT_TRUE(runUntil(1532ms));
+  EXPECT_FALSE(s.health("dead").online);
+  ASSERT_TRUE(runUntil(2300ms));
   EXPECT_TRUE(s.health("dead").online);
-  s.stop();
+  EXPECT_EQ(startsOf(2).at(5), 1132 + 400);
+  EXPECT_EQ(s.health("dead").consecutive_failures, 0u);
 }
 
-TEST(BusScheduler, ExceptionsDoNotMakeADeviceOffline) {
+TEST_F(BusSchedulerTest, ExceptionsDoNotMakeADeviceOffline) {
   struct Refusing : FakeBus {
+    using FakeBus::FakeBus;
     Result execute(const Request&) override {
       return Result::failure(ErrorKind::kException, "illegal data address", 2);
     }
-  } bus;
-  BusScheduler s(bus);
+  } refusing{clock};
+  BusScheduler& s = make(refusing);
   s.addPoll("d", 100.0, read(1), nullptr);
   s.start();
-  std::this_thread::sleep_for(200ms);
-  s.stop();
+  ASSERT_TRUE(runUntil(200ms));
   EXPECT_TRUE(s.health("d").online);
-  EXPECT_GT(s.health("d").polls_failed, 5u);
+  EXPECT_EQ(s.health("d").polls_failed, 20u);  // every one, at its rate
+  EXPECT_EQ(s.health("d").consecutive_failures, 0u);
+  s.stop();  // before `refusing` goes
 }
 
-TEST(BusScheduler, ReconnectsAfterThePortGoesAway) {
-  FakeBus bus;
+TEST_F(BusSchedulerTest, ReconnectsAfterThePortGoesAway) {
   BusScheduler::Options o;
   o.reconnect_initial = 0.05;
   o.reconnect_max = 0.1;
-  BusScheduler s(bus, o);
+  BusScheduler& s = make(o);
   s.addPoll("a", 50.0, read(1), nullptr);
   s.start();
-  std::this_thread::sleep_for(100ms);
-  bus.up = false;  // the next transaction fails with an I/O error
-  std::this_thread::sleep_for(300ms);
+  ASSERT_TRUE(runUntil(100ms));
+  EXPECT_EQ(s.health("a").polls_ok, 5u);
+  bus.up = false;  // the next transaction (the poll at 100 ms) fails with an I/O error
+  ASSERT_TRUE(runUntil(400ms));
   EXPECT_FALSE(s.connected());
   EXPECT_NE(s.connectionError().find("/dev/fake"), std::string::npos);
-  // Writes fail fast while the port is gone, naming why.
+  // Writes fail at once while the port is gone, naming why.
   auto w = s.submit("a", read(1));
-  ASSERT_EQ(w.wait_for(2s), std::future_status::ready);
+  ASSERT_TRUE(ready(w));
   const Result r = w.get();
   EXPECT_EQ(r.error, ErrorKind::kNotConnected);
+  EXPECT_NE(r.message.find("/dev/fake"), std::string::npos) << r.message;
+  EXPECT_EQ(s.health("a").writes_refused, 1u);
   bus.up = true;
-  std::this_thread::sleep_for(400ms);
+  ASSERT_TRUE(runUntil(800ms));
   EXPECT_TRUE(s.connected());
-  EXPECT_TRUE(s.submit("a", read(1)).get().ok());
+  bus.release();
+  auto again = s.submit("a", read(1));
+  ASSERT_TRUE(ready(again));
+  EXPECT_TRUE(again.get().ok());
   s.stop();
-  EXPECT_GE(bus.connects.load(), 2);
+  // Right away, then after 50 ms, then every 100 ms (the maximum) until it opens.
+  std::vector<long> tries;
+  {
+    std::lock_guard<std::mutex> lock(bus.m);
+    for (auto t : bus.connect_times) tries.push_back(ms(t));
+  }
+  EXPECT_EQ(tries, (std::vector<long>{100, 150, 250, 350, 450}));
+  EXPECT_EQ(bus.connects.load(), 5);
 }
 
-TEST(BusScheduler, StopFailsWhatIsStillQueued) {
-  FakeBus bus;
-  bus.latency = 100ms;
-  BusScheduler s(bus);
+TEST_F(BusSchedulerTest, StopFailsWhatIsStillQueued) {
+  BusScheduler& s = make();
+  bus.release();
   s.start();
+  // The first job is on the bus until stop() has begun (a submit then fails at once); the four
+  // behind it never run.
+  std::promise<void> on_bus;
   std::vector<std::future<Result>> jobs;
-  for (int i = 0; i < 5; ++i) jobs.push_back(s.submit("a", read(1)));
-  std::this_thread::sleep_for(50ms);
+  jobs.push_back(s.submit("a", [&](Transport& t) {
+    on_bus.set_value();
+    const auto deadline = std::chrono::steady_clock::now() + kSafetyNet;
+    for (;;) {
+      auto probe = s.submit("a", read(1));
+      if (probe.wait_for(0s) == std::future_status::ready && probe.get().message == "bus stopped")
+        break;
+      if (std::chrono::steady_clock::now() > deadline) break;
+      std::this_thread::sleep_for(100us);
+    }
+    return t.execute(Request::readCoils(1, 0, 8));
+  }));
+  for (int i = 0; i < 4; ++i) jobs.push_back(s.submit("a", read(1)));
+  ASSERT_EQ(on_bus.get_future().wait_for(kSafetyNet), std::future_status::ready);
   s.stop();
   int stopped = 0;
   for (auto& j : jobs) {
+    ASSERT_TRUE(ready(j));
     const Result r = j.get();
     if (!r.ok()) {
       EXPECT_EQ(r.message, "bus stopped");
       ++stopped;
     }
   }
-  EXPECT_GE(stopped, 3);
+  EXPECT_EQ(stopped, 4);
   EXPECT_EQ(s.submit("a", read(1)).get().message, "bus stopped");
+  std::lock_guard<std::mutex> lock(bus.m);
+  EXPECT_EQ(bus.log, std::vector<std::string>{"1r"});  // only the job that was on the bus
 }
 
-TEST(BusScheduler, AnOverloadedBusIsSharedInTurn) {
+TEST_F(BusSchedulerTest, AnOverloadedBusIsSharedInTurn) {
   // 16 devices each asking for more than the bus carries: none may take more than its turn,
   // whatever its place in the list, also after the schedule gives up catching up (3 s behind).
-  FakeBus bus;
   bus.latency = 2ms;
-  BusScheduler s(bus);
+  BusScheduler& s = make();
   for (uint8_t a = 1; a <= 16; ++a) {
     s.addDevice("d" + std::to_string(a));
     s.addPoll("d" + std::to_string(a), 1000.0, read(a), nullptr);
   }
   s.start();
-  std::this_thread::sleep_for(4500ms);
-  s.stop();
-  uint64_t least = UINT64_MAX, most = 0;
+  ASSERT_TRUE(runUntil(4500ms));
+  uint64_t least = UINT64_MAX, most = 0, total = 0;
   for (uint8_t a = 1; a <= 16; ++a) {
     const uint64_t n = s.health("d" + std::to_string(a)).polls_ok;
     least = std::min(least, n);
     most = std::max(most, n);
+    total += n;
   }
+  EXPECT_EQ(total, 2250u);  // back to back for 4.5 s
   EXPECT_GT(most, 20u);
   EXPECT_GE(least * 5, most * 4) << "fewest " << least << ", most " << most;
+  EXPECT_LE(most - least, 1u) << "fewest " << least << ", most " << most;
 }
 
-TEST(BusScheduler, AWriteWaitsForOneTransactionNotAWholePoll) {
-  FakeBus bus;
+TEST_F(BusSchedulerTest, AWriteWaitsForOneTransactionNotAWholePoll) {
   bus.latency = 30ms;
-  BusScheduler s(bus);
+  BusScheduler& s = make();
   s.addDevice("slow");
   s.addPoll(
       "slow", 1.0,
@@ -232,21 +384,21 @@ TEST(BusScheduler, AWriteWaitsForOneTransactionNotAWholePoll) {
         return Result::success();
       },
       nullptr);
+  bus.hold();  // the poll's first read stays on the bus
   s.start();
-  auto logged = [&] {
-    std::lock_guard<std::mutex> lock(bus.m);
-    return bus.log.size();
-  };
-  while (logged() == 0) std::this_thread::sleep_for(1ms);  // the poll's first read is on
-  auto write = s.submit(
-      "other", [](Transport& t) { return t.execute(Request::writeSingleCoil(2, 0, true)); });
+  ASSERT_TRUE(clock.awaitSleepers(1, kSafetyNet));
+  ASSERT_EQ(clock.nextDeadline(), Clock::time_point::max());  // held, not waiting for time
+  auto write = s.submit("other", writeCoil(2));
+  bus.release();
+  ASSERT_TRUE(ready(write));
   EXPECT_TRUE(write.get().ok());
-  std::this_thread::sleep_for(100ms);  // the rest of the poll
+  ASSERT_TRUE(runUntil(500ms));  // the rest of the poll
   s.stop();
   std::lock_guard<std::mutex> lock(bus.m);
-  ASSERT_GE(bus.log.size(), 4u);
+  ASSERT_EQ(bus.log.size(), 4u);
   EXPECT_EQ(bus.log[0], "1r");
   EXPECT_EQ(bus.log[1], "2w") << "the write goes between the poll's transactions";
   EXPECT_EQ(bus.log[2], "1r");
   EXPECT_EQ(bus.log[3], "1r");
+  EXPECT_EQ(ms(bus.started[1]), 30);  // right after the first read
 }

@@ -1,7 +1,12 @@
 // The link against a scripted device on a pty: every kind of failure is told apart, and
 // nothing from one transaction is read as the answer to the next.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <future>
 #include <thread>
 
@@ -223,4 +228,29 @@ TEST_F(RtuLinkFaults, OneOwnerPerPort) {
   EXPECT_NE(error.find("in use by another process"), std::string::npos) << error;
   link_->disconnect();
   EXPECT_TRUE(second.connect(&error)) << error;
+}
+
+// A program that ignores locks (mbpoll, a terminal) must not get the port while the link has it:
+// the kernel refuses its open() with EBUSY (TIOCEXCL). Root is let through by the kernel, so a
+// root test tries as "nobody".
+TEST_F(RtuLinkFaults, ProgramsThatIgnoreTheLockCannotOpenThePort) {
+  const std::string path = pty_.path();
+  const bool root = geteuid() == 0;
+  if (root) {
+    ASSERT_EQ(chmod(path.c_str(), 0666), 0);
+  }
+  auto tryOpen = [&] {  // 0: refused with EBUSY, 1: opened, 2: other error
+    const pid_t pid = fork();
+    if (pid == 0) {
+      if (root && (setgid(65534) != 0 || setuid(65534) != 0)) _exit(3);
+      const int fd = open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
+      _exit(fd >= 0 ? 1 : errno == EBUSY ? 0 : 2);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  EXPECT_EQ(tryOpen(), 0);
+  link_->disconnect();
+  EXPECT_EQ(tryOpen(), 1);  // the exclusivity ends with the link's hold on the port
 }

@@ -1,6 +1,7 @@
 // The bus thread. It alone calls the Transport (and so libmodbus); everyone else hands it jobs.
 // Writes (submit) go ahead of polls; polls run at their device's rate, earliest due first, and a
 // device that stops answering is polled with backoff so it cannot stall the others.
+// Time comes from a Clock (the real steady clock unless one is given; tests use a ManualClock).
 #pragma once
 
 #include <chrono>
@@ -14,13 +15,15 @@
 #include <thread>
 #include <vector>
 
+#include "modbus_rtu_driver/core/clock.h"
 #include "modbus_rtu_driver/core/status.h"
 #include "modbus_rtu_driver/core/transport.h"
 
 namespace modbus_rtu_driver {
 
 struct DeviceHealth {
-  bool online = true;  // false after `offline_after` failed transactions in a row
+  bool online = true;     // false after `offline_after` failed transactions in a row
+  bool answered = false;  // it has answered at least once (online in /diagnostics only then)
   uint32_t consecutive_failures = 0;
   uint64_t polls_ok = 0, polls_failed = 0, writes_ok = 0, writes_failed = 0;
   uint64_t writes_refused = 0;    // failed unsent: the port was not open or the bus stopped
@@ -44,6 +47,9 @@ class BusScheduler {
 
   explicit BusScheduler(Transport& transport);
   BusScheduler(Transport& transport, Options options);
+  // Reads the time from and sleeps on `clock` (the real steady clock otherwise); it must outlive
+  // the scheduler.
+  BusScheduler(Transport& transport, Options options, Clock& clock);
   ~BusScheduler();  // stops the thread; pending jobs fail with "bus stopped"
 
   void start();
@@ -70,9 +76,9 @@ class BusScheduler {
  private:
   struct Poll {
     std::string device;
-    std::chrono::steady_clock::duration period{};
-    std::chrono::steady_clock::time_point due{};
-    std::chrono::steady_clock::time_point last_run{};  // when it was last polled
+    Clock::duration period{};
+    Clock::time_point due{};
+    Clock::time_point last_run{};  // when it was last polled
     Job job;
     ResultCallback on_result;
   };
@@ -107,14 +113,15 @@ class BusScheduler {
 
   Transport& transport_;
   Options options_;
+  Clock& clock_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::deque<Pending> writes_;
   std::vector<Poll> polls_;
   std::map<std::string, DeviceHealth> health_;
-  std::map<std::string, std::chrono::steady_clock::time_point> backoff_until_;
+  std::map<std::string, Clock::time_point> backoff_until_;
   std::map<std::string, double> backoff_;
-  std::map<std::string, std::deque<std::chrono::steady_clock::time_point>> poll_times_;
+  std::map<std::string, std::deque<Clock::time_point>> poll_times_;
   PollTransport poll_transport_;
   bool running_ = false;
   bool connected_ = false;

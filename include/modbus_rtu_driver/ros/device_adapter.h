@@ -56,13 +56,16 @@ class DeviceAdapter {
   bool onSet(uint8_t channel, std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res);
   bool onSetOutputs(SetOutputs::Request& req, SetOutputs::Response& res);
   void onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& msg);
-  void flushCommands();  // bus thread
+  void logOnlineChange(const DeviceHealth& health);
 
   ros::Publisher outputs_pub_;
   std::vector<ros::Publisher> output_state_pubs_;
   std::vector<std::optional<bool>> published_outputs_;
   std::vector<ros::Subscriber> command_subs_;
   std::vector<ros::ServiceServer> services_;
+
+  std::optional<bool> logged_online_;  // what the log last said
+  ros::WallTime last_offline_log_;
 
   OutputBatch batch_;
   // Command topics: newest command per channel wins; one bus job drains them.
