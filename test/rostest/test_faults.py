@@ -126,7 +126,7 @@ class FaultsTest(unittest.TestCase):
         """Review defect A: a refused write went out later, merged into the next one, and one
         command during the outage silenced the command topics for good."""
         helpers.Latest(NS + "relays/outputs", DigitalStates).wait(30, what="relay board polls")
-        set_out3 = helpers.service(NS + "relays/out3/set", SetBool)
+        set_fan = helpers.service(NS + "relays/fan/set", SetBool)  # channel 3
         set_out7 = helpers.service(NS + "relays/out7/set", SetBool)
         out4 = rospy.Publisher(NS + "relays/out4/command", Bool, queue_size=1)
         out5 = rospy.Publisher(NS + "relays/out5/command", Bool, queue_size=1)
@@ -141,7 +141,7 @@ class FaultsTest(unittest.TestCase):
         helpers.wait_until(lambda: self.status("bus ") is not None and
                            self.status("bus ").level == DiagnosticStatus.ERROR, 15,
                            "the bus reported down")
-        res = set_out3(True)
+        res = set_fan(True)
         self.assertFalse(res.success)
         self.assertIn("port not open", res.message)
         out4.publish(Bool(True))
@@ -154,7 +154,7 @@ class FaultsTest(unittest.TestCase):
         # Command topics still work after the outage ...
         out5.publish(Bool(True))
         helpers.wait_until(lambda: self.sim.get("255", "coil", 5) == [1], 15, "out5 on by command")
-        # ... and services too; the refused out3 and out4 never reach the board.
+        # ... and services too; the refused fan (3) and out4 never reach the board.
         res = set_out7(True)
         self.assertTrue(res.success, res.message)
         self.assertNotIn("merged", res.message)
