@@ -152,8 +152,12 @@ class FaultsTest(unittest.TestCase):
         helpers.wait_until(lambda: self.status("bus ").level != DiagnosticStatus.ERROR, 30,
                            "the bus reported up again")
         # Command topics still work after the outage ...
-        out5.publish(Bool(True))
-        helpers.wait_until(lambda: self.sim.get("255", "coil", 5) == [1], 15, "out5 on by command")
+        # (A command is best effort: one lost on a loaded machine is sent again, as a robot's
+        # controller would. Dead command topics never turn it on.)
+        def out5_on():
+            out5.publish(Bool(True))
+            return self.sim.get("255", "coil", 5) == [1]
+        helpers.wait_until(out5_on, 15, "out5 on by command")
         # ... and services too; the refused fan (3) and out4 never reach the board.
         res = set_out7(True)
         self.assertTrue(res.success, res.message)
