@@ -69,16 +69,31 @@ bool BusNode::start() {
   return true;
 }
 
+// Line errors (silence, garbled or misaddressed replies, i/o) in the last kErrorWindowSeconds:
+// the level says how the bus is now; the totals stay in the values.
+uint64_t BusNode::recentLineErrors(const LinkStats& s) {
+  const uint64_t total = s.timeouts + s.crc_errors + s.wrong_address + s.malformed + s.io_errors;
+  const ros::WallTime now = ros::WallTime::now();
+  error_totals_.emplace_back(now, total);
+  while (error_totals_.size() > 1 &&
+         (now - error_totals_[1].first).toSec() >= static_cast<double>(kErrorWindowSeconds))
+    error_totals_.pop_front();
+  return total - error_totals_.front().second;
+}
+
 void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   using diagnostic_msgs::DiagnosticStatus;
   const LinkStats s = link_->stats();
+  const uint64_t recent = recentLineErrors(s);
   if (!bus_->connected()) {
     status.summary(DiagnosticStatus::ERROR, "port not open: " + bus_->connectionError());
     // A wrong port or a second node on it must show in the log, not only in /diagnostics.
     ROS_ERROR_THROTTLE(10.0, "bus %s: port not open: %s (retrying with backoff)",
                        config_.link.port.c_str(), bus_->connectionError().c_str());
-  } else if (s.timeouts + s.crc_errors + s.wrong_address + s.malformed + s.io_errors > 0) {
-    status.summary(DiagnosticStatus::WARN, "link up, errors seen");
+  } else if (recent > 0) {
+    status.summary(DiagnosticStatus::WARN, "link up, " + std::to_string(recent) +
+                                               " failed attempt(s) in the last " +
+                                               std::to_string(kErrorWindowSeconds) + " s");
   } else {
     status.summary(DiagnosticStatus::OK, "link up");
   }
@@ -86,6 +101,8 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   status.add("baud", config_.link.baud);
   status.add("parity", parityName(config_.link.parity));
   status.add("requests", s.requests);
+  status.add("attempts", s.attempts);
+  status.add("failed", s.failed);
   status.add("ok", s.ok);
   status.add("broadcasts", s.broadcasts);
   status.add("timeouts", s.timeouts);

@@ -8,7 +8,7 @@ import unittest
 
 import rospy
 import rostest
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from std_srvs.srv import SetBool
 
 from modbus_rtu_driver.msg import DigitalStates, PwmStates
@@ -26,6 +26,7 @@ class ReplyFaultsTest(unittest.TestCase):
         rospy.init_node("test_reply_faults")
         cls.sim = helpers.sim()
         cls.bus_values = {}
+        cls.bus_level = None
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls.on_diag)
         cls.inputs = helpers.Latest(NS + "relays/inputs", DigitalStates)
         cls.pwm = helpers.Latest(NS + "pwm_board/pwm", PwmStates)
@@ -40,6 +41,7 @@ class ReplyFaultsTest(unittest.TestCase):
         for s in msg.status:
             if s.name.split(": ", 1)[-1].startswith("bus "):
                 cls.bus_values = {kv.key: kv.value for kv in s.values}
+                cls.bus_level = (s.level, s.message)
 
     def counter(self, key):
         helpers.wait_until(lambda: key in self.bus_values, 10, "bus diagnostics with " + key)
@@ -178,6 +180,20 @@ class ReplyFaultsTest(unittest.TestCase):
                 self.sim.drop(dev, 0, "request")
             for ch in range(6):
                 self.sim.set(PWM, "holding", ch * 16 + 2, 0)
+
+    def test_5_the_bus_level_says_how_the_line_is_now(self):
+        """WARN while failed attempts are recent (also those a retry made good), OK again once
+        the line has been clean for the window (10 s); the totals stay."""
+        before = self.counter("crc errors")
+        self.sim.spoil("corrupt", RELAYS, 1)
+        self.assertTrue(self.valve(True).success)  # the retry gets through
+        self.counter_grows("crc errors", before)
+        helpers.wait_until(lambda: self.bus_level and self.bus_level[0] == DiagnosticStatus.WARN, 10,
+                           "bus WARN after a failed attempt")
+        self.assertIn("failed attempt", self.bus_level[1])
+        helpers.wait_until(lambda: self.bus_level[0] == DiagnosticStatus.OK, 40,
+                           "bus OK again once the line is clean")
+        self.assertGreater(self.counter("crc errors"), before)
 
 
 if __name__ == "__main__":

@@ -180,6 +180,10 @@ TEST_F(RtuLinkFaults, RetriesRepeatAfterATimeoutButNotAfterAnException) {
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(link.stats().retries, 1u);
   EXPECT_EQ(link.stats().attempts, 2u);
+  // The timeout a retry made good still shows by its kind (a flaky line is seen early).
+  EXPECT_EQ(link.stats().timeouts, 1u);
+  EXPECT_EQ(link.stats().ok, 1u);
+  EXPECT_EQ(link.stats().failed, 0u);
   auto device2 = std::async(std::launch::async, [&] {
     pty_.read(n);
     pty_.write(encodeException(1, 0x01, 0x02));
@@ -187,6 +191,8 @@ TEST_F(RtuLinkFaults, RetriesRepeatAfterATimeoutButNotAfterAnException) {
   EXPECT_EQ(link.execute(req).error, ErrorKind::kException);
   device2.get();
   EXPECT_EQ(link.stats().attempts, 3u);  // no retry after an exception
+  EXPECT_EQ(link.stats().exceptions, 1u);
+  EXPECT_EQ(link.stats().failed, 1u);
 }
 
 TEST_F(RtuLinkFaults, BroadcastIsSentAndNotWaitedFor) {

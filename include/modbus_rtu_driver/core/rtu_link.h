@@ -26,8 +26,11 @@ namespace modbus_rtu_driver {
 struct LinkStats {
   uint64_t requests = 0;  // transactions asked for (not counting retries)
   uint64_t attempts = 0;  // frames sent, retries included
-  uint64_t ok = 0;
+  uint64_t ok = 0;        // transactions that succeeded (after retries, if any)
+  uint64_t failed = 0;    // transactions that failed for good
   uint64_t broadcasts = 0;
+  // Failed attempts by kind, retried ones included (a timeout retried once counts 2 if both
+  // attempts failed, 1 if the retry got through).
   uint64_t timeouts = 0;
   uint64_t crc_errors = 0;
   uint64_t wrong_address = 0;
@@ -78,7 +81,8 @@ class RtuLink : public Transport {
   void awaitQuietLine(std::chrono::steady_clock::time_point until);
   void keepGap();
   double responseTimeout(const Request& request) const;
-  void account(const Result& result, double latency);
+  void account(const Result& result, double latency);  // per transaction
+  void countAttempt(const Result& result);             // per attempt: failures by kind
 
   LinkConfig config_;
   modbus_t* ctx_ = nullptr;

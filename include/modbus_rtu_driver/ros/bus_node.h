@@ -5,6 +5,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/ros.h>
 
+#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -26,6 +27,10 @@ class BusNode {
 
  private:
   void diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status);
+  uint64_t recentLineErrors(const LinkStats& stats);
+
+  static constexpr int kErrorWindowSeconds = 10;
+  std::deque<std::pair<ros::WallTime, uint64_t>> error_totals_;  // (when, line errors so far)
 
   ros::NodeHandle nh_;
   BusConfig config_;
