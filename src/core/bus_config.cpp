@@ -154,7 +154,8 @@ std::set<std::string> with(std::set<std::string> keys, const std::set<std::strin
 void parse(const YAML::Node& root, BusConfig* out) {
   if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
   checkKeys(root, "",
-            with(kLinkKeys, {"role", "diagnostic_period", "devices", "allow_raw_writes"}));
+            with(kLinkKeys, {"role", "diagnostic_period", "devices", "allow_raw_writes",
+                             "publish_on_change", "keep_alive"}));
   parseLink(root, &out->link);
   if (root["allow_raw_writes"])
     out->allow_raw_writes =
@@ -164,6 +165,14 @@ void parse(const YAML::Node& root, BusConfig* out) {
     if (out->role != "master") fail("role", "'" + out->role + "' is not master");
   }
   out->diagnostic_period = parseDiagnosticPeriod(root);
+  if (root["publish_on_change"])
+    out->publish_on_change =
+        get<bool>(root["publish_on_change"], "publish_on_change", "true or false");
+  if (root["keep_alive"]) {
+    out->keep_alive = getNumber(root["keep_alive"], "keep_alive");
+    if (!(out->keep_alive >= 0.1 && out->keep_alive <= 3600))
+      fail("keep_alive", std::to_string(out->keep_alive) + " s is outside 0.1-3600 s");
+  }
   const YAML::Node devices = root["devices"];
   if (!devices) fail("devices", "missing (a map of device name -> settings)");
   if (!devices.IsMap() || devices.size() == 0)

@@ -62,7 +62,10 @@ bool BusNode::start() {
       nh_.createTimer(ros::Duration(config_.diagnostic_period),
                       [this](const ros::TimerEvent&) { diagnostics_->force_update(); });
 
-  for (auto& a : adapters_) a->start();
+  for (auto& a : adapters_) {
+    a->setPublishPolicy({config_.publish_on_change, config_.keep_alive});
+    a->start();
+  }
   bus_->start();
   ROS_INFO("bus %s at %d baud, %s parity: %zu device(s)", config_.link.port.c_str(),
            config_.link.baud, parityName(config_.link.parity), adapters_.size());

@@ -2,8 +2,6 @@
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
 
-#include "modbus_rtu_driver/DigitalStates.h"
-
 namespace modbus_rtu_driver {
 
 DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
@@ -13,12 +11,10 @@ DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
 void DeviceAdapter::start() {
   const auto names = device_->outputNames();
   const size_t n = device_->outputCount();
-  outputs_pub_ = nh_.advertise<DigitalStates>("outputs", 1, true);
-  published_outputs_.assign(n, std::nullopt);
+  outputs_ = std::make_unique<DigitalStatesPublisher>(nh_, "outputs", names, publish_policy_);
   pending_commands_.assign(n, std::nullopt);
   for (size_t i = 0; i < n; ++i) {
     const auto ch = static_cast<uint8_t>(i);
-    output_state_pubs_.push_back(nh_.advertise<std_msgs::Bool>(names[i] + "/state", 1, true));
     command_subs_.push_back(nh_.subscribe<std_msgs::Bool>(
         names[i] + "/command", 10,
         [this, ch](const std_msgs::Bool::ConstPtr& msg) { onCommand(ch, msg); }));
@@ -37,7 +33,11 @@ void DeviceAdapter::start() {
 }
 
 void DeviceAdapter::onPoll(const Result& result) {
-  if (result.ok()) publishOutputs();
+  if (result.ok()) {
+    publishOutputs();
+  } else if (offline()) {
+    outputs_->markStale();
+  }
 }
 
 Result DeviceAdapter::runOnBus(BusScheduler::Job job) {
@@ -59,20 +59,7 @@ Result DeviceAdapter::writeOutputs(const std::vector<uint8_t>& channels,
 }
 
 void DeviceAdapter::publishOutputs() {
-  const auto& states = device_->outputs();
-  if (states.size() != device_->outputCount()) return;  // not known yet
-  DigitalStates msg;
-  msg.header.stamp = ros::Time::now();
-  msg.states.assign(states.begin(), states.end());
-  msg.names = device_->outputNames();
-  outputs_pub_.publish(msg);
-  for (size_t i = 0; i < states.size(); ++i) {
-    if (published_outputs_[i] == states[i]) continue;
-    published_outputs_[i] = states[i];
-    std_msgs::Bool b;
-    b.data = states[i];
-    output_state_pubs_[i].publish(b);
-  }
+  outputs_->publish(device_->outputs(), ros::Time::now());
 }
 
 std::string DeviceAdapter::answer(const Result& result, const std::string& what) const {

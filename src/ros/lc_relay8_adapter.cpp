@@ -1,5 +1,4 @@
 // LC relay board: inputs (optocouplers) and timed flash-close / flash-open.
-#include "modbus_rtu_driver/DigitalStates.h"
 #include "modbus_rtu_driver/Pulse.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
@@ -14,11 +13,8 @@ class LcRelay8Adapter : public DeviceAdapter {
 
   void start() override {
     DeviceAdapter::start();
-    const auto names = device_->inputNames();
-    inputs_pub_ = nh_.advertise<DigitalStates>("inputs", 10);
-    published_inputs_.assign(names.size(), std::nullopt);
-    for (const auto& n : names)
-      input_state_pubs_.push_back(nh_.advertise<std_msgs::Bool>(n + "/state", 1, true));
+    inputs_ = std::make_unique<DigitalStatesPublisher>(nh_, "inputs", device_->inputNames(),
+                                                       publish_policy_);
     pulse_srv_ = nh_.advertiseService("pulse", &LcRelay8Adapter::onPulse, this);
   }
 
@@ -27,19 +23,10 @@ class LcRelay8Adapter : public DeviceAdapter {
 
   void onPoll(const Result& result) override {
     DeviceAdapter::onPoll(result);
-    if (!result.ok()) return;
-    const auto& states = device_->inputs();
-    DigitalStates msg;
-    msg.header.stamp = ros::Time::now();
-    msg.states.assign(states.begin(), states.end());
-    msg.names = device_->inputNames();
-    inputs_pub_.publish(msg);
-    for (size_t i = 0; i < states.size() && i < published_inputs_.size(); ++i) {
-      if (published_inputs_[i] == states[i]) continue;
-      published_inputs_[i] = states[i];
-      std_msgs::Bool b;
-      b.data = states[i];
-      input_state_pubs_[i].publish(b);
+    if (result.ok()) {
+      inputs_->publish(device_->inputs(), ros::Time::now());
+    } else if (offline()) {
+      inputs_->markStale();
     }
   }
 
@@ -66,9 +53,7 @@ class LcRelay8Adapter : public DeviceAdapter {
     return true;
   }
 
-  ros::Publisher inputs_pub_;
-  std::vector<ros::Publisher> input_state_pubs_;
-  std::vector<std::optional<bool>> published_inputs_;
+  std::unique_ptr<DigitalStatesPublisher> inputs_;
   ros::ServiceServer pulse_srv_;
 };
 

@@ -19,6 +19,7 @@
 #include "modbus_rtu_driver/core/bus_scheduler.h"
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/devices/output_batch.h"
+#include "modbus_rtu_driver/ros/digital_states_publisher.h"
 
 namespace modbus_rtu_driver {
 
@@ -29,6 +30,8 @@ class DeviceAdapter {
   DeviceAdapter(const DeviceAdapter&) = delete;
   DeviceAdapter& operator=(const DeviceAdapter&) = delete;
 
+  // How state topics are published (every poll, or on change with a keep-alive); before start().
+  void setPublishPolicy(const DigitalStatesPublisher::Policy& policy) { publish_policy_ = policy; }
   // Advertises topics and services and registers the poll with the scheduler.
   virtual void start();
   // Fills the device's /diagnostics status.
@@ -43,6 +46,8 @@ class DeviceAdapter {
   Result runOnBus(BusScheduler::Job job);
   // Bus thread only: publish the outputs message and the per-channel states that changed.
   void publishOutputs();
+  // Whether the last poll failed with the device now offline (its states are stale).
+  bool offline() const { return !bus_.health(device_->name()).online; }
   // Service writes of outputs: checked, then merged with others queued for this device.
   Result writeOutputs(const std::vector<uint8_t>& channels, const std::vector<bool>& states);
   // "ok" or "<device>: <message>" for service answers.
@@ -51,6 +56,7 @@ class DeviceAdapter {
   std::shared_ptr<Device> device_;
   BusScheduler& bus_;
   ros::NodeHandle nh_;  // ~/<device>
+  DigitalStatesPublisher::Policy publish_policy_;
 
  private:
   bool onSet(uint8_t channel, std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res);
@@ -58,9 +64,7 @@ class DeviceAdapter {
   void onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& msg);
   void logOnlineChange(const DeviceHealth& health);
 
-  ros::Publisher outputs_pub_;
-  std::vector<ros::Publisher> output_state_pubs_;
-  std::vector<std::optional<bool>> published_outputs_;
+  std::unique_ptr<DigitalStatesPublisher> outputs_;
   std::vector<ros::Subscriber> command_subs_;
   std::vector<ros::ServiceServer> services_;
 
