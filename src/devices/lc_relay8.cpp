@@ -20,22 +20,30 @@ Result LcRelay8::setOutputs(Transport& bus, const std::vector<uint8_t>& channels
   return writeCoilOutputs(bus, channels, states);
 }
 
-std::string LcRelay8::validatePulse(uint8_t channel, double duration) {
+std::string LcRelay8::pulseTenths(uint8_t channel, double duration, uint16_t* tenths) {
   if (channel >= kChannels) return "channel: " + std::to_string(channel) + " is outside 0-7";
-  const double tenths = duration * 10.0;
-  if (!(duration >= 0.1 && duration <= 6553.5) || std::fabs(tenths - std::round(tenths)) > 1e-6) {
+  // Convert first (the nearest 0.1 s, float noise allowed), then check the register value that
+  // would be written: 0x0001-0xFFFF.
+  const double units = duration * 10.0;
+  const double nearest = std::isfinite(units) ? std::round(units) : -1;
+  if (nearest < 1 || nearest > 65535 || std::fabs(units - nearest) > 1e-3 + 1e-9 * nearest) {
     char buf[96];
     std::snprintf(buf, sizeof buf, "duration: %g s is outside 0.1-6553.5 s in steps of 0.1 s",
                   duration);
     return buf;
   }
+  if (tenths) *tenths = static_cast<uint16_t>(nearest);
   return {};
 }
 
+std::string LcRelay8::validatePulse(uint8_t channel, double duration) {
+  return pulseTenths(channel, duration, nullptr);
+}
+
 Result LcRelay8::pulse(Transport& bus, uint8_t channel, bool state, double duration) {
-  const std::string problem = validatePulse(channel, duration);
+  uint16_t tenths = 0;
+  const std::string problem = pulseTenths(channel, duration, &tenths);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
-  const auto tenths = static_cast<uint16_t>(std::lround(duration * 10.0));
   Request write = Request::writeMultipleRegisters(address(), flashRegister(channel),
                                                   {state ? kFlashClose : kFlashOpen, tenths});
   write.repeatable = false;  // a second copy would start the timed flash again

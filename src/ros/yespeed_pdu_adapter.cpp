@@ -53,20 +53,41 @@ class YespeedPduAdapter : public DeviceAdapter {
     limits_pub_.publish(msg);
   }
 
+  // A field left at 0 (the default of a field not given) keeps what the device holds: the
+  // node reads the limits first and checks the rules on the merged values.
   bool onSetLimits(SetPduLimits::Request& req, SetPduLimits::Response& res) {
-    PduLimitValues l;
-    l.over_voltage = req.limits.over_voltage;
-    l.under_voltage = req.limits.under_voltage;
-    l.over_current = req.limits.over_current;
-    const std::string problem = YespeedPdu::validateLimits(l);
-    if (!problem.empty()) {
+    const double given[3] = {req.limits.over_voltage, req.limits.under_voltage,
+                             req.limits.over_current};
+    PduLimitChange change;
+    for (size_t i = 0; i < 3; ++i) {
+      if (given[i] == 0.0) continue;
+      uint16_t reg = 0;
+      const std::string problem = YespeedPdu::limitToRegister(i, given[i], &reg);
+      if (!problem.empty()) {
+        res.success = false;
+        res.message = device_->name() + ": " + problem;
+        return true;
+      }
+      change[i] = reg;
+    }
+    if (!change[0] && !change[1] && !change[2]) {
       res.success = false;
-      res.message = device_->name() + ": " + problem;
+      res.message = device_->name() +
+                    ": no limit given (over_voltage, under_voltage, over_current; 0 keeps one)";
       return true;
     }
-    const Result r = runOnBus([this, l](Transport& t) {
-      Result w = pdu().setLimits(t, l);
-      if (w.ok()) publishLimits();
+    if (change[0] && change[1] && change[2]) {  // all three: the rules before the bus is asked
+      const std::string problem =
+          YespeedPdu::checkLimitRegisters({*change[0], *change[1], *change[2]});
+      if (!problem.empty()) {
+        res.success = false;
+        res.message = device_->name() + ": " + problem;
+        return true;
+      }
+    }
+    const Result r = runOnBus([this, change](Transport& t) {
+      Result w = pdu().changeLimits(t, change);
+      publishLimits();  // whatever was read is what the device holds
       return w;
     });
     res.success = r.ok();

@@ -167,24 +167,54 @@ void Simulator::processFrame(const Bytes& frame, SimClock::time_point now) {
   if (reply) send(*target, std::move(*reply), delay, request_end);
 }
 
+// Address 0 reaches every device that hears the line, as on a wire. Each applies it as its
+// manual says: a write is applied and not answered. The LC board's address commands are the
+// exception: every LC board takes them and answers, so with more than one board the replies
+// collide (collideReplies).
 void Simulator::broadcast(const std::optional<Request>& request,
                           const std::vector<SimDevice*>& hearing, SimClock::time_point now,
                           SimClock::time_point request_end) {
   if (!request) return;  // nobody answers a broadcast; an undecodable one changes nothing
-  if (SimLcRelay8::isAddressCommand(*request)) {
-    for (SimDevice* d : hearing) {
-      auto* lc = dynamic_cast<SimLcRelay8*>(d);
-      if (!lc || lc->failing) continue;
-      auto reply = lc->handleAtZero(*request);
-      saveState();
-      if (reply) send(*lc, std::move(*reply), lc->replyDelay(), request_end);
-      return;  // "only one board on the bus": the first one takes it
+  const bool lc_address_command = SimLcRelay8::isAddressCommand(*request);
+  std::vector<Bytes> replies;
+  SimDevice* first_answer = nullptr;
+  for (SimDevice* d : hearing) {
+    if (d->failing) continue;
+    auto* lc = dynamic_cast<SimLcRelay8*>(d);
+    if (lc && lc_address_command) {
+      if (auto reply = lc->handleAtZero(*request)) {
+        replies.push_back(std::move(*reply));
+        if (!first_answer) first_answer = lc;
+      }
+    } else {
+      d->handle(*request, now);  // applied (or refused) silently
     }
-    return;
   }
-  for (SimDevice* d : hearing)
-    if (!d->failing) d->handle(*request, now);
   if (!isReadFunction(request->function)) saveState();
+  if (replies.empty()) return;
+  Bytes on_line = replies.size() == 1 ? std::move(replies[0]) : collideReplies(replies);
+  send(*first_answer, std::move(on_line), first_answer->replyDelay(), request_end);
+}
+
+// Several boards drive the line at once. A receiver gets neither reply: the model is the
+// replies ANDed bit by bit (a driven 0 wins over the idle 1 on most transceivers), each board
+// starting a bit after the one before, so the result is one byte longer than the longest
+// reply. Should that ever form a valid frame, its CRC is spoiled: a collision is never clean.
+Bytes collideReplies(const std::vector<Bytes>& replies) {
+  size_t longest = 0;
+  for (const Bytes& r : replies) longest = std::max(longest, r.size());
+  Bytes line(longest + 1, 0xFF);
+  for (size_t k = 0; k < replies.size(); ++k) {
+    const unsigned shift = static_cast<unsigned>(k % 7);  // bits late
+    uint16_t bits = 0xFFFF;                               // idle line before the reply
+    for (size_t i = 0; i < line.size(); ++i) {
+      const uint8_t byte = i < replies[k].size() ? replies[k][i] : 0xFF;
+      bits = static_cast<uint16_t>((bits << 8) | byte);
+      line[i] &= static_cast<uint8_t>(bits >> shift);
+    }
+  }
+  if (hasValidCrc(line)) line.back() ^= 0x01;
+  return line;
 }
 
 bool Simulator::chance(int percent) {

@@ -6,6 +6,7 @@
 #include <set>
 #include <sstream>
 
+#include "modbus_rtu_driver/devices/yespeed_pdu.h"
 #include "modbus_rtu_driver/tools/commission.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
 
@@ -128,6 +129,8 @@ const std::map<std::string, std::set<std::string>>& commandOptions() {
       {"get-save", kTyped},
       {"set-save", kTyped},
       {"factory-reset", kTyped},
+      {"get-limits", kTyped},
+      {"set-limits", {"type", "address", "over-voltage", "under-voltage", "over-current"}},
       {"read", {"address"}},
       {"write", {"address", "multiple"}},
       {"watch", {"address", "interval", "count"}},
@@ -251,6 +254,63 @@ void parseDevice(const Words& w, CommissionCommand& c) {
   }
 }
 
+// The PDU's field names as the tool's options: "over_voltage: ..." -> "--over-voltage: ...".
+std::string asOptions(std::string message) {
+  for (const char* field : YespeedPdu::kLimitNames) {
+    std::string option = std::string("--") + field;
+    std::replace(option.begin(), option.end(), '_', '-');
+    for (size_t at = message.find(field); at != std::string::npos;
+         at = message.find(field, at + option.size())) {
+      if (at >= 2 && message.compare(at - 2, 2, "--") == 0) continue;
+      message.replace(at, std::string(field).size(), option);
+    }
+  }
+  return message;
+}
+
+// get-limits / set-limits (Yespeed PDU). Each limit given is converted to the register value
+// that would be written and checked there (the manual's rules, on integers); with all three the
+// rule between them too. With fewer, the others are the PDU's own, and the rules are checked
+// on the merged set once they are read.
+void parseLimits(const Words& w, CommissionCommand& c) {
+  if (w.has("type") && w.get("type") != "yespeed_pdu")
+    bad("--type: " + c.command + " is a yespeed_pdu command; '" + w.get("type") +
+        "' has no limits");
+  c.type = "yespeed_pdu";
+  if (!w.has("address")) bad("--address: missing (1-247)");
+  c.address = intIn("--address", w.get("address"), 1, 247);
+  w.atMost(1);
+  if (c.command == "get-limits") return;
+  static const char* kOptions[3] = {"over-voltage", "under-voltage", "over-current"};
+  bool all = true;
+  for (size_t i = 0; i < 3; ++i) {
+    const std::string option = kOptions[i];
+    if (!w.has(option)) {
+      all = false;
+      continue;
+    }
+    const std::string text = w.get(option);
+    std::istringstream in(text);
+    double v = 0;
+    char rest = 0;
+    if (!(in >> v) || in >> rest)
+      bad("--" + option + ": '" + text + "' is not a number (" + YespeedPdu::kLimitUnits[i] + ")");
+    uint16_t reg = 0;
+    const std::string problem = YespeedPdu::limitToRegister(i, v, &reg, "--" + option);
+    if (!problem.empty()) bad(problem);
+    c.limits[i] = reg;
+  }
+  if (c.limits[0] < 0 && c.limits[1] < 0 && c.limits[2] < 0)
+    bad("set-limits: give at least one of --over-voltage V, --under-voltage V, --over-current A "
+        "(the others stay as the PDU holds them)");
+  if (all) {
+    const std::string problem = YespeedPdu::checkLimitRegisters(
+        {static_cast<uint16_t>(c.limits[0]), static_cast<uint16_t>(c.limits[1]),
+         static_cast<uint16_t>(c.limits[2])});
+    if (!problem.empty()) bad(asOptions(problem));
+  }
+}
+
 // info, read, write, watch: any device type, so any address a board can have.
 void parseAnyAddress(const Words& w, CommissionCommand& c) {
   if (!w.has("address")) bad("--address: missing (1-255)");
@@ -309,6 +369,8 @@ bool parseCommission(const std::vector<std::string>& args, CommissionCommand* ou
       parseScan(w, c);
     } else if (c.command == "read" || c.command == "write" || c.command == "watch") {
       parseTable(w, c);
+    } else if (c.command == "get-limits" || c.command == "set-limits") {
+      parseLimits(w, c);
     } else if (c.command == "info") {
       parseAnyAddress(w, c);
       w.atMost(1);

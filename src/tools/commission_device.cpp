@@ -1,6 +1,7 @@
 // The device settings of modbus_rtu_commission: address, baud, parity, return delay, power-down
 // save, factory reset, info. Each change reads the current value first (harmless), asks before
 // anything that changes how the device answers, and says when the change takes effect.
+#include <cstdio>
 #include <functional>
 #include <sstream>
 
@@ -75,6 +76,8 @@ class DeviceCommands {
     if (cmd == "set-address") return lc_ ? setLcAddress() : setLdAddress();
     if (cmd == "factory-reset") return factoryReset();
     if (cmd == "info") return info();
+    if (cmd == "get-limits") return getLimits();
+    if (cmd == "set-limits") return setLimits();
     const Setting which = settingFor(cmd.substr(4));  // get-baud -> baud
     return cmd.compare(0, 4, "get-") == 0 ? show(which) : change(which);
   }
@@ -182,9 +185,18 @@ class DeviceCommands {
                          : s_.bus.execute(Request::readHoldingRegisters(
                                ld_.address(), Ld58a08::kAddressRegister, 1));
     const std::string how = c_.address >= 0 ? "" : lc_ ? " through address 0" : " through 0xFF";
-    if (!r.ok())
-      return s_.out.fail(r, "reading the " + c_.type + " address" + how +
-                                (how.empty() ? "" : " (only one board may be on the bus)"));
+    if (!r.ok()) {
+      Result told = r;
+      if (!lc_ && r.error == ErrorKind::kException && r.exception_code == kIllegalDataAddress)
+        told.message +=
+            c_.address < 0
+                ? "; another board type may have answered (e.g. an LC relay board at its "
+                  "factory address 255: try --type lc_relay8)"
+                : "; another board type may be at " + std::to_string(c_.address) +
+                      " (info --address " + std::to_string(c_.address) + " names it)";
+      return s_.out.fail(told, "reading the " + c_.type + " address" + how +
+                                   (how.empty() ? "" : " (only one board may be on the bus)"));
+    }
     if (!how.empty())
       s_.out.note("read" + how + ": right only with one " + c_.type + " on the bus");
     s_.out.result(c_.type + " address: " + std::to_string(r.values[0]),
@@ -282,6 +294,64 @@ class DeviceCommands {
         "device is powered off and on.";
     s_.out.result("ld58a08 " + where + ": " + after,
                   Json().add("type", c_.type).add("note", after));
+    return kExitOk;
+  }
+
+  static std::string limitsHuman(const PduLimitRegisters& l) {
+    const PduLimitValues v = YespeedPdu::limitValues(l);
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "over-voltage %.1f V, under-voltage %.1f V, over-current %.2f A",
+                  v.over_voltage, v.under_voltage, v.over_current);
+    return buf;
+  }
+  static Json limitsJson(const PduLimitRegisters& l) {
+    const PduLimitValues v = YespeedPdu::limitValues(l);
+    return Json()
+        .add("over_voltage", v.over_voltage)
+        .add("under_voltage", v.under_voltage)
+        .add("over_current", v.over_current)
+        .add("registers", std::vector<uint16_t>(l.begin(), l.end()));
+  }
+
+  int getLimits() {
+    YespeedPdu pdu(deviceAt("yespeed_pdu", c_.address));
+    const Result r = pdu.readLimits(s_.bus);
+    if (!r.ok()) return s_.out.fail(r, "reading the limits of the " + device());
+    s_.out.result(device() + ", limits: " + limitsHuman(pdu.limitRegisters()),
+                  fields().merge(limitsJson(pdu.limitRegisters())));
+    return kExitOk;
+  }
+
+  // Reads the limits first; the ones not given stay. The rules are checked on the merged
+  // register values before anything is written, then the PDU's read back must show them.
+  int setLimits() {
+    YespeedPdu pdu(deviceAt("yespeed_pdu", c_.address));
+    Result r = pdu.readLimits(s_.bus);
+    if (!r.ok()) return s_.out.fail(r, "reading the limits of the " + device());
+    const PduLimitRegisters before = pdu.limitRegisters();
+    PduLimitChange change;
+    for (size_t i = 0; i < 3; ++i)
+      if (c_.limits[i] >= 0) change[i] = static_cast<uint16_t>(c_.limits[i]);
+    const PduLimitRegisters to = YespeedPdu::mergeLimits(before, change);
+    const std::string problem = YespeedPdu::checkLimitRegisters(to);
+    if (!problem.empty())
+      return s_.out.fail(kExitBadArguments, problem + " (with the limits the PDU holds: " +
+                                                limitsHuman(to) + "); nothing was written");
+    Json json = fields().merge(limitsJson(to));
+    json.add("previous", std::vector<uint16_t>(before.begin(), before.end()));
+    if (to == before) {
+      s_.out.result(device() + ": limits are already " + limitsHuman(to) + "; nothing written",
+                    json.add("changed", false));
+      return kExitOk;
+    }
+    if (!s_.confirm("Change the limits of the " + device() + " from " + limitsHuman(before) +
+                    " to " + limitsHuman(to) + "?"))
+      return s_.out.fail(kExitNotConfirmed, "not confirmed; nothing was changed");
+    r = pdu.writeLimitRegisters(s_.bus, to);
+    if (!r.ok()) return s_.out.fail(r, "writing the limits of the " + device());
+    s_.out.result(device() + ": limits set to " + limitsHuman(to) + " (was " + limitsHuman(before) +
+                      "); read back",
+                  json.add("changed", true));
     return kExitOk;
   }
 

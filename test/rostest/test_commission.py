@@ -295,6 +295,55 @@ class CommissionTest(unittest.TestCase):
         self.sim.stop()
         self.assertIn("rx FF 06 00 FB 00 00 ED E5", self.sim.log())  # the manual's frame
 
+    def test_pdu_limits(self):
+        # Issue #13/9: get-limits / set-limits, checked on the register values written.
+        self.start_sim([("lc_relay8", 255), ("yespeed_pdu", 2)])
+        self.assertEqual(self.ok(["get-limits", "--address", "2"]),
+                         "yespeed_pdu at address 2, limits: over-voltage 250.0 V, "
+                         "under-voltage 200.0 V, over-current 16.00 A\n")
+        before = self.sim.frames_received()
+        for args, message in [(["--over-voltage", "180.00001"], "(register 1800)"),
+                              (["--over-current", "19.999999"], "(register 2000)")]:
+            code, out, err = self.run_tool(["--yes", "set-limits", "--address", "2"] + args)
+            self.assertEqual(code, BAD_ARGUMENTS, err)
+            self.assertIn(message, err)
+        self.assertEqual(self.sim.frames_received(), before, "a refused command sent a frame")
+        code, _, err = self.run_tool(["set-limits", "--address", "2", "--over-voltage", "260"])
+        self.assertEqual(code, NOT_CONFIRMED, err)
+        self.assertEqual(self.sim.control.get("2", "holding", 0, 3), [2500, 2000, 1600])
+        # One limit: the others stay as the PDU holds them.
+        out = self.ok(["--yes", "set-limits", "--address", "2", "--over-voltage", "260"])
+        self.assertIn("limits set to over-voltage 260.0 V, under-voltage 200.0 V", out)
+        self.assertEqual(self.sim.control.get("2", "holding", 0, 3), [2600, 2000, 1600])
+        # Not above the PDU's own under-voltage: refused before the write.
+        code, _, err = self.run_tool(["--yes", "set-limits", "--address", "2",
+                                      "--over-voltage", "190"])
+        self.assertEqual(code, BAD_ARGUMENTS, err)
+        self.assertIn("must be above under_voltage (200.0 V)", err)
+        self.assertEqual(self.sim.control.get("2", "holding", 0, 3), [2600, 2000, 1600])
+        self.sim.stop()
+        self.assertIn("rx 02 10 00 00 00 03 06 0A 28 07 D0 06 40", self.sim.log())
+
+    def test_ld58a08_address_read_answered_by_an_lc_board_hints_at_its_type(self):
+        self.start_sim([("lc_relay8", 255)])
+        code, _, err = self.run_tool(["get-address", "--type", "ld58a08"])
+        self.assertEqual(code, REFUSED, err)
+        self.assertIn("illegal data address (02)", err)
+        self.assertIn("try --type lc_relay8", err)
+
+    def test_two_lc_boards_collide_at_address_zero(self):
+        # Issue #13/8: what "alone on the bus" prevents. Both boards answer the address read at
+        # 0, the replies collide, and the tool stops before it writes anything.
+        self.start_sim([("lc_relay8", 255), ("lc_relay8", 254)])
+        code, _, err = self.run_tool(["get-address", "--type", "lc_relay8"])
+        self.assertEqual(code, BUS_ERROR, err)
+        self.assertIn("two devices answering at once", err)
+        code, _, err = self.run_tool(["--yes", "set-address", "--type", "lc_relay8", "7"])
+        self.assertEqual(code, BUS_ERROR, err)
+        self.assertEqual([a for _, _, a, _, _ in self.sim.control.info()], [255, 254])
+        self.sim.stop()
+        self.assertNotIn("rx 00 10", self.sim.log(), "the tool wrote an address")
+
     def test_write_read_and_watch(self):
         self.start_sim([("lc_relay8", 255), ("ld58a08", 1)])
         self.ok(["write", "--address", "255", "coils", "0", "1", "0", "1"])

@@ -71,6 +71,37 @@ class YespeedPduTest(unittest.TestCase):
         time.sleep(0.2)
         self.assertEqual(self.sim.get(PDU, "holding", 0, 3), before)
 
+    def test_limit_rules_hold_for_the_register_values_written(self):
+        # Issue #13/6: 180.00001 V would be written as 1800 and 19.999999 A as 2000; both
+        # break the rules on the device: refused by the node, nothing sent.
+        before = self.sim.get(PDU, "holding", 0, 3)
+        set_limits = helpers.service(NS + "set_limits", SetPduLimits)
+        for limits, words in [
+                (PduLimits(over_voltage=180.00001, under_voltage=160.0, over_current=10.0),
+                 "over_voltage: 180.0 V (register 1800)"),
+                (PduLimits(over_voltage=250.0, under_voltage=200.0, over_current=19.999999),
+                 "over_current: 20.00 A (register 2000)")]:
+            res = set_limits(limits)
+            self.assertFalse(res.success, limits)
+            self.assertIn(words, res.message)
+        self.assertEqual(self.sim.get(PDU, "holding", 0, 3), before)
+
+    def test_one_limit_alone_keeps_the_others(self):
+        set_limits = helpers.service(NS + "set_limits", SetPduLimits)
+        before = self.sim.get(PDU, "holding", 0, 3)
+        target = 2550 if before[0] != 2550 else 2560
+        res = set_limits(PduLimits(over_voltage=target / 10.0))
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(self.sim.get(PDU, "holding", 0, 3), [target] + before[1:])
+        latest = helpers.Latest(NS + "limits", PduLimits)
+        latest.wait(5, lambda m: abs(m.over_voltage - target / 10.0) < 0.01, "the new limit")
+        # The merged set must follow the rules: an under-voltage not below the device's own
+        # over-voltage is refused, and nothing is written.
+        res = set_limits(PduLimits(under_voltage=(target + 10) / 10.0))
+        self.assertFalse(res.success)
+        self.assertIn("must be above under_voltage", res.message)
+        self.assertEqual(self.sim.get(PDU, "holding", 0, 3), [target] + before[1:])
+
     def test_relays(self):
         res = helpers.service(NS + "out1/set", SetBool)(True)
         self.assertTrue(res.success, res.message)

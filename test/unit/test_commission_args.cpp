@@ -223,3 +223,58 @@ TEST(CommissionArgs, HelpListsEveryCommandAndExitCode) {
                            "6 not confirmed"})
     EXPECT_NE(usage.find(word), std::string::npos) << word;
 }
+
+// Issue #13/9: the PDU's limits, each converted to the register value written and checked
+// there, before anything is opened or sent.
+TEST(CommissionArgs, PduLimitsAreCheckedOnTheRegisterValues) {
+  CommissionCommand c = parsed({"set-limits", "--address", "1", "--over-voltage", "260",
+                                "--under-voltage", "160", "--over-current", "7"});
+  EXPECT_EQ(c.type, "yespeed_pdu");
+  EXPECT_EQ(c.limits, (std::array<int, 3>{{2600, 1600, 700}}));
+  c = parsed({"set-limits", "--address", "2", "--over-voltage", "250"});
+  EXPECT_EQ(c.limits, (std::array<int, 3>{{2500, -1, -1}}));  // the others stay
+  EXPECT_EQ(parsed({"get-limits", "--address", "2", "--type", "yespeed_pdu"}).address, 2);
+
+  EXPECT_EQ(refusal({"set-limits", "--address", "1", "--over-voltage", "180.00001"}),
+            "--over-voltage: 180.0 V (register 1800) must be above 180.0 V (1800)");
+  EXPECT_EQ(refusal({"set-limits", "--address", "1", "--over-current", "19.999999"}),
+            "--over-current: 20.00 A (register 2000) must be between 5.00 A and 20.00 A "
+            "(500-2000, exclusive)");
+  EXPECT_EQ(refusal({"set-limits", "--address", "1", "--under-voltage", "280.000001"}),
+            "--under-voltage: 280.0 V (register 2800) must be below 280.0 V (2800)");
+  EXPECT_EQ(refusal({"set-limits", "--address", "1", "--over-current", "7.005"}),
+            "--over-current: 7.005 A is outside 0-655.35 A in steps of 0.01 A");
+  EXPECT_EQ(refusal({"set-limits", "--address", "1", "--over-current", "7A"}),
+            "--over-current: '7A' is not a number (A)");
+  EXPECT_EQ(refusal({"set-limits", "--address", "1", "--over-voltage", "200.00001",
+                     "--under-voltage", "200", "--over-current", "7"}),
+            "--over-voltage: 200.0 V must be above --under-voltage (200.0 V)");
+  EXPECT_NE(refusal({"set-limits", "--address", "1"}).find("give at least one of"),
+            std::string::npos);
+  EXPECT_EQ(refusal({"set-limits", "--address", "248", "--over-voltage", "250"}),
+            "--address: '248' is outside 1-247");
+  EXPECT_NE(refusal({"get-limits", "--address", "1", "--type", "lc_relay8"})
+                .find("--type: get-limits is a yespeed_pdu command"),
+            std::string::npos);
+  EXPECT_EQ(refusal({"get-limits", "--address", "1", "--over-voltage", "250"}),
+            "--over-voltage: not an option of get-limits (see --help)");
+}
+
+// The scan's duration in --help, from the code's own timeouts: one read per silent address,
+// the scan timeout plus the gap kept before the next request.
+TEST(CommissionArgs, TheFullScanDurationInTheHelpFollowsTheTimeouts) {
+  const CommissionCommand c = parsed({"scan", "--bauds", "all", "--parities", "all"});
+  double seconds = 0;
+  for (const int baud : c.bauds)
+    for (const Parity parity : c.parities) {
+      LinkConfig line = c.link;
+      line.baud = baud;
+      line.parity = parity;
+      seconds += c.addresses.size() * (c.link.response_timeout + effectiveMinGap(line));
+    }
+  EXPECT_EQ(c.addresses.size() * c.bauds.size() * c.parities.size(), 6120u);
+  EXPECT_NEAR(seconds / 60, 9.1, 0.1);
+  EXPECT_NE(commissionUsage().find("about 9 minutes"), std::string::npos);
+  EXPECT_NE(commissionUsage().find("6120 x 0.081 s = 8.3 min of timeouts + 0.8 min of gaps"),
+            std::string::npos);
+}

@@ -213,3 +213,90 @@ TEST_F(CommissionOnScript, IdentificationByHarmlessReads) {
   EXPECT_FALSE(ghost.present);
   EXPECT_EQ(ghost.note, "address 255: an LD58A08 answered for its address 1");
 }
+
+// Issue #13/9: the PDU's limits with the manual's frames (7.4 read, 7.5 FC16 write).
+TEST_F(CommissionOnScript, PduLimitsWithTheManualsFrames) {
+  bus_.expect("01 03 00 00 00 03 05 CB", golden("01 03 00 00 00 03 05 CB"));  // 250, 200, 16
+  EXPECT_EQ(run({"get-limits", "--address", "1"}), kExitOk);
+  EXPECT_EQ(out_.str(),
+            "yespeed_pdu at address 1, limits: over-voltage 250.0 V, under-voltage 200.0 V, "
+            "over-current 16.00 A\n");
+  bus_.expect("01 03 00 00 00 03 05 CB", golden("01 03 00 00 00 03 05 CB"));
+  EXPECT_EQ(run({"--json", "get-limits", "--address", "1"}), kExitOk);
+  EXPECT_EQ(out_.str(),
+            "{\"ok\":true,\"type\":\"yespeed_pdu\",\"address\":1,\"over_voltage\":250,"
+            "\"under_voltage\":200,\"over_current\":16,\"registers\":[2500,2000,1600]}\n");
+
+  const R write = R::writeMultipleRegisters(1, 0, {2600, 1600, 700});
+  const R back = R::readHoldingRegisters(1, 0, 3);
+  bus_.expect("01 03 00 00 00 03 05 CB", golden("01 03 00 00 00 03 05 CB"))
+      .expect("01 10 00 00 00 03 06 0A 28 06 40 02 BC 87 A1", reply(write))
+      .expect("01 03 00 00 00 03 05 CB", reply(back, {2600, 1600, 700}));
+  EXPECT_EQ(run({"--yes", "set-limits", "--address", "1", "--over-voltage", "260",
+                 "--under-voltage", "160", "--over-current", "7"}),
+            kExitOk);
+  EXPECT_EQ(out_.str(),
+            "yespeed_pdu at address 1: limits set to over-voltage 260.0 V, under-voltage 160.0 V, "
+            "over-current 7.00 A (was over-voltage 250.0 V, under-voltage 200.0 V, over-current "
+            "16.00 A); read back\n");
+}
+
+TEST_F(CommissionOnScript, PduSetLimitsKeepsTheOthersAsksAndChecksTheMergedValues) {
+  const std::string read = "01 03 00 00 00 03 05 CB", holds = golden(read);  // 250, 200, 16
+  // One limit: the others as the PDU holds them; nothing without a "y".
+  bus_.expect(read, holds);
+  EXPECT_EQ(run({"set-limits", "--address", "1", "--over-voltage", "260"}, "n\n"),
+            kExitNotConfirmed);
+  EXPECT_NE(err_.str().find("Change the limits of the yespeed_pdu at address 1 from over-voltage "
+                            "250.0 V, under-voltage 200.0 V, over-current 16.00 A to "
+                            "over-voltage 260.0 V, under-voltage 200.0 V, over-current 16.00 A?"),
+            std::string::npos)
+      << err_.str();
+  const R write = R::writeMultipleRegisters(1, 0, {2600, 2000, 1600});
+  const R back = R::readHoldingRegisters(1, 0, 3);
+  bus_.expect(read, holds)
+      .expect(frame(write), reply(write))
+      .expect(read, reply(back, {2600, 2000, 1600}));
+  EXPECT_EQ(run({"set-limits", "--address", "1", "--over-voltage", "260"}, "y\n"), kExitOk);
+
+  // 190 V alone is fine, but not above the PDU's own under-voltage 200 V: nothing written.
+  bus_.expect(read, holds);
+  EXPECT_EQ(run({"--yes", "set-limits", "--address", "1", "--over-voltage", "190"}),
+            kExitBadArguments);
+  EXPECT_NE(err_.str().find("over_voltage: 190.0 V must be above under_voltage (200.0 V)"),
+            std::string::npos)
+      << err_.str();
+
+  // Refused by the PDU (exception 03), or not what it holds afterwards: never a success.
+  const R other = R::writeMultipleRegisters(1, 0, {2500, 2000, 700});
+  bus_.expect(read, holds).expect(frame(other), exception(other, kIllegalDataValue));
+  EXPECT_EQ(run({"--yes", "set-limits", "--address", "1", "--over-current", "7"}), kExitRefused);
+  bus_.expect(read, holds).expect(frame(other), reply(other)).expect(read, holds);  // still 16 A
+  EXPECT_NE(run({"--yes", "set-limits", "--address", "1", "--over-current", "7"}), kExitOk);
+  EXPECT_NE(err_.str().find("holds 250.0 V / 200.0 V / 16.00 A"), std::string::npos) << err_.str();
+
+  // Already so: nothing written.
+  bus_.expect(read, holds);
+  EXPECT_EQ(run({"set-limits", "--address", "1", "--over-current", "16"}), kExitOk);
+  EXPECT_EQ(out_.str(),
+            "yespeed_pdu at address 1: limits are already over-voltage 250.0 V, under-voltage "
+            "200.0 V, over-current 16.00 A; nothing written\n");
+}
+
+// Issue #13/9: an LC board at 255 answers the LD58A08's address read with exception 02.
+TEST_F(CommissionOnScript, Ld58a08AddressReadRefusedHintsAtAnotherBoardType) {
+  const R own = R::readHoldingRegisters(0xFF, 0x00FD, 1);
+  bus_.expect("FF 03 00 FD 00 01 00 24", exception(own, kIllegalDataAddress));
+  EXPECT_EQ(run({"get-address", "--type", "ld58a08"}), kExitRefused);
+  EXPECT_NE(err_.str().find("illegal data address"), std::string::npos) << err_.str();
+  EXPECT_NE(err_.str().find("another board type may have answered (e.g. an LC relay board at "
+                            "its factory address 255: try --type lc_relay8)"),
+            std::string::npos)
+      << err_.str();
+  const R at7 = R::readHoldingRegisters(7, 0x00FD, 1);
+  bus_.expect(frame(at7), exception(at7, kIllegalDataAddress));
+  EXPECT_EQ(run({"get-address", "--type", "ld58a08", "--address", "7"}), kExitRefused);
+  EXPECT_NE(err_.str().find("another board type may be at 7 (info --address 7 names it)"),
+            std::string::npos)
+      << err_.str();
+}

@@ -1,6 +1,8 @@
 // Device models against a scripted transport, with the manuals' own frames.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/devices/registry.h"
@@ -295,10 +297,11 @@ TEST(YespeedPdu, LimitRulesNameTheField) {
     std::string words;
   };
   const std::vector<Case> cases = {
-      {{180.0, 100.0, 10.0}, "over_voltage: 180 V must be above 180 V"},
-      {{250.0, 280.0, 10.0}, "under_voltage: 280 V must be below 280 V"},
-      {{200.0, 210.0, 10.0}, "over_voltage: 200 V must be above under_voltage"},
-      {{250.0, 200.0, 5.0}, "over_current: 5 A must be between 5 A and 20 A"},
+      {{180.0, 100.0, 10.0}, "over_voltage: 180.0 V (register 1800) must be above 180.0 V"},
+      {{250.0, 280.0, 10.0}, "under_voltage: 280.0 V (register 2800) must be below 280.0 V"},
+      {{200.0, 210.0, 10.0}, "over_voltage: 200.0 V must be above under_voltage (210.0 V)"},
+      {{250.0, 200.0, 5.0},
+       "over_current: 5.00 A (register 500) must be between 5.00 A and 20.00 A"},
       {{250.0, 200.0, 20.0}, "over_current"},
       {{250.05, 200.0, 10.0}, "over_voltage: 250.05 V is outside 0-6553.5 V in steps of 0.1 V"},
       {{250.0, 200.0, 10.001}, "over_current"},
@@ -314,6 +317,91 @@ TEST(YespeedPdu, LimitRulesNameTheField) {
   ScriptedTransport bus;
   EXPECT_EQ(pdu.setLimits(bus, {170.0, 160.0, 10.0}).error, ErrorKind::kInvalidArgument);
   EXPECT_EQ(bus.executed(), 0);
+}
+
+// Issue #13/6: the rules hold for the integer that is written, not for the double asked for.
+// 180.00001 V is written as 1800 and 19.999999 A as 2000, both of which the PDU refuses.
+TEST(YespeedPdu, LimitRulesAreCheckedOnTheRegisterValuesWritten) {
+  EXPECT_NE(YespeedPdu::validateLimits({180.00001, 100.0, 10.0})
+                .find("over_voltage: 180.0 V (register 1800) must be above 180.0 V"),
+            std::string::npos);
+  EXPECT_NE(YespeedPdu::validateLimits({250.0, 200.0, 19.999999})
+                .find("over_current: 20.00 A (register 2000) must be between"),
+            std::string::npos);
+  EXPECT_NE(YespeedPdu::validateLimits({250.0, 280.000001, 10.0})
+                .find("under_voltage: 280.0 V (register 2800)"),
+            std::string::npos);
+  EXPECT_NE(YespeedPdu::validateLimits({250.0, 200.0, 5.0000001}).find("register 500"),
+            std::string::npos);
+  // over > under on the registers: 200.00001 V and 200.0 V are both 2000.
+  EXPECT_NE(YespeedPdu::validateLimits({200.00001, 200.0, 10.0})
+                .find("over_voltage: 200.0 V must be above under_voltage (200.0 V)"),
+            std::string::npos);
+  YespeedPdu pdu(config("yespeed_pdu", 1));
+  ScriptedTransport bus;
+  EXPECT_EQ(pdu.setLimits(bus, {180.00001, 100.0, 10.0}).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(pdu.setLimits(bus, {250.0, 200.0, 19.999999}).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(bus.executed(), 0);  // nothing reached the bus
+  // Float noise below the rule's edge is still the next step: 180.1 V as float32 is 1801.
+  PduLimitRegisters regs{};
+  EXPECT_EQ(YespeedPdu::validateLimits({static_cast<float>(180.1), 100.0, 19.99}, &regs), "");
+  EXPECT_EQ(regs, (PduLimitRegisters{1801, 1000, 1999}));
+}
+
+// One limit alone: the others are read from the device, the rules checked on the merged set,
+// then all three written in one FC16 and read back.
+TEST(YespeedPdu, OneLimitAloneKeepsTheOthersTheDeviceHolds) {
+  YespeedPdu pdu(config("yespeed_pdu", 1));
+  ScriptedTransport bus;
+  bus.expect("01 03 00 00 00 03 05 CB", "01 03 06 09 C4 07 D0 06 40 D2 E0");  // 250, 200, 16
+  const Request all = Request::writeMultipleRegisters(1, 0, {2600, 2000, 1600});
+  bus.expectEcho(toHex(encodeRequest(all)));
+  const Request back = Request::readHoldingRegisters(1, 0, 3);
+  bus.expect(toHex(encodeRequest(back)), toHex(encodeReply(back, {2600, 2000, 1600})));
+  PduLimitChange change;
+  change[0] = 2600;
+  const Result r = pdu.changeLimits(bus, change);
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_NEAR(pdu.limits().over_voltage, 260.0, 1e-9);
+  EXPECT_SCRIPT_DONE(bus);
+
+  // The merged set breaks a rule: read, nothing written.
+  bus.expect("01 03 00 00 00 03 05 CB", "01 03 06 09 C4 07 D0 06 40 D2 E0");
+  change = {};
+  change[0] = 1900;  // not above the device's under-voltage 200.0 V
+  const Result refused = pdu.changeLimits(bus, change);
+  EXPECT_EQ(refused.error, ErrorKind::kInvalidArgument);
+  EXPECT_NE(refused.message.find("over_voltage: 190.0 V must be above under_voltage (200.0 V)"),
+            std::string::npos)
+      << refused.message;
+  EXPECT_NE(refused.message.find("nothing was written"), std::string::npos);
+  EXPECT_SCRIPT_DONE(bus);
+
+  // A read back that differs from what was written is not reported as success.
+  bus.expectEcho("01 10 00 00 00 03 06 0A 28 06 40 02 BC 87 A1");
+  bus.expect(toHex(encodeRequest(back)), toHex(encodeReply(back, {2500, 2000, 1600})));
+  const Result ignored = pdu.setLimits(bus, {260.0, 160.0, 7.0});
+  EXPECT_FALSE(ignored.ok());
+  EXPECT_NE(ignored.message.find("holds 250.0 V / 200.0 V / 16.00 A"), std::string::npos)
+      << ignored.message;
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(LcRelay8, FlashTimeIsCheckedOnTheTenthsWritten) {
+  LcRelay8 board(config("lc_relay8", 255));
+  ScriptedTransport bus;
+  // 0.09999999 s is written as 1 (0.1 s) and 6553.5000001 s as 0xFFFF: both valid.
+  const Request shortest = Request::writeMultipleRegisters(255, 0x0003, {4, 1});
+  bus.expectEcho(toHex(encodeRequest(shortest)));
+  EXPECT_TRUE(board.pulse(bus, 0, true, 0.09999999).ok());
+  const Request longest = Request::writeMultipleRegisters(255, 0x0003, {4, 0xFFFF});
+  bus.expectEcho(toHex(encodeRequest(longest)));
+  EXPECT_TRUE(board.pulse(bus, 0, true, 6553.5000001).ok());
+  // 0.04 s would be 0 tenths, 6553.55 s is not a whole step: refused, nothing sent.
+  EXPECT_NE(LcRelay8::validatePulse(0, 0.04).find("duration"), std::string::npos);
+  EXPECT_NE(LcRelay8::validatePulse(0, 6553.55).find("duration"), std::string::npos);
+  EXPECT_NE(LcRelay8::validatePulse(0, std::nan("")).find("duration"), std::string::npos);
+  EXPECT_SCRIPT_DONE(bus);
 }
 
 TEST(Registry, TypesAddressesAndNames) {

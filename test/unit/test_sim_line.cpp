@@ -101,17 +101,52 @@ TEST(SimLine, BroadcastsAreAppliedByAllAndAnsweredByNone) {
   EXPECT_EQ(line("get 254 coil 3"), "ok 1");
   EXPECT_EQ(client.exchange(encodeRequest(Request::writeSingleRegister(0, 0xFC, 2))), "");
   EXPECT_EQ(line("get 1 holding 252"), "ok 2");
-  // The LC board's address commands at 0: one board answers, nobody else takes them.
-  EXPECT_EQ(client.exchange("00 03 00 00 00 01 85 DB", 7), "00 03 02 00 FF C5 C4");
-  EXPECT_EQ(client.exchange(encodeRequest(Request::writeMultipleRegisters(0, 0, {200}))),
-            toHex(encodeRequest(Request::writeMultipleRegisters(0, 0, {200}))));
+}
+
+// Issue #13/8: what the commissioning tool's "alone on the bus" prevents. The LC board's address
+// commands at 0 reach every device: every LC board takes them and answers, the answers collide,
+// and every other device sees a broadcast write to its register 0.
+TEST(SimLine, TheLcAddressCommandAtZeroReachesEveryBoardAndTheRepliesCollide) {
+  Line line({{"lc_relay8", 255}, {"ld58a08", 1}, {"yespeed_pdu", 2}, {"lc_relay8", 254}});
+  PtyClient client(line.link());
+  // Reading the address: both boards answer at once; no valid frame comes back.
+  const std::string read = client.exchange("00 03 00 00 00 01 85 DB");
+  const Bytes garbled_read = hex(read);
+  EXPECT_FALSE(garbled_read.empty()) << "the boards do answer";
+  EXPECT_FALSE(hasValidCrc(garbled_read)) << read;
+  EXPECT_NE(read, "00 03 02 00 FF C5 C4");
+  // Setting it to 200 changes both boards; the echo is garbled as well.
+  const Bytes set = encodeRequest(Request::writeMultipleRegisters(0, 0, {200}));
+  const std::string echo = client.exchange(set);
+  EXPECT_FALSE(echo.empty());
+  EXPECT_FALSE(hasValidCrc(hex(echo))) << echo;
   EXPECT_EQ(line("info"),
             "ok #0:lc_relay8:200:9600:N #1:ld58a08:1:9600:N #2:yespeed_pdu:2:9600:N "
-            "#3:lc_relay8:254:9600:N");
-  EXPECT_EQ(line("get 1 holding 0"), "ok 0") << "the LD58A08's CH0 period is untouched";
+            "#3:lc_relay8:200:9600:N");
+  EXPECT_EQ(line("get 1 holding 0"), "ok 200") << "the LD58A08 took 200 as CH0's period";
+  EXPECT_EQ(line("get 2 holding 0"), "ok 2500") << "the PDU refuses 20.0 V as over-voltage";
+}
+
+TEST(SimLine, ABoardAloneAnswersItsAddressCommandsCleanly) {
+  Line line({{"lc_relay8", 255}});
+  PtyClient client(line.link());
+  EXPECT_EQ(client.exchange("00 03 00 00 00 01 85 DB", 7), "00 03 02 00 FF C5 C4");
+  const Bytes set = encodeRequest(Request::writeMultipleRegisters(0, 0, {200}));
+  EXPECT_EQ(client.exchange(set, set.size()), toHex(set));
+  EXPECT_EQ(line("info"), "ok #0:lc_relay8:200:9600:N");
   Line without_lc({{"ld58a08", 1}});
   PtyClient other(without_lc.link());
   EXPECT_EQ(other.exchange("00 03 00 00 00 01 85 DB"), "");
+}
+
+TEST(SimLine, CollidingRepliesAreNeverAValidFrame) {
+  const Bytes a = hex("00 10 00 00 00 01 02 00 FF EB 80");
+  const Bytes garbled = collideReplies({a, a});  // the same echo from two boards
+  EXPECT_EQ(garbled.size(), a.size() + 1);
+  EXPECT_FALSE(hasValidCrc(garbled));
+  EXPECT_NE(Bytes(garbled.begin(), garbled.begin() + static_cast<long>(a.size())), a);
+  const Bytes b = hex("00 03 02 00 FF C5 C4"), c = hex("00 03 02 00 FE 04 04");
+  EXPECT_FALSE(hasValidCrc(collideReplies({b, c})));
 }
 
 TEST(SimLine, DevicesHearOnlyTheirOwnBaudAndParity) {

@@ -27,7 +27,10 @@ class LcRelay8 : public Device {
   Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                     const std::vector<bool>& states) override;
 
-  // Empty when valid: channel 0-7, duration 0.1-6553.5 s.
+  // Empty when valid: channel 0-7, duration 0.1-6553.5 s. The duration is converted to the
+  // delay register's 0.1 s steps first (the nearest step, float noise allowed); the range is
+  // checked on that integer (0x0001-0xFFFF), which goes to `tenths` when not null.
+  static std::string pulseTenths(uint8_t channel, double duration, uint16_t* tenths);
   static std::string validatePulse(uint8_t channel, double duration);
   // state true = flash-close (on for duration, then off); false = flash-open.
   Result pulse(Transport& bus, uint8_t channel, bool state, double duration);

@@ -3,6 +3,9 @@
 // under-voltage x0.1 V, over-current x0.01 A). Manual: seeds/002.
 #pragma once
 
+#include <array>
+#include <optional>
+
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace modbus_rtu_driver {
@@ -21,6 +24,11 @@ struct PduLimitValues {
   double over_current = 0;   // A
 };
 
+// The three limits as the registers hold them: 0.1 V, 0.1 V, 0.01 A (holding registers 0-2).
+using PduLimitRegisters = std::array<uint16_t, 3>;
+// A change of some of them; an empty field keeps what the device holds.
+using PduLimitChange = std::array<std::optional<uint16_t>, 3>;
+
 class YespeedPdu : public Device {
  public:
   static constexpr size_t kRelays = 8;
@@ -36,21 +44,48 @@ class YespeedPdu : public Device {
 
   Result readTelemetry(Transport& bus);  // fills reading()
   Result readLimits(Transport& bus);     // fills limits()
-  // The manual's rules: over > under, over > 180 V, under < 280 V, 5 A < current < 20 A,
-  // each in the register's resolution and range. Empty when valid.
-  static std::string validateLimits(const PduLimitValues& limits);
-  // One FC16 write of registers 0-2, then a read back.
+  static constexpr const char* kLimitNames[3] = {"over_voltage", "under_voltage", "over_current"};
+  static constexpr const char* kLimitUnits[3] = {"V", "V", "A"};
+  static constexpr double kLimitSteps[3] = {0.1, 0.1, 0.01};
+
+  // Converts limit `which` (0 over-voltage, 1 under-voltage, 2 over-current; V or A) to the
+  // register value that would be written (the nearest whole step: 0.1 V, 0.01 A; float32 noise
+  // allowed), then checks that value's own rule from the manual on the integer. `name` is what
+  // the message calls the field (default kLimitNames). Empty when fine.
+  static std::string limitToRegister(size_t which, double value, uint16_t* reg,
+                                     const std::string& name = "");
+  // The manual's rules on the register values: over > under, over > 1800 (180 V), under < 2800
+  // (280 V), 500 < current < 2000 (5-20 A), all strict. Empty when valid.
+  static std::string checkLimitRegisters(const PduLimitRegisters& regs);
+  // Both of the above, for all three values. Empty when valid; `regs` may be null.
+  static std::string validateLimits(const PduLimitValues& limits,
+                                    PduLimitRegisters* regs = nullptr);
+  // The fields of `change` over `current` (what the device holds).
+  static PduLimitRegisters mergeLimits(const PduLimitRegisters& current,
+                                       const PduLimitChange& change);
+  static PduLimitValues limitValues(const PduLimitRegisters& regs);
+  // "250.0 V / 200.0 V / 16.00 A"
+  static std::string limitsText(const PduLimitRegisters& regs);
+
+  // One FC16 write of registers 0-2 (checked first: nothing is sent when a rule is broken),
+  // then a read back, which must show what was written.
   Result setLimits(Transport& bus, const PduLimitValues& limits);
+  Result writeLimitRegisters(Transport& bus, const PduLimitRegisters& regs);
+  // Some of the limits: reads the others from the device first, checks the rules on the merged
+  // values, then writes all three as above.
+  Result changeLimits(Transport& bus, const PduLimitChange& change);
 
   const PduReading& reading() const { return reading_; }
   bool readingFresh() const { return reading_fresh_; }  // the last poll's read succeeded
   const PduLimitValues& limits() const { return limits_; }
+  const PduLimitRegisters& limitRegisters() const { return limit_registers_; }
   bool limitsKnown() const { return limits_known_; }
 
  private:
   PduReading reading_;
   bool reading_fresh_ = false;
   PduLimitValues limits_;
+  PduLimitRegisters limit_registers_{};
   bool limits_known_ = false;
 };
 

@@ -7,10 +7,13 @@
 // a valid frame is dropped when the line has been silent for t3.5 (at least 4 ms: a pty delivers
 // in bursts). A device hears a frame only at its own baud and parity (what the client set on the
 // pty); frames for nobody, and frames with a bad CRC, get silence. A device at the exact address
-// answers before one that answers 0xFF for itself (LD58A08). Broadcasts reach every device and
-// nobody answers, except the LC board's address commands at 0, which only the first LC board
-// takes and answers. With `pace`, the reply starts t3.5 after the request's wire time and its
-// bytes are written at the line's character rate.
+// answers before one that answers 0xFF for itself (LD58A08). Broadcasts (address 0) reach every
+// device and nobody answers, except the LC board's address commands at 0: every LC board takes
+// them and answers, and two or more replies collide into garbled bytes (collideReplies), as on a
+// real bus. Other devices see the LC address command as a broadcast write to their register 0
+// (LD58A08: channel 0's period; PDU: its over-voltage limit, refused below 180 V). With `pace`, the
+// reply starts t3.5 after the request's wire time and its bytes are written at the line's character
+// rate.
 #pragma once
 
 #include <atomic>
@@ -40,6 +43,9 @@ struct SimulatorConfig {
 // False with a message naming the key when the YAML does not fit.
 bool loadSimulatorConfig(const std::string& path, SimulatorConfig* out, std::string* error);
 bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::string* error);
+
+// What the line carries when several devices answer at once: garbled bytes, never a valid frame.
+Bytes collideReplies(const std::vector<Bytes>& replies);
 
 struct SimulatorOptions {
   std::string link;         // path of the symlink to the pty's slave side

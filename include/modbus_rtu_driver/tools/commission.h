@@ -3,6 +3,7 @@
 // running, so bad values are refused before the port is even opened.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <iosfwd>
@@ -26,11 +27,14 @@ struct CommissionCommand {
   LinkConfig link;  // --port, --baud, --parity, --timeout; no retries: say what happened
   bool json = false, yes = false;
   std::string command;  // scan, get-address, set-address, ...
-  std::string type;     // ld58a08 | lc_relay8 for the commands that depend on the board
+  std::string type;     // ld58a08 | lc_relay8 (| yespeed_pdu for the limits)
   int address = -1;     // --address; -1 = not given
   // set-*: the new value in the device's own units: address, baud code, parity code (0 none,
   // 1 even, 2 odd), return delay in 40 ms steps, power-down save 0/1.
   int new_value = -1;
+  // set-limits: over-voltage, under-voltage (0.1 V), over-current (0.01 A) as the registers
+  // take them, each already checked against its own rule; -1 = keep what the PDU holds.
+  std::array<int, 3> limits{{-1, -1, -1}};
   // read / write / watch
   std::string table;  // coils | discrete-inputs | holding | input-registers
   int start = 0, count = 1;
