@@ -22,30 +22,69 @@ bool toTenths(double seconds, long* tenths) {
   return std::fabs(t - static_cast<double>(*tenths)) < 1e-6;
 }
 
+// Range first ("outside"), then the step ("not a multiple of" / "not whole"): each message
+// names the real problem.
+std::string checkTenths(const char* field, double v, double lo, double hi, const char* note) {
+  long t = 0;
+  const std::string range = fmt(lo) + "-" + fmt(hi) + " s";
+  const std::string what = std::string(field) + ": " + fmt(v) + " s is ";
+  if (!(v >= lo && v <= hi))
+    return what + "outside " + range + (*note ? std::string(" (") + note + ")" : "");
+  if (!toTenths(v, &t))
+    return what + "not a multiple of the 0.1 s step (" + range + " in steps of 0.1 s" +
+           (*note ? std::string("; ") + note : "") + ")";
+  return {};
+}
+
+std::string checkWhole(const char* field, double v, double lo, double hi, const char* unit,
+                       const char* whole) {
+  const std::string range = fmt(lo) + "-" + fmt(hi) + " " + unit;
+  if (!(v >= lo && v <= hi))
+    return std::string(field) + ": " + fmt(v) + " " + unit + " is outside " + range;
+  if (v != std::floor(v))
+    return std::string(field) + ": " + fmt(v) + " " + unit + " is not " + whole + " (" + range +
+           " in steps of 1 " + unit + ")";
+  return {};
+}
+
 }  // namespace
 
 std::string Ld58a08::validatePwm(const PwmSettings& s) {
   if (s.channel >= kChannels) return "channel: " + std::to_string(s.channel) + " is outside 0-7";
-  long t = 0;
+  const std::string ch = "channel " + std::to_string(s.channel);
+  std::string problem;
   if (s.channel < 6) {
-    if (!(s.period >= 0.1 && s.period <= 6553.5) || !toTenths(s.period, &t))
-      return "period: " + fmt(s.period) + " s is outside 0.1-6553.5 s in steps of 0.1 s";
-    if (!(s.on_time >= 0.0 && s.on_time <= 6553.4) || !toTenths(s.on_time, &t))
-      return "on_time: " + fmt(s.on_time) + " s is outside 0-6553.4 s in steps of 0.1 s";
+    const char* wrong = s.frequency != 0.0    ? "frequency"
+                        : s.duty_cycle != 0.0 ? "duty_cycle"
+                        : s.duration != 0.0   ? "duration"
+                                              : nullptr;
+    if (wrong)
+      return std::string(wrong) + ": " + ch +
+             " takes period/on_time/pulses (channels 0-5); frequency/duty_cycle/duration are "
+             "for channels 6-7";
+    if (!(problem = checkTenths("period", s.period, 0.1, 6553.5, "")).empty()) return problem;
+    if (!(problem = checkTenths("on_time", s.on_time, 0.0, 6553.4, "")).empty()) return problem;
     if (s.on_time > s.period + 1e-9)
       return "on_time: " + fmt(s.on_time) + " s is longer than the period (" + fmt(s.period) +
              " s)";
     if (s.pulses == kContinuous) return "pulses: 65535 is outside 0-65534 (0 = run continuously)";
     return {};
   }
-  if (!(s.frequency >= 1 && s.frequency <= 20000) || s.frequency != std::floor(s.frequency))
-    return "frequency: " + fmt(s.frequency) + " Hz is outside 1-20000 Hz in whole Hz";
-  if (!(s.duty_cycle >= 0 && s.duty_cycle <= 100) || s.duty_cycle != std::floor(s.duty_cycle))
-    return "duty_cycle: " + fmt(s.duty_cycle) + " % is outside 0-100 % in whole percent";
-  if (s.duration != 0.0 &&
-      (!(s.duration >= 0.1 && s.duration <= 6553.4) || !toTenths(s.duration, &t)))
-    return "duration: " + fmt(s.duration) +
-           " s is outside 0.1-6553.4 s in steps of 0.1 s (0 = run continuously)";
+  const char* wrong = s.period != 0.0    ? "period"
+                      : s.on_time != 0.0 ? "on_time"
+                      : s.pulses != 0    ? "pulses"
+                                         : nullptr;
+  if (wrong)
+    return std::string(wrong) + ": " + ch +
+           " takes frequency/duty_cycle/duration (channels 6-7); period/on_time/pulses are for "
+           "channels 0-5";
+  if (!(problem = checkWhole("frequency", s.frequency, 1, 20000, "Hz", "a whole number of Hz"))
+           .empty())
+    return problem;
+  if (!(problem = checkWhole("duty_cycle", s.duty_cycle, 0, 100, "%", "a whole percent")).empty())
+    return problem;
+  if (s.duration != 0.0)
+    return checkTenths("duration", s.duration, 0.1, 6553.4, "0 = run continuously");
   return {};
 }
 
@@ -108,7 +147,25 @@ Result Ld58a08::stopPwm(Transport& bus, uint8_t channel) {
   if (channel >= kChannels)
     return Result::failure(ErrorKind::kInvalidArgument,
                            "channel: " + std::to_string(channel) + " is outside 0-7");
-  return bus.execute(Request::writeSingleRegister(address(), pwmRegister(channel) + 2, 0));
+  Result r = bus.execute(Request::writeSingleRegister(address(), pwmRegister(channel) + 2, 0));
+  if (r.ok() || !mayHaveActed(r)) return r;
+  // The reply was lost: the enable register tells (0 = stopped, by this write or by itself).
+  PwmState state;
+  Result now = readPwmChannel(bus, channel, &state);
+  if (!now.ok()) {
+    r.message += "; not confirmed: reading channel " + std::to_string(channel) +
+                 " back failed too (" + now.message + ")";
+    return r;
+  }
+  pwm_[channel] = state;
+  if (state.running) {
+    r.message += "; read back: not done (channel " + std::to_string(channel) + " still runs)";
+    return r;
+  }
+  Result ok = Result::success();
+  ok.message =
+      "confirmed by reading channel " + std::to_string(channel) + " back (" + r.message + ")";
+  return ok;
 }
 
 Result Ld58a08::readPwmChannel(Transport& bus, uint8_t ch, PwmState* out) {
@@ -119,15 +176,18 @@ Result Ld58a08::readPwmChannel(Transport& bus, uint8_t ch, PwmState* out) {
   p.channel = ch;
   p.high_speed = ch >= 6;
   const uint16_t enable = r.values[2];
+  p.enable = enable;
   p.running = enable != 0;
+  p.continuous = enable == kContinuous;
+  const uint16_t left = p.continuous ? 0 : enable;
   if (p.high_speed) {
     p.frequency = r.values[0];
     p.duty_cycle = r.values[1];
-    p.duration = enable / 10.0;
+    p.remaining_time = left / 10.0;
   } else {
     p.period = r.values[0] / 10.0;
     p.on_time = r.values[1] / 10.0;
-    p.pulses = enable;
+    p.remaining_pulses = left;
   }
   return r;
 }
@@ -155,9 +215,52 @@ Result Ld58a08::poll(Transport& bus) {
   return readPwmChannel(bus, ch, &pwm_[ch]);
 }
 
+// The outputs (coils and register 0x0080) drive a channel only while its enable register is 0
+// (manual, 0x0080): while the PWM runs, the board acknowledges the write and the output keeps
+// following the PWM. So the requested channels' PWM registers are read first (the snapshot may
+// be 8 polls old), a running PWM is stopped (confirmed), and then the outputs are written.
 Result Ld58a08::setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                            const std::vector<bool>& states) {
-  return writeCoilOutputs(bus, channels, states);
+  const std::string problem = validateChannels(channels, states);
+  if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
+  std::vector<uint8_t> stopped;
+  auto list = [](const std::vector<uint8_t>& chs) {
+    std::string text = chs.size() == 1 ? "channel " : "channels ";
+    for (size_t i = 0; i < chs.size(); ++i) text += (i ? ", " : "") + std::to_string(chs[i]);
+    return text;
+  };
+  auto stoppedNote = [&] { return "PWM on " + list(stopped) + " stopped first"; };
+  for (uint8_t ch : channels) {
+    PwmState state;
+    Result read = readPwmChannel(bus, ch, &state);
+    if (!read.ok()) {
+      read.message += "; outputs not written: whether PWM runs on channel " + std::to_string(ch) +
+                      " is unknown";
+      if (!stopped.empty()) read.message += " (" + stoppedNote() + ")";
+      return read;
+    }
+    pwm_[ch] = state;
+    if (!state.running) continue;
+    Result stop = stopPwm(bus, ch);
+    if (!stop.ok()) {
+      stop.message = "PWM runs on channel " + std::to_string(ch) + " and stopping it failed (" +
+                     stop.message + "); outputs not written";
+      if (!stopped.empty()) stop.message += " (" + stoppedNote() + ")";
+      return stop;
+    }
+    pwm_[ch].running = pwm_[ch].continuous = false;
+    pwm_[ch].remaining_pulses = 0;
+    pwm_[ch].remaining_time = 0.0;
+    pwm_[ch].enable = 0;
+    stopped.push_back(ch);
+  }
+  Result r = writeCoilOutputs(bus, channels, states);
+  if (stopped.empty()) return r;
+  if (r.ok())
+    r.message = stoppedNote() + (r.message.empty() ? "" : "; " + r.message);
+  else
+    r.message += " (" + stoppedNote() + ")";
+  return r;
 }
 
 Result Ld58a08::readSettings(Transport& bus, Ld58a08Settings* out) {

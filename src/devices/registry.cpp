@@ -14,7 +14,7 @@ namespace {
 
 struct DeviceType {
   const char* name;
-  int max_address;  // LC boards accept 1-255; the others follow the spec's 1-247
+  int max_address;  // LC boards 1-255, LD58A08 1-248 (its manual); the PDU the spec's 1-247
   size_t outputs, inputs;
   std::unique_ptr<Device> (*make)(const DeviceConfig&);
 };
@@ -26,7 +26,7 @@ std::unique_ptr<Device> make(const DeviceConfig& c) {
 
 // One line per device type.
 const DeviceType kTypes[] = {
-    {"ld58a08", 247, Ld58a08::kChannels, 0, make<Ld58a08>},
+    {"ld58a08", 248, Ld58a08::kChannels, 0, make<Ld58a08>},
     {"lc_relay8", 255, LcRelay8::kChannels, LcRelay8::kChannels, make<LcRelay8>},
     {"yespeed_pdu", 247, YespeedPdu::kRelays, 0, make<YespeedPdu>},
 };

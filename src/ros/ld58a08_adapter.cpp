@@ -36,13 +36,14 @@ class Ld58a08Adapter : public DeviceAdapter {
       PwmChannel c;
       c.channel = s.channel;
       c.high_speed = s.high_speed;
+      c.running = s.running;
+      c.continuous = s.continuous;
       c.period = s.period;
       c.on_time = s.on_time;
-      c.pulses = s.pulses;
+      c.remaining_pulses = s.remaining_pulses;
       c.frequency = s.frequency;
       c.duty_cycle = s.duty_cycle;
-      c.duration = s.duration;
-      c.running = s.running;
+      c.remaining_time = s.remaining_time;
       msg.channels.push_back(c);
     }
     if (have_last_ && msg.channels == last_.channels) return;

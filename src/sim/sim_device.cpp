@@ -121,7 +121,8 @@ std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t addres
 
 int maxSimAddress(const std::string& type) {
   if (type == "lc_relay8") return 255;
-  if (type == "ld58a08" || type == "yespeed_pdu") return 247;
+  if (type == "ld58a08") return 248;  // its manual: 0x01-0xF8
+  if (type == "yespeed_pdu") return 247;
   return 0;
 }
 

@@ -167,7 +167,7 @@ uint8_t SimLd58a08::checkHolding(uint16_t a, const std::vector<uint16_t>& values
       if (sub == 0 && (v == 0 || (fast && v > 20000))) return kIllegalDataValue;
       if (sub == 1 && (fast ? v > 100 : v == 0xFFFF)) return kIllegalDataValue;
     } else if ((r == 0x0080 && v > 0xFF) || (r == 0x00FA && v > 1) ||
-               (r == 0x00FD && (v < 1 || v > 247))) {
+               (r == 0x00FD && (v < 1 || v > 248))) {
       return kIllegalDataValue;
     }
   }
@@ -273,7 +273,7 @@ void SimLd58a08::saveState(YAML::Node& n) const {
 
 void SimLd58a08::loadState(const YAML::Node& n, SimClock::time_point now) {
   const int address = n["address"].as<int>(address_);
-  if (address >= 1 && address <= 247) address_ = static_cast<uint8_t>(address);
+  if (address >= 1 && address <= 248) address_ = static_cast<uint8_t>(address);
   baud_code_ = n["baud_code"].as<uint16_t>(baud_code_);
   parity_code_ = n["parity_code"].as<uint16_t>(parity_code_);
   line_.baud = n["baud"].as<int>(line_.baud);

@@ -225,7 +225,7 @@ void parseDevice(const Words& w, CommissionCommand& c) {
     c.type = "ld58a08";
   }
   const bool lc = c.type == "lc_relay8";
-  const int max_address = lc ? 255 : 247;
+  const int max_address = lc ? 255 : 248;  // LD58A08 manual: 1-248
   if (w.has("address")) c.address = intIn("--address", w.get("address"), 1, max_address);
   const bool address_optional =
       cmd == "get-address" || cmd == "set-address" || cmd == "factory-reset";

@@ -20,7 +20,7 @@ Finds and configures Modbus RTU boards on a serial port; no ROS master needed.
   info --address A                         type and settings of the device at A
   get-address --type ld58a08|lc_relay8 [--address A]
   set-address --type ld58a08|lc_relay8 [--address A] NEW
-      ld58a08: 1-247, register 0x00FD at A, or through 0xFF without --address.
+      ld58a08: 1-248, register 0x00FD at A, or through 0xFF without --address.
       lc_relay8: 1-255, always through address 0 (--address A: check it is A first).
       Through 0xFF or 0 the board must be ALONE on the bus: every board takes the command.
       An LD58A08 also answers some requests at 0xFF: move LC boards off their factory

@@ -233,9 +233,9 @@ class CommissionTest(unittest.TestCase):
         before = self.sim.frames_received()
         cases = [
             (["set-address", "--type", "ld58a08", "--address", "1", "0"], "new address: '0'"),
-            (["set-address", "--type", "ld58a08", "--address", "1", "248"], "outside 1-247"),
+            (["set-address", "--type", "ld58a08", "--address", "1", "249"], "outside 1-248"),
             (["set-address", "--type", "lc_relay8", "256"], "new address: '256' is outside 1-255"),
-            (["set-address", "--type", "ld58a08", "--address", "248", "5"], "--address: '248'"),
+            (["set-address", "--type", "ld58a08", "--address", "249", "5"], "--address: '249'"),
             (["set-baud", "--type", "ld58a08", "--address", "1", "9"], "neither a code 0-7"),
             (["set-baud", "--type", "lc_relay8", "--address", "255", "115200"], "code 2-4"),
             (["set-parity", "--address", "1", "mark"], "parity: 'mark' is not none, even or odd"),

@@ -6,6 +6,7 @@ import unittest
 
 import rospy
 import rostest
+from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
 
 from modbus_rtu_driver.msg import DigitalStates, PwmStates
@@ -65,8 +66,9 @@ class Ld58a08Test(unittest.TestCase):
         res = self.set_pwm(channel=3, period=50.0, on_time=20.0, pulses=0)
         self.assertTrue(res.success, res.message)
         self.assertEqual(self.regs(0x30, 3), [500, 200, 0xFFFF])
-        self.pwm.wait(5, lambda m: m.channels[3].running and m.channels[3].pulses == 0xFFFF,
-                      "channel 3 running continuously")
+        # pulses: 0 (continuous) reads back as continuous, not as 65535 pulses left.
+        self.pwm.wait(5, lambda m: m.channels[3].running and m.channels[3].continuous and
+                      m.channels[3].remaining_pulses == 0, "channel 3 running continuously")
         res = self.stop_pwm(channel=3)
         self.assertTrue(res.success, res.message)
         self.assertEqual(self.regs(0x32, 1), [0])
@@ -82,6 +84,56 @@ class Ld58a08Test(unittest.TestCase):
         self.assertTrue(res.success, res.message)
         self.assertEqual(self.regs(0x62, 1), [0])
         self.pwm.wait(5, lambda m: not m.channels[6].running, "channel 6 stopped")
+
+    def test_outputs_on_running_pwm_channels_stop_the_pwm_first(self):
+        # Manual, 0x0080: an output applies only while the channel's enable register is 0.
+        res = self.set_pwm(channel=5, period=1.0, on_time=0.5, pulses=0)
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(self.regs(0x52, 1), [0xFFFF])
+        res = helpers.service(NS + "out5/set", SetBool)(True)
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(res.message, "out5 on (PWM on channel 5 stopped first)")
+        self.assertEqual(self.regs(0x52, 1), [0], "enable register 0")
+        self.assertEqual(self.sim.get(BOARD, "coil", 5, 1), [1])
+        time.sleep(1.2)  # over one PWM period: a PWM still running would have switched it off
+        self.assertEqual(self.sim.get(BOARD, "coil", 5, 1), [1], "a plain output now")
+        self.pwm.wait(5, lambda m: not m.channels[5].running, "pwm to show channel 5 stopped")
+        # set_outputs: only the running channel is stopped, both are written.
+        res = self.set_pwm(channel=6, frequency=1000, duty_cycle=50, duration=0)
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(self.sim.get(BOARD, "coil", 6, 1), [1], "the PWM drives output 6")
+        set_outputs = helpers.service(NS + "set_outputs", SetOutputs)
+        res = set_outputs(channels=[6, 7], states=[False, True])
+        self.assertTrue(res.success, res.message)
+        self.assertIn("PWM on channel 6 stopped first", res.message)
+        self.assertEqual(self.regs(0x62, 1), [0])
+        self.assertEqual(self.sim.get(BOARD, "coil", 6, 2), [0, 1])
+        # The command topic (fire and forget) does the same.
+        res = self.set_pwm(channel=1, period=0.4, on_time=0.2, pulses=0)
+        self.assertTrue(res.success, res.message)
+        pub = rospy.Publisher(NS + "out1/command", Bool, queue_size=1, latch=True)
+        pub.publish(Bool(True))
+        helpers.wait_until(lambda: self.regs(0x12, 1) == [0], 10, "PWM 1 stopped by out1/command")
+        helpers.wait_until(lambda: self.sim.get(BOARD, "coil", 1, 1) == [1], 10, "out1 on")
+        time.sleep(0.5)  # over one PWM period
+        self.assertEqual(self.sim.get(BOARD, "coil", 1, 1), [1])
+        pub.unregister()
+        res = set_outputs(channels=[1, 5, 7], states=[False, False, False])
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(self.sim.get(BOARD, "coil", 0, 8)[5:8], [0, 0, 0])
+
+    def test_pwm_messages_say_the_real_problem(self):
+        cases = [
+            (dict(channel=7, frequency=1000, duty_cycle=33.3), "not a whole percent"),
+            (dict(channel=2, period=1.0, on_time=0.55), "not a multiple of the 0.1 s step"),
+            (dict(channel=1, frequency=1000, duty_cycle=50),
+             "channel 1 takes period/on_time/pulses (channels 0-5); "
+             "frequency/duty_cycle/duration are for channels 6-7"),
+        ]
+        for args, words in cases:
+            res = self.set_pwm(**args)
+            self.assertFalse(res.success, args)
+            self.assertIn(words, res.message, args)
 
     def test_fast_pwm_output_time_ends(self):
         res = self.set_pwm(channel=7, frequency=2000, duty_cycle=55, duration=0.5)

@@ -88,6 +88,10 @@ struct BadCase {
   std::vector<std::string> words;  // must all appear in the one error message
 };
 
+TEST(BusConfig, AnLd58a08MayHaveAddress248) {
+  EXPECT_EQ(errorOf(replaced("address: 1,", "address: 248,")), "") << "its manual: 1-248";
+}
+
 TEST(BusConfig, EachBadValueIsNamed) {
   const std::vector<BadCase> cases = {
       {"baud: 9600", "baud: 9601", {"baud", "9601", "115200"}},
@@ -103,7 +107,8 @@ TEST(BusConfig, EachBadValueIsNamed) {
       {"type: lc_relay8", "type: ld99", {"devices/relays/type", "ld99"}},
       {"address: 255", "address: 256", {"devices/relays/address", "256"}},
       {"address: 255", "address: 0", {"devices/relays/address", "0"}},
-      {"address: 1,", "address: 248,", {"devices/pwm_board/address", "248", "1-247"}},
+      {"address: 1,", "address: 249,", {"devices/pwm_board/address", "249", "1-248"}},
+      {"address: 2,", "address: 248,", {"devices/pdu/address", "248", "1-247"}},
       {"address: 2,", "address: 1,", {"devices/pdu/address", "already used", "pwm_board"}},
       {"poll_rate: 10.0", "poll_rate: -2", {"devices/relays/poll_rate", "-2"}},
       {"  relays:", "  bad-name:", {"bad-name", "ROS name"}},

@@ -107,15 +107,18 @@ TEST(CommissionArgs, TablesAcceptDecimalAndHex) {
 
 TEST(CommissionArgs, AddressesOutsideTheBoardsRangeAreRefused) {
   EXPECT_EQ(refusal({"set-address", "--type", "ld58a08", "0"}),
-            "new address: '0' is outside 1-247");
-  EXPECT_EQ(refusal({"set-address", "--type", "ld58a08", "248"}),
-            "new address: '248' is outside 1-247");
+            "new address: '0' is outside 1-248");
+  // The LD58A08 manual allows 1-248 (0x01-0xF8).
+  EXPECT_EQ(refusal({"set-address", "--type", "ld58a08", "249"}),
+            "new address: '249' is outside 1-248");
+  EXPECT_EQ(parsed({"set-address", "--type", "ld58a08", "248"}).new_value, 248);
+  EXPECT_EQ(parsed({"get-baud", "--type", "ld58a08", "--address", "248"}).address, 248);
   EXPECT_EQ(refusal({"set-address", "--type", "lc_relay8", "256"}),
             "new address: '256' is outside 1-255");
   EXPECT_EQ(refusal({"set-address", "--type", "lc_relay8", "0"}),
             "new address: '0' is outside 1-255");
-  EXPECT_EQ(refusal({"get-baud", "--type", "ld58a08", "--address", "248"}),
-            "--address: '248' is outside 1-247");
+  EXPECT_EQ(refusal({"get-baud", "--type", "ld58a08", "--address", "249"}),
+            "--address: '249' is outside 1-248");
   EXPECT_EQ(refusal({"read", "--address", "0", "coils", "0"}), "--address: '0' is outside 1-255");
   EXPECT_EQ(refusal({"set-address", "--type", "ld58a08"}), "value: missing (see --help)");
   EXPECT_EQ(refusal({"set-address", "5"}), "--type: missing (ld58a08 or lc_relay8)");

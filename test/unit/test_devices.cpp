@@ -21,6 +21,12 @@ DeviceConfig config(const std::string& type, int address) {
   return c;
 }
 
+// Before an output write the LD58A08 reads the channel's PWM registers: here stopped.
+void expectPwmOff(ScriptedTransport& bus, uint8_t ch) {
+  const Request read = Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3);
+  bus.expect(toHex(encodeRequest(read)), toHex(encodeReply(read, {0, 0, 0})));
+}
+
 #define EXPECT_SCRIPT_DONE(bus)        \
   do {                                 \
     EXPECT_EQ((bus).mismatches(), ""); \
@@ -59,9 +65,11 @@ TEST(Ld58a08, FastPwmIsTheManualsFc16Frame) {
 TEST(Ld58a08, OutputsUseFc05ForOneAndFc15ForSeveral) {
   Ld58a08 board(config("ld58a08", 1));
   ScriptedTransport bus;
+  bus.expect("01 03 00 50 00 03 05 DA", "01 03 06 00 00 00 00 00 00 21 75");  // PWM 5 off
   bus.expect("01 05 00 05 FF 00 9C 3B", "01 05 00 05 FF 00 9C 3B");
   EXPECT_TRUE(board.setOutputs(bus, {5}, {true}).ok());
   // All eight at once: the manual's "channels 0,3,7 ON, others OFF".
+  for (uint8_t ch = 0; ch < 8; ++ch) expectPwmOff(bus, ch);
   bus.expect("01 0F 00 00 00 08 01 89 3F 33", "01 0F 00 00 00 08 54 0D");
   EXPECT_TRUE(board
                   .setOutputs(bus, {0, 1, 2, 3, 4, 5, 6, 7},
@@ -75,6 +83,8 @@ TEST(Ld58a08, ChannelsWithGapsReadFirstSoOthersKeepTheirState) {
   Ld58a08 board(config("ld58a08", 1));
   ScriptedTransport bus;
   // The device reports 0x7C (channels 2-6 on); set 0 on and 3 off: FC15 over 0..3.
+  expectPwmOff(bus, 0);
+  expectPwmOff(bus, 3);
   bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 7C 50 69");
   Request w = Request::writeMultipleCoils(1, 0, {true, false, true, false});
   bus.expectEcho(toHex(encodeRequest(w)));
@@ -99,19 +109,111 @@ TEST(Ld58a08, PollDecodesOutputsAndPwm) {
   ASSERT_TRUE(board.pwmKnown());
   EXPECT_DOUBLE_EQ(board.pwm()[0].period, 50.0);
   EXPECT_DOUBLE_EQ(board.pwm()[0].on_time, 20.0);
-  EXPECT_EQ(board.pwm()[0].pulses, 0xFFFF);
+  // Continuous (0xFFFF) is said as such, not as 65535 pulses left.
   EXPECT_TRUE(board.pwm()[0].running);
+  EXPECT_TRUE(board.pwm()[0].continuous);
+  EXPECT_EQ(board.pwm()[0].remaining_pulses, 0);
   EXPECT_TRUE(board.pwm()[6].high_speed);
   EXPECT_DOUBLE_EQ(board.pwm()[6].frequency, 10000);
-  EXPECT_DOUBLE_EQ(board.pwm()[6].duration, 100.0);
+  EXPECT_TRUE(board.pwm()[6].running);
+  EXPECT_FALSE(board.pwm()[6].continuous);
+  EXPECT_DOUBLE_EQ(board.pwm()[6].remaining_time, 100.0);
   EXPECT_FALSE(board.pwm()[3].running);
+  EXPECT_FALSE(board.pwm()[3].continuous);
+  EXPECT_EQ(board.pwm()[3].remaining_pulses, 0);
   // Later polls read the outputs and one channel's registers each.
   bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 00 51 88");
   const Request ch0 = Request::readHoldingRegisters(1, 0, 3);
   bus.expect(toHex(encodeRequest(ch0)), toHex(encodeReply(ch0, {500, 200, 0})));
   ASSERT_TRUE(board.poll(bus).ok());
   EXPECT_FALSE(board.pwm()[0].running);
+  EXPECT_FALSE(board.pwm()[0].continuous);
   EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, ReadBackSaysContinuousAndWhatIsLeftExplicitly) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 00 51 88");
+  for (uint16_t ch = 0; ch < 8; ++ch) {
+    const Request read = Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3);
+    const std::vector<uint16_t> regs = ch == 1   ? std::vector<uint16_t>{10, 5, 7}
+                                       : ch == 7 ? std::vector<uint16_t>{2000, 55, 0xFFFF}
+                                                 : std::vector<uint16_t>{10, 5, 0};
+    bus.expect(toHex(encodeRequest(read)), toHex(encodeReply(read, regs)));
+  }
+  ASSERT_TRUE(board.poll(bus).ok());
+  const PwmState& burst = board.pwm()[1];
+  EXPECT_TRUE(burst.running);
+  EXPECT_FALSE(burst.continuous);
+  EXPECT_EQ(burst.remaining_pulses, 7);
+  const PwmState& endless = board.pwm()[7];
+  EXPECT_TRUE(endless.running);
+  EXPECT_TRUE(endless.continuous);
+  EXPECT_DOUBLE_EQ(endless.remaining_time, 0.0) << "not 6553.5 s";
+  const PwmState& off = board.pwm()[2];
+  EXPECT_FALSE(off.running);
+  EXPECT_FALSE(off.continuous);
+  EXPECT_EQ(off.remaining_pulses, 0);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, PwmMessagesSayTheRealProblem) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  auto slow = [](uint8_t ch, double period, double on) {
+    PwmSettings s;
+    s.channel = ch;
+    s.period = period;
+    s.on_time = on;
+    return s;
+  };
+  auto fast = [](uint8_t ch, double f, double duty, double duration) {
+    PwmSettings s;
+    s.channel = ch;
+    s.frequency = f;
+    s.duty_cycle = duty;
+    s.duration = duration;
+    return s;
+  };
+  PwmSettings pulses_on_fast = fast(6, 1000, 50, 0);
+  pulses_on_fast.pulses = 3;
+  PwmSettings duration_on_slow = slow(0, 1.0, 0.5);
+  duration_on_slow.duration = 2.0;
+  const std::vector<std::pair<PwmSettings, std::string>> cases = {
+      {fast(7, 1000, 33.3, 0),
+       "duty_cycle: 33.3 % is not a whole percent (0-100 % in steps of 1 %)"},
+      {fast(7, 1000.5, 30, 0),
+       "frequency: 1000.5 Hz is not a whole number of Hz (1-20000 Hz in steps of 1 Hz)"},
+      {slow(2, 1.0, 0.55),
+       "on_time: 0.55 s is not a multiple of the 0.1 s step (0-6553.4 s in steps of 0.1 s)"},
+      {slow(2, 1.05, 0),
+       "period: 1.05 s is not a multiple of the 0.1 s step (0.1-6553.5 s in steps of 0.1 s)"},
+      {fast(6, 1000, 50, 0.25),
+       "duration: 0.25 s is not a multiple of the 0.1 s step (0.1-6553.4 s in steps of 0.1 s; "
+       "0 = run continuously)"},
+      {fast(6, 1000, 50, 0.05), "duration: 0.05 s is outside 0.1-6553.4 s (0 = run continuously)"},
+      {fast(1, 1000, 50, 0),
+       "frequency: channel 1 takes period/on_time/pulses (channels 0-5); "
+       "frequency/duty_cycle/duration are for channels 6-7"},
+      {duration_on_slow,
+       "duration: channel 0 takes period/on_time/pulses (channels 0-5); "
+       "frequency/duty_cycle/duration are for channels 6-7"},
+      {slow(6, 1.0, 0.5),
+       "period: channel 6 takes frequency/duty_cycle/duration (channels 6-7); "
+       "period/on_time/pulses are for channels 0-5"},
+      {pulses_on_fast,
+       "pulses: channel 6 takes frequency/duty_cycle/duration (channels 6-7); "
+       "period/on_time/pulses are for channels 0-5"},
+      {fast(7, 1000, 101, 0), "duty_cycle: 101 % is outside 0-100 %"},
+      {slow(2, 1.0, -1), "on_time: -1 s is outside 0-6553.4 s"},
+  };
+  for (const auto& [settings, message] : cases) {
+    const Result r = board.setPwm(bus, settings);
+    EXPECT_EQ(r.error, ErrorKind::kInvalidArgument);
+    EXPECT_EQ(r.message, message);
+  }
+  EXPECT_EQ(bus.executed(), 0);
 }
 
 TEST(Ld58a08, BadPwmValuesNameTheFieldAndSendNothing) {
@@ -180,15 +282,92 @@ TEST(Ld58a08, StopAndReturnDelayFrames) {
 TEST(Ld58a08, ADeviceThatDoesNotConfirmIsNotSuccess) {
   Ld58a08 board(config("ld58a08", 1));
   ScriptedTransport bus;
+  expectPwmOff(bus, 0);
   bus.expect("01 05 00 00 FF 00 8C 3A");                          // silence
   bus.expect(toHex(encodeRequest(Request::readCoils(1, 0, 8))));  // and to the read-back
   const Result silent = board.setOutputs(bus, {0}, {true});
   EXPECT_EQ(silent.error, ErrorKind::kTimeout);
   EXPECT_NE(silent.message.find("not confirmed"), std::string::npos) << silent.message;
+  expectPwmOff(bus, 0);
   bus.expect("01 05 00 00 FF 00 8C 3A", toHex(encodeException(1, 5, 4)));
   const Result r = board.setOutputs(bus, {0}, {true});
   EXPECT_EQ(r.error, ErrorKind::kException);
   EXPECT_NE(r.message.find("slave device failure"), std::string::npos);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+// Manual, 0x0080: the outputs apply only with the channel's PWM enable register at 0. An output
+// write to a channel whose PWM runs stops the PWM first (FC06 0 to 0x00n2), then writes.
+TEST(Ld58a08, AnOutputOnARunningPwmChannelStopsThePwmFirst) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expect("01 03 00 30 00 03 05 C4", "01 03 06 00 0A 00 05 FF FF A8 C5");  // 1 s, 0.5 s, run
+  bus.expect("01 06 00 32 00 00 28 05", "01 06 00 32 00 00 28 05");           // enable 0
+  bus.expect("01 05 00 03 FF 00 7C 3A", "01 05 00 03 FF 00 7C 3A");           // DO 3 on
+  const Result r = board.setOutputs(bus, {3}, {true});
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(r.message, "PWM on channel 3 stopped first");
+  EXPECT_FALSE(board.pwm()[3].running);
+  EXPECT_SCRIPT_DONE(bus);
+  // A fast channel, switched off: its output time register is the enable register.
+  bus.expect("01 03 00 70 00 03 04 10", "01 03 06 07 D0 00 37 FF FF 51 6E");
+  bus.expect("01 06 00 72 00 00 29 D1", "01 06 00 72 00 00 29 D1");
+  bus.expect("01 05 00 07 00 00 7C 0B", "01 05 00 07 00 00 7C 0B");
+  const Result off = board.setOutputs(bus, {7}, {false});
+  EXPECT_TRUE(off.ok()) << off.message;
+  EXPECT_EQ(off.message, "PWM on channel 7 stopped first");
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, SeveralOutputsStopOnlyTheChannelsThatRun) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expect("01 03 00 20 00 03 04 01", "01 03 06 00 0A 00 05 00 00 A9 75");  // 2: stopped
+  bus.expect("01 03 00 30 00 03 05 C4", "01 03 06 00 0A 00 05 FF FF A8 C5");  // 3: runs
+  bus.expect("01 06 00 32 00 00 28 05", "01 06 00 32 00 00 28 05");
+  bus.expect("01 0F 00 02 00 02 01 03 E7 56", "01 0F 00 02 00 02 75 CA");  // DO 2, 3 on
+  const Result r = board.setOutputs(bus, {2, 3}, {true, true});
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(r.message, "PWM on channel 3 stopped first");
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, ALostStopReplyIsReadBackBeforeTheOutputIsWritten) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expect("01 03 00 30 00 03 05 C4", "01 03 06 00 0A 00 05 FF FF A8 C5");
+  bus.expect("01 06 00 32 00 00 28 05");                                      // reply lost
+  bus.expect("01 03 00 30 00 03 05 C4", "01 03 06 00 0A 00 05 00 00 A9 75");  // stopped
+  bus.expect("01 05 00 03 FF 00 7C 3A");                                      // reply lost
+  bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 08 50 4E");                 // DO 3 on
+  const Result r = board.setOutputs(bus, {3}, {true});
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(r.message.rfind("PWM on channel 3 stopped first; confirmed by reading the outputs", 0),
+            0u)
+      << r.message;
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(Ld58a08, APwmThatCouldNotBeStoppedLeavesTheOutputUnwritten) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expect("01 03 00 30 00 03 05 C4", "01 03 06 00 0A 00 05 FF FF A8 C5");
+  bus.expect("01 06 00 32 00 00 28 05");                                      // reply lost
+  bus.expect("01 03 00 30 00 03 05 C4", "01 03 06 00 0A 00 05 FF FF A8 C5");  // still runs
+  const Result r = board.setOutputs(bus, {3}, {true});
+  EXPECT_EQ(r.error, ErrorKind::kTimeout);
+  EXPECT_NE(r.message.find("PWM runs on channel 3 and stopping it failed"), std::string::npos)
+      << r.message;
+  EXPECT_NE(r.message.find("not done (channel 3 still runs)"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("outputs not written"), std::string::npos) << r.message;
+  EXPECT_SCRIPT_DONE(bus);  // no FC05
+  // An unreadable PWM state: nothing written either.
+  bus.expect("01 03 00 30 00 03 05 C4");
+  const Result unknown = board.setOutputs(bus, {3}, {true});
+  EXPECT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.message.find("outputs not written: whether PWM runs on channel 3 is unknown"),
+            std::string::npos)
+      << unknown.message;
   EXPECT_SCRIPT_DONE(bus);
 }
 
@@ -408,8 +587,13 @@ TEST(Registry, TypesAddressesAndNames) {
   EXPECT_EQ(knownDeviceTypes(), (std::vector<std::string>{"ld58a08", "lc_relay8", "yespeed_pdu"}));
   std::string error;
   EXPECT_NE(createDevice(config("lc_relay8", 255), &error), nullptr) << error;
-  EXPECT_EQ(createDevice(config("ld58a08", 255), &error), nullptr);
-  EXPECT_NE(error.find("devices/dev/address: 255 is outside 1-247 for ld58a08"), std::string::npos)
+  EXPECT_EQ(createDevice(config("ld58a08", 249), &error), nullptr);
+  EXPECT_NE(error.find("devices/dev/address: 249 is outside 1-248 for ld58a08"), std::string::npos)
+      << error;
+  EXPECT_NE(createDevice(config("ld58a08", 248), &error), nullptr) << "its manual: 1-248";
+  EXPECT_EQ(createDevice(config("yespeed_pdu", 248), &error), nullptr);
+  EXPECT_NE(error.find("devices/dev/address: 248 is outside 1-247 for yespeed_pdu"),
+            std::string::npos)
       << error;
   EXPECT_EQ(createDevice(config("relay", 3), &error), nullptr);
   EXPECT_NE(error.find("devices/dev/type: 'relay'"), std::string::npos) << error;

@@ -89,7 +89,7 @@ TEST(ConfirmByReadBack, ABurstWhoseReplyWasLostIsReadBackNotSentAgain) {
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_NE(r.message.find("confirmed by reading channel 2 back"), std::string::npos);
   EXPECT_TRUE(board.pwm()[2].running);
-  EXPECT_EQ(board.pwm()[2].pulses, 4);
+  EXPECT_EQ(board.pwm()[2].remaining_pulses, 4);
   EXPECT_TRUE(bus.usedUp());
   EXPECT_EQ(bus.mismatches(), "");
 }

@@ -5,6 +5,8 @@
 
 #include "modbus_rtu_driver/core/rtu_link.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
 using namespace modbus_rtu_driver;
@@ -149,5 +151,37 @@ TEST_F(LinkVsSimulator, Ld58a08AnswersAt0xFFAndChangesAddress) {
   ASSERT_TRUE(link_->execute(Request::writeSingleRegister(1, 0x00FD, 9)).ok());
   const Result at9 = link_->execute(Request::readCoils(9, 0, 8));
   EXPECT_TRUE(at9.ok()) << at9.message;
+  EXPECT_EQ(link_->execute(Request::readCoils(1, 0, 8)).error, ErrorKind::kTimeout);
+}
+
+// The LD58A08 manual allows addresses 1-248. libmodbus 3.1.6 cannot address 248, so the link
+// sends and reads those frames itself (as for the LC board at 255): the whole device works there.
+TEST_F(LinkVsSimulator, Ld58a08At248WorksEndToEnd) {
+  ASSERT_TRUE(link_->execute(Request::writeSingleRegister(1, 0x00FD, 248)).ok());
+  DeviceConfig config;
+  config.name = "pwm_board";
+  config.type = "ld58a08";
+  config.address = 248;
+  std::string error;
+  std::unique_ptr<Device> device = createDevice(config, &error);
+  ASSERT_NE(device, nullptr) << error;
+  auto& board = static_cast<Ld58a08&>(*device);
+  Result r = board.poll(*link_);
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_TRUE(board.pwmKnown());
+  r = board.setOutputs(*link_, {3}, {true});
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(sim("get 248 coil 0 8"), "ok 0 0 0 1 0 0 0 0");
+  PwmSettings s;
+  s.channel = 6;
+  s.frequency = 2000;
+  s.duty_cycle = 30;
+  r = board.setPwm(*link_, s);
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(sim("get 248 holding 0x60 3"), "ok 2000 30 65535");
+  Ld58a08Settings settings;
+  r = board.readSettings(*link_, &settings);
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(settings.address, 248);
   EXPECT_EQ(link_->execute(Request::readCoils(1, 0, 8)).error, ErrorKind::kTimeout);
 }

@@ -159,7 +159,7 @@ TEST(SimExecutable, BadConfigurationAndOptionsAreRefused) {
   Process bad({kExe, "--config", dir / "bad.yaml", "--link", dir / "tty"});
   EXPECT_EQ(Process::readFor(bad.err, 5000, "\n"),
             "modbus_rtu_simulator: " + (dir / "bad.yaml") +
-                ": devices[0]/address: 300 is outside 1-247 for ld58a08\n");
+                ": devices[0]/address: 300 is outside 1-248 for ld58a08\n");
   EXPECT_EQ(bad.wait(5000), 1);
   EXPECT_FALSE(exists(dir / "tty"));
   Process option({kExe, "--config", dir / "bad.yaml", "--lnk", dir / "tty"});

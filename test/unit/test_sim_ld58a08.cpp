@@ -129,6 +129,45 @@ TEST(SimLd58a08, ContinuousPulsesRunUntilStoppedAndOverrideCoilWrites) {
   EXPECT_EQ(coil(d, 0, t0 + 3601s + 800ms), 0);
 }
 
+// Manual, 0x0080: the output status applies only with the channel's PWM enable register at 0.
+// Every way of writing an output (FC05, FC15, FC06 / FC16 on 0x0080) leaves a PWM channel to
+// its PWM, and still sets the plain channels of the same write.
+TEST(SimLd58a08, OutputWritesDoNotMoveAChannelWhosePwmRuns) {
+  SimLd58a08 d(1, {});
+  const auto t0 = SimClock::now();
+  ASSERT_EQ(d.write(Table::kHolding, 0x0020, {10, 5, 0xFFFF}, t0), 0);    // 2: on 0.5 s of 1 s
+  ASSERT_EQ(d.write(Table::kHolding, 0x0060, {1000, 0, 0xFFFF}, t0), 0);  // 6: 0 % duty, off
+  const std::vector<Request> writes = {
+      Request::writeSingleCoil(1, 2, true),
+      Request::writeSingleCoil(1, 6, true),
+      Request::writeMultipleCoils(1, 0, {true, true, true, true, true, true, true, true}),
+      Request::writeSingleRegister(1, 0x80, 0xFF),
+      Request::writeMultipleRegisters(1, 0x80, {0xFF}),
+  };
+  auto second = t0;
+  for (const Request& w : writes) {
+    const std::string frame = toHex(encodeRequest(w));
+    const auto off_phase = second + 700ms, on_phase = second + 1200ms;
+    second += 1s;
+    ASSERT_EQ(d.write(Table::kHolding, 0x80, {0}, off_phase), 0);
+    EXPECT_FALSE(ask(d, w, off_phase).empty()) << "the board acknowledges: " << frame;
+    EXPECT_EQ(coil(d, 2, off_phase), 0) << "the PWM's off phase, not the write: " << frame;
+    EXPECT_EQ(coil(d, 6, off_phase), 0) << "0 % duty, not the write: " << frame;
+    if (w.function != FunctionCode::kWriteSingleCoil) {
+      EXPECT_EQ(coil(d, 0, off_phase), 1) << "a plain channel takes it: " << frame;
+    }
+    EXPECT_EQ(coil(d, 2, on_phase), 1) << "then the PWM's on phase: " << frame;
+    // Off does not hold an output that the PWM has on either.
+    ASSERT_EQ(d.write(Table::kCoil, 2, {0}, on_phase), 0);
+    EXPECT_EQ(coil(d, 2, on_phase), 1) << frame;
+  }
+  // Enable 0: a plain output again, written as asked.
+  ASSERT_EQ(d.write(Table::kHolding, 0x0022, {0}, second), 0);
+  ASSERT_EQ(d.write(Table::kCoil, 2, {1}, second), 0);
+  EXPECT_EQ(coil(d, 2, second + 10s + 700ms), 1);
+  EXPECT_EQ(regs(d, 0x22, 1, second + 10s)[0], 0);
+}
+
 TEST(SimLd58a08, NewTimingWhileRunningKeepsThePulsesLeft) {
   SimLd58a08 d(1, {});
   const auto t0 = SimClock::now();
@@ -203,14 +242,19 @@ TEST(SimLd58a08, AddressChangeAnswersFromTheOldAddressThenMoves) {
   const Request to9 = Request::writeSingleRegister(0xFF, 0xFD, 9);
   EXPECT_EQ(ask(d, to9), toHex(encodeRequest(to9)));
   EXPECT_EQ(d.address(), 9);
-  // 0xFF reaches only the special registers; the addresses 0 and 248 are refused.
+  // 0xFF reaches only the special registers; the addresses 0 and 249 are refused.
   const Request bits = Request::readCoils(0xFF, 0, 8);
   EXPECT_FALSE(d.answersTo(0xFF, &bits));
   EXPECT_EQ(ask(d, Request::writeSingleRegister(9, 0xFD, 0)),
             exceptionHex(9, kFc06, kIllegalDataValue));
-  EXPECT_EQ(ask(d, Request::writeSingleRegister(9, 0xFD, 248)),
+  EXPECT_EQ(ask(d, Request::writeSingleRegister(9, 0xFD, 249)),
             exceptionHex(9, kFc06, kIllegalDataValue));
   EXPECT_EQ(d.address(), 9);
+  // 248 (0xF8) is the manual's highest address: taken, and answered there.
+  const Request to248 = Request::writeSingleRegister(9, 0xFD, 248);
+  EXPECT_EQ(ask(d, to248), toHex(encodeRequest(to248)));
+  EXPECT_EQ(d.address(), 248);
+  EXPECT_EQ(ask(d, "F8 01 00 00 00 08 29 A5").substr(0, 8), "F8 01 01");
 }
 
 TEST(SimLd58a08, BaudAndParityAreStoredAndTakenAtPowerOn) {

@@ -70,8 +70,11 @@ TEST(SimConfig, BadConfigsAreRefusedNamingTheKey) {
   EXPECT_EQ(configError("devices: [{type: plc, address: 1}]"),
             "devices[0]/type: 'plc' is not ld58a08, lc_relay8 or yespeed_pdu");
   EXPECT_EQ(
-      configError("devices: [{type: lc_relay8, address: 255}, {type: ld58a08, address: 248}]"),
-      "devices[1]/address: 248 is outside 1-247 for ld58a08");
+      configError("devices: [{type: lc_relay8, address: 255}, {type: ld58a08, address: 249}]"),
+      "devices[1]/address: 249 is outside 1-248 for ld58a08");
+  EXPECT_EQ(configError("devices: [{type: ld58a08, address: 248}]"), "accepted");
+  EXPECT_EQ(configError("devices: [{type: yespeed_pdu, address: 248}]"),
+            "devices[0]/address: 248 is outside 1-247 for yespeed_pdu");
   EXPECT_EQ(configError("devices: [{type: lc_relay8, address: 0}]"),
             "devices[0]/address: 0 is outside 1-255 for lc_relay8");
   EXPECT_EQ(configError("devices: [{type: lc_relay8, address: x}]"),

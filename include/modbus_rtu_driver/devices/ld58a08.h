@@ -1,6 +1,7 @@
 // LD58A08: 8 digital outputs (coils 0-7, mirrored in holding register 0x0080), each also a PWM
 // channel. Channels 0-5 are slow (period / on-time in 0.1 s, pulse count at 0x00n2), channels
-// 6-7 fast (frequency Hz, duty %, output time in 0.1 s at 0x00n2). Manual: seeds/000.
+// 6-7 fast (frequency Hz, duty %, output time in 0.1 s at 0x00n2). Addresses 1-248 (248 goes
+// through the link's own framing, as libmodbus 3.1.6 cannot address it). Manual: seeds/000.
 #pragma once
 
 #include <array>
@@ -21,22 +22,25 @@ struct PwmSettings {
   double duration = 0.0;    // s, 0.1-6553.4; 0 = continuous (written as 0xFFFF)
 };
 
-// What the device reports for a channel (registers 0x00n0-0x00n2 decoded).
+// What the device reports for a channel (registers 0x00n0-0x00n2 decoded). The enable register
+// (0x00n2) is split into explicit fields: 0 = stopped, 0xFFFF = continuous, else what is left.
 struct PwmState {
   uint8_t channel = 0;
   bool high_speed = false;
+  bool running = false;     // enable register not 0: the PWM drives the output
+  bool continuous = false;  // enable register 0xFFFF: runs until stopped
   double period = 0.0, on_time = 0.0;
-  uint16_t pulses = 0;  // raw register: 0 off, 0xFFFF continuous, else pulses left
+  uint16_t remaining_pulses = 0;  // channels 0-5: pulses left of a burst (1-65534), else 0
   double frequency = 0.0, duty_cycle = 0.0;
-  double duration = 0.0;  // s; raw 0xFFFF reported as 6553.5
-  bool running = false;
+  double remaining_time = 0.0;  // s, channels 6-7: output time left of a timed run, else 0
+  uint16_t enable = 0;          // the raw enable register
 };
 
 // Special function registers.
 struct Ld58a08Settings {
   uint16_t power_down_save = 0;  // 0x00FA
   uint16_t return_delay = 0;     // 0x00FC, x40 ms, 0-25
-  uint16_t address = 1;          // 0x00FD, 1-247
+  uint16_t address = 1;          // 0x00FD, 1-248
   uint16_t baud_code = 3;        // 0x00FE, 0-7
   uint16_t parity = 0;           // 0x00FF, 0 none 1 even 2 odd
 };
@@ -59,6 +63,9 @@ class Ld58a08 : public Device {
 
   // Polls the outputs (FC01) and the PWM registers of one channel (all on the first poll).
   Result poll(Transport& bus) override;
+  // The outputs drive a channel only while its PWM is off (manual, 0x0080): reads the requested
+  // channels' PWM registers, stops (FC06 0 to 0x00n2, confirmed) those that run, then writes the
+  // outputs (FC05 / FC15). The message then says "PWM on channel N stopped first".
   Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                     const std::vector<bool>& states) override;
 
@@ -66,7 +73,8 @@ class Ld58a08 : public Device {
   static std::string validatePwm(const PwmSettings& settings);
   // One FC16 write of the channel's three registers.
   Result setPwm(Transport& bus, const PwmSettings& settings);
-  // Writes 0 to the channel's enable register (0x00n2).
+  // Writes 0 to the channel's enable register (0x00n2); a lost reply is confirmed by reading
+  // the channel back.
   Result stopPwm(Transport& bus, uint8_t channel);
   Result readPwm(Transport& bus);  // fills pwm()
   const std::array<PwmState, kChannels>& pwm() const { return pwm_; }

@@ -121,7 +121,7 @@ using SimSlave = SimDevice;
 // Builds a device of `type` (ld58a08, lc_relay8, yespeed_pdu); null for an unknown type.
 std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t address,
                                          SimLineSettings line);
-// Highest address a device of `type` can have (LD58A08 and PDU 247, LC board 255); 0 = unknown.
+// Highest address a device of `type` can have (LD58A08 248, PDU 247, LC board 255); 0 = unknown.
 int maxSimAddress(const std::string& type);
 
 }  // namespace modbus_rtu_driver

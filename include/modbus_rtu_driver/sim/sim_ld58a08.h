@@ -9,7 +9,10 @@
 // - Factory reset (a write to 0x00FB, or baud code > 7): address 1 at once; baud 9600, parity
 //   none from the next power-on; return delay 0, power-down save off, every PWM channel stopped
 //   and cleared (its output off). Plain outputs stay as they are.
-// - While a channel's PWM runs, its output bit follows the waveform, whatever a coil write says.
+// - Addresses 1-248 (0x01-0xF8, the manual's range for 0x00FD); 0 and 249-65535 get exception 03.
+// - While a channel's PWM runs, its output bit follows the waveform, whatever a coil write (FC05,
+//   FC15) or a 0x0080 write says; the write is acknowledged (manual, 0x0080: the outputs apply
+//   only with the enable register at 0).
 //   A fast channel (6, 7) reads as on while it runs with a duty cycle above 0.
 // - PWM values outside the manual's ranges are refused with exception 03: period 0, on-time
 //   65535 or longer than the period, frequency outside 1-20000 Hz, duty cycle over 100 %, and
