@@ -81,6 +81,9 @@ class FaultsTest(unittest.TestCase):
                            self.status("device pdu").level == DiagnosticStatus.ERROR, 15,
                            "pdu offline in /diagnostics")
         self.assertIn("offline", self.status("device pdu").message)
+        # Its latched states say they are stale (the last ones read, not now's).
+        pdu_outputs = helpers.Latest(NS + "pdu/outputs", DigitalStates)
+        pdu_outputs.wait(10, lambda m: m.stale, "pdu outputs marked stale")
         rospy.loginfo("pdu offline after %.1f s", time.time() - t0)
         # Its services fail fast with a clear message.
         set_pdu = helpers.service(NS + "pdu/out0/set", SetBool)
@@ -99,6 +102,7 @@ class FaultsTest(unittest.TestCase):
         helpers.wait_until(lambda: self.status("device pdu").level == DiagnosticStatus.OK, 20,
                            "pdu back online")
         helpers.Latest(NS + "pdu/telemetry", PduTelemetry).wait(10, what="telemetry again")
+        pdu_outputs.wait(10, lambda m: not m.stale, "pdu outputs fresh again")
 
         # The port goes away ...
         self.sim_proc.terminate()
