@@ -19,7 +19,7 @@
 #include "modbus_rtu_driver/sim/simulator.h"
 
 using namespace modbus_rtu_driver;
-using Clock = std::chrono::steady_clock;
+using Steady = std::chrono::steady_clock;
 
 namespace {
 
@@ -30,14 +30,14 @@ struct Op {
 
 // Transactions per second of `once` over `seconds` (0 when one of them failed).
 double rate(double seconds, const std::function<bool()>& once) {
-  const auto end = Clock::now() + std::chrono::duration<double>(seconds);
+  const auto end = Steady::now() + std::chrono::duration<double>(seconds);
   long n = 0;
-  const auto start = Clock::now();
-  while (Clock::now() < end) {
+  const auto start = Steady::now();
+  while (Steady::now() < end) {
     if (!once()) return 0;
     ++n;
   }
-  return n / std::chrono::duration<double>(Clock::now() - start).count();
+  return n / std::chrono::duration<double>(Steady::now() - start).count();
 }
 
 bool plainLibmodbus(modbus_t* ctx, const Request& r) {

@@ -3,6 +3,7 @@ add_library(modbus_rtu_ros
   src/ros/adapter_registry.cpp
   src/ros/bus_node.cpp
   src/ros/device_adapter.cpp
+  src/ros/device_failsafe.cpp
   src/ros/digital_states_publisher.cpp
   src/ros/lc_relay8_adapter.cpp
   src/ros/ld58a08_adapter.cpp

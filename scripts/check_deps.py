@@ -38,6 +38,7 @@ ROSDEP_TO_DEBIAN = {
     "std_srvs": ["libstd-srvs-dev", "python3-std-srvs"],
     "diagnostic_msgs": ["python3-diagnostic-msgs"],
     "diagnostic_updater": ["libdiagnostic-updater-dev"],
+    "topic_tools": ["libtopic-tools-dev"],
     "message_generation": ["ros-message-generation"],
     "message_runtime": ["ros-core-dev"],
     "rosbag": ["librosbag-dev", "python3-rosbag"],

@@ -13,8 +13,13 @@ namespace modbus_rtu_driver {
 
 namespace {
 
-const std::set<std::string> kDeviceKeys = {"type",    "address", "poll_rate",
-                                           "outputs", "inputs",  "reply_delay"};
+const std::set<std::string> kDeviceKeys = {
+    "type",       "address",    "poll_rate", "outputs",         "inputs",   "reply_delay",
+    "safe_state", "on_restart", "on_start",  "command_timeout", "heartbeat"};
+// The master role's keys beside the link's.
+const std::set<std::string> kBusKeys = {
+    "role",       "diagnostic_period", "devices",         "allow_raw_writes", "publish_on_change",
+    "keep_alive", "heartbeat",         "shutdown_timeout"};
 const std::set<std::string> kSlaveKeys = {"slave_id",          "coils",           "discrete_inputs",
                                           "holding_registers", "input_registers", "names"};
 const std::set<std::string> kLinkKeys = {
@@ -74,6 +79,88 @@ std::vector<std::string> getNames(const YAML::Node& n, const std::string& key) {
   return names;
 }
 
+// A value for every output channel: one scalar for all, or a map by channel name.
+template <typename T, typename Parse>
+std::vector<T> perChannel(const YAML::Node& n, const std::string& key,
+                          const std::vector<std::string>& names, T none, Parse parse) {
+  std::vector<T> values(names.size(), none);
+  if (n.IsScalar()) {
+    const T v = parse(n, key);
+    for (T& x : values) x = v;
+    return values;
+  }
+  if (!n.IsMap()) fail(key, show(n) + " is neither one value for all channels nor a map by name");
+  for (const auto& kv : n) {
+    const std::string channel = kv.first.as<std::string>();
+    size_t i = 0;
+    while (i < names.size() && names[i] != channel) ++i;
+    if (i == names.size()) {
+      std::string list;
+      for (const auto& nm : names) list += (list.empty() ? "" : ", ") + nm;
+      fail(key + "/" + channel, "no output channel of that name (outputs: " + list + ")");
+    }
+    values[i] = parse(kv.second, key + "/" + channel);
+  }
+  return values;
+}
+
+void parseHeartbeat(const YAML::Node& n, const std::string& key, std::string* topic,
+                    double* timeout) {
+  if (!n.IsMap()) fail(key, show(n) + " is not a map {topic: NAME, timeout: S}");
+  checkKeys(n, key + "/", {"topic", "timeout"});
+  if (!n["topic"]) fail(key + "/topic", "missing (the topic whose messages keep outputs armed)");
+  *topic = get<std::string>(n["topic"], key + "/topic", "a topic name");
+  if (topic->empty()) fail(key + "/topic", "empty");
+  if (!n["timeout"]) fail(key + "/timeout", "missing (s without a message before the safe state)");
+  *timeout = getNumber(n["timeout"], key + "/timeout");
+  if (!(*timeout >= 0.05 && *timeout <= 3600))
+    fail(key + "/timeout", std::to_string(*timeout) + " s is outside 0.05-3600 s");
+}
+
+void parseFailsafe(const YAML::Node& n, const std::string& where,
+                   const std::vector<std::string>& names, FailsafeConfig* out) {
+  if (n["safe_state"]) {
+    out->safe_state = perChannel<SafeState>(
+        n["safe_state"], where + "safe_state", names, SafeState::kHold,
+        [](const YAML::Node& v, const std::string& key) {
+          SafeState s;
+          const std::string text = get<std::string>(v, key, "off, on or hold");
+          if (!parseSafeState(text, &s)) fail(key, "'" + text + "' is not off, on or hold");
+          return s;
+        });
+  }
+  if (n["command_timeout"]) {
+    out->command_timeout = perChannel<double>(
+        n["command_timeout"], where + "command_timeout", names, 0.0,
+        [](const YAML::Node& v, const std::string& key) {
+          const double s = getNumber(v, key);
+          if (!(s == 0 || (s >= 0.05 && s <= 3600)))
+            fail(key, std::to_string(s) + " s is outside 0.05-3600 s (0 = none)");
+          return s;
+        });
+    for (size_t i = 0; i < names.size(); ++i) {
+      if (out->command_timeout[i] > 0 && out->safeStateOf(i) == SafeState::kHold)
+        fail(where + "command_timeout/" + names[i],
+             "needs a safe_state of off or on for that channel (it is hold)");
+    }
+  }
+  if (n["on_restart"]) {
+    const std::string text =
+        get<std::string>(n["on_restart"], where + "on_restart", "restore, safe or leave");
+    if (!parseOnRestart(text, &out->on_restart))
+      fail(where + "on_restart", "'" + text + "' is not restore, safe or leave");
+  }
+  if (n["on_start"]) {
+    const std::string text = get<std::string>(n["on_start"], where + "on_start", "safe or keep");
+    if (text != "safe" && text != "keep")
+      fail(where + "on_start", "'" + text + "' is not safe or keep");
+    out->on_start_safe = text == "safe";
+  }
+  if (n["heartbeat"])
+    parseHeartbeat(n["heartbeat"], where + "heartbeat", &out->heartbeat_topic,
+                   &out->heartbeat_timeout);
+}
+
 DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
   const std::string where = "devices/" + name + "/";
   if (!isValidRosName(name))
@@ -100,6 +187,7 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
   if (n["inputs"]) d.inputs = getNames(n["inputs"], where + "inputs");
   const std::string problem = validateDeviceConfig(d);
   if (!problem.empty()) throw ConfigError{problem};
+  parseFailsafe(n, where, outputNamesOf(d), &d.failsafe);
   return d;
 }
 
@@ -153,9 +241,7 @@ std::set<std::string> with(std::set<std::string> keys, const std::set<std::strin
 
 void parse(const YAML::Node& root, BusConfig* out) {
   if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
-  checkKeys(root, "",
-            with(kLinkKeys, {"role", "diagnostic_period", "devices", "allow_raw_writes",
-                             "publish_on_change", "keep_alive"}));
+  checkKeys(root, "", with(kLinkKeys, kBusKeys));
   parseLink(root, &out->link);
   if (root["allow_raw_writes"])
     out->allow_raw_writes =
@@ -172,6 +258,13 @@ void parse(const YAML::Node& root, BusConfig* out) {
     out->keep_alive = getNumber(root["keep_alive"], "keep_alive");
     if (!(out->keep_alive >= 0.1 && out->keep_alive <= 3600))
       fail("keep_alive", std::to_string(out->keep_alive) + " s is outside 0.1-3600 s");
+  }
+  if (root["heartbeat"])
+    parseHeartbeat(root["heartbeat"], "heartbeat", &out->heartbeat_topic, &out->heartbeat_timeout);
+  if (root["shutdown_timeout"]) {
+    out->shutdown_timeout = getNumber(root["shutdown_timeout"], "shutdown_timeout");
+    if (!(out->shutdown_timeout >= 0 && out->shutdown_timeout <= 60))
+      fail("shutdown_timeout", std::to_string(out->shutdown_timeout) + " s is outside 0-60 s");
   }
   const YAML::Node devices = root["devices"];
   if (!devices) fail("devices", "missing (a map of device name -> settings)");
@@ -267,7 +360,7 @@ bool parseSlaveConfig(const YAML::Node& root, SlaveConfig* out, std::string* err
 
 std::vector<std::string> configKeys() {
   std::vector<std::string> keys(kLinkKeys.begin(), kLinkKeys.end());
-  keys.insert(keys.end(), {"role", "diagnostic_period", "devices", "allow_raw_writes"});
+  keys.insert(keys.end(), kBusKeys.begin(), kBusKeys.end());
   for (const auto& k : kDeviceKeys) keys.push_back("devices/D/" + k);
   keys.insert(keys.end(), kSlaveKeys.begin(), kSlaveKeys.end());
   return keys;

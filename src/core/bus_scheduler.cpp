@@ -71,16 +71,19 @@ void BusScheduler::addDevice(const std::string& device) {
 
 void BusScheduler::addPoll(const std::string& device, double rate_hz, Job poll,
                            ResultCallback on_result) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  health_[device];
-  if (!(rate_hz > 0)) return;  // 0 = never poll
-  Poll p;
-  p.device = device;
-  p.period = seconds(1.0 / rate_hz);
-  p.due = clock_.now();
-  p.job = std::move(poll);
-  p.on_result = std::move(on_result);
-  polls_.push_back(std::move(p));
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    health_[device];
+    if (!(rate_hz > 0)) return;  // 0 = never poll
+    Poll p;
+    p.device = device;
+    p.period = seconds(1.0 / rate_hz);
+    p.due = clock_.now();
+    p.job = std::move(poll);
+    p.on_result = std::move(on_result);
+    polls_.push_back(std::move(p));
+  }
+  clock_.notifyAll(wake_);  // the bus thread may be waiting with nothing to poll
 }
 
 std::future<Result> BusScheduler::submit(const std::string& device, Job job) {

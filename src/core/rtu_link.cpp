@@ -17,7 +17,7 @@ namespace modbus_rtu_driver {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using Steady = std::chrono::steady_clock;
 
 #if LIBMODBUS_VERSION_CHECK(3, 1, 7)
 constexpr bool kHasQuirks = true;
@@ -110,7 +110,7 @@ bool RtuLink::connect(std::string* error) {
     if (ever_connected_) ++stats_.reconnects;
   }
   ever_connected_ = true;
-  last_activity_ = Clock::now();
+  last_activity_ = Steady::now();
   return true;
 }
 
@@ -133,7 +133,7 @@ Result RtuLink::execute(const Request& request) {
     ++stats_.requests;
   }
   if (!request.expectsReply()) return sendBroadcast(request);
-  const auto start = Clock::now();
+  const auto start = Steady::now();
   Result r;
   for (int attempt_no = 0;; ++attempt_no) {
     r = attempt(request);
@@ -143,7 +143,7 @@ Result RtuLink::execute(const Request& request) {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.retries;
   }
-  account(r, std::chrono::duration<double>(Clock::now() - start).count());
+  account(r, std::chrono::duration<double>(Steady::now() - start).count());
   return r;
 }
 
@@ -167,7 +167,7 @@ Result RtuLink::attempt(const Request& request) {
     // Writes: libmodbus receives, we compare the echo byte for byte (3.1.6 checks only lengths).
     r = exchangeRaw(request, false);
   }
-  last_activity_ = Clock::now();
+  last_activity_ = Steady::now();
   countAttempt(r);
   // A failure (not an answer) may be followed by a late reply. A success keeps an earlier
   // entry: after a retry, the first attempt's reply may be the one taken, the second's late.
@@ -236,7 +236,7 @@ Result RtuLink::sendBroadcast(const Request& request) {
     return r;
   }
   tcdrain(modbus_get_socket(ctx_));
-  last_activity_ = Clock::now();
+  last_activity_ = Steady::now();
   std::lock_guard<std::mutex> lock(stats_mutex_);
   ++stats_.attempts;
   ++stats_.broadcasts;

@@ -17,17 +17,17 @@
 namespace modbus_rtu_driver {
 
 namespace {
-using Clock = std::chrono::steady_clock;
+using Steady = std::chrono::steady_clock;
 }  // namespace
 
 void RtuLink::keepGap() {
-  const auto ready = last_activity_ + std::chrono::duration_cast<Clock::duration>(
+  const auto ready = last_activity_ + std::chrono::duration_cast<Steady::duration>(
                                           std::chrono::duration<double>(effectiveMinGap(config_)));
-  auto now = Clock::now();
+  auto now = Steady::now();
   if (now >= ready) return;
   // A few microseconds cost less spun than slept (a sleep is a syscall and a wake-up).
   if (ready - now < std::chrono::microseconds(20)) {
-    while (Clock::now() < ready) {
+    while (Steady::now() < ready) {
     }
     return;
   }
@@ -46,8 +46,8 @@ void RtuLink::keepGap() {
 // the input (a late reply, noise, a long echo) belongs to nobody. Asking for the byte count
 // first is cheaper than a flush on every request.
 void RtuLink::prepareLine(const Request& request) {
-  const auto now = Clock::now();
-  const auto guard = std::chrono::duration_cast<Clock::duration>(
+  const auto now = Steady::now();
+  const auto guard = std::chrono::duration_cast<Steady::duration>(
       std::chrono::duration<double>(config_.late_reply_guard));
   for (auto it = unsettled_.begin(); it != unsettled_.end();)
     it = now - it->second.failed_at >= guard ? unsettled_.erase(it) : std::next(it);
@@ -67,11 +67,11 @@ void RtuLink::prepareLine(const Request& request) {
 
 // Reads and drops bytes until `until`, pushed back by late_reply_guard whenever bytes come
 // (1 s at most, so a babbling line cannot stall the bus).
-void RtuLink::awaitQuietLine(Clock::time_point until) {
+void RtuLink::awaitQuietLine(Steady::time_point until) {
   const int fd = modbus_get_socket(ctx_);
-  const auto give_up = Clock::now() + std::chrono::seconds(1);
+  const auto give_up = Steady::now() + std::chrono::seconds(1);
   uint64_t dropped = 0;
-  for (auto now = Clock::now(); now < until && now < give_up; now = Clock::now()) {
+  for (auto now = Steady::now(); now < until && now < give_up; now = Steady::now()) {
     fd_set set;
     FD_ZERO(&set);
     FD_SET(fd, &set);
@@ -85,10 +85,10 @@ void RtuLink::awaitQuietLine(Clock::time_point until) {
     const ssize_t n = read(fd, junk, sizeof junk);
     if (n <= 0) break;
     dropped += static_cast<uint64_t>(n);
-    until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                               std::chrono::duration<double>(config_.late_reply_guard));
+    until = Steady::now() + std::chrono::duration_cast<Steady::duration>(
+                                std::chrono::duration<double>(config_.late_reply_guard));
   }
-  last_activity_ = Clock::now();
+  last_activity_ = Steady::now();
   std::lock_guard<std::mutex> lock(stats_mutex_);
   stats_.stale_bytes += dropped;
 }

@@ -11,7 +11,7 @@
 namespace modbus_rtu_driver {
 
 namespace {
-using Clock = std::chrono::steady_clock;
+using Steady = std::chrono::steady_clock;
 }  // namespace
 
 const char* slaveTableName(SlaveTable t) {
@@ -79,7 +79,7 @@ SlaveStats SlaveServer::stats() const {
   std::lock_guard<std::mutex> lock(mutex_);
   SlaveStats s = stats_;
   if (heard_)
-    s.since_last_heard = std::chrono::duration<double>(Clock::now() - last_heard_).count();
+    s.since_last_heard = std::chrono::duration<double>(Steady::now() - last_heard_).count();
   return s;
 }
 
@@ -183,15 +183,15 @@ void SlaveServer::run() {
         continue;
       }
       if (n > 0) {
-        last_byte_ = Clock::now();
+        last_byte_ = Steady::now();
         got = true;
         handleInput(buf, static_cast<size_t>(n), false);
       }
     }
     // t3.5 ends a frame; ptys and USB adapters deliver in bursts, so never less than 4 ms.
     const double gap = std::max(effectiveMinGap(config_.link), 0.004);
-    const bool silence =
-        !got && framer_.pending() && Clock::now() - last_byte_ > std::chrono::duration<double>(gap);
+    const bool silence = !got && framer_.pending() &&
+                         Steady::now() - last_byte_ > std::chrono::duration<double>(gap);
     if (silence) handleInput(nullptr, 0, true);
   }
 }
@@ -276,7 +276,7 @@ void SlaveServer::serve(const Bytes& frame) {
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    last_heard_ = Clock::now();
+    last_heard_ = Steady::now();
     heard_ = true;
     if (broadcast) {
       ++stats_.broadcasts;

@@ -5,7 +5,6 @@
 
 namespace modbus_rtu_driver {
 
-namespace {
 std::vector<std::string> withDefaults(const std::vector<std::string>& given, size_t n,
                                       const char* prefix) {
   if (given.size() == n) return given;
@@ -13,7 +12,6 @@ std::vector<std::string> withDefaults(const std::vector<std::string>& given, siz
   for (size_t i = 0; i < n; ++i) names.push_back(prefix + std::to_string(i));
   return names;
 }
-}  // namespace
 
 std::vector<std::string> Device::outputNames() const {
   return withDefaults(config_.outputs, outputCount(), "out");

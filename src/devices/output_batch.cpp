@@ -14,7 +14,8 @@ std::shared_ptr<OutputBatch::Entry> OutputBatch::add(std::vector<uint8_t> channe
   return entry;
 }
 
-Result OutputBatch::complete(Device& device, Transport& bus, const std::shared_ptr<Entry>& entry) {
+Result OutputBatch::complete(Device& device, Transport& bus, const std::shared_ptr<Entry>& entry,
+                             const WrittenCallback& on_written) {
   if (entry->result) return *entry->result;
   std::vector<std::shared_ptr<Entry>> batch;
   {
@@ -32,6 +33,7 @@ Result OutputBatch::complete(Device& device, Transport& bus, const std::shared_p
     states.push_back(state);
   }
   Result r = device.setOutputs(bus, channels, states);
+  if (r.ok() && on_written) on_written(channels, states);
   if (batch.size() > 1 && r.ok())
     r.message = (r.message.empty() ? "" : r.message + "; ") + "merged with " +
                 std::to_string(batch.size() - 1) + " other request(s) into one write";

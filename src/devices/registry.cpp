@@ -54,6 +54,11 @@ std::string checkNames(const std::string& key, const std::vector<std::string>& n
 
 }  // namespace
 
+std::vector<std::string> outputNamesOf(const DeviceConfig& config) {
+  const DeviceType* t = find(config.type);
+  return t ? withDefaults(config.outputs, t->outputs, "out") : std::vector<std::string>{};
+}
+
 std::vector<std::string> knownDeviceTypes() {
   std::vector<std::string> names;
   for (const auto& t : kTypes) names.emplace_back(t.name);

@@ -1,6 +1,11 @@
 #include "modbus_rtu_driver/ros/bus_node.h"
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
+#include <topic_tools/shape_shifter.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
 
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
@@ -13,6 +18,78 @@ BusNode::BusNode(const ros::NodeHandle& private_nh) : nh_(private_nh) {}
 BusNode::~BusNode() {
   // The bus thread calls into the adapters: stop it before they go.
   if (bus_) bus_->stop();
+}
+
+void BusNode::startFailsafe() {
+  failsafe_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 10, true);
+  ros::NodeHandle topics;  // heartbeat topics resolve in the node's namespace
+  double shortest = 0.5;
+  auto watch = [&](const std::string& topic, double timeout, Watchdog* dog) {
+    heartbeat_subs_.push_back(topics.subscribe<topic_tools::ShapeShifter>(
+        topic, 1, [dog](const topic_tools::ShapeShifter::ConstPtr&) { dog->feed(); }));
+    shortest = std::min(shortest, timeout);
+  };
+  if (!config_.heartbeat_topic.empty()) {
+    bus_heartbeat_ = std::make_unique<Watchdog>(config_.heartbeat_timeout);
+    watch(config_.heartbeat_topic, config_.heartbeat_timeout, bus_heartbeat_.get());
+  }
+  for (auto& a : adapters_) {
+    a->setFailsafeSink([this](const FailsafeEvent& e) { failsafe_pub_.publish(e); });
+    if (a->heartbeat()) {
+      const DeviceConfig& dc = configOf(a->name());
+      watch(dc.failsafe.heartbeat_topic, dc.failsafe.heartbeat_timeout, a->heartbeat());
+    }
+    for (const DeviceConfig& dc : config_.devices)
+      for (double s : dc.failsafe.command_timeout)
+        if (s > 0) shortest = std::min(shortest, s);
+  }
+  // Deadlines are checked at a tenth of the shortest timeout: a trigger fires at most 10 % late.
+  failsafe_timer_ =
+      nh_.createSteadyTimer(ros::WallDuration(std::max(0.005, shortest / 10)),
+                            [this](const ros::SteadyTimerEvent&) { checkDeadlines(); });
+}
+
+const DeviceConfig& BusNode::configOf(const std::string& device) const {
+  for (const DeviceConfig& dc : config_.devices)
+    if (dc.name == device) return dc;
+  return config_.devices.front();
+}
+
+void BusNode::checkDeadlines() {
+  if (bus_heartbeat_ && bus_heartbeat_->expired()) {
+    const std::string reason = "no message on " + config_.heartbeat_topic + " within " +
+                               std::to_string(config_.heartbeat_timeout) + " s";
+    for (auto& a : adapters_) a->applySafe("heartbeat", reason);
+  }
+  for (auto& a : adapters_) a->checkDeadlines();
+}
+
+void BusNode::shutdown() {
+  if (!bus_) return;
+  failsafe_timer_.stop();
+  // Safe states before the port closes, bounded: a device that cannot be reached is logged and
+  // the node exits anyway.
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(config_.shutdown_timeout));
+  std::vector<std::pair<std::string, std::future<Result>>> pending;
+  for (auto& a : adapters_)
+    if (a->hasSafeStates()) pending.emplace_back(a->name(), a->applySafe("shutdown", "node stops"));
+  for (auto& [name, done] : pending) {
+    // rosconsole has shut down with ROS: stderr is what the user sees now.
+    if (done.wait_until(deadline) != std::future_status::ready) {
+      std::fprintf(stderr,
+                   "[ERROR] %s: safe states not confirmed within shutdown_timeout (%.1f s); "
+                   "exiting anyway\n",
+                   name.c_str(), config_.shutdown_timeout);
+      continue;
+    }
+    const Result r = done.get();
+    if (!r.ok())
+      std::fprintf(stderr, "[ERROR] %s: safe states not reached before exit: %s\n", name.c_str(),
+                   r.message.c_str());
+  }
+  bus_->stop();
 }
 
 bool BusNode::start() {
@@ -62,11 +139,21 @@ bool BusNode::start() {
       nh_.createTimer(ros::Duration(config_.diagnostic_period),
                       [this](const ros::TimerEvent&) { diagnostics_->force_update(); });
 
+  startFailsafe();
+  bus_->start();
+  // on_start: safe puts those outputs there before any command is taken (and before the first
+  // poll, so a restart is never seen in them).
+  for (auto& a : adapters_) {
+    if (!a->safeOnStart()) continue;
+    auto done = a->applySafe("start", "on_start: safe");
+    if (done.wait_for(std::chrono::duration<double>(config_.shutdown_timeout + 5.0)) !=
+        std::future_status::ready)
+      ROS_ERROR("%s: start-up safe states not confirmed in time", a->name().c_str());
+  }
   for (auto& a : adapters_) {
     a->setPublishPolicy({config_.publish_on_change, config_.keep_alive});
     a->start();
   }
-  bus_->start();
   ROS_INFO("bus %s at %d baud, %s parity: %zu device(s)", config_.link.port.c_str(),
            config_.link.baud, parityName(config_.link.parity), adapters_.size());
   return true;

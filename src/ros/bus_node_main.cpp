@@ -2,6 +2,8 @@
 // `role: master` (default) polls devices, `role: slave` serves a Modbus master.
 #include <ros/ros.h>
 
+#include <csignal>
+
 #include "modbus_rtu_driver/ros/bus_node.h"
 #include "modbus_rtu_driver/ros/slave_node.h"
 
@@ -13,11 +15,15 @@ int run(const ros::NodeHandle& nh) {
   ros::AsyncSpinner spinner(4);
   spinner.start();
   ros::waitForShutdown();
+  spinner.stop();
+  node.shutdown();  // the fail-safe's shutdown writes, then the port closes
   return 0;
 }
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "modbus_rtu_bus");
+  // roscpp handles SIGINT; SIGTERM (systemd, docker stop, kill) must end as cleanly.
+  std::signal(SIGTERM, [](int) { ros::requestShutdown(); });
   ros::NodeHandle nh("~");
   const std::string role = nh.param<std::string>("role", "master");
   if (role == "slave") return run<modbus_rtu_driver::SlaveNode>(nh);

@@ -6,7 +6,13 @@ namespace modbus_rtu_driver {
 
 DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
                              const ros::NodeHandle& node)
-    : device_(std::move(device)), bus_(bus), nh_(node, device_->name()) {}
+    : device_(std::move(device)),
+      bus_(bus),
+      nh_(node, device_->name()),
+      failsafe_(device_->config().failsafe, device_->outputCount()) {
+  const FailsafeConfig& fs = device_->config().failsafe;
+  if (!fs.heartbeat_topic.empty()) heartbeat_ = std::make_unique<Watchdog>(fs.heartbeat_timeout);
+}
 
 void DeviceAdapter::start() {
   const auto names = device_->outputNames();
@@ -35,6 +41,7 @@ void DeviceAdapter::start() {
 void DeviceAdapter::onPoll(const Result& result) {
   if (result.ok()) {
     publishOutputs();
+    checkRestart();
   } else if (offline()) {
     outputs_->markStale();
   }
@@ -52,13 +59,19 @@ Result DeviceAdapter::writeOutputs(const std::vector<uint8_t>& channels,
   auto device = device_;
   return runOnBus([this, device, entry](Transport& t) {
     const bool sent = !entry->result;
-    Result w = batch_.complete(*device, t, entry);
+    Result w = batch_.complete(
+        *device, t, entry, [this](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
+          failsafe_.confirmed(chs, sts, true);
+          endFailsafeState();
+        });
+    failsafe_.observeWrite(device->outputs());
     if (sent && w.ok()) publishOutputs();
     return w;
   });
 }
 
 void DeviceAdapter::publishOutputs() {
+  if (!outputs_) return;  // before start(): the start-up safe states
   outputs_->publish(device_->outputs(), ros::Time::now());
 }
 
@@ -89,6 +102,7 @@ bool DeviceAdapter::onSetOutputs(SetOutputs::Request& req, SetOutputs::Response&
 }
 
 void DeviceAdapter::onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& msg) {
+  failsafe_.commandReceived(channel, msg->data);  // the dead man's deadline
   std::lock_guard<std::mutex> lock(commands_mutex_);
   pending_commands_[channel] = msg->data;
   if (commands_queued_) return;  // the queued job will take the newest value
@@ -108,7 +122,10 @@ void DeviceAdapter::onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& m
     }
     if (channels.empty()) return Result::success();
     Result w = device_->setOutputs(t, channels, states);
+    failsafe_.observeWrite(device_->outputs());
     if (w.ok()) {
+      failsafe_.confirmed(channels, states, true);
+      endFailsafeState();
       publishOutputs();
     } else {
       ROS_WARN_THROTTLE(1.0, "%s: command failed: %s", device_->name().c_str(), w.message.c_str());
@@ -162,6 +179,7 @@ void DeviceAdapter::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("writes refused unsent (port not open)", h.writes_refused);
   status.add("consecutive failures", h.consecutive_failures);
   status.add("last error", h.last_error.empty() ? "none" : h.last_error);
+  diagnoseFailsafe(status);
 }
 
 }  // namespace modbus_rtu_driver

@@ -41,6 +41,7 @@ class LcRelay8Adapter : public DeviceAdapter {
     const bool state = req.state;
     const double duration = req.duration;
     const Result r = runOnBus([this, channel, state, duration](Transport& t) {
+      markSelfTimed(channel);  // the board switches it back by itself
       Result w = board().pulse(t, channel, state, duration);
       // The board changed the output by itself: read it back so the topics show it now.
       if (w.ok() && board().poll(t).ok()) publishOutputs();

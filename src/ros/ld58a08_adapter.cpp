@@ -69,6 +69,7 @@ class Ld58a08Adapter : public DeviceAdapter {
       return true;
     }
     const Result r = runOnBus([this, s](Transport& t) {
+      markSelfTimed(s.channel);  // the PWM drives the output from now on
       Result w = board().setPwm(t, s);
       if (w.ok() && board().readPwm(t).ok()) publishPwm();
       return w;

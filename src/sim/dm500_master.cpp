@@ -13,7 +13,7 @@ namespace modbus_rtu_driver {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using Steady = std::chrono::steady_clock;
 
 std::vector<std::string> words(const std::string& line) {
   std::istringstream in(line.substr(0, line.find('#')));
@@ -32,15 +32,15 @@ std::string join(const std::vector<uint16_t>& v) {
 
 Bytes Dm500Master::readFor(double seconds, size_t max_bytes, const Request* request) {
   Bytes in;
-  const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
-  while (Clock::now() < deadline && in.size() < max_bytes) {
+  const auto deadline = Steady::now() + std::chrono::duration<double>(seconds);
+  while (Steady::now() < deadline && in.size() < max_bytes) {
     if (request) {
       const size_t need = replyLengthFromHeader(*request, in);
       if (need && in.size() >= need) break;
     }
     pollfd p{pty_.fd(), POLLIN, 0};
     const auto left =
-        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Steady::now());
     if (poll(&p, 1, static_cast<int>(std::max<long>(1, left.count()))) <= 0) continue;
     uint8_t buf[256];
     const ssize_t n = read(pty_.fd(), buf, sizeof buf);
@@ -160,7 +160,7 @@ bool Dm500Master::step(const std::string& line, std::string* why) {
       }
     }
     const bool waiting = op.rfind("wait_", 0) == 0;
-    const auto deadline = Clock::now() + std::chrono::duration<double>(within);
+    const auto deadline = Steady::now() + std::chrono::duration<double>(within);
     for (;;) {
       const Result r = transact(req);
       std::string problem;
@@ -177,7 +177,7 @@ bool Dm500Master::step(const std::string& line, std::string* why) {
         problem = "read " + join(r.values) + ", expected " + join(expected);
       }
       if (problem.empty()) return true;
-      if (!waiting || Clock::now() >= deadline) {
+      if (!waiting || Steady::now() >= deadline) {
         *why = problem;
         return false;
       }

@@ -11,7 +11,7 @@ namespace modbus_rtu_driver {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using Steady = std::chrono::steady_clock;
 
 class TableCommands {
  public:
@@ -81,11 +81,11 @@ class TableCommands {
 
   // Sleeps `seconds` unless stopped first.
   void pause(double seconds) {
-    const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                          std::chrono::duration<double>(seconds));
-    while (!s_.stop && Clock::now() < until)
+    const auto until = Steady::now() + std::chrono::duration_cast<Steady::duration>(
+                                           std::chrono::duration<double>(seconds));
+    while (!s_.stop && Steady::now() < until)
       std::this_thread::sleep_for(
-          std::min<Clock::duration>(until - Clock::now(), std::chrono::milliseconds(20)));
+          std::min<Steady::duration>(until - Steady::now(), std::chrono::milliseconds(20)));
   }
 
   // Prints the values when they differ from `last` (all of them the first time).
@@ -106,7 +106,7 @@ class TableCommands {
   }
 
   int watch() {
-    const auto t0 = Clock::now();
+    const auto t0 = Steady::now();
     std::vector<uint16_t> last;
     int exit_code = kExitNotFound;
     bool failing = false;
@@ -114,7 +114,7 @@ class TableCommands {
       if (n) pause(c_.interval);
       if (s_.stop) break;
       const Result r = s_.bus.execute(readRequest());
-      const double t = std::chrono::duration<double>(Clock::now() - t0).count();
+      const double t = std::chrono::duration<double>(Steady::now() - t0).count();
       if (!r.ok()) {
         if (!failing) s_.out.note("read failed: " + r.message);  // once, not every poll
         failing = true;

@@ -44,6 +44,18 @@ CASES = [
     (with_change(["devices"], None), ["devices", "missing"]),
     (with_change(["stop_bits"], 3), ["stop_bits", "3"]),
     (with_change(["response_timeout"], "fast"), ["response_timeout", "fast"]),
+    # Fail-safe keys (docs/failsafe.md).
+    (with_change(["devices", "relays", "safe_state"], "maybe"), ["devices/relays/safe_state", "maybe"]),
+    (with_change(["devices", "relays", "safe_state"], {"pumpx": "off"}),
+     ["devices/relays/safe_state/pumpx", "no output channel"]),
+    (with_change(["devices", "relays", "command_timeout"], 1.0),
+     ["devices/relays/command_timeout/out0", "safe_state"]),
+    (with_change(["devices", "relays", "on_restart"], "reboot"), ["devices/relays/on_restart", "reboot"]),
+    (with_change(["devices", "relays", "on_start"], "now"), ["devices/relays/on_start", "now"]),
+    (with_change(["devices", "relays", "heartbeat"], {"topic": "alive"}),
+     ["devices/relays/heartbeat/timeout", "missing"]),
+    (with_change(["heartbeat"], {"topic": "alive", "timeout": 0}), ["heartbeat/timeout", "outside"]),
+    (with_change(["shutdown_timeout"], 120), ["shutdown_timeout", "outside"]),
 ]
 
 

@@ -29,6 +29,12 @@ struct BusConfig {
   // The write_registers / write_coils services reach any register of any slave, settings such as
   // address and baud included: refused unless the configuration says so.
   bool allow_raw_writes = false;
+  // Fail-safe: a heartbeat for the whole bus (any message type on `heartbeat_topic`; none within
+  // `heartbeat_timeout` s puts every channel with a safe state there), and how long the node may
+  // spend writing safe states when it shuts down.
+  std::string heartbeat_topic;
+  double heartbeat_timeout = 0.0;
+  double shutdown_timeout = 3.0;  // s
   std::vector<DeviceConfig> devices;
 };
 

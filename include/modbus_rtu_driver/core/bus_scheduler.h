@@ -55,10 +55,11 @@ class BusScheduler {
   void start();
   void stop();
 
-  // Registers a device so its health is tracked. Must be called before start().
+  // Registers a device so its health is tracked.
   void addDevice(const std::string& device);
   // Periodic poll of `device` at `rate_hz` (0 = never). `on_result` runs on the bus thread right
-  // after each poll with its outcome.
+  // after each poll with its outcome. May be called while the bus runs (the node starts polling
+  // only once the start-up safe states are written).
   void addPoll(const std::string& device, double rate_hz, Job poll, ResultCallback on_result);
 
   // Runs `job` on the bus thread ahead of every poll. The future holds the real outcome. When
@@ -117,7 +118,7 @@ class BusScheduler {
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::deque<Pending> writes_;
-  std::vector<Poll> polls_;
+  std::deque<Poll> polls_;  // a deque: adding a poll keeps the one running valid
   std::map<std::string, DeviceHealth> health_;
   std::map<std::string, Clock::time_point> backoff_until_;
   std::map<std::string, double> backoff_;

@@ -10,6 +10,7 @@
 
 #include "modbus_rtu_driver/core/transport.h"
 #include "modbus_rtu_driver/core/types.h"
+#include "modbus_rtu_driver/devices/failsafe.h"
 
 namespace modbus_rtu_driver {
 
@@ -21,7 +22,12 @@ struct DeviceConfig {
   std::vector<std::string> outputs;  // channel names; empty = out0..outN-1
   std::vector<std::string> inputs;   // channel names; empty = in0..inN-1
   double reply_delay = 0.0;          // s the device waits before answering (LD58A08 0x00FC x 40 ms)
+  FailsafeConfig failsafe;           // safe states and when they apply
 };
+
+// `given` when it has `n` names, else prefix0..prefix<n-1>.
+std::vector<std::string> withDefaults(const std::vector<std::string>& given, size_t n,
+                                      const char* prefix);
 
 class Device {
  public:
@@ -37,6 +43,12 @@ class Device {
   virtual const char* type() const = 0;
   virtual size_t outputCount() const = 0;
   virtual size_t inputCount() const { return 0; }
+  // True for an output the device drives by itself right now (a running PWM), as far as the
+  // snapshot knows: a poll that shows it changed is not a restart.
+  virtual bool outputSelfTimed(size_t channel) const {
+    (void)channel;
+    return false;
+  }
 
   // Reads everything the device reports (outputs, inputs, telemetry, settings) into the
   // snapshot. On failure the snapshot keeps its previous values and the Result says why.

@@ -78,6 +78,9 @@ class Ld58a08 : public Device {
   Result stopPwm(Transport& bus, uint8_t channel);
   Result readPwm(Transport& bus);  // fills pwm()
   const std::array<PwmState, kChannels>& pwm() const { return pwm_; }
+  bool outputSelfTimed(size_t channel) const override {
+    return !pwm_known_ || (channel < kChannels && pwm_[channel].running);
+  }
   bool pwmKnown() const { return pwm_known_; }
 
   Result readSettings(Transport& bus, Ld58a08Settings* out);

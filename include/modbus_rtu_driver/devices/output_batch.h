@@ -5,6 +5,7 @@
 // outcome. The later jobs find their request done and send nothing. ROS-free.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -24,8 +25,14 @@ class OutputBatch {
 
   // Any thread: adds a request to the next write.
   std::shared_ptr<Entry> add(std::vector<uint8_t> channels, std::vector<bool> states);
+  // What a confirmed write set: channels[i] to states[i] (newest state per channel).
+  using WrittenCallback =
+      std::function<void(const std::vector<uint8_t>& channels, const std::vector<bool>& states)>;
+
   // Bus thread: the outcome of `entry`, writing the pending requests first if it is among them.
-  Result complete(Device& device, Transport& bus, const std::shared_ptr<Entry>& entry);
+  // `on_written` runs once per confirmed write.
+  Result complete(Device& device, Transport& bus, const std::shared_ptr<Entry>& entry,
+                  const WrittenCallback& on_written = {});
 
  private:
   std::mutex mutex_;

@@ -15,5 +15,7 @@ std::vector<std::string> knownDeviceTypes();
 std::unique_ptr<Device> createDevice(const DeviceConfig& config, std::string* error);
 // Checks a device config (address range for the type, names, poll rate); empty when valid.
 std::string validateDeviceConfig(const DeviceConfig& config);
+// The output channel names of a (valid) config, defaults filled in; empty for an unknown type.
+std::vector<std::string> outputNamesOf(const DeviceConfig& config);
 
 }  // namespace modbus_rtu_driver

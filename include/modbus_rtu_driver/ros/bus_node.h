@@ -13,6 +13,7 @@
 #include "modbus_rtu_driver/core/bus_config.h"
 #include "modbus_rtu_driver/core/bus_scheduler.h"
 #include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/core/watchdog.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 #include "modbus_rtu_driver/ros/raw_writes.h"
 
@@ -24,9 +25,16 @@ class BusNode {
   ~BusNode();
   // False (with the reason logged once) when the configuration is invalid.
   bool start();
+  // Puts outputs with a safe state there (confirmed, within shutdown_timeout), then stops the
+  // bus. Call after ROS has shut down; the destructor stops the bus without it.
+  void shutdown();
 
  private:
   void diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status);
+  // Fail-safe: ~failsafe, heartbeat subscriptions (any type), the deadline timer.
+  void startFailsafe();
+  void checkDeadlines();
+  const DeviceConfig& configOf(const std::string& device) const;
   uint64_t recentLineErrors(const LinkStats& stats);
 
   static constexpr int kErrorWindowSeconds = 10;
@@ -40,6 +48,10 @@ class BusNode {
   std::unique_ptr<RawWrites> raw_writes_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::Timer diagnostics_timer_;
+  ros::Publisher failsafe_pub_;
+  std::vector<ros::Subscriber> heartbeat_subs_;
+  std::unique_ptr<Watchdog> bus_heartbeat_;
+  ros::SteadyTimer failsafe_timer_;
 };
 
 }  // namespace modbus_rtu_driver

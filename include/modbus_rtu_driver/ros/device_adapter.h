@@ -9,15 +9,20 @@
 #include <std_msgs/Bool.h>
 #include <std_srvs/SetBool.h>
 
+#include <functional>
+#include <future>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "modbus_rtu_driver/FailsafeEvent.h"
 #include "modbus_rtu_driver/SetOutputs.h"
 #include "modbus_rtu_driver/core/bus_scheduler.h"
+#include "modbus_rtu_driver/core/watchdog.h"
 #include "modbus_rtu_driver/devices/device.h"
+#include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/devices/output_batch.h"
 #include "modbus_rtu_driver/ros/digital_states_publisher.h"
 
@@ -38,6 +43,21 @@ class DeviceAdapter {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   const std::string& name() const { return device_->name(); }
 
+  // Fail-safe (device_failsafe.cpp). Where events go (the node's latched ~failsafe topic).
+  using EventSink = std::function<void(const FailsafeEvent&)>;
+  void setFailsafeSink(EventSink sink) { failsafe_sink_ = std::move(sink); }
+  // Puts the channels with a safe state there (only those in `only`, when given), confirmed by
+  // reading the outputs back, and reports the event. Runs on the bus thread; the future holds
+  // the outcome. Nothing to do: a ready success.
+  std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
+                                const std::vector<uint8_t>& only = {});
+  // Timer (any thread): command deadlines that passed, this device's heartbeat.
+  void checkDeadlines();
+  // Whether the device has any safe state, and whether start-up puts it there.
+  bool hasSafeStates() const { return failsafe_.config().hasSafeStates(); }
+  bool safeOnStart() const { return failsafe_.config().on_start_safe && hasSafeStates(); }
+  Watchdog* heartbeat() { return heartbeat_.get(); }
+
  protected:
   // Runs after each poll on the bus thread; the base publishes outputs.
   virtual void onPoll(const Result& result);
@@ -46,6 +66,8 @@ class DeviceAdapter {
   Result runOnBus(BusScheduler::Job job);
   // Bus thread only: publish the outputs message and the per-channel states that changed.
   void publishOutputs();
+  // A PWM run or a flash started on `channel`: the device changes it by itself.
+  void markSelfTimed(uint8_t channel) { failsafe_.selfTimed(channel); }
   // Whether the last poll failed with the device now offline (its states are stale).
   bool offline() const { return !bus_.health(device_->name()).online; }
   // Service writes of outputs: checked, then merged with others queued for this device.
@@ -63,6 +85,23 @@ class DeviceAdapter {
   bool onSetOutputs(SetOutputs::Request& req, SetOutputs::Response& res);
   void onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& msg);
   void logOnlineChange(const DeviceHealth& health);
+  // Bus thread, after a good poll: restart detection and on_restart.
+  void checkRestart();
+  // Bus thread: writes `targets`, reads back, reports (trigger, reason, action).
+  Result writeAndReport(Transport& t, const OutputTargets& targets, const std::string& trigger,
+                        const std::string& reason, const std::string& action);
+  void report(const FailsafeEvent& event);
+  // A user's confirmed write ends the fail-safe state shown in /diagnostics.
+  void endFailsafeState();
+  void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  FailsafeTracker failsafe_;
+  std::unique_ptr<Watchdog> heartbeat_;
+  EventSink failsafe_sink_;
+  std::mutex failsafe_mutex_;  // the two below
+  uint64_t restarts_detected_ = 0, failsafe_events_ = 0;
+  std::string last_failsafe_;    // the newest event in words
+  std::string failsafe_active_;  // set by a safe write, cleared by a user's write
 
   std::unique_ptr<DigitalStatesPublisher> outputs_;
   std::vector<ros::Subscriber> command_subs_;

@@ -19,7 +19,8 @@ class SlaveNode {
  public:
   explicit SlaveNode(const ros::NodeHandle& private_nh);
   ~SlaveNode();
-  bool start();  // false (logged) when the configuration is invalid
+  bool start();       // false (logged) when the configuration is invalid
+  void shutdown() {}  // nothing to put in a safe state: the master owns the outputs
 
  private:
   void onWrite(const SlaveWrite& write);  // server thread

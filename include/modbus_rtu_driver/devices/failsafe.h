@@ -1,0 +1,105 @@
+// What a device's outputs do when control goes away (ROS-free). The configuration says, per
+// output channel, which state is safe; FailsafeTracker follows what was commanded and confirmed,
+// tells when a poll shows that the device restarted, and runs the dead-man deadlines of command
+// topics. The node (ROS side) decides when to write the safe states: shutdown, heartbeat lost,
+// command timeout, device restart, start-up.
+#pragma once
+
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "modbus_rtu_driver/core/clock.h"
+
+namespace modbus_rtu_driver {
+
+enum class SafeState { kHold, kOff, kOn };
+enum class OnRestart { kLeave, kRestore, kSafe };
+
+// "off", "on", "hold"; also true/false, which is what rosparam makes of a bare on/off.
+bool parseSafeState(const std::string& text, SafeState* out);
+const char* safeStateName(SafeState state);
+bool parseOnRestart(const std::string& text, OnRestart* out);
+const char* onRestartName(OnRestart policy);
+
+struct FailsafeConfig {
+  std::vector<SafeState> safe_state;    // per output channel; empty = every channel holds
+  std::vector<double> command_timeout;  // s per output channel; empty or 0 = no dead man
+  OnRestart on_restart = OnRestart::kLeave;
+  bool on_start_safe = false;      // on_start: safe (true) | keep
+  std::string heartbeat_topic;     // this device's own heartbeat; empty = none
+  double heartbeat_timeout = 0.0;  // s
+
+  SafeState safeStateOf(size_t channel) const {
+    return channel < safe_state.size() ? safe_state[channel] : SafeState::kHold;
+  }
+  double commandTimeoutOf(size_t channel) const {
+    return channel < command_timeout.size() ? command_timeout[channel] : 0.0;
+  }
+  bool hasSafeStates() const;
+};
+
+// Outputs to write: channels[i] to states[i].
+struct OutputTargets {
+  std::vector<uint8_t> channels;
+  std::vector<bool> states;
+  bool empty() const { return channels.empty(); }
+};
+
+// Per device; any thread (it locks).
+class FailsafeTracker {
+ public:
+  enum class Verdict { kNormal, kCameBack, kOutputsChanged };
+
+  FailsafeTracker(FailsafeConfig config, size_t channels, Clock& clock = Clock::steady());
+
+  const FailsafeConfig& config() const { return config_; }
+  // Channels with a safe state other than hold, and that state.
+  OutputTargets safeTargets() const;
+  // The states users last commanded that a restore writes again (channels never commanded by
+  // a plain output write are left out).
+  OutputTargets restoreTargets() const;
+
+  // Bus thread, right after the device confirmed a write. `by_user`: a service or command (what
+  // restore re-applies), as opposed to the failsafe's own writes.
+  void confirmed(const std::vector<uint8_t>& channels, const std::vector<bool>& states,
+                 bool by_user);
+  // Bus thread, after any write job (confirmed or not): the device's snapshot, read back where a
+  // reply was lost, is what the next poll is compared with.
+  void observeWrite(const std::vector<bool>& outputs);
+  // The device may change `channel` by itself from now on (a PWM run, a timed flash): polls
+  // are not compared on it until a plain write settles it again.
+  void selfTimed(uint8_t channel);
+
+  // Bus thread, after a successful poll. `self_timed[i]`: the device reports channel i as
+  // timed by itself right now. `was_offline`: the device had been offline before this poll.
+  // kCameBack / kOutputsChanged (with `changed` filled) mean it restarted; the new states are
+  // taken as the confirmed ones either way.
+  Verdict observePoll(const std::vector<bool>& outputs, const std::vector<bool>& self_timed,
+                      bool was_offline, std::vector<uint8_t>* changed);
+
+  // Command topics' dead man: a command that turns a channel with a command_timeout on starts
+  // its deadline, any command on it renews or (off) ends it.
+  void commandReceived(uint8_t channel, bool state);
+  // Channels whose deadline has passed, each returned once.
+  std::vector<uint8_t> expiredCommands();
+
+  // A safe write that could not be done (device offline): done when the device answers again.
+  void setSafePending(bool pending);
+  bool safePending() const;
+
+ private:
+  FailsafeConfig config_;
+  size_t channels_;
+  Clock& clock_;
+  mutable std::mutex mutex_;
+  std::vector<std::optional<bool>> confirmed_;  // last known state per channel
+  std::vector<std::optional<bool>> commanded_;  // last state a user commanded per channel
+  std::vector<bool> settled_;                   // compared on polls
+  std::vector<std::optional<Clock::time_point>> command_deadline_;
+  bool safe_pending_ = false;
+};
+
+}  // namespace modbus_rtu_driver

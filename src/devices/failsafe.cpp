@@ -1,0 +1,167 @@
+#include "modbus_rtu_driver/devices/failsafe.h"
+
+#include <chrono>
+
+namespace modbus_rtu_driver {
+
+bool parseSafeState(const std::string& text, SafeState* out) {
+  if (text == "off" || text == "false") {
+    *out = SafeState::kOff;
+  } else if (text == "on" || text == "true") {
+    *out = SafeState::kOn;
+  } else if (text == "hold") {
+    *out = SafeState::kHold;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+const char* safeStateName(SafeState state) {
+  switch (state) {
+    case SafeState::kOff:
+      return "off";
+    case SafeState::kOn:
+      return "on";
+    default:
+      return "hold";
+  }
+}
+
+bool parseOnRestart(const std::string& text, OnRestart* out) {
+  if (text == "leave") {
+    *out = OnRestart::kLeave;
+  } else if (text == "restore") {
+    *out = OnRestart::kRestore;
+  } else if (text == "safe") {
+    *out = OnRestart::kSafe;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+const char* onRestartName(OnRestart policy) {
+  switch (policy) {
+    case OnRestart::kRestore:
+      return "restore";
+    case OnRestart::kSafe:
+      return "safe";
+    default:
+      return "leave";
+  }
+}
+
+bool FailsafeConfig::hasSafeStates() const {
+  for (SafeState s : safe_state)
+    if (s != SafeState::kHold) return true;
+  return false;
+}
+
+FailsafeTracker::FailsafeTracker(FailsafeConfig config, size_t channels, Clock& clock)
+    : config_(std::move(config)),
+      channels_(channels),
+      clock_(clock),
+      confirmed_(channels),
+      commanded_(channels),
+      settled_(channels, true),
+      command_deadline_(channels) {}
+
+OutputTargets FailsafeTracker::safeTargets() const {
+  OutputTargets t;
+  for (size_t i = 0; i < channels_; ++i) {
+    const SafeState s = config_.safeStateOf(i);
+    if (s == SafeState::kHold) continue;
+    t.channels.push_back(static_cast<uint8_t>(i));
+    t.states.push_back(s == SafeState::kOn);
+  }
+  return t;
+}
+
+OutputTargets FailsafeTracker::restoreTargets() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  OutputTargets t;
+  for (size_t i = 0; i < channels_; ++i) {
+    if (!commanded_[i]) continue;
+    t.channels.push_back(static_cast<uint8_t>(i));
+    t.states.push_back(*commanded_[i]);
+  }
+  return t;
+}
+
+void FailsafeTracker::confirmed(const std::vector<uint8_t>& channels,
+                                const std::vector<bool>& states, bool by_user) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (size_t i = 0; i < channels.size() && i < states.size(); ++i) {
+    const uint8_t ch = channels[i];
+    if (ch >= channels_) continue;
+    confirmed_[ch] = states[i];
+    settled_[ch] = true;
+    if (by_user) commanded_[ch] = states[i];
+  }
+}
+
+void FailsafeTracker::observeWrite(const std::vector<bool>& outputs) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (size_t i = 0; i < channels_ && i < outputs.size(); ++i) confirmed_[i] = outputs[i];
+}
+
+void FailsafeTracker::selfTimed(uint8_t channel) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (channel < channels_) settled_[channel] = false;
+}
+
+FailsafeTracker::Verdict FailsafeTracker::observePoll(const std::vector<bool>& outputs,
+                                                      const std::vector<bool>& self_timed,
+                                                      bool was_offline,
+                                                      std::vector<uint8_t>* changed) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (changed) changed->clear();
+  bool differs = false;
+  for (size_t i = 0; i < channels_ && i < outputs.size(); ++i) {
+    const bool timed = !settled_[i] || (i < self_timed.size() && self_timed[i]);
+    if (!timed && confirmed_[i] && *confirmed_[i] != outputs[i]) {
+      differs = true;
+      if (changed) changed->push_back(static_cast<uint8_t>(i));
+    }
+    confirmed_[i] = outputs[i];
+  }
+  if (was_offline) return Verdict::kCameBack;
+  return differs ? Verdict::kOutputsChanged : Verdict::kNormal;
+}
+
+void FailsafeTracker::commandReceived(uint8_t channel, bool state) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (channel >= channels_) return;
+  const double timeout = config_.commandTimeoutOf(channel);
+  if (state && timeout > 0) {
+    command_deadline_[channel] = clock_.now() + std::chrono::duration_cast<Clock::duration>(
+                                                    std::chrono::duration<double>(timeout));
+  } else {
+    command_deadline_[channel].reset();
+  }
+}
+
+std::vector<uint8_t> FailsafeTracker::expiredCommands() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<uint8_t> expired;
+  const auto now = clock_.now();
+  for (size_t i = 0; i < channels_; ++i) {
+    if (!command_deadline_[i] || now < *command_deadline_[i]) continue;
+    command_deadline_[i].reset();
+    expired.push_back(static_cast<uint8_t>(i));
+  }
+  return expired;
+}
+
+void FailsafeTracker::setSafePending(bool pending) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  safe_pending_ = pending;
+}
+
+bool FailsafeTracker::safePending() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return safe_pending_;
+}
+
+}  // namespace modbus_rtu_driver

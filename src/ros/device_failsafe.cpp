@@ -1,0 +1,194 @@
+// DeviceAdapter's fail-safe: safe writes confirmed by read-back, restart handling, dead-man and
+// heartbeat deadlines, and how the events are reported (log, ~failsafe, /diagnostics).
+#include <diagnostic_msgs/DiagnosticStatus.h>
+
+#include <cstdio>
+
+#include "modbus_rtu_driver/ros/device_adapter.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+std::string join(const std::vector<std::string>& names, const std::vector<uint8_t>& channels) {
+  std::string s;
+  for (uint8_t c : channels) s += (s.empty() ? "" : ", ") + names[c];
+  return s;
+}
+
+std::future<Result> ready(Result r) {
+  std::promise<Result> p;
+  p.set_value(std::move(r));
+  return p.get_future();
+}
+
+}  // namespace
+
+std::future<Result> DeviceAdapter::applySafe(const std::string& trigger, const std::string& reason,
+                                             const std::vector<uint8_t>& only) {
+  const OutputTargets all = failsafe_.safeTargets();
+  OutputTargets targets;
+  for (size_t i = 0; i < all.channels.size(); ++i) {
+    if (!only.empty() && std::find(only.begin(), only.end(), all.channels[i]) == only.end())
+      continue;
+    targets.channels.push_back(all.channels[i]);
+    targets.states.push_back(all.states[i]);
+  }
+  if (targets.empty()) return ready(Result::success());
+  return bus_.submit(device_->name(), [this, targets, trigger, reason](Transport& t) {
+    return writeAndReport(t, targets, trigger, reason, "safe");
+  });
+}
+
+Result DeviceAdapter::writeAndReport(Transport& t, const OutputTargets& targets,
+                                     const std::string& trigger, const std::string& reason,
+                                     const std::string& action) {
+  const auto names = device_->outputNames();
+  FailsafeEvent e;
+  e.header.stamp = ros::Time::now();
+  e.device = device_->name();
+  e.trigger = trigger;
+  e.reason = reason;
+  e.action = action;
+  for (size_t i = 0; i < targets.channels.size(); ++i) {
+    e.channels.push_back(names[targets.channels[i]]);
+    e.states.push_back(targets.states[i]);
+  }
+  Result w = device_->setOutputs(t, targets.channels, targets.states);
+  failsafe_.observeWrite(device_->outputs());
+  if (w.ok()) {
+    // Read back: the outputs as the device reports them now, not as the write's echo said.
+    const Result back = device_->poll(t);
+    if (!back.ok()) {
+      w = Result::failure(back.error, "written, but reading back failed: " + back.message);
+    } else {
+      failsafe_.observeWrite(device_->outputs());
+      for (size_t i = 0; i < targets.channels.size(); ++i) {
+        if (device_->outputs()[targets.channels[i]] == targets.states[i]) continue;
+        w = Result::failure(ErrorKind::kMalformed, "read back: " + names[targets.channels[i]] +
+                                                       " is still " +
+                                                       (targets.states[i] ? "off" : "on"));
+        break;
+      }
+    }
+  }
+  if (w.ok()) {
+    failsafe_.confirmed(targets.channels, targets.states, action == "restore");
+    publishOutputs();
+  }
+  // A safe state not reached is tried again when the device answers again.
+  if (action == "safe") failsafe_.setSafePending(!w.ok());
+  e.confirmed = w.ok();
+  e.message = w.ok() ? "confirmed by reading the outputs back" : w.message;
+  report(e);
+  return w;
+}
+
+void DeviceAdapter::checkRestart() {
+  // The scheduler records this poll after this callback: health still says how it was before.
+  const bool was_offline = !bus_.health(device_->name()).online;
+  std::vector<bool> timed(device_->outputCount());
+  for (size_t i = 0; i < timed.size(); ++i) timed[i] = device_->outputSelfTimed(i);
+  std::vector<uint8_t> changed;
+  const auto verdict = failsafe_.observePoll(device_->outputs(), timed, was_offline, &changed);
+  if (failsafe_.safePending()) {
+    bus_.submit(device_->name(), [this](Transport& t) {
+      return writeAndReport(t, failsafe_.safeTargets(), "restart",
+                            "the device answers again; its safe state was not reached before",
+                            "safe");
+    });
+    return;
+  }
+  if (verdict == FailsafeTracker::Verdict::kNormal) return;
+  {
+    std::lock_guard<std::mutex> lock(failsafe_mutex_);
+    ++restarts_detected_;
+  }
+  const std::string reason = verdict == FailsafeTracker::Verdict::kCameBack
+                                 ? "answered again after being offline"
+                                 : "outputs " + join(device_->outputNames(), changed) +
+                                       " changed with no command in between (power cycle?)";
+  const OnRestart policy = failsafe_.config().on_restart;
+  const OutputTargets targets = policy == OnRestart::kRestore ? failsafe_.restoreTargets()
+                                : policy == OnRestart::kSafe  ? failsafe_.safeTargets()
+                                                              : OutputTargets{};
+  if (targets.empty()) {
+    FailsafeEvent e;
+    e.header.stamp = ros::Time::now();
+    e.device = device_->name();
+    e.trigger = "restart";
+    e.reason = reason;
+    e.action = onRestartName(policy);
+    e.confirmed = true;
+    e.message = "outputs left as they are";
+    report(e);
+    return;
+  }
+  const std::string action = onRestartName(policy);
+  bus_.submit(device_->name(), [this, targets, reason, action](Transport& t) {
+    return writeAndReport(t, targets, "restart", reason, action);
+  });
+}
+
+void DeviceAdapter::checkDeadlines() {
+  const auto expired = failsafe_.expiredCommands();
+  if (!expired.empty())
+    applySafe(
+        "command_timeout",
+        "no command on " + join(device_->outputNames(), expired) + " within its command_timeout",
+        expired);
+  if (heartbeat_ && heartbeat_->expired()) {
+    const FailsafeConfig& fs = failsafe_.config();
+    applySafe("heartbeat", "no message on " + fs.heartbeat_topic + " within " +
+                               std::to_string(fs.heartbeat_timeout) + " s");
+  }
+}
+
+void DeviceAdapter::report(const FailsafeEvent& e) {
+  std::string text = e.trigger + " (" + e.reason + "): ";
+  for (size_t i = 0; i < e.channels.size(); ++i)
+    text += (i ? ", " : "") + e.channels[i] + (e.states[i] ? " on" : " off");
+  if (e.channels.empty()) text += e.action;
+  text += e.confirmed ? "" : "; NOT confirmed: " + e.message;
+  {
+    std::lock_guard<std::mutex> lock(failsafe_mutex_);
+    ++failsafe_events_;
+    last_failsafe_ = text;
+    if (!e.channels.empty() && e.action == "safe") failsafe_active_ = text;
+  }
+  if (!ros::ok()) {
+    // Shutting down: rosconsole is gone, and this is what the user must still see.
+    std::fprintf(stderr, "[%s] %s: fail-safe %s\n", e.confirmed ? "WARN" : "ERROR",
+                 device_->name().c_str(), text.c_str());
+  } else if (e.confirmed) {
+    ROS_WARN("%s: fail-safe %s", device_->name().c_str(), text.c_str());
+  } else {
+    ROS_ERROR("%s: fail-safe %s", device_->name().c_str(), text.c_str());
+  }
+  if (failsafe_sink_) failsafe_sink_(e);
+}
+
+void DeviceAdapter::endFailsafeState() {
+  std::lock_guard<std::mutex> lock(failsafe_mutex_);
+  failsafe_active_.clear();
+}
+
+void DeviceAdapter::diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const FailsafeConfig& fs = failsafe_.config();
+  const auto names = device_->outputNames();
+  std::string safe;
+  for (size_t i = 0; i < names.size(); ++i)
+    if (fs.safeStateOf(i) != SafeState::kHold)
+      safe += (safe.empty() ? "" : ", ") + names[i] + " " + safeStateName(fs.safeStateOf(i));
+  status.add("safe states", safe.empty() ? "none (every output holds)" : safe);
+  status.add("on_restart", onRestartName(fs.on_restart));
+  std::lock_guard<std::mutex> lock(failsafe_mutex_);
+  status.add("restarts detected", restarts_detected_);
+  status.add("fail-safe events", failsafe_events_);
+  status.add("last fail-safe event", last_failsafe_.empty() ? "none" : last_failsafe_);
+  if (!failsafe_active_.empty())
+    status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN,
+                        "outputs in their safe state after " + failsafe_active_);
+}
+
+}  // namespace modbus_rtu_driver

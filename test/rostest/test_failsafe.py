@@ -1,0 +1,200 @@
+#!/usr/bin/env python3
+"""Fail-safe outputs against the real node and the simulator: each trigger is checked in the
+simulator's coils, not only in the node's topics. The test runs the bus node itself, so it can
+start it on outputs left on and stop it with SIGINT or SIGTERM."""
+import os
+import signal
+import tempfile
+import subprocess
+import threading
+import time
+import unittest
+
+import rosparam
+import rospkg
+import rospy
+import rostest
+import yaml
+from std_msgs.msg import Bool, String
+from std_srvs.srv import SetBool
+
+from modbus_rtu_driver.msg import FailsafeEvent
+
+import helpers
+
+NODE = "fsbus"
+NS = "/" + NODE + "/"
+RELAYS, PWM = "255", "1"
+
+
+class FailsafeTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_failsafe")
+        cls.sim = helpers.sim()
+        path = os.path.join(rospkg.RosPack().get_path("modbus_rtu_driver"), "test", "rostest",
+                            "failsafe_bus.yaml")
+        with open(path) as f:
+            cls.config = yaml.safe_load(f)
+        cls.config["port"] = rospy.get_param("~port")
+        cls.events = []
+        rospy.Subscriber(NS + "failsafe", FailsafeEvent, cls.events.append)
+        cls.alive = rospy.Publisher("/robot/alive", String, queue_size=1)
+        cls.beating = threading.Event()
+        cls.beating.set()
+        threading.Thread(target=cls.heartbeat, daemon=True).start()
+        cls.node = None
+
+    @classmethod
+    def heartbeat(cls):
+        while not rospy.is_shutdown():
+            if cls.beating.is_set():
+                cls.alive.publish(String("alive"))
+            time.sleep(0.05)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.stop_node(signal.SIGINT)
+
+    @classmethod
+    def start_node(cls):
+        rosparam.upload_params("/" + NODE, cls.config)
+        cls.log = tempfile.TemporaryFile(mode="w+")
+        cls.node = subprocess.Popen(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus",
+                                     "__name:=" + NODE], stdout=cls.log, stderr=subprocess.STDOUT)
+        return helpers.service(NS + "relays/pump/set", SetBool, timeout=30)
+
+    @classmethod
+    def stop_node(cls, sig):
+        if cls.node is None:
+            return None
+        cls.node.send_signal(sig)
+        code = cls.node.wait(30)
+        cls.node = None
+        cls.log.seek(0)
+        cls.output = cls.log.read()
+        print(cls.output)
+        return code
+
+    def coils(self, dev, n=8):
+        return self.sim.get(dev, "coil", 0, n)
+
+    def event(self, trigger, device="relays", since=0):
+        return helpers.wait_until(
+            lambda: next((e for e in self.events[since:] if e.trigger == trigger and
+                          e.device == device), None), 15, "a %s event of %s" % (trigger, device))
+
+    def set(self, name, state):
+        res = helpers.service(NS + name + "/set", SetBool)(state)
+        self.assertTrue(res.success, res.message)
+
+    def test_1_start_up_puts_outputs_safe_before_any_command(self):
+        self.sim.set(RELAYS, "coil", 0, 1, 1, 0, 1)  # pump, valve on, lamp off, fan on
+        self.start_node()
+        # By the time the node takes commands, the board is already safe; fan holds.
+        self.assertEqual(self.coils(RELAYS, 4), [0, 0, 1, 1])
+        e = self.event("start")
+        self.assertTrue(e.confirmed, e.message)
+        self.assertEqual(list(e.channels), ["pump", "valve", "lamp"])
+        self.assertEqual(list(e.states), [False, False, True])
+        # The PWM board has no on_start: safe; it is left as it was.
+        self.assertEqual(self.coils(PWM, 2), [0, 0])
+
+    def test_2_heartbeat_lost_puts_outputs_safe_and_nothing_comes_back_by_itself(self):
+        self.set("relays/pump", True)
+        self.set("relays/fan", False)
+        self.set("pwm_board/out1", False)
+        since = len(self.events)
+        self.beating.clear()
+        t0 = time.time()
+        # Within the timeout (1 s) plus a transaction or two.
+        helpers.wait_until(lambda: self.coils(RELAYS, 3) == [0, 0, 1], 5, "relays safe")
+        helpers.wait_until(lambda: self.coils(PWM, 2) == [0, 1], 5, "pwm board safe")
+        took = time.time() - t0
+        self.assertGreater(took, 0.5, "safe states came before the heartbeat timed out")
+        self.assertEqual(self.event("heartbeat", "relays", since).confirmed, True)
+        self.assertEqual(self.coils(RELAYS, 4)[3], 0)  # fan holds
+        # The heartbeat returns: nothing is re-energized ...
+        self.beating.set()
+        time.sleep(1.5)
+        self.assertEqual(self.coils(RELAYS, 3), [0, 0, 1])
+        # ... until commanded again.
+        self.set("relays/pump", True)
+        self.assertEqual(self.coils(RELAYS, 1), [1])
+
+    def test_3_command_timeout_is_a_dead_man(self):
+        pub = rospy.Publisher(NS + "relays/valve/command", Bool, queue_size=1)
+        helpers.wait_until(lambda: pub.get_num_connections() > 0, 10, "the node subscribed")
+        since = len(self.events)
+        # Renewed every 0.1 s (timeout 1 s): stays on.
+        end = time.time() + 2.0
+        while time.time() < end:
+            pub.publish(Bool(True))
+            time.sleep(0.1)
+        self.assertEqual(self.coils(RELAYS, 2)[1], 1)
+        self.assertFalse([e for e in self.events[since:] if e.trigger == "command_timeout"])
+        # No more commands: off within the timeout plus a transaction.
+        helpers.wait_until(lambda: self.coils(RELAYS, 2)[1] == 0, 5, "valve off by the dead man")
+        e = self.event("command_timeout", "relays", since)
+        self.assertEqual(list(e.channels), ["valve"])
+        # Services are not affected: a valve set by service stays on.
+        self.set("relays/valve", True)
+        time.sleep(1.5)
+        self.assertEqual(self.coils(RELAYS, 2)[1], 1)
+
+    def test_4_power_cycle_restore_and_safe(self):
+        self.set("relays/pump", True)
+        self.set("relays/valve", False)
+        self.set("relays/lamp", True)
+        self.set("relays/fan", True)
+        self.set("pwm_board/out0", True)
+        self.set("pwm_board/out1", False)
+        since = len(self.events)
+        self.sim.command("power_cycle")  # every board comes back with its outputs off
+        # relays: on_restart restore -> pump and fan on again.
+        helpers.wait_until(lambda: self.coils(RELAYS, 4) == [1, 0, 1, 1], 10, "relays restored")
+        e = self.event("restart", "relays", since)
+        self.assertEqual(e.action, "restore")
+        self.assertTrue(e.confirmed, e.message)
+        self.assertIn("changed with no command", e.reason)
+        # pwm_board: on_restart safe -> out0 off, out1 on.
+        helpers.wait_until(lambda: self.coils(PWM, 2) == [0, 1], 10, "pwm board safe")
+        self.assertEqual(self.event("restart", "pwm_board", since).action, "safe")
+
+    def test_5_node_stop_sigint_and_sigterm(self):
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            self.set("relays/pump", True)
+            self.set("relays/valve", True)
+            self.set("pwm_board/out0", True)
+            self.assertEqual(self.coils(RELAYS, 2), [1, 1])
+            code = self.stop_node(sig)
+            self.assertEqual(code, 0, "exit code after %s" % sig)
+            # Written and confirmed before the port closed.
+            self.assertEqual(self.coils(RELAYS, 4), [0, 0, 1, 1], "after %s" % sig)
+            self.assertEqual(self.coils(PWM, 2), [0, 1], "after %s" % sig)
+            self.assertIn("relays: fail-safe shutdown (node stops): pump off, valve off, lamp on",
+                          self.output)
+            self.start_node()
+
+    def test_6_a_device_that_cannot_be_reached_at_stop_is_logged_and_the_node_exits(self):
+        self.set("relays/pump", True)
+        self.set("pwm_board/out0", True)
+        self.sim.silence(RELAYS, True)
+        try:
+            t0 = time.time()
+            code = self.stop_node(signal.SIGINT)
+            took = time.time() - t0
+        finally:
+            self.sim.silence(RELAYS, False)
+        self.assertEqual(code, 0)
+        self.assertLess(took, self.config["shutdown_timeout"] + 10, "bounded")
+        self.assertIn("relays: fail-safe shutdown (node stops)", self.output)
+        self.assertIn("NOT confirmed", self.output)
+        self.assertEqual(self.coils(RELAYS, 1), [1], "the silent board kept its state")
+        # The other boards still got theirs.
+        self.assertEqual(self.coils(PWM, 2), [0, 1])
+        self.start_node()
+
+
+if __name__ == "__main__":
+    rostest.rosrun("modbus_rtu_driver", "failsafe", FailsafeTest)

@@ -1,0 +1,219 @@
+// The fail-safe policy (ROS-free): configuration rules, restart detection, the dead man's
+// deadlines and the heartbeat watchdog on a manual clock, and what a safe write sends (scripted
+// transport, byte exact).
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include "modbus_rtu_driver/core/bus_config.h"
+#include "modbus_rtu_driver/core/watchdog.h"
+#include "modbus_rtu_driver/devices/failsafe.h"
+#include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "scripted_transport.h"
+
+using namespace modbus_rtu_driver;
+using namespace std::chrono_literals;
+
+namespace {
+
+const char* kBus = R"(
+port: /dev/null
+heartbeat: {topic: /robot/alive, timeout: 0.5}
+devices:
+  relays:
+    type: lc_relay8
+    address: 255
+    outputs: [pump, valve, lamp, fan, out4, out5, out6, out7]
+    safe_state: {pump: off, valve: off, lamp: on}
+    command_timeout: {pump: 2.0}
+    on_restart: restore
+    on_start: safe
+  pdu: {type: yespeed_pdu, address: 2, safe_state: off, heartbeat: {topic: pdu_alive, timeout: 1}}
+)";
+
+std::string errorOf(const std::string& yaml) {
+  BusConfig config;
+  std::string error;
+  return parseBusConfig(YAML::Load(yaml), &config, &error) ? "" : error;
+}
+
+std::string device(const std::string& settings) {
+  return "devices: {relays: {type: lc_relay8, address: 255, " + settings + "}}";
+}
+
+}  // namespace
+
+TEST(FailsafeConfig, ParsesPerChannelAndForAll) {
+  BusConfig c;
+  std::string error;
+  ASSERT_TRUE(parseBusConfig(YAML::Load(kBus), &c, &error)) << error;
+  EXPECT_EQ(c.heartbeat_topic, "/robot/alive");
+  EXPECT_DOUBLE_EQ(c.heartbeat_timeout, 0.5);
+  const FailsafeConfig& r =
+      c.devices[0].name == "relays" ? c.devices[0].failsafe : c.devices[1].failsafe;
+  const FailsafeConfig& p =
+      c.devices[0].name == "pdu" ? c.devices[0].failsafe : c.devices[1].failsafe;
+  EXPECT_EQ(r.safeStateOf(0), SafeState::kOff);
+  EXPECT_EQ(r.safeStateOf(1), SafeState::kOff);
+  EXPECT_EQ(r.safeStateOf(2), SafeState::kOn);
+  EXPECT_EQ(r.safeStateOf(3), SafeState::kHold);
+  EXPECT_DOUBLE_EQ(r.commandTimeoutOf(0), 2.0);
+  EXPECT_DOUBLE_EQ(r.commandTimeoutOf(1), 0.0);
+  EXPECT_EQ(r.on_restart, OnRestart::kRestore);
+  EXPECT_TRUE(r.on_start_safe);
+  for (size_t i = 0; i < 8; ++i) EXPECT_EQ(p.safeStateOf(i), SafeState::kOff) << i;
+  EXPECT_EQ(p.heartbeat_topic, "pdu_alive");
+  EXPECT_EQ(p.on_restart, OnRestart::kLeave);  // the defaults change nothing
+  EXPECT_FALSE(p.on_start_safe);
+}
+
+// rosparam turns a bare off/on into booleans; both spellings mean the same.
+TEST(FailsafeConfig, BooleansFromRosparamAreOffAndOn) {
+  BusConfig c;
+  std::string error;
+  ASSERT_TRUE(
+      parseBusConfig(YAML::Load(device("safe_state: {out0: false, out1: true}")), &c, &error))
+      << error;
+  EXPECT_EQ(c.devices[0].failsafe.safeStateOf(0), SafeState::kOff);
+  EXPECT_EQ(c.devices[0].failsafe.safeStateOf(1), SafeState::kOn);
+}
+
+TEST(FailsafeConfig, BadValuesAreRefusedWithTheKeyNamed) {
+  EXPECT_EQ(errorOf(device("safe_state: maybe")),
+            "devices/relays/safe_state: 'maybe' is not off, on or hold");
+  EXPECT_EQ(errorOf(device("safe_state: {pumpx: off}")),
+            "devices/relays/safe_state/pumpx: no output channel of that name (outputs: out0, "
+            "out1, out2, out3, out4, out5, out6, out7)");
+  EXPECT_EQ(errorOf(device("safe_state: [off]")),
+            "devices/relays/safe_state: a list is neither one value for all channels nor a map "
+            "by name");
+  EXPECT_EQ(errorOf(device("command_timeout: 1.0")),
+            "devices/relays/command_timeout/out0: needs a safe_state of off or on for that "
+            "channel (it is hold)");
+  EXPECT_NE(errorOf(device("safe_state: off, command_timeout: 0.01")).find("outside 0.05-3600"),
+            std::string::npos);
+  EXPECT_EQ(errorOf(device("on_restart: reboot")),
+            "devices/relays/on_restart: 'reboot' is not restore, safe or leave");
+  EXPECT_EQ(errorOf(device("on_start: off")), "devices/relays/on_start: 'off' is not safe or keep");
+  EXPECT_EQ(
+      errorOf(device("heartbeat: {topic: x}")),
+      "devices/relays/heartbeat/timeout: missing (s without a message before the safe state)");
+  EXPECT_EQ(errorOf(device("heartbeat: {topic: x, timeout: 1, rate: 2}"))
+                .rfind("devices/relays/heartbeat/rate: unknown key", 0),
+            0u);
+  EXPECT_NE(errorOf("heartbeat: {topic: x, timeout: 0}\n" + device("safe_state: off"))
+                .find("heartbeat/timeout: 0.000000 s is outside 0.05-3600 s"),
+            std::string::npos);
+  EXPECT_NE(errorOf("shutdown_timeout: 100\n" + device("safe_state: off")).find("shutdown_timeout"),
+            std::string::npos);
+}
+
+TEST(FailsafeTracker, SafeTargetsLeaveHoldChannelsAlone) {
+  FailsafeConfig c;
+  c.safe_state = {SafeState::kOff, SafeState::kHold, SafeState::kOn};
+  FailsafeTracker t(c, 3);
+  const OutputTargets s = t.safeTargets();
+  EXPECT_EQ(s.channels, (std::vector<uint8_t>{0, 2}));
+  EXPECT_EQ(s.states, (std::vector<bool>{false, true}));
+}
+
+TEST(FailsafeTracker, APollThatDiffersWithNoCommandIsARestart) {
+  FailsafeTracker t(FailsafeConfig{}, 4);
+  std::vector<uint8_t> changed;
+  // The first poll only learns the states.
+  EXPECT_EQ(t.observePoll({true, false, true, false}, {}, false, &changed),
+            FailsafeTracker::Verdict::kNormal);
+  EXPECT_EQ(t.observePoll({true, false, true, false}, {}, false, &changed),
+            FailsafeTracker::Verdict::kNormal);
+  // A confirmed write moves the expectation: no restart.
+  t.confirmed({1}, {true}, true);
+  EXPECT_EQ(t.observePoll({true, true, true, false}, {}, false, &changed),
+            FailsafeTracker::Verdict::kNormal);
+  // A power cycle turns everything off.
+  EXPECT_EQ(t.observePoll({false, false, false, false}, {}, false, &changed),
+            FailsafeTracker::Verdict::kOutputsChanged);
+  EXPECT_EQ(changed, (std::vector<uint8_t>{0, 1, 2}));
+  // Back after being offline is a restart whatever the states.
+  EXPECT_EQ(t.observePoll({false, false, false, false}, {}, true, &changed),
+            FailsafeTracker::Verdict::kCameBack);
+  // What a restore writes: what users commanded (channel 1 on).
+  const OutputTargets r = t.restoreTargets();
+  EXPECT_EQ(r.channels, (std::vector<uint8_t>{1}));
+  EXPECT_EQ(r.states, (std::vector<bool>{true}));
+}
+
+TEST(FailsafeTracker, ChannelsTheDeviceTimesItselfAreNotCompared) {
+  FailsafeTracker t(FailsafeConfig{}, 2);
+  t.observePoll({false, false}, {}, false, nullptr);
+  t.selfTimed(0);  // an LC flash on channel 0
+  EXPECT_EQ(t.observePoll({true, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
+  EXPECT_EQ(t.observePoll({false, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
+  // A running PWM as the device reports it.
+  EXPECT_EQ(t.observePoll({false, true}, {false, true}, false, nullptr),
+            FailsafeTracker::Verdict::kNormal);
+  // A plain write settles channel 0 again: it is compared from then on.
+  t.confirmed({0}, {true}, true);
+  std::vector<uint8_t> changed;
+  EXPECT_EQ(t.observePoll({false, true}, {false, true}, false, &changed),
+            FailsafeTracker::Verdict::kOutputsChanged);
+  EXPECT_EQ(changed, (std::vector<uint8_t>{0}));
+}
+
+TEST(FailsafeTracker, TheDeadMansDeadlineOnAManualClock) {
+  ManualClock clock;
+  FailsafeConfig c;
+  c.safe_state = {SafeState::kOff, SafeState::kOff};
+  c.command_timeout = {1.0, 0.0};
+  FailsafeTracker t(c, 2, clock);
+  t.commandReceived(0, true);
+  t.commandReceived(1, true);  // no timeout on channel 1
+  clock.advance(999ms);
+  EXPECT_TRUE(t.expiredCommands().empty());
+  t.commandReceived(0, true);  // renewed
+  clock.advance(999ms);
+  EXPECT_TRUE(t.expiredCommands().empty());
+  clock.advance(1ms);
+  EXPECT_EQ(t.expiredCommands(), (std::vector<uint8_t>{0}));
+  EXPECT_TRUE(t.expiredCommands().empty());  // once
+  t.commandReceived(0, true);
+  t.commandReceived(0, false);  // off ends it
+  clock.advance(5s);
+  EXPECT_TRUE(t.expiredCommands().empty());
+}
+
+TEST(Watchdog, ExpiresOnceAndIsReArmedByAFeed) {
+  ManualClock clock;
+  Watchdog w(0.5, clock);
+  clock.advance(499ms);
+  EXPECT_FALSE(w.expired());  // armed from the start
+  clock.advance(1ms);
+  EXPECT_TRUE(w.expired());
+  EXPECT_TRUE(w.tripped());
+  clock.advance(10s);
+  EXPECT_FALSE(w.expired());  // once
+  w.feed();
+  EXPECT_FALSE(w.tripped());
+  clock.advance(400ms);
+  w.feed();
+  clock.advance(400ms);
+  EXPECT_FALSE(w.expired());
+  clock.advance(100ms);
+  EXPECT_TRUE(w.expired());
+}
+
+// What the safe write of an LC board sends: pump and valve off, lamp on (FC15 over 0-2).
+TEST(FailsafeTracker, TheSafeWriteIsOneFrame) {
+  DeviceConfig dc;
+  dc.name = "relays";
+  dc.type = "lc_relay8";
+  dc.address = 255;
+  LcRelay8 board(dc);
+  FailsafeConfig c;
+  c.safe_state = {SafeState::kOff, SafeState::kOff, SafeState::kOn};
+  FailsafeTracker t(c, 8);
+  const OutputTargets s = t.safeTargets();
+  ScriptedTransport bus;
+  bus.expectEcho(toHex(encodeRequest(Request::writeMultipleCoils(255, 0, {false, false, true}))));
+  EXPECT_TRUE(board.setOutputs(bus, s.channels, s.states).ok());
+  EXPECT_TRUE(bus.usedUp());
+  EXPECT_EQ(bus.mismatches(), "");
+}
