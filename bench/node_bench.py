@@ -4,7 +4,7 @@ service-to-answer latency of SetBool while the node polls three devices, and the
 while polling three devices at 50 Hz each. Starts its own rosmaster, the simulator and the node
 from the sourced catkin workspace; prints markdown tables; appends CSV rows to --csv.
 
-    node_bench.py [--calls N] [--cpu-seconds S] [--csv FILE]
+    node_bench.py [--calls N] [--bauds 115200,9600] [--cpu-seconds S (0: skip)] [--csv FILE]
 """
 import argparse
 import logging
@@ -21,7 +21,7 @@ import rospy
 from diagnostic_msgs.msg import DiagnosticArray
 from std_srvs.srv import SetBool
 
-SIM_YAML = """baud: 115200
+SIM_YAML = """baud: %(baud)d
 parity: none
 devices:
   - {type: lc_relay8, address: 255}
@@ -29,7 +29,7 @@ devices:
   - {type: yespeed_pdu, address: 2}
 """
 
-BUS_YAML = """baud: 115200
+BUS_YAML = """baud: %(baud)d
 parity: none
 diagnostic_period: 0.5
 devices:
@@ -53,10 +53,10 @@ def free_port():
 class Simulator:
     """The simulator with --verbose --timestamps; keeps (monotonic time, hex) of every rx."""
 
-    def __init__(self, workdir, pace):
+    def __init__(self, workdir, pace, baud=115200):
         config = os.path.join(workdir, "sim.yaml")
         with open(config, "w") as f:
-            f.write(SIM_YAML)
+            f.write(SIM_YAML % {"baud": baud})
         self.link = os.path.join(workdir, "tty")
         args = [executable("modbus_rtu_simulator"), "--config", config, "--link", self.link,
                 "--verbose", "--timestamps"] + (["--pace"] if pace else [])
@@ -78,10 +78,10 @@ class Simulator:
 
 
 class Node:
-    def __init__(self, workdir, port, rate):
+    def __init__(self, workdir, port, rate, baud=115200):
         config = os.path.join(workdir, "bus.yaml")
         with open(config, "w") as f:
-            f.write(BUS_YAML % {"rate": rate})
+            f.write(BUS_YAML % {"rate": rate, "baud": baud})
         subprocess.check_call(["rosparam", "delete", "/bench_bus"], stderr=subprocess.DEVNULL) \
             if self._has_params() else None
         subprocess.check_call(["rosparam", "load", config, "/bench_bus"])
@@ -119,9 +119,9 @@ def percentile(values, p):
     return ordered[min(len(ordered) - 1, int(round(p / 100.0 * (len(ordered) - 1))))]
 
 
-def latency(workdir, calls, csv):
-    sim = Simulator(workdir, pace=True)
-    node = Node(workdir, sim.link, 10.0)
+def latency(workdir, calls, csv, baud):
+    sim = Simulator(workdir, pace=True, baud=baud)
+    node = Node(workdir, sim.link, 10.0, baud)
     try:
         node.wait_ready()
         pump = rospy.ServiceProxy("/bench_bus/relays/out0/set", SetBool, persistent=True)
@@ -147,12 +147,13 @@ def latency(workdir, calls, csv):
     finally:
         node.stop()
         sim.stop()
-    # One transaction's wire time at 115200 8N1: the longest poll, FC04 5 registers (8 + 15
-    # bytes) with t3.5 after the request and after the reply.
-    transaction = (8 + 15) * 10 / 115200.0 + 2 * 0.00175
+    # One transaction's wire time at the baud, 8N1: the longest poll, FC04 5 registers (8 + 15
+    # bytes) with t3.5 after the request and after the reply (1.75 ms above 19200 baud).
+    t35 = 3.5 * 11 / baud if baud <= 19200 else 0.00175
+    transaction = (8 + 15) * 10.0 / baud + 2 * t35
     target = 0.002 + transaction
-    print("## Latency of SetBool while polling 3 devices at 10 Hz (paced 115200 line, %d calls)\n"
-          % calls)
+    print("## Latency of SetBool while polling 3 devices at 10 Hz (paced %d line, %d calls)\n"
+          % (baud, calls))
     print("| from the call to | p50 [ms] | p99 [ms] | max [ms] | target p99 [ms] |")
     print("|---|---|---|---|---|")
     for name, values in (("the frame on the line", wire), ("the answer", answer)):
@@ -163,7 +164,7 @@ def latency(workdir, calls, csv):
             name, 1e3 * percentile(values, 50), 1e3 * percentile(values, 99), 1e3 * max(values),
             "%.2f (2 ms + one transaction, %.2f ms)" % (1e3 * target, 1e3 * transaction)
             if name.startswith("the frame") else ""))
-        csv.write("latency,%s,%f,%f,%f\n" % (name.replace(" ", "_"), percentile(values, 50),
+        csv.write("latency_%d,%s,%f,%f,%f\n" % (baud, name.replace(" ", "_"), percentile(values, 50),
                                               percentile(values, 99), target))
     print("\n%d of %d calls matched to their frame; %d failed.\n" % (len(wire), calls, failed))
 
@@ -203,6 +204,8 @@ def cpu(workdir, seconds, csv):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--calls", type=int, default=500)
+    parser.add_argument("--bauds", default="115200,9600",
+                        help="latency at each of these bauds (9600: the LC board's factory speed)")
     parser.add_argument("--cpu-seconds", type=float, default=10.0)
     parser.add_argument("--csv", default="node_bench.csv")
     args = parser.parse_args()
@@ -215,8 +218,11 @@ def main():
         rospy.init_node("modbus_rtu_node_bench", anonymous=True, disable_signals=True)
         logging.getLogger("rosout").setLevel(logging.ERROR)  # keep the tables clean
         with tempfile.TemporaryDirectory() as workdir, open(args.csv, "a") as csv:
-            latency(workdir, args.calls, csv)
-            cpu(workdir, args.cpu_seconds, csv)
+            for baud in (int(b) for b in args.bauds.split(",") if b):
+                # A 9600 transaction is 12 x longer: fewer calls keep the run short.
+                latency(workdir, args.calls if baud > 19200 else max(50, args.calls // 3), csv, baud)
+            if args.cpu_seconds > 0:
+                cpu(workdir, args.cpu_seconds, csv)
     finally:
         master.terminate()
         master.wait(10)

@@ -10,12 +10,13 @@ mkdir -p "$OUT/corpus"
 # Two targets: frames through the framer, decoder and simulated devices; and the slave role's
 # request handling (framer + libmodbus's modbus_reply on a real pty).
 CORE=(src/core/frame.cpp src/core/types.cpp src/core/request_framer.cpp)
-build() {
+build() {  # a target that does not build is run as missing below, and fails
   local name=$1
   shift
+  rm -f "$OUT/$name"
   (cd "$REPO" && clang++ -std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined \
     -fno-sanitize-recover=all -Iinclude -I/usr/include/modbus "test/fuzz/$name.cpp" "${CORE[@]}" "$@" \
-    -lmodbus -lyaml-cpp -o "$OUT/$name")
+    -lmodbus -lyaml-cpp -o "$OUT/$name") || echo "$name: build failed"
 }
 build fuzz_frames src/sim/sim_device.cpp src/sim/sim_ld58a08.cpp src/sim/sim_lc_relay8.cpp \
   src/sim/sim_yespeed_pdu.cpp
@@ -32,8 +33,13 @@ overall=0
 for name in fuzz_frames fuzz_slave; do
   status=0
   mkdir -p "$OUT/corpus-$name"
-  "$OUT/$name" -max_total_time="$SECONDS_TO_RUN" -print_final_stats=1 "$OUT/corpus-$name" \
-    "$OUT/corpus" >"$OUT/$name.log" 2>&1 || status=$?
+  if [ -x "$OUT/$name" ]; then
+    "$OUT/$name" -max_total_time="$SECONDS_TO_RUN" -print_final_stats=1 "$OUT/corpus-$name" \
+      "$OUT/corpus" >"$OUT/$name.log" 2>&1 || status=$?
+  else
+    echo "$name was not built" >"$OUT/$name.log"
+    status=127
+  fi
   runs=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$OUT/$name.log" | grep -oE '[0-9]+$' || echo 0)
   echo "$name: $runs inputs in ${SECONDS_TO_RUN} s, exit $status"
   [ $status = 0 ] || { tail -40 "$OUT/$name.log"; overall=1; }
@@ -42,7 +48,7 @@ for name in fuzz_frames fuzz_slave; do
     if [ $status = 0 ]; then
       printf '<testsuite name="fuzz" tests="1"><testcase classname="fuzz" name="%s_%s_inputs"/></testsuite>\n' "$name" "$runs" >"$RESULTS/$name.xml"
     else
-      printf '<testsuite name="fuzz" tests="1" failures="1"><testcase classname="fuzz" name="%s"><failure message="crash or invariant broken, see %s"/></testcase></testsuite>\n' "$name" "$OUT/$name.log" >"$RESULTS/$name.xml"
+      printf '<testsuite name="fuzz" tests="1" failures="1"><testcase classname="fuzz" name="%s"><failure message="not built, crash or invariant broken, see %s"/></testcase></testsuite>\n' "$name" "$OUT/$name.log" >"$RESULTS/$name.xml"
     fi
   fi
 done

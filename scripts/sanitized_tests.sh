@@ -8,10 +8,15 @@ mkdir -p "$BUILD" "$RESULTS"
 WS=$("$REPO/scripts/workspace.sh")
 cmake -S "$REPO/test/sanitizers" -B "$BUILD" -DCMAKE_CXX_COMPILER=g++ \
   -DMSG_INCLUDE="$WS/devel/include" >/dev/null
-cmake --build "$BUILD" -j"$(nproc)" 2>&1 | grep -E "error|warning: " || true
-export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1
 status=0
 mkdir -p "$BUILD/logs"
+# A build that fails must fail the run (old binaries would otherwise be tested as if new).
+if ! cmake --build "$BUILD" -j"$(nproc)" >"$BUILD/logs/build.log" 2>&1; then
+  grep -E "error|warning: " "$BUILD/logs/build.log" | head -20
+  printf '<testsuite name="sanitized-build" tests="1" failures="1"><testcase classname="sanitizers" name="build"><failure message="the sanitizer build failed, see %s"/></testcase></testsuite>\n' "$BUILD/logs/build.log" >"$RESULTS/sanitized-build.xml"
+  status=1
+fi
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1
 for t in "$BUILD"/test_*; do
   [ -f "$t" ] && [ -x "$t" ] || continue
   name=$(basename "$t")
