@@ -24,10 +24,12 @@ void BusNode::startFailsafe() {
   failsafe_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 10, true);
   ros::NodeHandle topics;  // heartbeat topics resolve in the node's namespace
   double shortest = 0.5;
+  bool deadlines = false;  // no heartbeat and no command timeout: no timer at all
   auto watch = [&](const std::string& topic, double timeout, Watchdog* dog) {
     heartbeat_subs_.push_back(topics.subscribe<topic_tools::ShapeShifter>(
         topic, 1, [dog](const topic_tools::ShapeShifter::ConstPtr&) { dog->feed(); }));
     shortest = std::min(shortest, timeout);
+    deadlines = true;
   };
   if (!config_.heartbeat_topic.empty()) {
     bus_heartbeat_ = std::make_unique<Watchdog>(config_.heartbeat_timeout);
@@ -39,10 +41,15 @@ void BusNode::startFailsafe() {
       const DeviceConfig& dc = configOf(a->name());
       watch(dc.failsafe.heartbeat_topic, dc.failsafe.heartbeat_timeout, a->heartbeat());
     }
-    for (const DeviceConfig& dc : config_.devices)
-      for (double s : dc.failsafe.command_timeout)
-        if (s > 0) shortest = std::min(shortest, s);
   }
+  for (const DeviceConfig& dc : config_.devices) {
+    for (double s : dc.failsafe.command_timeout) {
+      if (s <= 0) continue;
+      shortest = std::min(shortest, s);
+      deadlines = true;
+    }
+  }
+  if (!deadlines) return;
   // Deadlines are checked at a tenth of the shortest timeout: a trigger fires at most 10 % late.
   failsafe_timer_ =
       nh_.createSteadyTimer(ros::WallDuration(std::max(0.005, shortest / 10)),
