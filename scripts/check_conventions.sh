@@ -16,11 +16,29 @@ if out=$(cd "$REPO" && catkin_lint --strict . 2>&1); then
 else
   echo "$out"; junit catkin_lint_strict "catkin_lint found problems"; status=1
 fi
+# The layers include only downwards: core <- devices <- config <- ros; sim and tools never ROS.
+# (The build links each library only on the ones below, with --no-undefined.)
+layering=""
+forbid() {  # layer directory, pattern of includes it must not have
+  local hits
+  hits=$(cd "$REPO" && grep -rnE "#include [<\"]($2)" "src/$1" "include/modbus_rtu_driver/$1" 2>/dev/null || true)
+  [ -z "$hits" ] || layering+="$1 reaches up: $hits; "
+}
+forbid core 'ros/|modbus_rtu_driver/(devices|config|ros|sim|tools)/|modbus_rtu_driver/[A-Z]'
+forbid devices 'ros/|modbus_rtu_driver/(config|ros|sim|tools)/|modbus_rtu_driver/[A-Z]'
+forbid config 'ros/|modbus_rtu_driver/(ros|sim|tools)/|modbus_rtu_driver/[A-Z]'
+forbid sim 'ros/|modbus_rtu_driver/(devices|config|ros|tools)/|modbus_rtu_driver/[A-Z]'
+forbid tools 'ros/|modbus_rtu_driver/(config|ros|sim)/|modbus_rtu_driver/[A-Z]'
+if [ -z "$layering" ]; then
+  junit layering_includes_go_down ""
+else
+  echo "$layering"; junit layering_includes_go_down "${layering//\"/}"; status=1
+fi
 files=$(cd "$REPO" && find src include bench test -name '*.cpp' -o -name '*.h')
 if out=$(cd "$REPO" && clang-format --dry-run -Werror $files 2>&1); then
   junit clang_format_applied ""
 else
   echo "$out" | head -20; junit clang_format_applied "files differ from .clang-format"; status=1
 fi
-echo "conventions: catkin_lint and clang-format checked, exit $status"
+echo "conventions: catkin_lint, layering and clang-format checked, exit $status"
 exit $status

@@ -34,6 +34,7 @@ ROSDEP_TO_DEBIAN = {
     "catkin": ["ros-core-dev", "build-essential", "cmake", "pkg-config"],
     "roscpp": ["ros-core-dev"],
     "rospy": ["ros-core-dev"],
+    "roslaunch": ["ros-core-dev"],
     "std_msgs": ["ros-core-dev"],
     "std_srvs": ["libstd-srvs-dev", "python3-std-srvs"],
     "diagnostic_msgs": ["python3-diagnostic-msgs"],

@@ -69,30 +69,6 @@ std::string exceptionName(uint8_t code) {
   }
 }
 
-const char* errorKindName(ErrorKind kind) {
-  switch (kind) {
-    case ErrorKind::kNone:
-      return "ok";
-    case ErrorKind::kTimeout:
-      return "timeout";
-    case ErrorKind::kCrc:
-      return "crc error";
-    case ErrorKind::kWrongAddress:
-      return "reply from wrong address";
-    case ErrorKind::kException:
-      return "modbus exception";
-    case ErrorKind::kMalformed:
-      return "malformed reply";
-    case ErrorKind::kIo:
-      return "i/o error";
-    case ErrorKind::kInvalidArgument:
-      return "invalid argument";
-    case ErrorKind::kNotConnected:
-      return "not connected";
-  }
-  return "unknown";
-}
-
 namespace {
 Request make(uint8_t slave, FunctionCode fc, uint16_t address, uint16_t count) {
   Request r;

@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <set>
 
-#include "modbus_rtu_driver/core/bus_config.h"
+#include "modbus_rtu_driver/core/config_yaml.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"

@@ -197,6 +197,10 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   status.add("port", config_.link.port);
   status.add("baud", config_.link.baud);
   status.add("parity", parityName(config_.link.parity));
+  // Whether the adapter took ASYNC_LOW_LATENCY: without it an FTDI adapter holds replies up to
+  // its latency timer (16 ms by default).
+  status.add("low latency",
+             link_->lowLatency() ? "yes" : "no (the adapter refused it or it is off)");
   status.add("requests", s.requests);
   status.add("attempts", s.attempts);
   status.add("failed", s.failed);

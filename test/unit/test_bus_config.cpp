@@ -5,7 +5,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "modbus_rtu_driver/core/bus_config.h"
+#include "modbus_rtu_driver/config/bus_config.h"
+#include "modbus_rtu_driver/core/config_yaml.h"
+#include "modbus_rtu_driver/core/slave_config.h"
 
 using namespace modbus_rtu_driver;
 

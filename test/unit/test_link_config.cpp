@@ -1,8 +1,7 @@
-// Line timing derived from the serial settings, and the escalating status.
+// Line timing derived from the serial settings.
 #include <gtest/gtest.h>
 
 #include "modbus_rtu_driver/core/link_config.h"
-#include "modbus_rtu_driver/core/status.h"
 
 using namespace modbus_rtu_driver;
 
@@ -59,24 +58,4 @@ TEST(LinkConfig, Parity) {
   EXPECT_EQ(p, Parity::kOdd);
   EXPECT_FALSE(parseParity("mark", &p));
   EXPECT_STREQ(parityName(Parity::kNone), "none");
-}
-
-TEST(Status, OnlyEscalatesUntilReset) {
-  Status s;
-  EXPECT_EQ(s.level(), Level::kOk);
-  s.escalate(Level::kWarn, "slow");
-  s.escalate(Level::kOk, "fine again");
-  EXPECT_EQ(s.level(), Level::kWarn);
-  EXPECT_EQ(s.message(), "slow");
-  s.escalate(Level::kError, "offline");
-  s.escalate(Level::kWarn, "slow");
-  EXPECT_EQ(s.level(), Level::kError);
-  EXPECT_EQ(s.message(), "offline");
-  s.escalate(Level::kError, "second error");
-  EXPECT_EQ(s.message(), "offline");  // the first message of a level is kept
-  s.escalate(Level::kStale, "no data");
-  EXPECT_EQ(s.level(), Level::kStale);
-  s.reset();
-  EXPECT_EQ(s.level(), Level::kOk);
-  EXPECT_STREQ(levelName(Level::kStale), "STALE");
 }

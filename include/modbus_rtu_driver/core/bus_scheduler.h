@@ -16,7 +16,6 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/clock.h"
-#include "modbus_rtu_driver/core/status.h"
 #include "modbus_rtu_driver/core/transport.h"
 
 namespace modbus_rtu_driver {

@@ -9,6 +9,7 @@
 // Requests marked not repeatable are never retried.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <map>
@@ -68,7 +69,8 @@ class RtuLink : public Transport {
   // Safe to call from any thread (diagnostics).
   LinkStats stats() const;
   // True when the port accepted ASYNC_LOW_LATENCY (USB adapters; ptys do not support it).
-  bool lowLatency() const { return low_latency_; }
+  // Any thread.
+  bool lowLatency() const { return low_latency_.load(); }
 
  private:
   Result attempt(const Request& request);
@@ -88,7 +90,7 @@ class RtuLink : public Transport {
   modbus_t* ctx_ = nullptr;
   mutable std::mutex stats_mutex_;
   LinkStats stats_;
-  bool low_latency_ = false;
+  std::atomic<bool> low_latency_{false};  // read by the diagnostics thread
   bool ever_connected_ = false;
   struct Unsettled {  // a failed transaction whose reply may still come
     std::chrono::steady_clock::time_point failed_at;

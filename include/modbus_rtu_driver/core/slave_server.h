@@ -13,9 +13,9 @@
 #include <thread>
 #include <vector>
 
-#include "modbus_rtu_driver/core/bus_config.h"
 #include "modbus_rtu_driver/core/frame.h"
 #include "modbus_rtu_driver/core/request_framer.h"
+#include "modbus_rtu_driver/core/slave_config.h"
 
 typedef struct _modbus modbus_t;                    // NOLINT: libmodbus's names
 typedef struct _modbus_mapping_t modbus_mapping_t;  // NOLINT

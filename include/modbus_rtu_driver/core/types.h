@@ -86,7 +86,6 @@ enum class ErrorKind {
   kInvalidArgument,  // refused before anything reached the bus
   kNotConnected,     // the port is not open
 };
-const char* errorKindName(ErrorKind kind);
 
 // Outcome of one transaction. `values` carries what was read (bits as 0/1) or, for writes,
 // what the device confirmed.

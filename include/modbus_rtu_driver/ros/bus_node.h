@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/bus_config.h"
+#include "modbus_rtu_driver/config/bus_config.h"
 #include "modbus_rtu_driver/core/bus_scheduler.h"
 #include "modbus_rtu_driver/core/rtu_link.h"
 #include "modbus_rtu_driver/core/watchdog.h"

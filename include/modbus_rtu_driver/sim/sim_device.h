@@ -115,8 +115,6 @@ class SimDevice {
   uint8_t address_;
   SimLineSettings line_;
 };
-// The brief calls the interface SimSlave; SimDevice is the name the rest of the code uses.
-using SimSlave = SimDevice;
 
 // Builds a device of `type` (ld58a08, lc_relay8, yespeed_pdu); null for an unknown type.
 std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t address,

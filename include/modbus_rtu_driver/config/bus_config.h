@@ -1,10 +1,8 @@
 // The configuration of one bus node (what the YAML in the node's private namespace says),
-// checked key by key. ROS-free so every rule is unit-tested; the node converts its parameters
-// to a YAML::Node and calls parseBusConfig.
+// checked key by key. It sits above the devices (it checks each device against its type) and
+// below the ROS node, which converts its parameters to a YAML::Node and calls parseBusConfig.
 #pragma once
 
-#include <cstdint>
-#include <map>
 #include <string>
 #include <vector>
 
@@ -41,25 +39,7 @@ struct BusConfig {
 // False with one message naming the key, the value and what is allowed; `out` is then undefined.
 bool parseBusConfig(const YAML::Node& root, BusConfig* out, std::string* error);
 
-// Slave role: the node serves a Modbus master (such as the DM500 controller).
-struct SlaveConfig {
-  LinkConfig link;
-  int slave_id = 1;     // 1-247
-  uint16_t coils = 64;  // size of each table the master may use, 0-10000
-  uint16_t discrete_inputs = 64;
-  uint16_t holding_registers = 64;
-  uint16_t input_registers = 64;
-  double diagnostic_period = 1.0;                 // s
-  std::map<uint16_t, std::string> coil_names;     // address -> ROS name
-  std::map<uint16_t, std::string> holding_names;  // address -> ROS name
-};
-
-bool parseSlaveConfig(const YAML::Node& root, SlaveConfig* out, std::string* error);
-
 // Every key either role accepts ("devices/D/type" for device keys), for documentation checks.
 std::vector<std::string> configKeys();
-
-// True when `name` is a valid ROS graph name segment: a letter, then letters, digits, '_'.
-bool isValidRosName(const std::string& name);
 
 }  // namespace modbus_rtu_driver

@@ -1,76 +1,26 @@
-#include "modbus_rtu_driver/core/bus_config.h"
+#include "modbus_rtu_driver/config/bus_config.h"
 
-#include <yaml-cpp/yaml.h>
-
-#include <cctype>
 #include <map>
 #include <set>
-#include <sstream>
 
+#include "modbus_rtu_driver/core/config_yaml.h"
+#include "modbus_rtu_driver/core/slave_config.h"
 #include "modbus_rtu_driver/devices/registry.h"
 
 namespace modbus_rtu_driver {
 
 namespace {
 
+using namespace config;
+
 const std::set<std::string> kDeviceKeys = {
     "type",       "address",    "poll_rate", "outputs",         "inputs",   "reply_delay",
     "safe_state", "on_restart", "on_start",  "command_timeout", "heartbeat"};
+
 // The master role's keys beside the link's.
 const std::set<std::string> kBusKeys = {
     "role",       "diagnostic_period", "devices",         "allow_raw_writes", "publish_on_change",
     "keep_alive", "heartbeat",         "shutdown_timeout"};
-const std::set<std::string> kSlaveKeys = {"slave_id",          "coils",           "discrete_inputs",
-                                          "holding_registers", "input_registers", "names"};
-const std::set<std::string> kLinkKeys = {
-    "port",         "baud",    "parity",  "data_bits", "stop_bits",   "response_timeout",
-    "byte_timeout", "retries", "min_gap", "direction", "low_latency", "late_reply_guard"};
-
-struct ConfigError {
-  std::string message;
-};
-
-[[noreturn]] void fail(const std::string& key, const std::string& what) {
-  throw ConfigError{key + ": " + what};
-}
-
-std::string show(const YAML::Node& n) {
-  if (n.IsScalar()) return "'" + n.Scalar() + "'";
-  if (n.IsSequence()) return "a list";
-  if (n.IsMap()) return "a map";
-  return "nothing";
-}
-
-template <typename T>
-T get(const YAML::Node& n, const std::string& key, const char* expected) {
-  try {
-    return n.as<T>();
-  } catch (const YAML::Exception&) {
-    fail(key, show(n) + " is not " + expected);
-  }
-}
-
-double getNumber(const YAML::Node& n, const std::string& key) {
-  return get<double>(n, key, "a number");
-}
-
-int getInt(const YAML::Node& n, const std::string& key) {
-  const double v = getNumber(n, key);
-  if (v != static_cast<int>(v)) fail(key, show(n) + " is not a whole number");
-  return static_cast<int>(v);
-}
-
-void checkKeys(const YAML::Node& map, const std::string& where,
-               const std::set<std::string>& known) {
-  for (const auto& kv : map) {
-    const std::string key = kv.first.as<std::string>();
-    if (!known.count(key)) {
-      std::string list;
-      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-      fail(where + key, "unknown key (known keys: " + list + ")");
-    }
-  }
-}
 
 std::vector<std::string> getNames(const YAML::Node& n, const std::string& key) {
   if (!n.IsSequence()) fail(key, show(n) + " is not a list of names");
@@ -191,54 +141,6 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
   return d;
 }
 
-void parseLink(const YAML::Node& root, LinkConfig* out) {
-  LinkConfig& link = *out;
-  if (root["port"]) link.port = get<std::string>(root["port"], "port", "a device path");
-  if (root["baud"]) link.baud = getInt(root["baud"], "baud");
-  if (root["parity"]) {
-    const std::string p = get<std::string>(root["parity"], "parity", "none, even or odd");
-    if (!parseParity(p, &link.parity)) fail("parity", "'" + p + "' is not none, even or odd");
-  }
-  if (root["data_bits"]) link.data_bits = getInt(root["data_bits"], "data_bits");
-  if (root["stop_bits"]) link.stop_bits = getInt(root["stop_bits"], "stop_bits");
-  if (root["response_timeout"])
-    link.response_timeout = getNumber(root["response_timeout"], "response_timeout");
-  if (root["byte_timeout"]) link.byte_timeout = getNumber(root["byte_timeout"], "byte_timeout");
-  if (root["retries"]) link.retries = getInt(root["retries"], "retries");
-  if (root["late_reply_guard"])
-    link.late_reply_guard = getNumber(root["late_reply_guard"], "late_reply_guard");
-  if (root["min_gap"]) link.min_gap = getNumber(root["min_gap"], "min_gap");
-  if (root["low_latency"])
-    link.low_latency = get<bool>(root["low_latency"], "low_latency", "true or false");
-  if (root["direction"]) {
-    const std::string d =
-        get<std::string>(root["direction"], "direction", "auto, rts_high, rts_low");
-    if (d == "auto")
-      link.direction = DirectionControl::kAuto;
-    else if (d == "rts_high")
-      link.direction = DirectionControl::kRtsHigh;
-    else if (d == "rts_low")
-      link.direction = DirectionControl::kRtsLow;
-    else
-      fail("direction", "'" + d + "' is not auto, rts_high or rts_low");
-  }
-  const std::string link_problem = validateLinkConfig(link);
-  if (!link_problem.empty()) throw ConfigError{link_problem};
-}
-
-double parseDiagnosticPeriod(const YAML::Node& root) {
-  if (!root["diagnostic_period"]) return 1.0;
-  const double p = getNumber(root["diagnostic_period"], "diagnostic_period");
-  if (!(p >= 0.1 && p <= 60))
-    fail("diagnostic_period", std::to_string(p) + " s is outside 0.1-60 s");
-  return p;
-}
-
-std::set<std::string> with(std::set<std::string> keys, const std::set<std::string>& more) {
-  keys.insert(more.begin(), more.end());
-  return keys;
-}
-
 void parse(const YAML::Node& root, BusConfig* out) {
   if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
   checkKeys(root, "", with(kLinkKeys, kBusKeys));
@@ -282,95 +184,15 @@ void parse(const YAML::Node& root, BusConfig* out) {
   }
 }
 
-uint16_t getTableSize(const YAML::Node& root, const char* key, uint16_t fallback) {
-  if (!root[key]) return fallback;
-  const int n = getInt(root[key], key);
-  if (n < 0 || n > 10000) fail(key, std::to_string(n) + " is outside 0-10000");
-  return static_cast<uint16_t>(n);
-}
-
-void parseNames(const YAML::Node& n, const std::string& key, uint16_t size,
-                std::map<uint16_t, std::string>* out) {
-  if (!n) return;
-  if (!n.IsMap()) fail(key, show(n) + " is not a map of address -> name");
-  std::set<std::string> seen;
-  for (const auto& kv : n) {
-    // address: name as in the DM500 docs; ROS parameter keys are strings, so a launch file
-    // writes "6": name (quoted) or name: 6, and all three forms are accepted.
-    const std::string k = kv.first.as<std::string>();
-    const bool address_first = !k.empty() && std::isdigit(static_cast<unsigned char>(k[0]));
-    const int address = getInt(address_first ? kv.first : kv.second, key);
-    const std::string name = address_first ? get<std::string>(kv.second, key, "a name") : k;
-    const std::string where = key + "/" + std::to_string(address);
-    if (address < 0 || address >= size)
-      fail(where, "address is outside the table (0-" + std::to_string(size - 1) + ")");
-    if (!isValidRosName(name))
-      fail(where, "'" + name + "' is not a valid ROS name (a letter, then letters, digits or '_')");
-    if (!seen.insert(name).second) fail(where, "'" + name + "' is given twice");
-    (*out)[static_cast<uint16_t>(address)] = name;
-  }
-}
-
-void parseSlave(const YAML::Node& root, SlaveConfig* out) {
-  if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
-  checkKeys(root, "", with(with(kLinkKeys, {"role", "diagnostic_period"}), kSlaveKeys));
-  parseLink(root, &out->link);
-  const std::string role = root["role"] ? get<std::string>(root["role"], "role", "slave") : "";
-  if (role != "slave") fail("role", "'" + role + "' is not slave");
-  out->diagnostic_period = parseDiagnosticPeriod(root);
-  if (!root["slave_id"]) fail("slave_id", "missing (the address this node answers, 1-247)");
-  out->slave_id = getInt(root["slave_id"], "slave_id");
-  if (out->slave_id < 1 || out->slave_id > 247)
-    fail("slave_id", std::to_string(out->slave_id) + " is outside 1-247");
-  out->coils = getTableSize(root, "coils", 64);
-  out->discrete_inputs = getTableSize(root, "discrete_inputs", 64);
-  out->holding_registers = getTableSize(root, "holding_registers", 64);
-  out->input_registers = getTableSize(root, "input_registers", 64);
-  const YAML::Node names = root["names"];
-  if (names) {
-    if (!names.IsMap()) fail("names", show(names) + " is not a map (coils, holding_registers)");
-    checkKeys(names, "names/", {"coils", "holding_registers"});
-    parseNames(names["coils"], "names/coils", out->coils, &out->coil_names);
-    parseNames(names["holding_registers"], "names/holding_registers", out->holding_registers,
-               &out->holding_names);
-  }
-}
-
-// Runs a parser; its first error becomes the message.
-template <typename Config>
-bool parseWith(void (*parser)(const YAML::Node&, Config*), const YAML::Node& root, Config* out,
-               std::string* error) {
-  *out = Config{};
-  try {
-    parser(root, out);
-    return true;
-  } catch (const ConfigError& e) {
-    if (error) *error = e.message;
-  } catch (const YAML::Exception& e) {
-    if (error) *error = std::string("configuration: ") + e.what();
-  }
-  return false;
-}
-
 }  // namespace
-
-bool parseSlaveConfig(const YAML::Node& root, SlaveConfig* out, std::string* error) {
-  return parseWith(parseSlave, root, out, error);
-}
 
 std::vector<std::string> configKeys() {
   std::vector<std::string> keys(kLinkKeys.begin(), kLinkKeys.end());
   keys.insert(keys.end(), kBusKeys.begin(), kBusKeys.end());
   for (const auto& k : kDeviceKeys) keys.push_back("devices/D/" + k);
-  keys.insert(keys.end(), kSlaveKeys.begin(), kSlaveKeys.end());
+  const auto slave = slaveConfigKeys();
+  keys.insert(keys.end(), slave.begin(), slave.end());
   return keys;
-}
-
-bool isValidRosName(const std::string& name) {
-  if (name.empty() || !std::isalpha(static_cast<unsigned char>(name[0]))) return false;
-  for (char c : name)
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
-  return true;
 }
 
 bool parseBusConfig(const YAML::Node& root, BusConfig* out, std::string* error) {

@@ -1,2 +1,0 @@
-# RtuLink sources: target_sources(modbus_rtu_core PRIVATE ...)
-target_sources(modbus_rtu_core PRIVATE src/core/rtu_link.cpp src/core/rtu_link_line.cpp)
