@@ -9,11 +9,6 @@ Clock::duration seconds(double s) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
 }
 
-// Failures that say the device did not answer properly (as opposed to answering "no").
-bool isSilence(ErrorKind k) {
-  return k == ErrorKind::kTimeout || k == ErrorKind::kCrc || k == ErrorKind::kWrongAddress ||
-         k == ErrorKind::kMalformed || k == ErrorKind::kIo || k == ErrorKind::kNotConnected;
-}
 }  // namespace
 
 BusScheduler::BusScheduler(Transport& transport) : BusScheduler(transport, Options{}) {}
@@ -134,7 +129,7 @@ void BusScheduler::record(const std::string& device, const Result& result, bool 
     (result.ok() ? h.writes_ok : h.writes_failed)++;
   }
   if (!result.ok()) h.last_error = result.message;
-  if (!isSilence(result.error)) {  // it answered, even if with an exception
+  if (!noProperAnswer(result.error)) {  // it answered, even if with an exception
     h.answered = true;
     h.consecutive_failures = 0;
     h.online = true;

@@ -34,11 +34,6 @@ void toTimeval(double seconds, uint32_t* sec, uint32_t* usec) {
   }
 }
 
-bool retryable(ErrorKind k) {
-  return k == ErrorKind::kTimeout || k == ErrorKind::kCrc || k == ErrorKind::kWrongAddress ||
-         k == ErrorKind::kMalformed;
-}
-
 }  // namespace
 
 RtuLink::RtuLink(LinkConfig config) : config_(std::move(config)) {}
@@ -137,7 +132,7 @@ Result RtuLink::execute(const Request& request) {
   Result r;
   for (int attempt_no = 0;; ++attempt_no) {
     r = attempt(request);
-    if (r.ok() || !retryable(r.error) || !request.repeatable || attempt_no >= config_.retries ||
+    if (r.ok() || !answerLost(r.error) || !request.repeatable || attempt_no >= config_.retries ||
         !ctx_)
       break;
     std::lock_guard<std::mutex> lock(stats_mutex_);

@@ -74,8 +74,7 @@ Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& chan
 }
 
 bool Device::mayHaveActed(const Result& r) {
-  return r.error == ErrorKind::kTimeout || r.error == ErrorKind::kCrc ||
-         r.error == ErrorKind::kWrongAddress || r.error == ErrorKind::kMalformed;
+  return answerLost(r.error);
 }
 
 // A write whose reply was lost may still have been done: the coils read back tell. Success

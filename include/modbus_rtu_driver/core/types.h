@@ -87,6 +87,19 @@ enum class ErrorKind {
   kNotConnected,     // the port is not open
 };
 
+// How the kinds of failure are told apart, in one place:
+// the request reached the device and its answer was lost or garbled: a retry may help, and a
+// write may have been done (read back before reporting it failed);
+inline bool answerLost(ErrorKind k) {
+  return k == ErrorKind::kTimeout || k == ErrorKind::kCrc || k == ErrorKind::kWrongAddress ||
+         k == ErrorKind::kMalformed;
+}
+// the device did not answer properly, or could not be asked: counts towards "offline" (an
+// exception is an answer).
+inline bool noProperAnswer(ErrorKind k) {
+  return answerLost(k) || k == ErrorKind::kIo || k == ErrorKind::kNotConnected;
+}
+
 // Outcome of one transaction. `values` carries what was read (bits as 0/1) or, for writes,
 // what the device confirmed.
 struct Result {
