@@ -16,7 +16,7 @@ target_link_libraries(modbus_rtu_sim PUBLIC modbus_rtu_core yaml-cpp Threads::Th
 # catkin puts executables in devel/lib/modbus_rtu_driver: `rosrun modbus_rtu_driver
 # modbus_rtu_simulator` finds it.
 add_executable(modbus_rtu_simulator src/sim/simulator_main.cpp)
-target_link_libraries(modbus_rtu_simulator modbus_rtu_sim)
+target_link_libraries(modbus_rtu_simulator modbus_rtu_sim CLI11::CLI11)
 
 add_executable(modbus_rtu_dm500_sim src/sim/dm500_main.cpp)
-target_link_libraries(modbus_rtu_dm500_sim modbus_rtu_sim)
+target_link_libraries(modbus_rtu_dm500_sim modbus_rtu_sim CLI11::CLI11)

@@ -9,6 +9,7 @@ add_library(modbus_rtu_commission_lib
   src/tools/commission_table.cpp
   src/tools/commission_usage.cpp
 )
-target_link_libraries(modbus_rtu_commission_lib PUBLIC modbus_rtu_core)
+target_link_libraries(modbus_rtu_commission_lib PUBLIC modbus_rtu_core nlohmann_json::nlohmann_json
+  PRIVATE CLI11::CLI11)
 add_executable(modbus_rtu_commission src/tools/commission_main.cpp)
 target_link_libraries(modbus_rtu_commission modbus_rtu_commission_lib)
