@@ -2,11 +2,13 @@
 // Prints "simulator ready on <link>" once the link exists; SIGHUP power-cycles the devices;
 // SIGINT / SIGTERM stop it and remove the link and the control socket. roslaunch's
 // __name:= style arguments are ignored.
+#include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "modbus_rtu_driver/sim/simulator.h"
 
@@ -15,20 +17,13 @@ namespace {
 volatile std::sig_atomic_t g_stop = 0;
 volatile std::sig_atomic_t g_power_cycle = 0;
 
-const char* kUsage =
-    "usage: modbus_rtu_simulator --config FILE --link PATH [--state-file FILE]\n"
-    "                            [--control SOCKET] [--pace] [--verbose [--timestamps]]\n"
-    "  --config FILE      devices and line settings (see config/simulator.yaml)\n"
-    "  --link PATH        symlink to the pty's slave side (a stale link is replaced)\n"
-    "  --state-file FILE  what the devices store (address, baud, parity, ...), loaded at start\n"
-    "  --control SOCKET   Unix socket for test commands (default: PATH.ctl)\n"
-    "  --pace             the line runs at its real speed (also `pace: true` in the config)\n"
-    "  --verbose          print every frame: rx/tx followed by the bytes in hex\n"
-    "  --timestamps       with --verbose: CLOCK_MONOTONIC seconds after rx/tx\n"
-    "SIGHUP power-cycles the devices; SIGINT/SIGTERM stop the simulator.\n";
+// roslaunch appends __name:=..., __log:=... and remappings; they are not ours.
+bool isRosArgument(const std::string& word) {
+  return word.empty() || word.rfind("__", 0) == 0 || word.find(":=") != std::string::npos;
+}
 
-int usage(const std::string& why) {
-  std::fprintf(stderr, "modbus_rtu_simulator: %s\n%s", why.c_str(), kUsage);
+int usage(const CLI::App& app, const std::string& why) {
+  std::fprintf(stderr, "modbus_rtu_simulator: %s\n%s", why.c_str(), app.help().c_str());
   return 2;
 }
 
@@ -46,33 +41,45 @@ int main(int argc, char** argv) {
   std::string config_path;
   SimulatorOptions options;
   bool pace = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const bool takes_value =
-        a == "--config" || a == "--link" || a == "--control" || a == "--state-file";
-    if (takes_value && i + 1 >= argc) return usage(a + ": missing value");
-    if (a == "--config")
-      config_path = argv[++i];
-    else if (a == "--link")
-      options.link = argv[++i];
-    else if (a == "--control")
-      options.control = argv[++i];
-    else if (a == "--state-file")
-      options.state_file = argv[++i];
-    else if (a == "--pace")
-      pace = true;
-    else if (a == "--verbose")
-      options.verbose = true;
-    else if (a == "--timestamps")
-      options.timestamps = true;
-    else if (a == "--help" || a == "-h")
-      return std::printf("%s", kUsage), 0;
-    else if (a.rfind("__", 0) == 0 || a.find(":=") != std::string::npos || a.empty())
-      continue;  // roslaunch
-    else
-      return usage("unknown option " + a);
+  std::vector<std::string> ros_arguments;
+  CLI::App app(
+      "Modbus RTU devices on a pseudo-terminal; prints \"simulator ready on PATH\" once "
+      "the link exists.",
+      "modbus_rtu_simulator");
+  app.footer("SIGHUP power-cycles the devices; SIGINT/SIGTERM stop the simulator.");
+  app.allow_extras();
+  app.add_option("--config", config_path,
+                 "devices and line settings (see config/simulator.yaml); needed")
+      ->type_name("FILE");
+  app.add_option("--link", options.link,
+                 "symlink to the pty's slave side (a stale link is replaced); needed")
+      ->type_name("PATH");
+  app.add_option("--state-file", options.state_file,
+                 "what the devices store (address, baud, parity, ...), loaded at start")
+      ->type_name("FILE");
+  app.add_option("--control", options.control, "Unix socket for test commands (default: PATH.ctl)")
+      ->type_name("SOCKET");
+  app.add_flag("--pace", pace, "the line runs at its real speed (also `pace: true` in the config)");
+  app.add_flag("--verbose", options.verbose,
+               "print every frame: rx/tx followed by the bytes in hex");
+  app.add_flag("--timestamps", options.timestamps,
+               "with --verbose: CLOCK_MONOTONIC seconds after rx/tx");
+  app.add_option("ros_arguments", ros_arguments)->group("");  // roslaunch's, ignored
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    std::printf("%s", app.help().c_str());
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    return usage(app, e.what());
   }
-  if (config_path.empty() || options.link.empty()) return usage("--config and --link are needed");
+  for (const std::string& extra : app.remaining())
+    return usage(app,
+                 (extra.rfind("-", 0) == 0 ? "unknown option " : "unexpected argument ") + extra);
+  for (const std::string& word : ros_arguments)
+    if (!isRosArgument(word)) return usage(app, "unexpected argument " + word);
+  if (config_path.empty() || options.link.empty())
+    return usage(app, "--config and --link are needed");
   SimulatorConfig config;
   std::string error;
   if (!loadSimulatorConfig(config_path, &config, &error)) {

@@ -1,9 +1,12 @@
-// Command line of modbus_rtu_commission: every value is checked against the manuals' ranges
-// before anything is opened or sent, and each refusal names the option and its range.
+// Command line of modbus_rtu_commission, parsed by CLI11: every value is checked against the
+// manuals' ranges before anything is opened or sent, and each refusal names the option and its
+// range. CLI11 splits the words into the command, its options and its positional values and
+// runs the checks that need nothing else; the checks that depend on the command or on another
+// option (the board type's address range, --to after --from, the PDU's limits) follow.
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
 #include <map>
-#include <set>
 #include <sstream>
 
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"
@@ -37,23 +40,31 @@ bool toLong(const std::string& text, long* out) {
   return true;
 }
 
-int intIn(const std::string& what, const std::string& text, int lo, int hi) {
+// "'text' is outside lo-hi", or "" when text is an integer in lo-hi.
+std::string outsideInts(const std::string& text, long lo, long hi) {
   long v = 0;
-  if (!toLong(text, &v) || v < lo || v > hi)
-    bad(what + ": '" + text + "' is outside " + std::to_string(lo) + "-" + std::to_string(hi));
+  if (toLong(text, &v) && v >= lo && v <= hi) return "";
+  return "'" + text + "' is outside " + std::to_string(lo) + "-" + std::to_string(hi);
+}
+
+int intIn(const std::string& what, const std::string& text, int lo, int hi) {
+  const std::string problem = outsideInts(text, lo, hi);
+  if (!problem.empty()) bad(what + ": " + problem);
+  long v = 0;
+  toLong(text, &v);
   return static_cast<int>(v);
 }
 
-double secondsIn(const std::string& what, const std::string& text, double lo, double hi) {
+bool toDouble(const std::string& text, double* out) {
   std::istringstream in(text);
-  double v = 0;
   char rest = 0;
-  if (!(in >> v) || in >> rest || !(v >= lo && v <= hi)) {
-    std::ostringstream range;
-    range << lo << "-" << hi;
-    bad(what + ": '" + text + "' is outside " + range.str() + " s");
-  }
-  return v;
+  return (in >> *out) && !(in >> rest);
+}
+
+std::string rangeText(double lo, double hi) {
+  std::ostringstream range;
+  range << lo << "-" << hi;
+  return range.str();
 }
 
 // "a, b,c" -> {"a", "b", "c"}
@@ -67,101 +78,228 @@ std::vector<std::string> splitList(const std::string& text) {
   return items;
 }
 
-// The command line split into --options and positional words.
-class Words {
- public:
-  explicit Words(const std::vector<std::string>& args) {
-    static const std::set<std::string> kFlags = {"json", "yes", "first", "multiple"};
-    for (size_t i = 0; i < args.size(); ++i) {
-      const std::string& a = args[i];
-      if (a.size() < 3 || a.compare(0, 2, "--") != 0) {
-        positional_.push_back(a);
-        continue;
-      }
-      const std::string key = a.substr(2);
-      if (kFlags.count(key)) {
-        options_[key] = "";
-      } else if (i + 1 < args.size() && args[i + 1].compare(0, 2, "--") != 0) {
-        options_[key] = args[++i];
-      } else {
-        bad(a + ": missing value");
-      }
-    }
-  }
-  bool has(const std::string& key) const { return options_.count(key) != 0; }
-  std::string get(const std::string& key) const { return has(key) ? options_.at(key) : ""; }
-  // The command line without the options; [0] is the command.
-  const std::vector<std::string>& positional() const { return positional_; }
-
-  void allowOnly(const std::string& command, const std::set<std::string>& allowed) const {
-    static const std::set<std::string> kGlobal = {"port",    "baud", "parity",
-                                                  "timeout", "json", "yes"};
-    for (const auto& kv : options_)
-      if (!kGlobal.count(kv.first) && !allowed.count(kv.first))
-        bad("--" + kv.first + ": not an option of " + command + " (see --help)");
-  }
-  const std::string& word(size_t n, const std::string& what, const std::string& hint) const {
-    if (n >= positional_.size()) bad(what + ": missing (" + hint + ")");
-    return positional_[n];
-  }
-  void atMost(size_t n) const {
-    if (positional_.size() > n) bad("unexpected argument '" + positional_[n] + "'");
-  }
-
- private:
-  std::map<std::string, std::string> options_;
-  std::vector<std::string> positional_;
-};
-
-const std::map<std::string, std::set<std::string>>& commandOptions() {
-  static const std::set<std::string> kTyped = {"type", "address"};
-  static const std::map<std::string, std::set<std::string>> kCommands = {
-      {"scan", {"from", "to", "addresses", "bauds", "parities", "first"}},
-      {"info", {"address"}},
-      {"get-address", kTyped},
-      {"set-address", kTyped},
-      {"get-baud", kTyped},
-      {"set-baud", kTyped},
-      {"get-parity", kTyped},
-      {"set-parity", kTyped},
-      {"get-return-delay", kTyped},
-      {"set-return-delay", kTyped},
-      {"get-save", kTyped},
-      {"set-save", kTyped},
-      {"factory-reset", kTyped},
-      {"get-limits", kTyped},
-      {"set-limits", {"type", "address", "over-voltage", "under-voltage", "over-current"}},
-      {"read", {"address"}},
-      {"write", {"address", "multiple"}},
-      {"watch", {"address", "interval", "count"}},
-  };
-  return kCommands;
+// CLI11 checks of one option's value on its own; CLI11 puts the option's name in front.
+CLI::Validator intRange(long lo, long hi) {
+  return CLI::Validator([lo, hi](std::string& text) { return outsideInts(text, lo, hi); },
+                        std::to_string(lo) + "-" + std::to_string(hi));
 }
 
-void parseLink(const Words& w, CommissionCommand& c) {
-  if (!w.has("port")) bad("--port: missing (the serial device, e.g. /dev/ttyUSB0)");
-  c.link.port = w.get("port");
-  if (w.has("baud")) {
-    c.link.baud = intIn("--baud", w.get("baud"), 1200, 115200);
-    if (!isStandardBaud(c.link.baud))
-      bad("--baud: '" + w.get("baud") + "' is not one of " + kAllBauds);
+CLI::Validator secondsRange(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        double v = 0;
+        if (toDouble(text, &v) && v >= lo && v <= hi) return "";
+        return "'" + text + "' is outside " + rangeText(lo, hi) + " s";
+      },
+      rangeText(lo, hi) + " s");
+}
+
+const CLI::Validator kBaud(
+    [](std::string& text) -> std::string {
+      const std::string problem = outsideInts(text, 1200, 115200);
+      if (!problem.empty()) return problem;
+      long v = 0;
+      toLong(text, &v);
+      if (!isStandardBaud(static_cast<int>(v))) return "'" + text + "' is not one of " + kAllBauds;
+      return "";
+    },
+    "1200-115200");
+
+const CLI::Validator kParity(
+    [](std::string& text) -> std::string {
+      Parity p;
+      return parseParity(text, &p) ? "" : "'" + text + "' is not none, even or odd";
+    },
+    "none|even|odd");
+
+const CLI::Validator kBaudList(
+    [](std::string& text) -> std::string {
+      for (const std::string& b : splitList(text == "all" ? kAllBauds : text)) {
+        long v = 0;
+        if (!toLong(b, &v) || !isStandardBaud(static_cast<int>(v)))
+          return "'" + b + "' is not one of " + kAllBauds + " (or all)";
+      }
+      return "";
+    },
+    "LIST|all");
+
+const CLI::Validator kParityList(
+    [](std::string& text) -> std::string {
+      for (const std::string& p : splitList(text == "all" ? "none,even,odd" : text)) {
+        Parity parity;
+        if (!parseParity(p, &parity)) return "'" + p + "' is not none, even or odd (or all)";
+      }
+      return "";
+    },
+    "LIST|all");
+
+// Every word of the command line lands here as text; the checks above and below turn it into
+// a CommissionCommand.
+struct Words {
+  std::string port, baud, parity, timeout;
+  std::string type, address, from, to, addresses, bauds, parities, interval, count;
+  std::array<std::string, 3> limits;
+  std::string value, table, start, table_count;
+  std::vector<std::string> values;
+};
+
+const char* const kLimitOptions[3] = {"--over-voltage", "--under-voltage", "--over-current"};
+
+// The command line: options before the command are the link's; every command has its own.
+// Global options may also follow the command (fallthrough). Unknown words are kept as extras
+// and refused by parseCommission with the command's name.
+struct Cli {
+  CLI::App app{"Finds and configures Modbus RTU boards on a serial port; no ROS master needed.",
+               "modbus_rtu_commission"};
+  Words w;
+
+  Cli() {
+    app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+    app.allow_extras();
+    app.fallthrough();
+    app.require_subcommand(0, 1);
+    app.set_help_all_flag("--help-all", "help of every command");
+    app.add_option("--port", w.port, "the serial device, e.g. /dev/ttyUSB0 (needed)")
+        ->type_name("PORT");
+    app.add_option("--baud", w.baud, "line speed (default 9600)")->type_name("B")->check(kBaud);
+    app.add_option("--parity", w.parity, "line parity (default none)")
+        ->type_name("P")
+        ->check(kParity);
+    app.add_option("--timeout", w.timeout, "wait for a reply (see below)")
+        ->type_name("S")
+        ->check(secondsRange(0.005, 10));
+    app.add_flag("--json", "results as one JSON object per line");
+    app.add_flag("--yes", "no confirmation questions");
+
+    CLI::App* scan = app.add_subcommand(
+        "scan", "harmless reads at every address and line setting; names what answers");
+    scan->add_option("--from", w.from, "first address (default 1)")
+        ->type_name("A")
+        ->check(intRange(1, 255));
+    scan->add_option("--to", w.to, "last address, --from-255 (default 255)")->type_name("B");
+    scan->add_option("--addresses", w.addresses, "instead of --from/--to: e.g. 1-5,255")
+        ->type_name("LIST");
+    scan->add_option("--bauds", w.bauds, "e.g. 9600,19200 or all (default --baud)")
+        ->check(kBaudList);
+    scan->add_option("--parities", w.parities, "none,even,odd or all (default --parity)")
+        ->check(kParityList);
+    scan->add_flag("--first", "stop at the first device found");
+
+    CLI::App* info = app.add_subcommand("info", "type and settings of the device at --address");
+    addAddress(info);
+
+    struct Setting {
+      const char* get;
+      const char* set;
+      const char* what;
+      const char* value;
+      const char* range;
+    };
+    const Setting settings[] = {
+        {"get-address", "set-address", "the board's address", "NEW",
+         "ld58a08 1-248, lc_relay8 1-255; without --address through 0xFF / 0: board alone on "
+         "the bus"},
+        {"get-baud", "set-baud", "the stored baud rate", "BAUD",
+         "a rate or a code: ld58a08 0-7 (1200-115200), lc_relay8 2-4 (4800, 9600, 19200)"},
+        {"get-parity", "set-parity", "the stored parity (ld58a08)", "none|even|odd",
+         "none, even or odd"},
+        {"get-return-delay", "set-return-delay", "the wait before answering (ld58a08)", "MS",
+         "0-1000 ms in steps of 40"},
+        {"get-save", "set-save", "the power-down save of the PWM settings (ld58a08)", "on|off",
+         "on or off"},
+    };
+    for (const Setting& s : settings) {
+      addTyped(app.add_subcommand(s.get, std::string("read ") + s.what));
+      CLI::App* set = app.add_subcommand(s.set, std::string("change ") + s.what + ": " + s.range);
+      addTyped(set);
+      set->add_option("value", w.value, s.range)->type_name(s.value);
+    }
+    addTyped(app.add_subcommand("factory-reset",
+                                "ld58a08 factory settings (through 0xFF without --address)"));
+
+    addLimitsType(
+        addAddress(app.add_subcommand("get-limits", "the PDU's limits (yespeed_pdu)"), "1-247"));
+    CLI::App* set_limits = app.add_subcommand(
+        "set-limits", "change the PDU's limits; those not given stay (yespeed_pdu)");
+    addLimitsType(addAddress(set_limits, "1-247"));
+    const char* limit_help[3] = {"V, in 0.1 V", "V, in 0.1 V", "A, in 0.01 A"};
+    for (size_t i = 0; i < 3; ++i)
+      set_limits->add_option(kLimitOptions[i], w.limits[i], limit_help[i])
+          ->type_name(YespeedPdu::kLimitUnits[i]);
+
+    CLI::App* read = app.add_subcommand("read", "one request: COUNT values from START");
+    addTable(read)->add_option("count", w.table_count, "how many (default 1)")->type_name("COUNT");
+    CLI::App* write = app.add_subcommand(
+        "write", "FC05/FC06 for one value, FC15/FC16 for more (--multiple: always)");
+    addTable(write)
+        ->add_option("values", w.values, "0 or 1 (coils), 0-65535 (holding)")
+        ->type_name("VALUE...")
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    write->add_flag("--multiple", "FC15/FC16 even for one value");
+    CLI::App* watch =
+        app.add_subcommand("watch", "polls; prints a line only when something changed");
+    addTable(watch)->add_option("count", w.table_count, "how many (default 1)")->type_name("COUNT");
+    watch->add_option("--interval", w.interval, "s between polls (default 0.5)")
+        ->type_name("S")
+        ->check(secondsRange(0.01, 3600));
+    watch->add_option("--count", w.count, "polls, then stop (default: until Ctrl-C)")
+        ->type_name("N")
+        ->check(intRange(1, 100000000));
+    for (CLI::App* command : app.get_subcommands({}))
+      command->footer(
+          "\n(modbus_rtu_commission --help: every command, the boards' ranges, "
+          "the scan's duration, exit codes)");
+    app.footer(commissionHelpDetails());
   }
-  if (w.has("parity") && !parseParity(w.get("parity"), &c.link.parity))
-    bad("--parity: '" + w.get("parity") + "' is not none, even or odd");
+
+  CLI::App* addAddress(CLI::App* command, const std::string& range = "1-255") {
+    command->add_option("--address", w.address, "the device's address (" + range + ")")
+        ->type_name("A");
+    return command;
+  }
+  void addTyped(CLI::App* command) {
+    command->add_option("--type", w.type, "ld58a08 or lc_relay8")->type_name("T");
+    addAddress(command, "ld58a08 1-248, lc_relay8 1-255");
+  }
+  void addLimitsType(CLI::App* command) {
+    command->add_option("--type", w.type, "yespeed_pdu (the only one)")->type_name("T");
+  }
+  CLI::App* addTable(CLI::App* command) {
+    addAddress(command);
+    command->add_option("table", w.table, "coils, discrete-inputs, holding or input-registers")
+        ->type_name("TABLE");
+    command->add_option("start", w.start, "first address in the table (0-65535)")
+        ->type_name("START");
+    return command;
+  }
+};
+
+// The command's words: `app` is the command's own (sub)app, `top` the whole command line.
+struct Parsed {
+  const CLI::App& top;
+  const CLI::App& app;
+  const Words& w;
+  bool has(const std::string& option) const { return app.count(option) != 0; }
+};
+
+void parseLink(const Parsed& p, CommissionCommand& c) {
+  if (!p.top.count("--port")) bad("--port: missing (the serial device, e.g. /dev/ttyUSB0)");
+  c.link.port = p.w.port;
+  if (p.top.count("--baud")) c.link.baud = intIn("--baud", p.w.baud, 1200, 115200);
+  if (p.top.count("--parity")) parseParity(p.w.parity, &c.link.parity);
   c.link.retries = 0;
   // Scans try many silent addresses: wait little. Other commands wait out an LD58A08's return
   // delay (up to 1000 ms) too.
   const double wire = 30.0 * bitsPerCharacter(c.link) / c.link.baud;
   c.link.response_timeout = (c.command == "scan" ? 0.05 : 1.05) + wire;
-  if (w.has("timeout"))
-    c.link.response_timeout = secondsIn("--timeout", w.get("timeout"), 0.005, 10);
+  if (p.top.count("--timeout")) toDouble(p.w.timeout, &c.link.response_timeout);
 }
 
-void parseScan(const Words& w, CommissionCommand& c) {
-  w.atMost(1);
-  if (w.has("addresses")) {
-    if (w.has("from") || w.has("to")) bad("--addresses: give it or --from/--to, not both");
-    for (const std::string& item : splitList(w.get("addresses"))) {
+void parseScan(const Parsed& p, CommissionCommand& c) {
+  const Words& w = p.w;
+  if (p.has("--addresses")) {
+    if (p.has("--from") || p.has("--to")) bad("--addresses: give it or --from/--to, not both");
+    for (const std::string& item : splitList(w.addresses)) {
       const size_t dash = item.find('-', 1);
       const int lo = intIn("--addresses", item.substr(0, dash), 1, 255);
       const int hi =
@@ -171,26 +309,26 @@ void parseScan(const Words& w, CommissionCommand& c) {
           c.addresses.push_back(a);
     }
   } else {
-    const int from = w.has("from") ? intIn("--from", w.get("from"), 1, 255) : 1;
-    const int to = w.has("to") ? intIn("--to", w.get("to"), from, 255) : 255;
+    const int from = p.has("--from") ? intIn("--from", w.from, 1, 255) : 1;
+    const int to = p.has("--to") ? intIn("--to", w.to, from, 255) : 255;
     for (int a = from; a <= to; ++a) c.addresses.push_back(a);
   }
-  const std::string bauds = w.has("bauds") ? w.get("bauds") : std::to_string(c.link.baud);
+  // Each item was checked by kBaudList / kParityList.
+  const std::string bauds = p.has("--bauds") ? w.bauds : std::to_string(c.link.baud);
   for (const std::string& b : splitList(bauds == "all" ? kAllBauds : bauds)) {
     long v = 0;
-    if (!toLong(b, &v) || !isStandardBaud(static_cast<int>(v)))
-      bad("--bauds: '" + b + "' is not one of " + kAllBauds + " (or all)");
+    toLong(b, &v);
     c.bauds.push_back(static_cast<int>(v));
   }
-  const std::string parities = w.has("parities") ? w.get("parities") : parityName(c.link.parity);
-  for (const std::string& p : splitList(parities == "all" ? "none,even,odd" : parities)) {
+  const std::string parities = p.has("--parities") ? w.parities : parityName(c.link.parity);
+  for (const std::string& name : splitList(parities == "all" ? "none,even,odd" : parities)) {
     Parity parity;
-    if (!parseParity(p, &parity)) bad("--parities: '" + p + "' is not none, even or odd (or all)");
+    parseParity(name, &parity);
     c.parities.push_back(parity);
   }
   if (c.addresses.empty() || c.bauds.empty() || c.parities.empty())
     bad("--addresses / --bauds / --parities: empty list");
-  c.first_only = w.has("first");
+  c.first_only = p.has("--first");
 }
 
 // A baud rate or a code, as the board's own code.
@@ -209,12 +347,12 @@ int baudCode(const std::string& text, bool lc) {
 
 // The settings commands: --type (ld58a08 unless the command fits both boards), --address and
 // the new value in the board's units.
-void parseDevice(const Words& w, CommissionCommand& c) {
+void parseDevice(const Parsed& p, CommissionCommand& c) {
   const std::string& cmd = c.command;
   const bool both_boards =
       cmd == "get-address" || cmd == "set-address" || cmd == "get-baud" || cmd == "set-baud";
-  if (w.has("type")) {
-    c.type = w.get("type");
+  if (p.has("--type")) {
+    c.type = p.w.type;
     if (c.type != "ld58a08" && c.type != "lc_relay8")
       bad("--type: '" + c.type + "' is not ld58a08 or lc_relay8");
     if (!both_boards && c.type != "ld58a08")
@@ -226,23 +364,22 @@ void parseDevice(const Words& w, CommissionCommand& c) {
   }
   const bool lc = c.type == "lc_relay8";
   const int max_address = lc ? 255 : 248;  // LD58A08 manual: 1-248
-  if (w.has("address")) c.address = intIn("--address", w.get("address"), 1, max_address);
+  if (p.has("--address")) c.address = intIn("--address", p.w.address, 1, max_address);
   const bool address_optional =
       cmd == "get-address" || cmd == "set-address" || cmd == "factory-reset";
   if (c.address < 0 && !address_optional)
     bad("--address: missing (1-" + std::to_string(max_address) + ")");
-  const bool setter = cmd.compare(0, 4, "set-") == 0;
-  w.atMost(setter ? 2 : 1);
-  if (!setter) return;
-  const std::string& v = w.word(1, "value", "see --help");
+  if (cmd.compare(0, 4, "set-") != 0) return;
+  if (!p.has("value")) bad("value: missing (see --help)");
+  const std::string& v = p.w.value;
   if (cmd == "set-address") {
     c.new_value = intIn("new address", v, 1, max_address);
   } else if (cmd == "set-baud") {
     c.new_value = baudCode(v, lc);
   } else if (cmd == "set-parity") {
-    Parity p;
-    if (!parseParity(v, &p)) bad("parity: '" + v + "' is not none, even or odd");
-    c.new_value = p == Parity::kEven ? 1 : p == Parity::kOdd ? 2 : 0;
+    Parity parity;
+    if (!parseParity(v, &parity)) bad("parity: '" + v + "' is not none, even or odd");
+    c.new_value = parity == Parity::kEven ? 1 : parity == Parity::kOdd ? 2 : 0;
   } else if (cmd == "set-return-delay") {
     const int ms = intIn("return delay", v, 0, 1000);
     if (ms % 40) bad("return delay: " + v + " ms is not a multiple of 40 ms (0-1000)");
@@ -272,31 +409,26 @@ std::string asOptions(std::string message) {
 // that would be written and checked there (the manual's rules, on integers); with all three the
 // rule between them too. With fewer, the others are the PDU's own, and the rules are checked
 // on the merged set once they are read.
-void parseLimits(const Words& w, CommissionCommand& c) {
-  if (w.has("type") && w.get("type") != "yespeed_pdu")
-    bad("--type: " + c.command + " is a yespeed_pdu command; '" + w.get("type") +
-        "' has no limits");
+void parseLimits(const Parsed& p, CommissionCommand& c) {
+  if (p.has("--type") && p.w.type != "yespeed_pdu")
+    bad("--type: " + c.command + " is a yespeed_pdu command; '" + p.w.type + "' has no limits");
   c.type = "yespeed_pdu";
-  if (!w.has("address")) bad("--address: missing (1-247)");
-  c.address = intIn("--address", w.get("address"), 1, 247);
-  w.atMost(1);
+  if (!p.has("--address")) bad("--address: missing (1-247)");
+  c.address = intIn("--address", p.w.address, 1, 247);
   if (c.command == "get-limits") return;
-  static const char* kOptions[3] = {"over-voltage", "under-voltage", "over-current"};
   bool all = true;
   for (size_t i = 0; i < 3; ++i) {
-    const std::string option = kOptions[i];
-    if (!w.has(option)) {
+    const std::string option = kLimitOptions[i];
+    if (!p.has(option)) {
       all = false;
       continue;
     }
-    const std::string text = w.get(option);
-    std::istringstream in(text);
+    const std::string& text = p.w.limits[i];
     double v = 0;
-    char rest = 0;
-    if (!(in >> v) || in >> rest)
-      bad("--" + option + ": '" + text + "' is not a number (" + YespeedPdu::kLimitUnits[i] + ")");
+    if (!toDouble(text, &v))
+      bad(option + ": '" + text + "' is not a number (" + YespeedPdu::kLimitUnits[i] + ")");
     uint16_t reg = 0;
-    const std::string problem = YespeedPdu::limitToRegister(i, v, &reg, "--" + option);
+    const std::string problem = YespeedPdu::limitToRegister(i, v, &reg, option);
     if (!problem.empty()) bad(problem);
     c.limits[i] = reg;
   }
@@ -312,75 +444,119 @@ void parseLimits(const Words& w, CommissionCommand& c) {
 }
 
 // info, read, write, watch: any device type, so any address a board can have.
-void parseAnyAddress(const Words& w, CommissionCommand& c) {
-  if (!w.has("address")) bad("--address: missing (1-255)");
-  c.address = intIn("--address", w.get("address"), 1, 255);
+void parseAnyAddress(const Parsed& p, CommissionCommand& c) {
+  if (!p.has("--address")) bad("--address: missing (1-255)");
+  c.address = intIn("--address", p.w.address, 1, 255);
 }
 
-void parseTable(const Words& w, CommissionCommand& c) {
-  parseAnyAddress(w, c);
-  c.table = w.word(1, "table", "coils, discrete-inputs, holding or input-registers");
+void parseTable(const Parsed& p, CommissionCommand& c) {
+  const Words& w = p.w;
+  parseAnyAddress(p, c);
+  if (!p.has("table")) bad("table: missing (coils, discrete-inputs, holding or input-registers)");
+  c.table = w.table;
   const bool bits = c.table == "coils" || c.table == "discrete-inputs";
   if (!bits && c.table != "holding" && c.table != "input-registers")
     bad("table: '" + c.table + "' is not coils, discrete-inputs, holding or input-registers");
-  c.start = intIn("start", w.word(2, "start", "0-65535"), 0, 65535);
+  if (!p.has("start")) bad("start: missing (0-65535)");
+  c.start = intIn("start", w.start, 0, 65535);
   if (c.command == "write") {
     if (c.table != "coils" && c.table != "holding")
       bad("table: " + c.table + " cannot be written (coils or holding)");
-    const size_t n = w.positional().size();
-    if (n < 4) bad("value: missing (" + std::string(bits ? "0 or 1" : "0-65535") + ")");
+    if (w.values.empty()) bad("value: missing (" + std::string(bits ? "0 or 1" : "0-65535") + ")");
     const size_t max = bits ? kMaxWriteBits : kMaxWriteRegisters;
-    if (n - 3 > max)
-      bad("value: " + std::to_string(n - 3) + " values, at most " + std::to_string(max));
-    for (size_t i = 3; i < n; ++i)
-      c.values.push_back(
-          static_cast<uint16_t>(intIn("value", w.positional()[i], 0, bits ? 1 : 65535)));
+    if (w.values.size() > max)
+      bad("value: " + std::to_string(w.values.size()) + " values, at most " + std::to_string(max));
+    for (const std::string& value : w.values)
+      c.values.push_back(static_cast<uint16_t>(intIn("value", value, 0, bits ? 1 : 65535)));
     c.count = static_cast<int>(c.values.size());
-    c.multiple = w.has("multiple");
+    c.multiple = p.has("--multiple");
   } else {
-    w.atMost(4);
     const int max = bits ? kMaxReadBits : kMaxReadRegisters;
-    if (w.positional().size() > 3) c.count = intIn("count", w.positional()[3], 1, max);
+    if (p.has("count")) c.count = intIn("count", w.table_count, 1, max);
   }
   if (c.start + c.count > 65536)
     bad("start: " + std::to_string(c.start) + " + " + std::to_string(c.count) + " passes 65535");
   if (c.command == "watch") {
-    if (w.has("interval")) c.interval = secondsIn("--interval", w.get("interval"), 0.01, 3600);
-    if (w.has("count")) c.polls = intIn("--count", w.get("count"), 1, 100000000);
+    if (p.has("--interval")) toDouble(w.interval, &c.interval);
+    if (p.has("--count")) c.polls = intIn("--count", w.count, 1, 100000000);
   }
+}
+
+// CLI11's own refusals, in this tool's words where they have a usual form.
+std::string describe(const CLI::ParseError& e) {
+  const std::string what = e.what();
+  const size_t colon = what.find(':');
+  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && what.compare(0, 2, "--") == 0 &&
+      what.find("required") != std::string::npos && what.find("missing") != std::string::npos)
+    return what.substr(0, colon) + ": missing value";
+  return what;
+}
+
+// Words CLI11 could not place: an unknown command, an option the command does not have, or a
+// value too many.
+void refuseExtras(const CLI::App& top, const CLI::App* command) {
+  const std::vector<std::string> extras = top.remaining(true);
+  if (extras.empty()) return;
+  const std::string& word = extras.front();
+  if (!command && word.compare(0, 1, "-") != 0)
+    bad("command: '" + word + "' is not known (see --help)");
+  if (word.compare(0, 2, "--") == 0 && word.size() > 2) {
+    const std::string option = word.substr(0, word.find('='));
+    bad(option + ": not an option of " + (command ? command->get_name() : "the tool") +
+        " (see --help)");
+  }
+  bad("unexpected argument '" + word + "'");
 }
 
 }  // namespace
 
+std::string commissionUsage() {
+  return Cli().app.help();
+}
+
 bool parseCommission(const std::vector<std::string>& args, CommissionCommand* out,
                      std::string* error) {
+  Cli cli;
   try {
-    const Words w(args);
+    try {
+      cli.app.parse(std::vector<std::string>(args.rbegin(), args.rend()));  // CLI11: reversed
+    } catch (const CLI::CallForHelp&) {
+      *out = CommissionCommand();
+      out->help = cli.app.help();  // the command's own when one was given
+      return true;
+    } catch (const CLI::CallForAllHelp&) {
+      *out = CommissionCommand();
+      out->help = cli.app.help("", CLI::AppFormatMode::All);
+      return true;
+    } catch (const CLI::ParseError& e) {
+      bad(describe(e));
+    }
+    const std::vector<CLI::App*> commands = cli.app.get_subcommands();
+    const CLI::App* command = commands.empty() ? nullptr : commands.front();
+    refuseExtras(cli.app, command);
+    if (!command) bad("command: missing (see --help)");
     CommissionCommand c;
-    c.json = w.has("json");
-    c.yes = w.has("yes");
-    c.command = w.word(0, "command", "see --help");
-    const auto known = commandOptions().find(c.command);
-    if (known == commandOptions().end())
-      bad("command: '" + c.command + "' is not known (see --help)");
-    w.allowOnly(c.command, known->second);
-    parseLink(w, c);
+    c.json = cli.app.count("--json") != 0;
+    c.yes = cli.app.count("--yes") != 0;
+    c.command = command->get_name();
+    const Parsed p{cli.app, *command, cli.w};
+    parseLink(p, c);
     if (c.command == "scan") {
-      parseScan(w, c);
+      parseScan(p, c);
     } else if (c.command == "read" || c.command == "write" || c.command == "watch") {
-      parseTable(w, c);
+      parseTable(p, c);
     } else if (c.command == "get-limits" || c.command == "set-limits") {
-      parseLimits(w, c);
+      parseLimits(p, c);
     } else if (c.command == "info") {
-      parseAnyAddress(w, c);
-      w.atMost(1);
+      parseAnyAddress(p, c);
     } else {
-      parseDevice(w, c);
+      parseDevice(p, c);
     }
     *out = c;
     return true;
   } catch (const BadArgument& e) {
     *error = e.message;
+    out->json = std::find(args.begin(), args.end(), "--json") != args.end();
     return false;
   }
 }

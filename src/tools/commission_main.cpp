@@ -32,21 +32,16 @@ void installInterruptHandler() {
 
 int main(int argc, char** argv) {
   using namespace modbus_rtu_driver;
-  const std::vector<std::string> args(argv + 1, argv + argc);
-  bool json = false;
-  for (const auto& a : args) {
-    if (a == "--help" || a == "-h") {
-      std::cout << commissionUsage();
-      return kExitOk;
-    }
-    json = json || a == "--json";
-  }
   CommissionCommand command;
   std::string error;
-  if (!parseCommission(args, &command, &error)) {
-    Output(json, std::cout, std::cerr).fail(kExitBadArguments, error);
+  if (!parseCommission(std::vector<std::string>(argv + 1, argv + argc), &command, &error)) {
+    Output(command.json, std::cout, std::cerr).fail(kExitBadArguments, error);
     std::cerr << "(modbus_rtu_commission --help lists the commands and ranges)\n";
     return kExitBadArguments;
+  }
+  if (!command.help.empty()) {
+    std::cout << command.help;
+    return kExitOk;
   }
   installInterruptHandler();
   const CommissionIo io{std::cin, std::cout, std::cerr, g_stop, isatty(STDERR_FILENO) == 1};

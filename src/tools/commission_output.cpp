@@ -3,61 +3,54 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ostream>
 
 #include "modbus_rtu_driver/tools/commission.h"
 
 namespace modbus_rtu_driver {
 
-std::string Json::quote(const std::string& text) {
-  std::string s = "\"";
-  for (const char c : text) {
-    if (c == '"' || c == '\\') {
-      s += '\\';
-      s += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      s += buf;
-    } else {
-      s += c;
-    }
-  }
-  return s + "\"";
-}
-
-Json& Json::addRaw(const std::string& key, const std::string& json) {
-  body_ += (body_.empty() ? "" : ",") + quote(key) + ":" + json;
-  return *this;
-}
-
-Json& Json::merge(const Json& other) {
-  if (!other.body_.empty()) body_ += (body_.empty() ? "" : ",") + other.body_;
-  return *this;
-}
-
 Json& Json::add(const std::string& key, int value) {
-  return addRaw(key, std::to_string(value));
+  value_[key] = value;
+  return *this;
 }
 
 Json& Json::add(const std::string& key, double value) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.6g", std::isfinite(value) ? value : 0.0);
-  return addRaw(key, buf);
+  const double rounded = std::strtod(buf, nullptr);
+  if (std::fabs(rounded) < 1e15 && rounded == std::floor(rounded))
+    value_[key] = static_cast<int64_t>(rounded);
+  else
+    value_[key] = rounded;
+  return *this;
 }
 
 Json& Json::add(const std::string& key, bool value) {
-  return addRaw(key, value ? "true" : "false");
+  value_[key] = value;
+  return *this;
 }
 
 Json& Json::add(const std::string& key, const std::string& value) {
-  return addRaw(key, quote(value));
+  value_[key] = value;
+  return *this;
 }
 
 Json& Json::add(const std::string& key, const std::vector<uint16_t>& values) {
-  std::string list = "[";
-  for (size_t i = 0; i < values.size(); ++i) list += (i ? "," : "") + std::to_string(values[i]);
-  return addRaw(key, list + "]");
+  value_[key] = values;
+  return *this;
+}
+
+Json& Json::add(const std::string& key, const std::vector<Json>& objects) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const Json& object : objects) list.push_back(object.value_);
+  value_[key] = std::move(list);
+  return *this;
+}
+
+Json& Json::merge(const Json& other) {
+  for (const auto& field : other.value_.items()) value_[field.key()] = field.value();
+  return *this;
 }
 
 int exitCodeFor(const Result& r) {

@@ -131,19 +131,18 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
   progress.clear();
   const bool complete = !stop;
   if (out.json()) {
-    std::string list = "[";
-    for (size_t i = 0; i < found.size(); ++i)
-      list += (i ? "," : "") + Json()
-                                   .add("address", found[i].address)
-                                   .add("baud", found[i].baud)
-                                   .add("parity", parityName(found[i].parity))
-                                   .add("type", found[i].type)
-                                   .str();
+    std::vector<Json> devices;
+    for (const auto& device : found)
+      devices.push_back(Json()
+                            .add("address", device.address)
+                            .add("baud", device.baud)
+                            .add("parity", parityName(device.parity))
+                            .add("type", device.type));
     out.event("", Json()
                       .add("ok", !found.empty())
                       .add("exit", found.empty() ? kExitNotFound : kExitOk)
                       .add("complete", complete)
-                      .addRaw("devices", list + "]"));
+                      .add("devices", devices));
   } else {
     out.event(std::to_string(found.size()) + " device(s) found" +
                   (complete ? "" : " (scan stopped early)"),

@@ -1,13 +1,12 @@
-// modbus_rtu_commission --help.
+// modbus_rtu_commission --help: what CLI11's option lists do not say (each command's words,
+// the boards' ranges, the scan's duration, confirmations, exit codes), after those lists.
 #include "modbus_rtu_driver/tools/commission.h"
 
 namespace modbus_rtu_driver {
 
-std::string commissionUsage() {
-  return R"(usage: modbus_rtu_commission --port PORT [--baud B] [--parity none|even|odd]
-                             [--timeout S] [--json] [--yes] COMMAND ...
-Finds and configures Modbus RTU boards on a serial port; no ROS master needed.
-
+std::string commissionHelpDetails() {
+  return R"(
+Details (COMMAND --help lists a command's options):
   scan [--from A] [--to B | --addresses 1-5,255] [--bauds 9600,19200|all]
        [--parities none,even,odd|all] [--first]
       Harmless reads at every address (default 1-255) and line setting (default --baud and
@@ -49,8 +48,8 @@ Finds and configures Modbus RTU boards on a serial port; no ROS master needed.
       Polls and prints a line only when something changed; Ctrl-C ends it.
 
 Numbers may be decimal or 0x-hex. Changes to how a device answers (address, baud, parity,
-return delay, factory reset) and the PDU's limits ask for confirmation on stdin unless --yes; without a "y" (or at
-end of input) nothing is changed.
+return delay, factory reset) and the PDU's limits ask for confirmation on stdin unless --yes;
+without a "y" (or at end of input) nothing is changed.
 Baud and parity take effect after the device is powered off and on.
 --timeout: wait for a reply, default 0.05 s + 30 characters for scans and 1 s more for other
 commands (an LD58A08 may wait up to 1000 ms before answering; scan such a board with a

@@ -47,10 +47,16 @@ struct CommissionCommand {
   std::vector<int> bauds;
   std::vector<Parity> parities;
   bool first_only = false;
+  // --help / --help-all: the text to print (and nothing else to do).
+  std::string help;
 };
 
+// The whole --help text (every command, range and exit code).
 std::string commissionUsage();
-// False with a message naming the option and its allowed range.
+// Its part after the option lists: each command's words and ranges, exit codes.
+std::string commissionHelpDetails();
+// False with a message naming the option and its allowed range; out->json then tells whether
+// --json was given (for the form of the message). --help parses to a command with only `help`.
 bool parseCommission(const std::vector<std::string>& args, CommissionCommand* out,
                      std::string* error);
 

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <iosfwd>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -11,23 +12,26 @@
 
 namespace modbus_rtu_driver {
 
-// A flat JSON object built field by field, in insertion order.
+// A JSON object built field by field, in insertion order (nlohmann::ordered_json).
 class Json {
  public:
   Json& add(const std::string& key, int value);
+  // Rounded to 6 significant digits (what the registers can hold and more); integers print
+  // without a fraction, non-finite values as 0.
   Json& add(const std::string& key, double value);
   Json& add(const std::string& key, bool value);
   Json& add(const std::string& key, const std::string& value);
   Json& add(const std::string& key, const char* value) { return add(key, std::string(value)); }
   Json& add(const std::string& key, const std::vector<uint16_t>& values);
-  Json& addRaw(const std::string& key, const std::string& json);  // an already encoded value
-  Json& merge(const Json& other);                                 // other's fields after ours
-  std::string str() const { return "{" + body_ + "}"; }
-
-  static std::string quote(const std::string& text);
+  Json& add(const std::string& key, const std::vector<Json>& objects);  // an array of objects
+  Json& merge(const Json& other);                                       // other's fields after ours
+  // Compact, one line; bytes that are not UTF-8 (a device's or the user's text) become U+FFFD.
+  std::string str() const {
+    return value_.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+  }
 
  private:
-  std::string body_;
+  nlohmann::ordered_json value_ = nlohmann::ordered_json::object();
 };
 
 // Exit code for the outcome of a transaction.
