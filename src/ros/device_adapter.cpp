@@ -32,6 +32,7 @@ void DeviceAdapter::start() {
             }));
   }
   services_.push_back(nh_.advertiseService("set_outputs", &DeviceAdapter::onSetOutputs, this));
+  advertise();
   auto device = device_;
   bus_.addPoll(
       device_->name(), device_->config().poll_rate,

@@ -11,8 +11,7 @@ class LcRelay8Adapter : public DeviceAdapter {
  public:
   using DeviceAdapter::DeviceAdapter;
 
-  void start() override {
-    DeviceAdapter::start();
+  void advertise() override {
     inputs_ = std::make_unique<DigitalStatesPublisher>(nh_, "inputs", device_->inputNames(),
                                                        publish_policy_);
     pulse_srv_ = nh_.advertiseService("pulse", &LcRelay8Adapter::onPulse, this);

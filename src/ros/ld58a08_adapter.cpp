@@ -13,8 +13,7 @@ class Ld58a08Adapter : public DeviceAdapter {
  public:
   using DeviceAdapter::DeviceAdapter;
 
-  void start() override {
-    DeviceAdapter::start();
+  void advertise() override {
     pwm_pub_ = nh_.advertise<PwmStates>("pwm", 1, true);
     set_srv_ = nh_.advertiseService("set_pwm", &Ld58a08Adapter::onSetPwm, this);
     stop_srv_ = nh_.advertiseService("stop_pwm", &Ld58a08Adapter::onStopPwm, this);

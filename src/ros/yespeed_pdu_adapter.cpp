@@ -13,8 +13,7 @@ class YespeedPduAdapter : public DeviceAdapter {
  public:
   using DeviceAdapter::DeviceAdapter;
 
-  void start() override {
-    DeviceAdapter::start();
+  void advertise() override {
     telemetry_pub_ = nh_.advertise<PduTelemetry>("telemetry", 50);
     limits_pub_ = nh_.advertise<PduLimits>("limits", 1, true);
     set_limits_srv_ = nh_.advertiseService("set_limits", &YespeedPduAdapter::onSetLimits, this);

@@ -2,6 +2,7 @@
 """PDU power logging: rosbag records the node's telemetry and the bag reads back."""
 import os
 import subprocess
+import time
 import unittest
 
 import rosbag
@@ -9,14 +10,19 @@ import rospkg
 import rospy
 import rostest
 
-from modbus_rtu_driver.msg import PduTelemetry
+from std_srvs.srv import SetBool
+
+from modbus_rtu_driver.msg import DigitalStates, PduTelemetry
 
 BAG = "/tmp/modbus_rtu_rostest_bag/telemetry.bag"
 
 
 class BagTest(unittest.TestCase):
-    def test_record_and_read_back(self):
+    @classmethod
+    def setUpClass(cls):
         rospy.init_node("test_bag")
+
+    def test_record_and_read_back(self):
         rospy.wait_for_message("/bus/pdu/telemetry", PduTelemetry, timeout=20)
         os.makedirs(os.path.dirname(BAG), exist_ok=True)
         if os.path.exists(BAG):
@@ -46,6 +52,40 @@ class BagTest(unittest.TestCase):
         with open(png, "rb") as f:
             self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
         self.assertGreater(os.path.getsize(png), 10000)
+
+    def test_state_topics_on_change_with_keep_alive(self):
+        """publish_on_change: outputs only when a state changes, and every keep_alive (1 s)."""
+        counts = {"/bus/relays/outputs": 0, "/bus_onchange/relays/outputs": 0}
+        latest = {}
+
+        def counter(topic):
+            def cb(msg):
+                counts[topic] += 1
+                latest[topic] = msg
+            return cb
+        subs = [rospy.Subscriber(t, DigitalStates, counter(t)) for t in counts]
+        deadline = time.time() + 20
+        while time.time() < deadline and any(t not in latest for t in counts):
+            time.sleep(0.05)
+        self.assertEqual(sorted(latest), sorted(counts), "both nodes publish outputs")
+        for t in counts:
+            counts[t] = 0
+        time.sleep(3.0)  # nothing changes meanwhile
+        every_poll, on_change = counts["/bus/relays/outputs"], counts["/bus_onchange/relays/outputs"]
+        rospy.loginfo("outputs in 3 s: %d every poll (10 Hz), %d on change", every_poll, on_change)
+        self.assertGreaterEqual(every_poll, 15)
+        self.assertGreaterEqual(on_change, 2, "keep-alive messages")
+        self.assertLessEqual(on_change, 5)
+        # A change is published at once, not at the next keep-alive only.
+        rospy.wait_for_service("/bus_onchange/relays/out6/set", 10)
+        res = rospy.ServiceProxy("/bus_onchange/relays/out6/set", SetBool)(True)
+        self.assertTrue(res.success, res.message)
+        deadline = time.time() + 5
+        while time.time() < deadline and not latest["/bus_onchange/relays/outputs"].states[6]:
+            time.sleep(0.02)
+        self.assertTrue(latest["/bus_onchange/relays/outputs"].states[6])
+        for s in subs:
+            s.unregister()
 
 
 if __name__ == "__main__":

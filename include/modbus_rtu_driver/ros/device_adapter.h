@@ -37,8 +37,10 @@ class DeviceAdapter {
 
   // How state topics are published (every poll, or on change with a keep-alive); before start().
   void setPublishPolicy(const DigitalStatesPublisher::Policy& policy) { publish_policy_ = policy; }
-  // Advertises topics and services and registers the poll with the scheduler.
-  virtual void start();
+  // Advertises topics and services (the base's, then the type's own in advertise()), and only
+  // then registers the poll with the scheduler: the bus may already run, and a poll's callback
+  // publishes on them.
+  void start();
   // Fills the device's /diagnostics status.
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   const std::string& name() const { return device_->name(); }
@@ -59,6 +61,8 @@ class DeviceAdapter {
   Watchdog* heartbeat() { return heartbeat_.get(); }
 
  protected:
+  // The type's own topics and services (start() calls it before the first poll can run).
+  virtual void advertise() {}
   // Runs after each poll on the bus thread; the base publishes outputs.
   virtual void onPoll(const Result& result);
   // Runs `job` on the bus thread and waits for the real outcome. The message of a failure says
