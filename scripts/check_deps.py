@@ -278,7 +278,8 @@ def main():
             uses.append((f"python module {name}", None, files))
         elif not origin.startswith((REPO, args.ws)):
             uses.append((f"python module {name}", origin, files))
-    for name, (path, files) in sorted(executables().items()):
+    called = executables()
+    for name, (path, files) in sorted(called.items()):
         uses.append((f"executable {name}", path, files))
     for pkg, files in sorted(launch_packages().items()):
         path = sh("rospack", "find", pkg).strip()
@@ -302,7 +303,7 @@ def main():
     if n_dep_files == 0:
         problems.append(f"no compiler dependency files under {args.ws}/build: build first")
 
-    print(f"dependency check: {len(modules)} python modules, {len(executables())} executables, "
+    print(f"dependency check: {len(modules)} python modules, {len(called)} executables, "
           f"{len(headers)} headers from {n_dep_files} dependency files; "
           f"{len(listed)} listed packages, {len(allowed)} in their closure")
     for p in problems:

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The fresh-machine proof (not part of the test command: it takes 20-30 minutes). For each of
 # the README's two commands it builds a new bare Debian 12 root with mmdebstrap (minbase: the
-# Essential packages and apt), clones the committed repository into it alone (no ../shared),
+# Essential packages and apt), clones the committed repository into it alone (nothing beside it),
 # and runs the command there as root:
 #   demo: scripts/demo.sh --duration 20   passes when it printed live PDU telemetry;
 #   test: scripts/test.sh                 passes when it ended "N passed, 0 failed".

@@ -37,13 +37,9 @@ void BusNode::startFailsafe() {
   }
   for (auto& a : adapters_) {
     a->setFailsafeSink([this](const FailsafeEvent& e) { failsafe_pub_.publish(e); });
-    if (a->heartbeat()) {
-      const DeviceConfig& dc = configOf(a->name());
-      watch(dc.failsafe.heartbeat_topic, dc.failsafe.heartbeat_timeout, a->heartbeat());
-    }
-  }
-  for (const DeviceConfig& dc : config_.devices) {
-    for (double s : dc.failsafe.command_timeout) {
+    const FailsafeConfig& fs = a->failsafeConfig();
+    if (a->heartbeat()) watch(fs.heartbeat_topic, fs.heartbeat_timeout, a->heartbeat());
+    for (double s : fs.command_timeout) {
       if (s <= 0) continue;
       shortest = std::min(shortest, s);
       deadlines = true;
@@ -54,12 +50,6 @@ void BusNode::startFailsafe() {
   failsafe_timer_ =
       nh_.createSteadyTimer(ros::WallDuration(std::max(0.005, shortest / 10)),
                             [this](const ros::SteadyTimerEvent&) { checkDeadlines(); });
-}
-
-const DeviceConfig& BusNode::configOf(const std::string& device) const {
-  for (const DeviceConfig& dc : config_.devices)
-    if (dc.name == device) return dc;
-  return config_.devices.front();
 }
 
 void BusNode::checkDeadlines() {

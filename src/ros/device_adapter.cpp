@@ -10,7 +10,7 @@ DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
       bus_(bus),
       nh_(node, device_->name()),
       failsafe_(device_->config().failsafe, device_->outputCount()) {
-  const FailsafeConfig& fs = device_->config().failsafe;
+  const FailsafeConfig& fs = failsafe_.config();
   if (!fs.heartbeat_topic.empty()) heartbeat_ = std::make_unique<Watchdog>(fs.heartbeat_timeout);
 }
 

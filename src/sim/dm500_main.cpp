@@ -2,34 +2,18 @@
 //   modbus_rtu_dm500_sim --link PATH --script FILE [--report FILE] [--baud B] [--timeout S]
 // (CLI11; --help lists the options and their ranges.)
 // Exit code 0 when every step passed. roslaunch's __name:= style arguments are ignored.
-#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
 #include <string>
-#include <vector>
 
+#include "modbus_rtu_driver/sim/command_line.h"
 #include "modbus_rtu_driver/sim/dm500_master.h"
-
-namespace {
-
-// roslaunch appends __name:=..., __log:=... and remappings; they are not ours.
-bool isRosArgument(const std::string& word) {
-  return word.empty() || word.rfind("__", 0) == 0 || word.find(":=") != std::string::npos;
-}
-
-int usage(const CLI::App& app, const std::string& why) {
-  std::fprintf(stderr, "modbus_rtu_dm500_sim: %s\n%s", why.c_str(), app.help().c_str());
-  return 2;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   using namespace modbus_rtu_driver;
   std::string link, script, report;
   int baud = 9600;
   double timeout = 0.5;
-  std::vector<std::string> ros_arguments;
   CLI::App app(
       "Plays the DM500 controller (a Modbus master) on a pty: one step of the script "
       "per line. Exit code 0 when every step passed.",
@@ -46,23 +30,11 @@ int main(int argc, char** argv) {
   app.add_option("--timeout", timeout, "wait for each reply in s (default 0.5)")
       ->type_name("S")
       ->check(CLI::Range(0.001, 60.0));
-  app.add_option("ros_arguments", ros_arguments)->group("");  // roslaunch's, ignored
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp&) {
-    std::printf("%s", app.help().c_str());
-    return 0;
-  } catch (const CLI::ParseError& e) {
-    return usage(app, e.what());
-  }
-  for (const std::string& extra : app.remaining())
-    return usage(app,
-                 (extra.rfind("-", 0) == 0 ? "unknown option " : "unexpected argument ") + extra);
-  for (const std::string& word : ros_arguments)
-    if (!isRosArgument(word)) return usage(app, "unexpected argument " + word);
-  if (link.empty() || script.empty()) return usage(app, "--link and --script are needed");
+  if (const int code = parseCommandLine(app, argc, argv); code >= 0) return code;
+  if (link.empty() || script.empty())
+    return commandLineError(app, "--link and --script are needed");
   std::ifstream steps(script);
-  if (!steps) return usage(app, "--script: cannot read " + script);
+  if (!steps) return commandLineError(app, "--script: cannot read " + script);
   if (!report.empty()) std::remove(report.c_str());  // a report is only there once this run ends
   PtyLink pty;
   std::string error;

@@ -2,7 +2,6 @@
 // Prints "simulator ready on <link>" once the link exists; SIGHUP power-cycles the devices;
 // SIGINT / SIGTERM stop it and remove the link and the control socket. roslaunch's
 // __name:= style arguments are ignored.
-#include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -10,22 +9,13 @@
 #include <thread>
 #include <vector>
 
+#include "modbus_rtu_driver/sim/command_line.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
 namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
 volatile std::sig_atomic_t g_power_cycle = 0;
-
-// roslaunch appends __name:=..., __log:=... and remappings; they are not ours.
-bool isRosArgument(const std::string& word) {
-  return word.empty() || word.rfind("__", 0) == 0 || word.find(":=") != std::string::npos;
-}
-
-int usage(const CLI::App& app, const std::string& why) {
-  std::fprintf(stderr, "modbus_rtu_simulator: %s\n%s", why.c_str(), app.help().c_str());
-  return 2;
-}
 
 void onSignal(int sig) {
   if (sig == SIGHUP)
@@ -41,7 +31,6 @@ int main(int argc, char** argv) {
   std::string config_path;
   SimulatorOptions options;
   bool pace = false;
-  std::vector<std::string> ros_arguments;
   CLI::App app(
       "Modbus RTU devices on a pseudo-terminal; prints \"simulator ready on PATH\" once "
       "the link exists.",
@@ -64,22 +53,9 @@ int main(int argc, char** argv) {
                "print every frame: rx/tx followed by the bytes in hex");
   app.add_flag("--timestamps", options.timestamps,
                "with --verbose: CLOCK_MONOTONIC seconds after rx/tx");
-  app.add_option("ros_arguments", ros_arguments)->group("");  // roslaunch's, ignored
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp&) {
-    std::printf("%s", app.help().c_str());
-    return 0;
-  } catch (const CLI::ParseError& e) {
-    return usage(app, e.what());
-  }
-  for (const std::string& extra : app.remaining())
-    return usage(app,
-                 (extra.rfind("-", 0) == 0 ? "unknown option " : "unexpected argument ") + extra);
-  for (const std::string& word : ros_arguments)
-    if (!isRosArgument(word)) return usage(app, "unexpected argument " + word);
+  if (const int code = parseCommandLine(app, argc, argv); code >= 0) return code;
   if (config_path.empty() || options.link.empty())
-    return usage(app, "--config and --link are needed");
+    return commandLineError(app, "--config and --link are needed");
   SimulatorConfig config;
   std::string error;
   if (!loadSimulatorConfig(config_path, &config, &error)) {

@@ -36,9 +36,20 @@ class FaultsTest(unittest.TestCase):
         rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diag)
 
     def tearDown(self):
+        self.stop_sim()
+
+    def stop_sim(self):
         if self.sim_proc:
             self.sim_proc.terminate()
             self.sim_proc.wait(10)
+            self.sim_proc = None
+
+    def stop_sim_and_wait_bus_down(self):
+        """The port goes away: the node's bus status turns ERROR."""
+        self.stop_sim()
+        helpers.wait_until(lambda: self.status("bus ") is not None and
+                           self.status("bus ").level == DiagnosticStatus.ERROR, 15,
+                           "the bus reported down")
 
     def on_diag(self, msg):
         for s in msg.status:
@@ -105,12 +116,7 @@ class FaultsTest(unittest.TestCase):
         pdu_outputs.wait(10, lambda m: not m.stale, "pdu outputs fresh again")
 
         # The port goes away ...
-        self.sim_proc.terminate()
-        self.sim_proc.wait(10)
-        self.sim_proc = None
-        helpers.wait_until(lambda: self.status("bus ") is not None and
-                           self.status("bus ").level == DiagnosticStatus.ERROR, 15,
-                           "the bus reported down")
+        self.stop_sim_and_wait_bus_down()
         set_pump = helpers.service(NS + "relays/pump/set", SetBool)
         res = set_pump(True)
         self.assertFalse(res.success)
@@ -139,12 +145,7 @@ class FaultsTest(unittest.TestCase):
         helpers.wait_until(lambda: self.status("device relays") is not None, 10, "diagnostics")
         before = self.refused()
 
-        self.sim_proc.terminate()
-        self.sim_proc.wait(10)
-        self.sim_proc = None
-        helpers.wait_until(lambda: self.status("bus ") is not None and
-                           self.status("bus ").level == DiagnosticStatus.ERROR, 15,
-                           "the bus reported down")
+        self.stop_sim_and_wait_bus_down()
         res = set_fan(True)
         self.assertFalse(res.success)
         self.assertIn("port not open", res.message)

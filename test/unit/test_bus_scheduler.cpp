@@ -14,6 +14,7 @@
 
 #include "modbus_rtu_driver/core/bus_scheduler.h"
 #include "modbus_rtu_driver/core/clock.h"
+#include "wait_for.h"
 
 using namespace modbus_rtu_driver;
 using namespace std::chrono_literals;
@@ -321,14 +322,13 @@ TEST_F(BusSchedulerTest, StopFailsWhatIsStillQueued) {
   std::vector<std::future<Result>> jobs;
   jobs.push_back(s.submit("a", [&](Transport& t) {
     on_bus.set_value();
-    const auto deadline = std::chrono::steady_clock::now() + kSafetyNet;
-    for (;;) {
-      auto probe = s.submit("a", read(1));
-      if (probe.wait_for(0s) == std::future_status::ready && probe.get().message == "bus stopped")
-        break;
-      if (std::chrono::steady_clock::now() > deadline) break;
-      std::this_thread::sleep_for(100us);
-    }
+    waitFor(
+        [&] {
+          auto probe = s.submit("a", read(1));
+          return probe.wait_for(0s) == std::future_status::ready &&
+                 probe.get().message == "bus stopped";
+        },
+        std::chrono::duration<double>(kSafetyNet).count());
     return t.execute(Request::readCoils(1, 0, 8));
   }));
   for (int i = 0; i < 4; ++i) jobs.push_back(s.submit("a", read(1)));

@@ -34,7 +34,6 @@ class BusNode {
   // Fail-safe: ~failsafe, heartbeat subscriptions (any type), the deadline timer.
   void startFailsafe();
   void checkDeadlines();
-  const DeviceConfig& configOf(const std::string& device) const;
   uint64_t recentLineErrors(const LinkStats& stats);
 
   static constexpr int kErrorWindowSeconds = 10;

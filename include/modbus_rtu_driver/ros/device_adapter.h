@@ -59,6 +59,7 @@ class DeviceAdapter {
   bool hasSafeStates() const { return failsafe_.config().hasSafeStates(); }
   bool safeOnStart() const { return failsafe_.config().on_start_safe && hasSafeStates(); }
   Watchdog* heartbeat() { return heartbeat_.get(); }
+  const FailsafeConfig& failsafeConfig() const { return failsafe_.config(); }
 
  protected:
   // The type's own topics and services (start() calls it before the first poll can run).
