@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/bus_scheduler.h"
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/core/rtu_link.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/sim/simulator.h"
@@ -38,7 +39,7 @@ Outcome run(const std::string& dir, int devices, bool one_offline, double second
   SimulatorConfig config;
   config.factory.baud = 115200;
   config.pace = true;
-  for (int a = 1; a <= devices; ++a) config.devices.push_back({"yespeed_pdu", a});
+  for (int a = 1; a <= devices; ++a) config.devices.push_back({kYespeedPduType.name, a});
   SimulatorOptions options;
   options.link = dir + "/scale" + std::to_string(devices) + (one_offline ? "off" : "");
   Simulator sim(config, options);
@@ -57,9 +58,9 @@ Outcome run(const std::string& dir, int devices, bool one_offline, double second
   for (int a = 1; a <= devices; ++a) {
     DeviceConfig dc;
     dc.name = "pdu" + std::to_string(a);
-    dc.type = "yespeed_pdu";
+    dc.type = kYespeedPduType.name;
     dc.address = a;
-    std::shared_ptr<Device> d = createDevice(dc, &error);
+    std::shared_ptr<Device> d = createDevice(dc);
     bus.addDevice(dc.name);
     bus.addPoll(
         dc.name, 1000.0, [d](Transport& t) { return d->poll(t); }, nullptr);

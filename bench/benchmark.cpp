@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/core/rtu_link.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
@@ -110,7 +111,7 @@ int main(int argc, char** argv) {
   {
     SimulatorConfig config;
     config.factory.baud = 115200;
-    config.devices = {{"yespeed_pdu", 2}};
+    config.devices = {{kYespeedPduType.name, 2}};
     SimulatorOptions options;
     options.link = dir + "/fast";
     Simulator sim(config, options);
@@ -179,7 +180,7 @@ int main(int argc, char** argv) {
     SimulatorConfig config;
     config.factory.baud = baud;
     config.pace = true;
-    config.devices = {{"yespeed_pdu", 2}};
+    config.devices = {{kYespeedPduType.name, 2}};
     SimulatorOptions options;
     options.link = dir + "/paced" + std::to_string(baud);
     Simulator sim(config, options);

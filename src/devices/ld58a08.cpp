@@ -274,12 +274,44 @@ Result Ld58a08::readSettings(Transport& bus, Ld58a08Settings* out) {
   return r;
 }
 
-Result Ld58a08::setReturnDelay(Transport& bus, uint16_t units) {
-  if (units > 25)
-    return Result::failure(
-        ErrorKind::kInvalidArgument,
-        "return_delay: " + std::to_string(units) + " is outside 0-25 (x 40 ms, up to 1000 ms)");
-  return bus.execute(Request::writeSingleRegister(address(), kReturnDelayRegister, units));
+std::string Ld58a08::validateSetting(Ld58a08Setting setting, uint16_t value) {
+  auto outside = [value](const char* field, int lo, int hi, const char* what) {
+    if (value >= lo && value <= hi) return std::string();
+    return std::string(field) + ": " + std::to_string(value) + " is outside " + std::to_string(lo) +
+           "-" + std::to_string(hi) + what;
+  };
+  switch (setting) {
+    case Ld58a08Setting::kPowerDownSave:
+      return outside("power_down_save", 0, 1, " (0 off, 1 on)");
+    case Ld58a08Setting::kReturnDelay:
+      return outside("return_delay", 0, 25, " (x 40 ms, up to 1000 ms)");
+    case Ld58a08Setting::kAddress:
+      return outside("address", 1, static_cast<int>(kLd58a08Type.max_address), "");
+    case Ld58a08Setting::kBaud:
+      return outside("baud_code", 0, 7,
+                     " (1200-115200; the board takes a higher code as a factory reset)");
+    case Ld58a08Setting::kParity:
+      return outside("parity", 0, 2, " (0 none, 1 even, 2 odd)");
+  }
+  return "unknown setting";
+}
+
+Result Ld58a08::readSetting(Transport& bus, Ld58a08Setting setting, uint16_t* value) {
+  Result r =
+      bus.execute(Request::readHoldingRegisters(address(), static_cast<uint16_t>(setting), 1));
+  if (r.ok()) *value = r.values[0];
+  return r;
+}
+
+Result Ld58a08::writeSetting(Transport& bus, Ld58a08Setting setting, uint16_t value) {
+  const std::string problem = validateSetting(setting, value);
+  if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
+  return bus.execute(
+      Request::writeSingleRegister(address(), static_cast<uint16_t>(setting), value));
+}
+
+Result Ld58a08::factoryReset(Transport& bus) {
+  return bus.execute(Request::writeSingleRegister(address(), kFactoryResetRegister, 0));
 }
 
 }  // namespace modbus_rtu_driver

@@ -13,9 +13,7 @@ namespace modbus_rtu_driver {
 namespace {
 
 struct DeviceType {
-  const char* name;
-  int max_address;  // LC boards 1-255, LD58A08 1-248 (its manual); the PDU the spec's 1-247
-  size_t outputs, inputs;
+  const DeviceDescriptor* type;  // name, address range, channel counts
   std::unique_ptr<Device> (*make)(const DeviceConfig&);
 };
 
@@ -26,14 +24,14 @@ std::unique_ptr<Device> make(const DeviceConfig& c) {
 
 // One line per device type.
 const DeviceType kTypes[] = {
-    {"ld58a08", 248, Ld58a08::kChannels, 0, make<Ld58a08>},
-    {"lc_relay8", 255, LcRelay8::kChannels, LcRelay8::kChannels, make<LcRelay8>},
-    {"yespeed_pdu", 247, YespeedPdu::kRelays, 0, make<YespeedPdu>},
+    {&kLd58a08Type, make<Ld58a08>},
+    {&kLcRelay8Type, make<LcRelay8>},
+    {&kYespeedPduType, make<YespeedPdu>},
 };
 
 const DeviceType* find(const std::string& name) {
   for (const auto& t : kTypes)
-    if (name == t.name) return &t;
+    if (name == t.type->name) return &t;
   return nullptr;
 }
 
@@ -56,23 +54,24 @@ std::string checkNames(const std::string& key, const std::vector<std::string>& n
 
 std::vector<std::string> outputNamesOf(const DeviceConfig& config) {
   const DeviceType* t = find(config.type);
-  return t ? withDefaults(config.outputs, t->outputs, "out") : std::vector<std::string>{};
+  return t ? withDefaults(config.outputs, t->type->outputs, "out") : std::vector<std::string>{};
 }
 
 std::vector<std::string> knownDeviceTypes() {
   std::vector<std::string> names;
-  for (const auto& t : kTypes) names.emplace_back(t.name);
+  for (const auto& t : kTypes) names.emplace_back(t.type->name);
   return names;
 }
 
 std::string validateDeviceConfig(const DeviceConfig& c) {
   const std::string where = "devices/" + c.name + "/";
-  const DeviceType* t = find(c.type);
-  if (!t) {
+  const DeviceType* found = find(c.type);
+  if (!found) {
     std::string list;
     for (const auto& n : knownDeviceTypes()) list += (list.empty() ? "" : ", ") + n;
     return where + "type: '" + c.type + "' is not a known device type (" + list + ")";
   }
+  const DeviceDescriptor* t = found->type;
   if (c.address < 1 || c.address > t->max_address)
     return where + "address: " + std::to_string(c.address) + " is outside 1-" +
            std::to_string(t->max_address) + " for " + c.type;
@@ -96,13 +95,9 @@ std::string validateDeviceConfig(const DeviceConfig& c) {
   return problem;
 }
 
-std::unique_ptr<Device> createDevice(const DeviceConfig& config, std::string* error) {
-  const std::string problem = validateDeviceConfig(config);
-  if (!problem.empty()) {
-    if (error) *error = problem;
-    return nullptr;
-  }
-  return find(config.type)->make(config);
+std::unique_ptr<Device> createDevice(const DeviceConfig& config) {
+  const DeviceType* t = find(config.type);
+  return t ? t->make(config) : nullptr;
 }
 
 }  // namespace modbus_rtu_driver

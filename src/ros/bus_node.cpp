@@ -104,11 +104,7 @@ bool BusNode::start() {
   link_ = std::make_unique<RtuLink>(config_.link);
   bus_ = std::make_unique<BusScheduler>(*link_);
   for (const DeviceConfig& dc : config_.devices) {
-    std::shared_ptr<Device> device = createDevice(dc, &error);
-    if (!device) {
-      ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());
-      return false;
-    }
+    std::shared_ptr<Device> device = createDevice(dc);  // dc was validated as it was parsed
     link_->setReplyDelay(device->address(), dc.reply_delay);
     bus_->addDevice(dc.name);
     auto adapter = createAdapter(device, *bus_, nh_);

@@ -111,19 +111,48 @@ uint8_t SimDevice::setDirect(Table table, uint16_t address, uint16_t value,
   return kIllegalDataAddress;
 }
 
-std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t address,
-                                         SimLineSettings line) {
-  if (type == "ld58a08") return std::make_unique<SimLd58a08>(address, line);
-  if (type == "lc_relay8") return std::make_unique<SimLcRelay8>(address, line);
-  if (type == "yespeed_pdu") return std::make_unique<SimYespeedPdu>(address, line);
+namespace {
+
+struct SimType {
+  const DeviceDescriptor* type;
+  std::unique_ptr<SimDevice> (*make)(uint8_t address, SimLineSettings line);
+};
+
+template <typename T>
+std::unique_ptr<SimDevice> make(uint8_t address, SimLineSettings line) {
+  return std::make_unique<T>(address, line);
+}
+
+// One line per simulated device type.
+const SimType kSimTypes[] = {
+    {&kLd58a08Type, make<SimLd58a08>},
+    {&kLcRelay8Type, make<SimLcRelay8>},
+    {&kYespeedPduType, make<SimYespeedPdu>},
+};
+
+const SimType* findSimType(const std::string& name) {
+  for (const auto& t : kSimTypes)
+    if (name == t.type->name) return &t;
   return nullptr;
 }
 
-int maxSimAddress(const std::string& type) {
-  if (type == "lc_relay8") return 255;
-  if (type == "ld58a08") return 248;  // its manual: 0x01-0xF8
-  if (type == "yespeed_pdu") return 247;
-  return 0;
+}  // namespace
+
+std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t address,
+                                         SimLineSettings line) {
+  const SimType* t = findSimType(type);
+  return t ? t->make(address, line) : nullptr;
+}
+
+const DeviceDescriptor* simDeviceType(const std::string& type) {
+  const SimType* t = findSimType(type);
+  return t ? t->type : nullptr;
+}
+
+std::string simDeviceTypeNames() {
+  std::string list;
+  for (const auto& t : kSimTypes) list += (list.empty() ? "" : ", ") + std::string(t.type->name);
+  return list;
 }
 
 }  // namespace modbus_rtu_driver

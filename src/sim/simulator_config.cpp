@@ -60,11 +60,13 @@ bool parseDevice(const YAML::Node& d, const std::string& where, SimulatorConfig:
   if (!scalar(d["type"], where + "/type", "a device type", &e->type, error) ||
       !scalar(d["address"], where + "/address", "a number", &e->address, error))
     return false;
-  const int max = maxSimAddress(e->type);
-  if (max == 0) {
-    *error = where + "/type: '" + e->type + "' is not ld58a08, lc_relay8 or yespeed_pdu";
+  const DeviceDescriptor* type = simDeviceType(e->type);
+  if (!type) {
+    *error =
+        where + "/type: '" + e->type + "' is not a simulated type (" + simDeviceTypeNames() + ")";
     return false;
   }
+  const int max = type->max_address;
   if (e->address < 1 || e->address > max) {
     *error = where + "/address: " + std::to_string(e->address) + " is outside 1-" +
              std::to_string(max) + " for " + e->type;

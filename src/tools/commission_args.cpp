@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"
 #include "modbus_rtu_driver/tools/commission.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
@@ -342,7 +343,7 @@ int baudCode(const std::string& text, bool lc) {
   }
   bad("baud: '" + text + "' is neither a code " + std::to_string(lo) + "-" + std::to_string(hi) +
       " nor one of " + (lc ? "4800, 9600, 19200" : kAllBauds) + " (" +
-      (lc ? "lc_relay8" : "ld58a08") + ")");
+      (lc ? kLcRelay8Type.name : kLd58a08Type.name) + ")");
 }
 
 // The settings commands: --type (ld58a08 unless the command fits both boards), --address and
@@ -351,19 +352,20 @@ void parseDevice(const Parsed& p, CommissionCommand& c) {
   const std::string& cmd = c.command;
   const bool both_boards =
       cmd == "get-address" || cmd == "set-address" || cmd == "get-baud" || cmd == "set-baud";
+  const std::string ld = kLd58a08Type.name, lc_type = kLcRelay8Type.name;
   if (p.has("--type")) {
     c.type = p.w.type;
-    if (c.type != "ld58a08" && c.type != "lc_relay8")
-      bad("--type: '" + c.type + "' is not ld58a08 or lc_relay8");
-    if (!both_boards && c.type != "ld58a08")
+    if (c.type != ld && c.type != lc_type)
+      bad("--type: '" + c.type + "' is not " + ld + " or " + lc_type);
+    if (!both_boards && c.type != ld)
       bad("--type: " + cmd + " is an ld58a08 command; the LC relay board has no such setting");
   } else if (both_boards) {
-    bad("--type: missing (ld58a08 or lc_relay8)");
+    bad("--type: missing (" + ld + " or " + lc_type + ")");
   } else {
-    c.type = "ld58a08";
+    c.type = ld;
   }
-  const bool lc = c.type == "lc_relay8";
-  const int max_address = lc ? 255 : 248;  // LD58A08 manual: 1-248
+  const bool lc = c.type == lc_type;
+  const int max_address = lc ? kLcRelay8Type.max_address : kLd58a08Type.max_address;
   if (p.has("--address")) c.address = intIn("--address", p.w.address, 1, max_address);
   const bool address_optional =
       cmd == "get-address" || cmd == "set-address" || cmd == "factory-reset";
@@ -410,11 +412,12 @@ std::string asOptions(std::string message) {
 // rule between them too. With fewer, the others are the PDU's own, and the rules are checked
 // on the merged set once they are read.
 void parseLimits(const Parsed& p, CommissionCommand& c) {
-  if (p.has("--type") && p.w.type != "yespeed_pdu")
-    bad("--type: " + c.command + " is a yespeed_pdu command; '" + p.w.type + "' has no limits");
-  c.type = "yespeed_pdu";
-  if (!p.has("--address")) bad("--address: missing (1-247)");
-  c.address = intIn("--address", p.w.address, 1, 247);
+  c.type = kYespeedPduType.name;
+  if (p.has("--type") && p.w.type != c.type)
+    bad("--type: " + c.command + " is a " + c.type + " command; '" + p.w.type + "' has no limits");
+  const int max_address = kYespeedPduType.max_address;
+  if (!p.has("--address")) bad("--address: missing (1-" + std::to_string(max_address) + ")");
+  c.address = intIn("--address", p.w.address, 1, max_address);
   if (c.command == "get-limits") return;
   bool all = true;
   for (size_t i = 0; i < 3; ++i) {

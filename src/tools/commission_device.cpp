@@ -5,6 +5,7 @@
 #include <functional>
 #include <sstream>
 
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"
@@ -66,9 +67,9 @@ class DeviceCommands {
   explicit DeviceCommands(Session& s)
       : s_(s),
         c_(s.cmd),
-        lc_(c_.type == "lc_relay8"),
-        ld_(deviceAt("ld58a08", c_.address < 0 ? 0xFF : c_.address)),
-        lc_board_(deviceAt("lc_relay8", c_.address)) {}
+        lc_(c_.type == kLcRelay8Type.name),
+        ld_(deviceAt(kLd58a08Type.name, c_.address < 0 ? 0xFF : c_.address)),
+        lc_board_(deviceAt(kLcRelay8Type.name, c_.address)) {}
 
   int run() {
     const std::string& cmd = c_.command;
@@ -86,18 +87,12 @@ class DeviceCommands {
   std::string device() const { return c_.type + " at address " + std::to_string(c_.address); }
   Json fields() const { return Json().add("type", c_.type).add("address", c_.address); }
 
-  // A holding register of the board at --address.
-  std::function<Result(uint16_t*)> reader(uint16_t reg) {
-    return [this, reg](uint16_t* v) {
-      Result r = s_.bus.execute(Request::readHoldingRegisters(ld_.address(), reg, 1));
-      if (r.ok()) *v = r.values[0];
-      return r;
-    };
+  // A setting of the LD58A08 at --address.
+  std::function<Result(uint16_t*)> reader(Ld58a08Setting which) {
+    return [this, which](uint16_t* v) { return ld_.readSetting(s_.bus, which, v); };
   }
-  std::function<Result(uint16_t)> writer(uint16_t reg) {
-    return [this, reg](uint16_t v) {
-      return s_.bus.execute(Request::writeSingleRegister(ld_.address(), reg, v));
-    };
+  std::function<Result(uint16_t)> writer(Ld58a08Setting which) {
+    return [this, which](uint16_t v) { return ld_.writeSetting(s_.bus, which, v); };
   }
 
   Setting settingFor(const std::string& what) {
@@ -106,16 +101,16 @@ class DeviceCommands {
           std::string(kPowerCycle) + (lc_ ? " (the manual advises about 30 s without power)" : "") +
           "; then reach it with --baud " + std::to_string(baudOfCode(c_.new_value)) + ".";
       if (!lc_)
-        return setting("baud rate", "baud_code", baudText, reader(Ld58a08::kBaudRegister),
-                       writer(Ld58a08::kBaudRegister), after);
+        return setting("baud rate", "baud_code", baudText, reader(Ld58a08Setting::kBaud),
+                       writer(Ld58a08Setting::kBaud), after);
       return setting(
           "baud rate", "baud_code", baudText,
           [this](uint16_t* v) { return lc_board_.readBaudCode(s_.bus, v); },
           [this](uint16_t v) { return lc_board_.writeBaudCode(s_.bus, v); }, after);
     }
     if (what == "parity")
-      return setting("parity", "parity_code", parityText, reader(Ld58a08::kParityRegister),
-                     writer(Ld58a08::kParityRegister),
+      return setting("parity", "parity_code", parityText, reader(Ld58a08Setting::kParity),
+                     writer(Ld58a08Setting::kParity),
                      std::string(kPowerCycle) + "; then reach it with --parity " +
                          parityText(c_.new_value) + ".");
     if (what == "return-delay") {
@@ -129,13 +124,13 @@ class DeviceCommands {
       return setting(
           "return delay", "return_delay_ms",
           [](int units) { return std::to_string(units * 40) + " ms"; },
-          reader(Ld58a08::kReturnDelayRegister),
-          [this](uint16_t v) { return ld_.setReturnDelay(s_.bus, v); }, after.str(), true, 40);
+          reader(Ld58a08Setting::kReturnDelay), writer(Ld58a08Setting::kReturnDelay), after.str(),
+          true, 40);
     }
     // The power-down save does not change how the board answers: no question.
     return setting(
         "power-down save", "save", [](int v) { return std::string(v ? "on" : "off"); },
-        reader(Ld58a08::kPowerDownSaveRegister), writer(Ld58a08::kPowerDownSaveRegister),
+        reader(Ld58a08Setting::kPowerDownSave), writer(Ld58a08Setting::kPowerDownSave),
         c_.new_value ? "PWM settings now survive a power cycle." : "", false);
   }
 
@@ -181,9 +176,9 @@ class DeviceCommands {
       s_.out.result("lc_relay8 answers at address " + std::to_string(c_.address), fields());
       return kExitOk;
     }
-    const Result r = lc_ ? LcRelay8::readAddressAtZero(s_.bus)
-                         : s_.bus.execute(Request::readHoldingRegisters(
-                               ld_.address(), Ld58a08::kAddressRegister, 1));
+    uint16_t address = 0;
+    Result r = lc_ ? LcRelay8::readAddressAtZero(s_.bus)
+                   : ld_.readSetting(s_.bus, Ld58a08Setting::kAddress, &address);
     const std::string how = c_.address >= 0 ? "" : lc_ ? " through address 0" : " through 0xFF";
     if (!r.ok()) {
       Result told = r;
@@ -199,8 +194,9 @@ class DeviceCommands {
     }
     if (!how.empty())
       s_.out.note("read" + how + ": right only with one " + c_.type + " on the bus");
-    s_.out.result(c_.type + " address: " + std::to_string(r.values[0]),
-                  Json().add("type", c_.type).add("address", static_cast<int>(r.values[0])));
+    if (lc_) address = r.values[0];
+    s_.out.result(c_.type + " address: " + std::to_string(address),
+                  Json().add("type", c_.type).add("address", static_cast<int>(address)));
     return kExitOk;
   }
 
@@ -223,13 +219,13 @@ class DeviceCommands {
 
   int setLdAddress() {
     const bool blind = c_.address < 0;  // through 0xFF
-    const Result now =
-        s_.bus.execute(Request::readHoldingRegisters(ld_.address(), Ld58a08::kAddressRegister, 1));
+    uint16_t current = 0;
+    const Result now = ld_.readSetting(s_.bus, Ld58a08Setting::kAddress, &current);
     if (!now.ok())
       return s_.out.fail(now,
                          std::string("reading the ld58a08 address") +
                              (blind ? " through 0xFF (only one board may be on the bus)" : ""));
-    const int from = now.values[0];
+    const int from = current;
     if (from == c_.new_value) {
       s_.out.result("ld58a08 address is already " + std::to_string(from) + "; nothing written",
                     Json().add("type", c_.type).add("address", from).add("changed", false));
@@ -242,12 +238,13 @@ class DeviceCommands {
                            : "?") +
                     " It answers only at the new address from then on."))
       return s_.out.fail(kExitNotConfirmed, "not confirmed; nothing was changed");
-    const Result r = s_.bus.execute(Request::writeSingleRegister(
-        ld_.address(), Ld58a08::kAddressRegister, static_cast<uint16_t>(c_.new_value)));
+    const Result r =
+        ld_.writeSetting(s_.bus, Ld58a08Setting::kAddress, static_cast<uint16_t>(c_.new_value));
     if (!r.ok()) return s_.out.fail(r, "writing the ld58a08 address");
-    const Result check = s_.bus.execute(Request::readHoldingRegisters(
-        static_cast<uint8_t>(c_.new_value), Ld58a08::kAddressRegister, 1));
-    return addressChanged(from, check.ok() && check.values[0] == c_.new_value);
+    Ld58a08 moved(deviceAt(kLd58a08Type.name, c_.new_value));
+    uint16_t there = 0;
+    const bool answers = moved.readSetting(s_.bus, Ld58a08Setting::kAddress, &there).ok();
+    return addressChanged(from, answers && there == c_.new_value);
   }
 
   int setLcAddress() {
@@ -274,7 +271,7 @@ class DeviceCommands {
     const Result r = LcRelay8::setAddressAtZero(s_.bus, static_cast<uint8_t>(c_.new_value));
     if (!r.ok()) return s_.out.fail(r, "writing the lc_relay8 address through address 0");
     uint16_t code = 0;
-    LcRelay8 moved(deviceAt("lc_relay8", c_.new_value));
+    LcRelay8 moved(deviceAt(kLcRelay8Type.name, c_.new_value));
     return addressChanged(from, moved.readBaudCode(s_.bus, &code).ok());
   }
 
@@ -286,8 +283,7 @@ class DeviceCommands {
                     "settings cleared?"))
       return s_.out.fail(kExitNotConfirmed, "not confirmed; nothing was changed");
     // FF 06 00 FB 00 00 ED E5 through 0xFF, as the manual prints it.
-    const Result r = s_.bus.execute(
-        Request::writeSingleRegister(ld_.address(), Ld58a08::kFactoryResetRegister, 0));
+    const Result r = ld_.factoryReset(s_.bus);
     if (!r.ok()) return s_.out.fail(r, "factory reset " + where);
     const std::string after =
         "factory settings restored (address 1, 9600 8N1); baud and parity take effect after the "
@@ -314,7 +310,7 @@ class DeviceCommands {
   }
 
   int getLimits() {
-    YespeedPdu pdu(deviceAt("yespeed_pdu", c_.address));
+    YespeedPdu pdu(deviceAt(kYespeedPduType.name, c_.address));
     const Result r = pdu.readLimits(s_.bus);
     if (!r.ok()) return s_.out.fail(r, "reading the limits of the " + device());
     s_.out.result(device() + ", limits: " + limitsHuman(pdu.limitRegisters()),
@@ -325,7 +321,7 @@ class DeviceCommands {
   // Reads the limits first; the ones not given stay. The rules are checked on the merged
   // register values before anything is written, then the PDU's read back must show them.
   int setLimits() {
-    YespeedPdu pdu(deviceAt("yespeed_pdu", c_.address));
+    YespeedPdu pdu(deviceAt(kYespeedPduType.name, c_.address));
     Result r = pdu.readLimits(s_.bus);
     if (!r.ok()) return s_.out.fail(r, "reading the limits of the " + device());
     const PduLimitRegisters before = pdu.limitRegisters();
@@ -365,7 +361,7 @@ class DeviceCommands {
     Json json = Json().add("address", c_.address).add("type", id.type);
     human << "address " << c_.address << ": " << id.type;
     Result r;
-    if (id.type == "ld58a08") {
+    if (id.type == kLd58a08Type.name) {
       Ld58a08Settings st;
       r = ld_.readSettings(s_.bus, &st);
       human << "\n  stored baud rate: " << baudText(st.baud_code)
@@ -375,13 +371,13 @@ class DeviceCommands {
       json.add("baud_code", st.baud_code).add("baud", baudOfCode(st.baud_code));
       json.add("parity_code", st.parity).add("return_delay_ms", st.return_delay * 40);
       json.add("save", st.power_down_save);
-    } else if (id.type == "lc_relay8") {
+    } else if (id.type == kLcRelay8Type.name) {
       uint16_t code = 0;
       r = lc_board_.readBaudCode(s_.bus, &code);
       human << "\n  baud rate: " << baudText(code);
       json.add("baud_code", code).add("baud", baudOfCode(code));
-    } else if (id.type == "yespeed_pdu") {
-      YespeedPdu pdu(deviceAt("yespeed_pdu", c_.address));
+    } else if (id.type == kYespeedPduType.name) {
+      YespeedPdu pdu(deviceAt(kYespeedPduType.name, c_.address));
       r = pdu.readTelemetry(s_.bus);
       if (r.ok()) r = pdu.readLimits(s_.bus);
       const PduReading& m = pdu.reading();

@@ -2,6 +2,7 @@
 #include <ostream>
 #include <set>
 
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/core/rtu_link.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
@@ -71,19 +72,19 @@ Identity identifyDevice(Transport& bus, uint8_t address) {
   const Result ld = probe(Request::readHoldingRegisters(address, Ld58a08::kAddressRegister, 1));
   if (ld.ok() && ld.values[0] == address) {
     id.present = true;
-    id.type = "ld58a08";
+    id.type = kLd58a08Type.name;
     return id;
   }
   // An LD58A08 answers 0xFF as "whoever you are": it is at its own address, not at 255.
   const bool ld_elsewhere = address == 0xFF && ld.ok();
   id.present = true;
   if (probe(Request::readInputRegisters(address, 0, 5)).ok()) {
-    id.type = "yespeed_pdu";
+    id.type = kYespeedPduType.name;
     return id;
   }
   const Result lc = probe(Request::readHoldingRegisters(address, LcRelay8::kBaudReadRegister, 1));
   if (lc.ok() && lc.values[0] >= 2 && lc.values[0] <= 4) {
-    id.type = "lc_relay8";
+    id.type = kLcRelay8Type.name;
   } else if (ld_elsewhere) {
     id.present = false;
     id.note = "address 255: an LD58A08 answered for its address " + std::to_string(ld.values[0]);

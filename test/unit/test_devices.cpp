@@ -279,6 +279,46 @@ TEST(Ld58a08, StopAndReturnDelayFrames) {
   EXPECT_SCRIPT_DONE(bus);
 }
 
+// The settings the commissioning tool changes, as the device class writes them: one FC06 to
+// the manual's register, refused unsent outside its range; the factory reset as the manual
+// prints it (through 0xFF).
+TEST(Ld58a08, SettingsFramesAndRanges) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  bus.expect("01 03 00 FE 00 01 E5 FA", "01 03 02 00 03 F8 45");
+  uint16_t code = 0;
+  ASSERT_TRUE(board.readSetting(bus, Ld58a08Setting::kBaud, &code).ok());
+  EXPECT_EQ(code, 3);
+  const std::pair<Ld58a08Setting, uint16_t> writes[] = {{Ld58a08Setting::kPowerDownSave, 1},
+                                                        {Ld58a08Setting::kAddress, 248},
+                                                        {Ld58a08Setting::kBaud, 7},
+                                                        {Ld58a08Setting::kParity, 2}};
+  for (const auto& w : writes) {
+    const Request request =
+        Request::writeSingleRegister(1, static_cast<uint16_t>(w.first), w.second);
+    bus.expectEcho(toHex(encodeRequest(request)));
+    EXPECT_TRUE(board.writeSetting(bus, w.first, w.second).ok());
+  }
+  EXPECT_SCRIPT_DONE(bus);
+  const std::pair<Ld58a08Setting, uint16_t> refused[] = {
+      {Ld58a08Setting::kPowerDownSave, 2}, {Ld58a08Setting::kReturnDelay, 26},
+      {Ld58a08Setting::kAddress, 0},       {Ld58a08Setting::kAddress, 249},
+      {Ld58a08Setting::kBaud, 8},          {Ld58a08Setting::kParity, 3}};
+  for (const auto& w : refused)
+    EXPECT_EQ(board.writeSetting(bus, w.first, w.second).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(bus.executed(), 5);
+  EXPECT_EQ(Ld58a08::validateSetting(Ld58a08Setting::kBaud, 8),
+            "baud_code: 8 is outside 0-7 (1200-115200; the board takes a higher code as a "
+            "factory reset)");
+  EXPECT_EQ(Ld58a08::validateSetting(Ld58a08Setting::kAddress, 249),
+            "address: 249 is outside 1-248");
+  Ld58a08 every_board(config("ld58a08", 0xFF));
+  ScriptedTransport reset_bus;
+  reset_bus.expect("FF 06 00 FB 00 00 ED E5", "FF 06 00 FB 00 00 ED E5");
+  EXPECT_TRUE(every_board.factoryReset(reset_bus).ok());
+  EXPECT_SCRIPT_DONE(reset_bus);
+}
+
 TEST(Ld58a08, ADeviceThatDoesNotConfirmIsNotSuccess) {
   Ld58a08 board(config("ld58a08", 1));
   ScriptedTransport bus;
@@ -585,21 +625,25 @@ TEST(LcRelay8, FlashTimeIsCheckedOnTheTenthsWritten) {
 
 TEST(Registry, TypesAddressesAndNames) {
   EXPECT_EQ(knownDeviceTypes(), (std::vector<std::string>{"ld58a08", "lc_relay8", "yespeed_pdu"}));
-  std::string error;
-  EXPECT_NE(createDevice(config("lc_relay8", 255), &error), nullptr) << error;
-  EXPECT_EQ(createDevice(config("ld58a08", 249), &error), nullptr);
-  EXPECT_NE(error.find("devices/dev/address: 249 is outside 1-248 for ld58a08"), std::string::npos)
-      << error;
-  EXPECT_NE(createDevice(config("ld58a08", 248), &error), nullptr) << "its manual: 1-248";
-  EXPECT_EQ(createDevice(config("yespeed_pdu", 248), &error), nullptr);
-  EXPECT_NE(error.find("devices/dev/address: 248 is outside 1-247 for yespeed_pdu"),
-            std::string::npos)
-      << error;
-  EXPECT_EQ(createDevice(config("relay", 3), &error), nullptr);
-  EXPECT_NE(error.find("devices/dev/type: 'relay'"), std::string::npos) << error;
+  EXPECT_EQ(validateDeviceConfig(config("lc_relay8", 255)), "");
+  EXPECT_EQ(validateDeviceConfig(config("ld58a08", 249)),
+            "devices/dev/address: 249 is outside 1-248 for ld58a08");
+  EXPECT_EQ(validateDeviceConfig(config("ld58a08", 248)), "") << "its manual: 1-248";
+  EXPECT_EQ(validateDeviceConfig(config("yespeed_pdu", 248)),
+            "devices/dev/address: 248 is outside 1-247 for yespeed_pdu");
+  EXPECT_NE(validateDeviceConfig(config("relay", 3)).find("devices/dev/type: 'relay'"),
+            std::string::npos);
+  EXPECT_EQ(createDevice(config("relay", 3)), nullptr);
+  for (const char* type : {"ld58a08", "lc_relay8", "yespeed_pdu"}) {
+    const std::unique_ptr<Device> made = createDevice(config(type, 1));
+    ASSERT_NE(made, nullptr) << type;
+    EXPECT_STREQ(made->type(), type);
+    EXPECT_EQ(made->outputCount(), findDeviceType(type)->outputs);
+    EXPECT_EQ(made->inputCount(), findDeviceType(type)->inputs);
+  }
   DeviceConfig c = config("yespeed_pdu", 3);
   c.inputs = {"a", "b", "c", "d", "e", "f", "g", "h"};
   EXPECT_NE(validateDeviceConfig(c).find("has no inputs"), std::string::npos);
   c = config("ld58a08", 3);
-  EXPECT_EQ(createDevice(c, &error)->outputNames()[7], "out7");
+  EXPECT_EQ(createDevice(c)->outputNames()[7], "out7");
 }

@@ -162,9 +162,9 @@ TEST_F(LinkVsSimulator, Ld58a08At248WorksEndToEnd) {
   config.name = "pwm_board";
   config.type = "ld58a08";
   config.address = 248;
-  std::string error;
-  std::unique_ptr<Device> device = createDevice(config, &error);
-  ASSERT_NE(device, nullptr) << error;
+  ASSERT_EQ(validateDeviceConfig(config), "");
+  std::unique_ptr<Device> device = createDevice(config);
+  ASSERT_NE(device, nullptr);
   auto& board = static_cast<Ld58a08&>(*device);
   Result r = board.poll(*link_);
   ASSERT_TRUE(r.ok()) << r.message;

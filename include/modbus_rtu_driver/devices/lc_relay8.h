@@ -4,13 +4,14 @@
 // Factory address 255. Manual: seeds/001.
 #pragma once
 
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace modbus_rtu_driver {
 
 class LcRelay8 : public Device {
  public:
-  static constexpr size_t kChannels = 8;
+  static constexpr size_t kChannels = kLcRelay8Type.outputs;
   static constexpr uint16_t kFlashClose = 0x0004;
   static constexpr uint16_t kFlashOpen = 0x0002;
   static constexpr uint16_t kBaudWriteRegister = 0x03E9;
@@ -18,7 +19,7 @@ class LcRelay8 : public Device {
   static uint16_t flashRegister(uint8_t channel) { return static_cast<uint16_t>(3 + 5 * channel); }
 
   explicit LcRelay8(DeviceConfig config) : Device(std::move(config)) {}
-  const char* type() const override { return "lc_relay8"; }
+  const char* type() const override { return kLcRelay8Type.name; }
   size_t outputCount() const override { return kChannels; }
   size_t inputCount() const override { return kChannels; }
 

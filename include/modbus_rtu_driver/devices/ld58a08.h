@@ -6,6 +6,7 @@
 
 #include <array>
 
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace modbus_rtu_driver {
@@ -36,7 +37,16 @@ struct PwmState {
   uint16_t enable = 0;          // the raw enable register
 };
 
-// Special function registers.
+// The special function registers a user may change (manual, 0x00FA-0x00FF). Address, baud and
+// parity change how the board answers: the address at once, baud and parity after a power cycle.
+enum class Ld58a08Setting : uint16_t {
+  kPowerDownSave = 0x00FA,  // 0 off, 1 on
+  kReturnDelay = 0x00FC,    // x 40 ms, 0-25
+  kAddress = 0x00FD,        // 1-248
+  kBaud = 0x00FE,           // code 0-7 (1200-115200); 8 and above would be a factory reset
+  kParity = 0x00FF,         // 0 none, 1 even, 2 odd
+};
+
 struct Ld58a08Settings {
   uint16_t power_down_save = 0;  // 0x00FA
   uint16_t return_delay = 0;     // 0x00FC, x40 ms, 0-25
@@ -47,7 +57,7 @@ struct Ld58a08Settings {
 
 class Ld58a08 : public Device {
  public:
-  static constexpr size_t kChannels = 8;
+  static constexpr size_t kChannels = kLd58a08Type.outputs;
   static constexpr uint16_t kOutputMaskRegister = 0x0080;
   static constexpr uint16_t kPowerDownSaveRegister = 0x00FA;
   static constexpr uint16_t kFactoryResetRegister = 0x00FB;
@@ -58,7 +68,7 @@ class Ld58a08 : public Device {
   static uint16_t pwmRegister(uint8_t channel) { return static_cast<uint16_t>(channel * 0x10); }
 
   explicit Ld58a08(DeviceConfig config) : Device(std::move(config)) {}
-  const char* type() const override { return "ld58a08"; }
+  const char* type() const override { return kLd58a08Type.name; }
   size_t outputCount() const override { return kChannels; }
 
   // Polls the outputs (FC01) and the PWM registers of one channel (all on the first poll).
@@ -84,7 +94,18 @@ class Ld58a08 : public Device {
   bool pwmKnown() const { return pwm_known_; }
 
   Result readSettings(Transport& bus, Ld58a08Settings* out);
-  Result setReturnDelay(Transport& bus, uint16_t units_of_40ms);  // 0-25
+  // Empty when `value` is in the setting's range, else a message naming it and the range.
+  static std::string validateSetting(Ld58a08Setting setting, uint16_t value);
+  Result readSetting(Transport& bus, Ld58a08Setting setting, uint16_t* value);
+  // FC06 to the setting's register, refused unsent outside its range. A new address is not
+  // taken by this object (it keeps asking at the configured one).
+  Result writeSetting(Transport& bus, Ld58a08Setting setting, uint16_t value);
+  Result setReturnDelay(Transport& bus, uint16_t units_of_40ms) {
+    return writeSetting(bus, Ld58a08Setting::kReturnDelay, units_of_40ms);
+  }
+  // FC06 0 to 0x00FB: address 1 at once, 9600 8N1 after a power cycle, PWM cleared. The manual
+  // sends it through 0xFF (every LD58A08 on the bus takes it).
+  Result factoryReset(Transport& bus);
 
  private:
   Result readPwmChannel(Transport& bus, uint8_t channel, PwmState* out);

@@ -6,6 +6,7 @@
 #include <array>
 #include <optional>
 
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace modbus_rtu_driver {
@@ -31,10 +32,10 @@ using PduLimitChange = std::array<std::optional<uint16_t>, 3>;
 
 class YespeedPdu : public Device {
  public:
-  static constexpr size_t kRelays = 8;
+  static constexpr size_t kRelays = kYespeedPduType.outputs;
 
   explicit YespeedPdu(DeviceConfig config) : Device(std::move(config)) {}
-  const char* type() const override { return "yespeed_pdu"; }
+  const char* type() const override { return kYespeedPduType.name; }
   size_t outputCount() const override { return kRelays; }
 
   // FC01 relays, then one FC04 for all five readings. Limits are read once (and after writes).

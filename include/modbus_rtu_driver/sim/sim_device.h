@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/core/frame.h"
 #include "modbus_rtu_driver/core/types.h"
 
@@ -116,10 +117,11 @@ class SimDevice {
   SimLineSettings line_;
 };
 
-// Builds a device of `type` (ld58a08, lc_relay8, yespeed_pdu); null for an unknown type.
+// Builds a device of `type` (a name in core/device_types.h); null for a type not simulated.
 std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t address,
                                          SimLineSettings line);
-// Highest address a device of `type` can have (LD58A08 248, PDU 247, LC board 255); 0 = unknown.
-int maxSimAddress(const std::string& type);
+// The descriptor of a simulated type (its address range); null for a type not simulated.
+const DeviceDescriptor* simDeviceType(const std::string& type);
+std::string simDeviceTypeNames();  // "ld58a08, lc_relay8, yespeed_pdu"
 
 }  // namespace modbus_rtu_driver

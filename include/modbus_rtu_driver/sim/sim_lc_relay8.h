@@ -13,6 +13,7 @@
 
 #include <array>
 
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 
 namespace modbus_rtu_driver {
@@ -20,7 +21,7 @@ namespace modbus_rtu_driver {
 class SimLcRelay8 : public SimDevice {
  public:
   SimLcRelay8(uint8_t address, SimLineSettings line);
-  const char* type() const override { return "lc_relay8"; }
+  const char* type() const override { return kLcRelay8Type.name; }
   // The board's commands at slave 0: read the address (FC03 register 0, count 1) and set it
   // (FC16 register 0, one value). Only an LC board handles these; it answers them.
   static bool isAddressCommand(const Request& request);

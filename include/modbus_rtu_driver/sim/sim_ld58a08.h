@@ -21,6 +21,7 @@
 
 #include <array>
 
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 
 namespace modbus_rtu_driver {
@@ -28,7 +29,7 @@ namespace modbus_rtu_driver {
 class SimLd58a08 : public SimDevice {
  public:
   SimLd58a08(uint8_t address, SimLineSettings line);
-  const char* type() const override { return "ld58a08"; }
+  const char* type() const override { return kLd58a08Type.name; }
   // "Only one module on the bus": it also answers its special registers (0x00FA-0x00FF) at
   // 0xFF, as the manual shows. Reading it as answering everything at 0xFF would make it
   // collide with an LC relay board at its factory address 255 on every poll.

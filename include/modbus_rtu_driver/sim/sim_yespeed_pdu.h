@@ -13,6 +13,7 @@
 #include <array>
 #include <random>
 
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 
 namespace modbus_rtu_driver {
@@ -20,7 +21,7 @@ namespace modbus_rtu_driver {
 class SimYespeedPdu : public SimDevice {
  public:
   SimYespeedPdu(uint8_t address, SimLineSettings line);
-  const char* type() const override { return "yespeed_pdu"; }
+  const char* type() const override { return kYespeedPduType.name; }
   void tick(SimClock::time_point now) override;
   void powerCycle(SimClock::time_point now) override;
   void saveState(YAML::Node& node) const override;
