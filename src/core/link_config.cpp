@@ -60,12 +60,20 @@ int bitsPerCharacter(const LinkConfig& c) {
   return 1 + c.data_bits + (c.parity == Parity::kNone ? 0 : 1) + c.stop_bits;
 }
 
+double characterTime(int baud, int bits_per_character) {
+  return static_cast<double>(bits_per_character) / (baud > 0 ? baud : 9600);
+}
+
+double frameGap(int baud, int bits_per_character) {
+  return baud > 19200 ? 0.00175 : 3.5 * characterTime(baud, bits_per_character);
+}
+
 double characterTime(const LinkConfig& c) {
-  return static_cast<double>(bitsPerCharacter(c)) / c.baud;
+  return characterTime(c.baud, bitsPerCharacter(c));
 }
 
 double frameGap(const LinkConfig& c) {
-  return c.baud > 19200 ? 0.00175 : 3.5 * characterTime(c);
+  return frameGap(c.baud, bitsPerCharacter(c));
 }
 
 double effectiveByteTimeout(const LinkConfig& c) {

@@ -11,7 +11,7 @@
 #include <cstring>
 
 #include "modbus_rtu_driver/core/frame.h"
-#include "modbus_rtu_driver/core/port_claim.h"
+#include "modbus_rtu_driver/core/serial_port.h"
 
 namespace modbus_rtu_driver {
 
@@ -53,25 +53,8 @@ LinkStats RtuLink::stats() const {
 
 bool RtuLink::connect(std::string* error) {
   disconnect();
-  const char parity = config_.parity == Parity::kEven  ? 'E'
-                      : config_.parity == Parity::kOdd ? 'O'
-                                                       : 'N';
-  ctx_ = modbus_new_rtu(config_.port.c_str(), config_.baud, parity, config_.data_bits,
-                        config_.stop_bits);
-  if (!ctx_) {
-    if (error) *error = "cannot use " + config_.port + ": " + modbus_strerror(errno);
-    return false;
-  }
-  if (modbus_connect(ctx_) == -1) {
-    if (error) *error = openError(config_.port, errno);
-    disconnect();
-    return false;
-  }
-  // One owner per port: two drivers on one bus would answer each other's requests.
-  if (!claimPort(modbus_get_socket(ctx_), config_.port, error)) {
-    disconnect();
-    return false;
-  }
+  ctx_ = openSerialPort(config_, error);
+  if (!ctx_) return false;
 #if LIBMODBUS_VERSION_CHECK(3, 1, 7)
   // Newer libmodbus can address 248-255 itself.
   modbus_enable_quirks(ctx_, MODBUS_QUIRK_MAX_SLAVE);
@@ -110,10 +93,7 @@ bool RtuLink::connect(std::string* error) {
 }
 
 void RtuLink::disconnect() {
-  if (!ctx_) return;
-  releasePort(modbus_get_socket(ctx_));
-  modbus_close(ctx_);
-  modbus_free(ctx_);
+  closeSerialPort(ctx_);
   ctx_ = nullptr;
 }
 

@@ -3,16 +3,15 @@
 #include <modbus/modbus.h>
 #include <sys/ioctl.h>
 #include <sys/prctl.h>
-#include <sys/select.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <cmath>
 #include <thread>
 
 #include "modbus_rtu_driver/core/frame.h"
 #include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/core/serial_port.h"
 
 namespace modbus_rtu_driver {
 
@@ -72,15 +71,7 @@ void RtuLink::awaitQuietLine(Steady::time_point until) {
   const auto give_up = Steady::now() + std::chrono::seconds(1);
   uint64_t dropped = 0;
   for (auto now = Steady::now(); now < until && now < give_up; now = Steady::now()) {
-    fd_set set;
-    FD_ZERO(&set);
-    FD_SET(fd, &set);
-    const double wait = std::chrono::duration<double>(until - now).count();
-    timeval tv{static_cast<time_t>(wait),
-               static_cast<suseconds_t>((wait - std::floor(wait)) * 1e6)};
-    const int ready = select(fd + 1, &set, nullptr, nullptr, &tv);
-    if (ready == -1 && errno == EINTR) continue;
-    if (ready <= 0) break;
+    if (waitReadable(fd, std::chrono::duration<double>(until - now).count()) <= 0) break;
     uint8_t junk[256];
     const ssize_t n = read(fd, junk, sizeof junk);
     if (n <= 0) break;
@@ -102,14 +93,7 @@ Result RtuLink::readReply(const Request& request) {
   Bytes buf;
   size_t need = 0;
   while (need == 0 || buf.size() < need) {
-    fd_set set;
-    FD_ZERO(&set);
-    FD_SET(fd, &set);
-    const double wait = buf.empty() ? first : between;
-    timeval tv{static_cast<time_t>(wait),
-               static_cast<suseconds_t>((wait - std::floor(wait)) * 1e6)};
-    const int ready = select(fd + 1, &set, nullptr, nullptr, &tv);
-    if (ready == -1 && errno == EINTR) continue;
+    const int ready = waitReadable(fd, buf.empty() ? first : between);
     if (ready == -1) return fromErrno(request, errno);
     if (ready == 0) {
       if (buf.empty())

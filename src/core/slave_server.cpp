@@ -1,12 +1,11 @@
 #include "modbus_rtu_driver/core/slave_server.h"
 
 #include <modbus/modbus.h>
-#include <poll.h>
 #include <unistd.h>
 
 #include <cerrno>
 
-#include "modbus_rtu_driver/core/port_claim.h"
+#include "modbus_rtu_driver/core/serial_port.h"
 
 namespace modbus_rtu_driver {
 
@@ -98,18 +97,8 @@ void SlaveServer::stop() {
 }
 
 bool SlaveServer::open(std::string* error) {
-  const LinkConfig& l = config_.link;
-  const char parity = l.parity == Parity::kEven ? 'E' : l.parity == Parity::kOdd ? 'O' : 'N';
-  ctx_ = modbus_new_rtu(l.port.c_str(), l.baud, parity, l.data_bits, l.stop_bits);
-  if (!ctx_ || modbus_connect(ctx_) == -1) {
-    *error = openError(l.port, errno);
-    close();
-    return false;
-  }
-  if (!claimPort(modbus_get_socket(ctx_), l.port, error)) {
-    close();
-    return false;
-  }
+  ctx_ = openSerialPort(config_.link, error);
+  if (!ctx_) return false;
   modbus_set_slave(ctx_, config_.slave_id);
   if (!mapping_)
     mapping_ = modbus_mapping_new(config_.coils, config_.discrete_inputs, config_.holding_registers,
@@ -118,12 +107,8 @@ bool SlaveServer::open(std::string* error) {
 }
 
 void SlaveServer::close() {
-  if (ctx_) {
-    releasePort(modbus_get_socket(ctx_));
-    modbus_close(ctx_);
-    modbus_free(ctx_);
-    ctx_ = nullptr;
-  }
+  closeSerialPort(ctx_);
+  ctx_ = nullptr;
 }
 
 void SlaveServer::applyChanges() {
@@ -172,14 +157,14 @@ void SlaveServer::run() {
       backoff = 0.2;
     }
     applyChanges();
-    pollfd p{modbus_get_socket(ctx_), POLLIN, 0};
-    const int ready = poll(&p, 1, 2);
+    const int fd = modbus_get_socket(ctx_);
+    const int ready = waitReadable(fd, 0.002);
     bool got = false;
     if (ready > 0) {
       uint8_t buf[512];
-      const ssize_t n = read(p.fd, buf, sizeof buf);
-      if (n <= 0 && (p.revents & (POLLHUP | POLLERR))) {
-        close();  // the port went away: reopen
+      const ssize_t n = read(fd, buf, sizeof buf);
+      if (n == 0 || (n < 0 && errno != EAGAIN && errno != EINTR)) {
+        close();  // readable but nothing to read: the port went away, reopen
         continue;
       }
       if (n > 0) {

@@ -20,13 +20,16 @@ bool parseTable(const std::string& name, Table* out) {
   return true;
 }
 
+int simBitsPerCharacter(const SimLineSettings& l) {
+  return 1 + l.data_bits + (l.parity == 'N' ? 0 : 1) + l.stop_bits;
+}
+
 double simCharacterTime(const SimLineSettings& l) {
-  const int bits = 1 + l.data_bits + (l.parity == 'N' ? 0 : 1) + l.stop_bits;
-  return static_cast<double>(bits) / (l.baud > 0 ? l.baud : 9600);
+  return characterTime(l.baud, simBitsPerCharacter(l));
 }
 
 double simFrameGap(const SimLineSettings& l) {
-  return l.baud > 19200 ? 0.00175 : 3.5 * simCharacterTime(l);
+  return frameGap(l.baud, simBitsPerCharacter(l));
 }
 
 namespace {

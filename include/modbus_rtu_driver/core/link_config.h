@@ -39,11 +39,16 @@ const char* parityName(Parity parity);  // "none", "even", "odd"
 bool parseParity(const std::string& text, Parity* out);
 bool isStandardBaud(int baud);
 
+// The wire timing every side of a line keeps (the link, the slave role, the simulator), from
+// the baud and the bits per character (start + data + parity + stop):
+double characterTime(int baud, int bits_per_character);  // s one character takes
+// The RTU inter-frame silence: 3.5 characters, fixed at 1.75 ms above 19200 baud (spec).
+double frameGap(int baud, int bits_per_character);
+
 // Bits per character on the wire (start + data + parity + stop).
 int bitsPerCharacter(const LinkConfig& config);
 // Seconds one character takes at the configured baud.
 double characterTime(const LinkConfig& config);
-// The RTU inter-frame silence: 3.5 characters, fixed at 1.75 ms above 19200 baud (spec).
 double frameGap(const LinkConfig& config);
 // Byte timeout used when none is configured: 1.5 characters, at least 0.5 ms... plus slack for
 // USB adapters and scheduler jitter.

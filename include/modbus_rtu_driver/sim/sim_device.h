@@ -12,6 +12,7 @@
 
 #include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/core/frame.h"
+#include "modbus_rtu_driver/core/link_config.h"
 #include "modbus_rtu_driver/core/types.h"
 
 namespace YAML {
@@ -32,9 +33,9 @@ struct SimLineSettings {
   int data_bits = 8;  // the line's; every simulated device uses 8
   int stop_bits = 1;  // the line's; a receiver accepts 1 or 2
 };
-// Seconds one character takes on the wire (start, data, parity, stop bits).
+// The line's timing, by the same rules as the driver's link (core/link_config.h).
+int simBitsPerCharacter(const SimLineSettings& line);  // start, data, parity, stop
 double simCharacterTime(const SimLineSettings& line);
-// The RTU inter-frame silence t3.5 (fixed 1.75 ms above 19200 baud).
 double simFrameGap(const SimLineSettings& line);
 
 class SimDevice {

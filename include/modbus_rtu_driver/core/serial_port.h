@@ -1,10 +1,24 @@
-// One owner per serial port: the bus node, the slave role and the commissioning tool take a
-// port the same way.
+// A serial port, opened and claimed one way by the bus link, the slave role and the
+// commissioning tool (one owner per port), and read with one wait.
 #pragma once
 
 #include <string>
 
+#include "modbus_rtu_driver/core/link_config.h"
+
+typedef struct _modbus modbus_t;  // NOLINT: libmodbus's own name
+
 namespace modbus_rtu_driver {
+
+// Opens `link.port` through libmodbus at the link's baud, parity, data and stop bits and claims
+// it (claimPort). Null with a message naming the port when it cannot.
+modbus_t* openSerialPort(const LinkConfig& link, std::string* error);
+// Gives the claim back, closes and frees `ctx` (null is fine).
+void closeSerialPort(modbus_t* ctx);
+
+// Waits until `fd` has bytes to read or `seconds` pass, resuming after signals: 1 readable,
+// 0 timed out, -1 failed (errno says why).
+int waitReadable(int fd, double seconds);
 
 // Claims the open port `fd` (named `port` in messages) for this process alone:
 //  - flock(LOCK_EX): another program of this project, or any that honours the lock, is told the
