@@ -18,7 +18,9 @@ void DeviceAdapter::start() {
   const auto names = device_->outputNames();
   const size_t n = device_->outputCount();
   outputs_ = std::make_unique<DigitalStatesPublisher>(nh_, "outputs", names, publish_policy_);
-  pending_commands_.assign(n, std::nullopt);
+  if (device_->inputCount() > 0)
+    inputs_ = std::make_unique<DigitalStatesPublisher>(nh_, "inputs", device_->inputNames(),
+                                                       publish_policy_);
   for (size_t i = 0; i < n; ++i) {
     const auto ch = static_cast<uint8_t>(i);
     command_subs_.push_back(nh_.subscribe<std_msgs::Bool>(
@@ -42,9 +44,11 @@ void DeviceAdapter::start() {
 void DeviceAdapter::onPoll(const Result& result) {
   if (result.ok()) {
     publishOutputs();
+    if (inputs_) inputs_->publish(device_->inputs(), ros::Time::now());
     checkRestart();
   } else if (offline()) {
     outputs_->markStale();
+    if (inputs_) inputs_->markStale();
   }
 }
 
@@ -57,18 +61,20 @@ Result DeviceAdapter::writeOutputs(const std::vector<uint8_t>& channels,
   const std::string problem = device_->checkOutputs(channels, states);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
   auto entry = batch_.add(channels, states);
-  auto device = device_;
-  return runOnBus([this, device, entry](Transport& t) {
-    const bool sent = !entry->result;
-    Result w = batch_.complete(
-        *device, t, entry, [this](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
-          failsafe_.confirmed(chs, sts, true);
-          endFailsafeState();
-        });
-    failsafe_.observeWrite(device->outputs());
-    if (sent && w.ok()) publishOutputs();
-    return w;
-  });
+  return runOnBus([this, entry](Transport& t) { return completeBatch(t, entry); });
+}
+
+Result DeviceAdapter::completeBatch(Transport& t,
+                                    const std::shared_ptr<OutputBatch::Entry>& entry) {
+  const bool sent = !entry->result;
+  Result w = batch_.complete(*device_, t, entry,
+                             [this](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
+                               failsafe_.confirmed(chs, sts, true);
+                               endFailsafeState();
+                             });
+  failsafe_.observeWrite(device_->outputs());
+  if (sent && w.ok()) publishOutputs();
+  return w;
 }
 
 void DeviceAdapter::publishOutputs() {
@@ -102,35 +108,25 @@ bool DeviceAdapter::onSetOutputs(SetOutputs::Request& req, SetOutputs::Response&
   return true;
 }
 
+// Commands join the same batch as service writes (newest state per channel wins, one frame).
+// One bus job at a time is queued for them: it completes the newest command's entry, and with
+// it every command added before (a batch takes everything pending, in order).
 void DeviceAdapter::onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& msg) {
   failsafe_.commandReceived(channel, msg->data);  // the dead man's deadline
   std::lock_guard<std::mutex> lock(commands_mutex_);
-  pending_commands_[channel] = msg->data;
-  if (commands_queued_) return;  // the queued job will take the newest value
-  commands_queued_ = true;
+  newest_command_ = batch_.add({channel}, {static_cast<bool>(msg->data)});
+  if (command_job_queued_) return;  // the queued job will take this one too
+  command_job_queued_ = true;
   bus_.submit(device_->name(), [this](Transport& t) {
-    std::vector<uint8_t> channels;
-    std::vector<bool> states;
+    std::shared_ptr<OutputBatch::Entry> entry;
     {
       std::lock_guard<std::mutex> lock(commands_mutex_);
-      for (size_t i = 0; i < pending_commands_.size(); ++i) {
-        if (!pending_commands_[i]) continue;
-        channels.push_back(static_cast<uint8_t>(i));
-        states.push_back(*pending_commands_[i]);
-        pending_commands_[i].reset();
-      }
-      commands_queued_ = false;
+      entry = std::move(newest_command_);
+      command_job_queued_ = false;
     }
-    if (channels.empty()) return Result::success();
-    Result w = device_->setOutputs(t, channels, states);
-    failsafe_.observeWrite(device_->outputs());
-    if (w.ok()) {
-      failsafe_.confirmed(channels, states, true);
-      endFailsafeState();
-      publishOutputs();
-    } else {
+    Result w = completeBatch(t, entry);
+    if (!w.ok())
       ROS_WARN_THROTTLE(1.0, "%s: command failed: %s", device_->name().c_str(), w.message.c_str());
-    }
     return w;
   });
 }

@@ -1,4 +1,4 @@
-// LC relay board: inputs (optocouplers) and timed flash-close / flash-open.
+// LC relay board: timed flash-close / flash-open (its inputs are published by the base).
 #include "modbus_rtu_driver/Pulse.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
@@ -12,22 +12,11 @@ class LcRelay8Adapter : public DeviceAdapter {
   using DeviceAdapter::DeviceAdapter;
 
   void advertise() override {
-    inputs_ = std::make_unique<DigitalStatesPublisher>(nh_, "inputs", device_->inputNames(),
-                                                       publish_policy_);
     pulse_srv_ = nh_.advertiseService("pulse", &LcRelay8Adapter::onPulse, this);
   }
 
  private:
   LcRelay8& board() { return static_cast<LcRelay8&>(*device_); }
-
-  void onPoll(const Result& result) override {
-    DeviceAdapter::onPoll(result);
-    if (result.ok()) {
-      inputs_->publish(device_->inputs(), ros::Time::now());
-    } else if (offline()) {
-      inputs_->markStale();
-    }
-  }
 
   bool onPulse(Pulse::Request& req, Pulse::Response& res) {
     const std::string problem = LcRelay8::validatePulse(req.channel, req.duration);
@@ -53,7 +42,6 @@ class LcRelay8Adapter : public DeviceAdapter {
     return true;
   }
 
-  std::unique_ptr<DigitalStatesPublisher> inputs_;
   ros::ServiceServer pulse_srv_;
 };
 

@@ -64,7 +64,7 @@ class DeviceAdapter {
  protected:
   // The type's own topics and services (start() calls it before the first poll can run).
   virtual void advertise() {}
-  // Runs after each poll on the bus thread; the base publishes outputs.
+  // Runs after each poll on the bus thread; the base publishes outputs (and inputs).
   virtual void onPoll(const Result& result);
   // Runs `job` on the bus thread and waits for the real outcome. The message of a failure says
   // whether the device is offline.
@@ -77,6 +77,9 @@ class DeviceAdapter {
   bool offline() const { return !bus_.health(device_->name()).online; }
   // Service writes of outputs: checked, then merged with others queued for this device.
   Result writeOutputs(const std::vector<uint8_t>& channels, const std::vector<bool>& states);
+  // Bus thread: the outcome of a batch entry (service write or command), written with every
+  // other pending one if not written yet; confirmed states reach the fail-safe and the topics.
+  Result completeBatch(Transport& t, const std::shared_ptr<OutputBatch::Entry>& entry);
   // "ok" or "<device>: <message>" for service answers.
   std::string answer(const Result& result, const std::string& what) const;
 
@@ -109,17 +112,17 @@ class DeviceAdapter {
   std::string failsafe_active_;  // set by a safe write, cleared by a user's write
 
   std::unique_ptr<DigitalStatesPublisher> outputs_;
+  std::unique_ptr<DigitalStatesPublisher> inputs_;  // devices with inputs only
   std::vector<ros::Subscriber> command_subs_;
   std::vector<ros::ServiceServer> services_;
 
   std::optional<bool> logged_online_;  // what the log last said
   ros::WallTime last_offline_log_;
 
-  OutputBatch batch_;
-  // Command topics: newest command per channel wins; one bus job drains them.
-  std::mutex commands_mutex_;
-  std::vector<std::optional<bool>> pending_commands_;
-  bool commands_queued_ = false;
+  OutputBatch batch_;          // service writes and command topics, merged
+  std::mutex commands_mutex_;  // the two below
+  std::shared_ptr<OutputBatch::Entry> newest_command_;
+  bool command_job_queued_ = false;
 };
 
 }  // namespace modbus_rtu_driver
