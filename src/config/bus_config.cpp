@@ -19,8 +19,8 @@ const std::set<std::string> kDeviceKeys = {
 
 // The master role's keys beside the link's.
 const std::set<std::string> kBusKeys = {
-    "role",       "diagnostic_period", "devices",         "allow_raw_writes", "publish_on_change",
-    "keep_alive", "heartbeat",         "shutdown_timeout"};
+    "role",       "diagnostic_period", "devices",          "allow_raw_writes",  "publish_on_change",
+    "keep_alive", "heartbeat",         "shutdown_timeout", "realtime_priority", "lock_memory"};
 
 std::vector<std::string> getNames(const YAML::Node& n, const std::string& key) {
   if (!n.IsSequence()) fail(key, show(n) + " is not a list of names");
@@ -168,6 +168,14 @@ void parse(const YAML::Node& root, BusConfig* out) {
     if (!(out->shutdown_timeout >= 0 && out->shutdown_timeout <= 60))
       fail("shutdown_timeout", std::to_string(out->shutdown_timeout) + " s is outside 0-60 s");
   }
+  if (root["realtime_priority"]) {
+    out->realtime_priority = getInt(root["realtime_priority"], "realtime_priority");
+    if (out->realtime_priority < 0 || out->realtime_priority > 99)
+      fail("realtime_priority", std::to_string(out->realtime_priority) +
+                                    " is outside 0-99 (0 = off, 1-99 SCHED_FIFO priority)");
+  }
+  if (root["lock_memory"])
+    out->lock_memory = get<bool>(root["lock_memory"], "lock_memory", "true or false");
   const YAML::Node devices = root["devices"];
   if (!devices) fail("devices", "missing (a map of device name -> settings)");
   if (!devices.IsMap() || devices.size() == 0)

@@ -172,6 +172,7 @@ Result BusScheduler::PollTransport::execute(const Request& request) {
 }
 
 void BusScheduler::run() {
+  if (options_.on_thread_start) options_.on_thread_start();
   double reconnect_delay = options_.reconnect_initial;
   auto next_connect = clock_.now();
   std::unique_lock<std::mutex> lock(mutex_);

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "modbus_rtu_driver/core/realtime.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
 #include "modbus_rtu_driver/ros/yaml_params.h"
@@ -102,7 +103,7 @@ bool BusNode::start() {
     return false;
   }
   link_ = std::make_unique<RtuLink>(config_.link);
-  bus_ = std::make_unique<BusScheduler>(*link_);
+  bus_ = std::make_unique<BusScheduler>(*link_, schedulingOptions());
   for (const DeviceConfig& dc : config_.devices) {
     std::shared_ptr<Device> device = createDevice(dc);  // dc was validated as it was parsed
     link_->setReplyDelay(device->address(), dc.reply_delay);
@@ -152,6 +153,25 @@ bool BusNode::start() {
   return true;
 }
 
+BusScheduler::Options BusNode::schedulingOptions() {
+  std::string error;
+  if (config_.lock_memory) {
+    memory_status_ = lockMemory(&error) ? "locked (mlockall)" : error;
+    if (!error.empty()) ROS_WARN("lock_memory: %s", error.c_str());
+  }
+  BusScheduler::Options options;
+  const int priority = config_.realtime_priority;
+  if (priority > 0)
+    options.on_thread_start = [this, priority] {
+      std::string refused;
+      const bool granted = raiseToRealtime(priority, &refused);
+      if (!granted) ROS_WARN("realtime_priority: %s", refused.c_str());
+      std::lock_guard<std::mutex> lock(realtime_mutex_);
+      realtime_status_ = granted ? "SCHED_FIFO " + std::to_string(priority) : refused;
+    };
+  return options;
+}
+
 // Line errors (silence, garbled or misaddressed replies, i/o) in the last kErrorWindowSeconds:
 // the level says how the bus is now; the totals stay in the values.
 uint64_t BusNode::recentLineErrors(const LinkStats& s) {
@@ -187,6 +207,11 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   // its latency timer (16 ms by default).
   status.add("low latency",
              link_->lowLatency() ? "yes" : "no (the adapter refused it or it is off)");
+  {
+    std::lock_guard<std::mutex> lock(realtime_mutex_);
+    status.add("bus thread scheduling", realtime_status_);
+    status.add("memory", memory_status_);
+  }
   status.add("requests", s.requests);
   status.add("attempts", s.attempts);
   status.add("failed", s.failed);

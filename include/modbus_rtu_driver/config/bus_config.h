@@ -33,6 +33,10 @@ struct BusConfig {
   std::string heartbeat_topic;
   double heartbeat_timeout = 0.0;
   double shutdown_timeout = 3.0;  // s
+  // The bus thread's SCHED_FIFO priority, 1-99; 0 = the normal scheduler. And whether the node
+  // locks its memory (mlockall). Both need the user's limits to allow them (docs/ros_api.md).
+  int realtime_priority = 0;
+  bool lock_memory = false;
   std::vector<DeviceConfig> devices;
 };
 

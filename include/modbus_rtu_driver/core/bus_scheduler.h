@@ -42,6 +42,8 @@ class BusScheduler {
     double backoff_max = 5.0;        // s
     double reconnect_initial = 0.5;  // s between attempts to reopen the port, doubling
     double reconnect_max = 5.0;      // s
+    // Runs first on the bus thread (the node raises the thread's priority there).
+    std::function<void()> on_thread_start;
   };
 
   explicit BusScheduler(Transport& transport);

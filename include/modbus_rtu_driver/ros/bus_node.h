@@ -7,6 +7,7 @@
 
 #include <deque>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,8 @@ class BusNode {
   void startFailsafe();
   void checkDeadlines();
   uint64_t recentLineErrors(const LinkStats& stats);
+  // realtime_priority and lock_memory: asked for here, their outcome shown in the diagnostics.
+  BusScheduler::Options schedulingOptions();
 
   static constexpr int kErrorWindowSeconds = 10;
   std::deque<std::pair<ros::WallTime, uint64_t>> error_totals_;  // (when, line errors so far)
@@ -51,6 +54,9 @@ class BusNode {
   std::vector<ros::Subscriber> heartbeat_subs_;
   std::unique_ptr<Watchdog> bus_heartbeat_;
   ros::SteadyTimer failsafe_timer_;
+  std::mutex realtime_mutex_;  // the two below: set on the bus thread, read by diagnostics
+  std::string realtime_status_ = "off";
+  std::string memory_status_ = "not locked";
 };
 
 }  // namespace modbus_rtu_driver
