@@ -5,6 +5,12 @@ while polling three devices at 50 Hz each. Starts its own rosmaster, the simulat
 from the sourced catkin workspace; prints markdown tables; appends CSV rows to --csv.
 
     node_bench.py [--calls N] [--bauds 115200,9600] [--cpu-seconds S (0: skip)] [--csv FILE]
+                  [--repeats R] [--hog N] [--realtime P]
+
+Each figure is measured --repeats times (5 by default) and shown as the median with the spread
+(lowest-highest) of the runs, so the machine's noise is in the table. With --hog N, N busy
+processes keep the CPUs loaded and the 115200 latency is measured again with the bus thread at
+normal priority and at SCHED_FIFO --realtime P (the node's realtime_priority).
 """
 import argparse
 import logging
@@ -78,10 +84,11 @@ class Simulator:
 
 
 class Node:
-    def __init__(self, workdir, port, rate, baud=115200):
+    def __init__(self, workdir, port, rate, baud=115200, realtime=0):
         config = os.path.join(workdir, "bus.yaml")
         with open(config, "w") as f:
             f.write(BUS_YAML % {"rate": rate, "baud": baud})
+            f.write("realtime_priority: %d\n" % realtime)
         subprocess.check_call(["rosparam", "delete", "/bench_bus"], stderr=subprocess.DEVNULL) \
             if self._has_params() else None
         subprocess.check_call(["rosparam", "load", config, "/bench_bus"])
@@ -119,9 +126,45 @@ def percentile(values, p):
     return ordered[min(len(ordered) - 1, int(round(p / 100.0 * (len(ordered) - 1))))]
 
 
-def latency(workdir, calls, csv, baud):
+class Hog:
+    """N busy processes at normal priority: a loaded robot computer."""
+
+    def __init__(self, n):
+        self.procs = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+                      for _ in range(n)]
+
+    def stop(self):
+        for p in self.procs:
+            p.kill()
+            p.wait()
+
+
+def spread(values, fmt="%.2f"):
+    """'median (lowest-highest)' of one figure over the repeats."""
+    if not values:
+        return "-"
+    if len(values) == 1:
+        return fmt % values[0]
+    return (fmt + " (" + fmt + "-" + fmt + ")") % (statistics.median(values), min(values),
+                                                 max(values))
+
+
+def raise_simulator(sim):
+    """Under load the simulator must keep its pace, or its delays would count as the node's:
+    SCHED_FIFO 60 for each of its threads where allowed. True when granted."""
+    try:
+        for tid in os.listdir("/proc/%d/task" % sim.proc.pid):
+            os.sched_setscheduler(int(tid), os.SCHED_FIFO, os.sched_param(60))
+        return True
+    except OSError:
+        return False
+
+
+def measure_latency(workdir, calls, baud, realtime=0, loaded=False):
+    """One run: (to-the-wire seconds, to-the-answer seconds, failed calls, simulator raised)."""
     sim = Simulator(workdir, pace=True, baud=baud)
-    node = Node(workdir, sim.link, 10.0, baud)
+    sim_raised = raise_simulator(sim) if loaded else False
+    node = Node(workdir, sim.link, 10.0, baud, realtime)
     try:
         node.wait_ready()
         pump = rospy.ServiceProxy("/bench_bus/relays/out0/set", SetBool, persistent=True)
@@ -147,29 +190,74 @@ def latency(workdir, calls, csv, baud):
     finally:
         node.stop()
         sim.stop()
+    return wire, answer, failed, sim_raised
+
+
+def transaction_time(baud):
     # One transaction's wire time at the baud, 8N1: the longest poll, FC04 5 registers (8 + 15
     # bytes) with t3.5 after the request and after the reply (1.75 ms above 19200 baud).
     t35 = 3.5 * 11 / baud if baud <= 19200 else 0.00175
-    transaction = (8 + 15) * 10.0 / baud + 2 * t35
+    return (8 + 15) * 10.0 / baud + 2 * t35
+
+
+def figures(runs):
+    """Per run (p50, p99, max) in ms of each list of seconds."""
+    return [(1e3 * percentile(v, 50), 1e3 * percentile(v, 99), 1e3 * max(v)) for v in runs if v]
+
+
+def latency(workdir, calls, csv, baud, repeats):
+    transaction = transaction_time(baud)
     target = 0.002 + transaction
-    print("## Latency of SetBool while polling 3 devices at 10 Hz (paced %d line, %d calls)\n"
-          % (baud, calls))
+    runs = [measure_latency(workdir, calls, baud) for _ in range(repeats)]
+    print("## Latency of SetBool while polling 3 devices at 10 Hz (paced %d line, %d calls, "
+          "%d runs)\n" % (baud, calls, repeats))
     print("| from the call to | p50 [ms] | p99 [ms] | max [ms] | target p99 [ms] |")
     print("|---|---|---|---|---|")
-    for name, values in (("the frame on the line", wire), ("the answer", answer)):
-        if not values:
-            print("| %s | - | - | - | |" % name)
-            continue
-        print("| %s | %.2f | %.2f | %.2f | %s |" % (
-            name, 1e3 * percentile(values, 50), 1e3 * percentile(values, 99), 1e3 * max(values),
+    for index, name in ((0, "the frame on the line"), (1, "the answer")):
+        f = figures([run[index] for run in runs])
+        print("| %s | %s | %s | %s | %s |" % (
+            name, spread([x[0] for x in f]), spread([x[1] for x in f]), spread([x[2] for x in f]),
             "%.2f (2 ms + one transaction, %.2f ms)" % (1e3 * target, 1e3 * transaction)
-            if name.startswith("the frame") else ""))
-        csv.write("latency_%d,%s,%f,%f,%f\n" % (baud, name.replace(" ", "_"), percentile(values, 50),
-                                              percentile(values, 99), target))
-    print("\n%d of %d calls matched to their frame; %d failed.\n" % (len(wire), calls, failed))
+            if index == 0 else ""))
+        if f:
+            csv.write("latency_%d,%s,%f,%f,%f\n" % (
+                baud, name.replace(" ", "_"), statistics.median(x[0] for x in f) / 1e3,
+                statistics.median(x[1] for x in f) / 1e3, target))
+    matched = sum(len(run[0]) for run in runs)
+    failed = sum(run[2] for run in runs)
+    print("\nMedian (lowest-highest) over the runs. %d of %d calls matched to their frame; %d "
+          "failed.\n" % (matched, calls * repeats, failed))
 
 
-def cpu(workdir, seconds, csv):
+def tail_latency(workdir, calls, csv, hogs, priority, repeats):
+    """SetBool to the wire at 115200 with the CPUs loaded, normal priority against SCHED_FIFO."""
+    hog = Hog(hogs)
+    try:
+        rows = []
+        for label, rt in (("normal", 0), ("SCHED_FIFO %d" % priority, priority)):
+            runs = [measure_latency(workdir, calls, 115200, rt, True) for _ in range(repeats)]
+            rows.append((label, figures([run[0] for run in runs])))
+            sim_raised = all(run[3] for run in runs)
+    finally:
+        hog.stop()
+    print("## SetBool to the wire under load (%d busy processes on %d CPUs, paced 115200 line, "
+          "%d calls, %d runs)\n" % (hogs, os.cpu_count(), calls, repeats))
+    print("| bus thread | p50 [ms] | p99 [ms] | max [ms] |")
+    print("|---|---|---|---|")
+    for label, f in rows:
+        print("| %s | %s | %s | %s |" % (label, spread([x[0] for x in f]),
+                                         spread([x[1] for x in f]), spread([x[2] for x in f])))
+        if f:
+            csv.write("tail_latency,%s,%f,%f,%f\n" % (
+                label.replace(" ", "_"), statistics.median(x[0] for x in f) / 1e3,
+                statistics.median(x[1] for x in f) / 1e3, statistics.median(x[2] for x in f) / 1e3))
+    print("\nThe simulator ran at %s in both rows, so its own pacing is not what the load delays. "
+          "The node's diagnostics say whether the kernel granted its priority "
+          "(`bus thread scheduling`).\n" % ("SCHED_FIFO 60" if sim_raised else
+                                              "normal priority (SCHED_FIFO refused)"))
+
+
+def measure_cpu(workdir, seconds):
     sim = Simulator(workdir, pace=False)
     node = Node(workdir, sim.link, 50.0)
     rates = {}
@@ -191,14 +279,25 @@ def cpu(workdir, seconds, csv):
     finally:
         node.stop()
         sim.stop()
-    share = 100.0 * (c1 - c0) / (t1 - t0)
-    print("## Node CPU while polling 3 devices at 50 Hz (simulator answering at once, 115200)\n")
-    print("| CPU of one core | target | achieved poll rates [Hz] |")
+    return 100.0 * (c1 - c0) / (t1 - t0), rates
+
+
+def cpu(workdir, seconds, csv, repeats):
+    runs = [measure_cpu(workdir, seconds) for _ in range(repeats)]
+    shares = [share for share, _ in runs]
+    rates = {}
+    for _, r in runs:
+        for k, v in r.items():
+            rates.setdefault(k, []).append(v)
+    print("## Node CPU while polling 3 devices at 50 Hz (simulator answering at once, 115200, "
+          "%d runs)\n" % repeats)
+    print("| CPU of one core [%] | target | achieved poll rates [Hz] |")
     print("|---|---|---|")
-    print("| %.1f %% | < 5 %% | %s |" % (share, ", ".join(
-        "%s %.1f" % (k, v) for k, v in sorted(rates.items()))))
-    print("\nMeasured from /proc/<pid>/stat (utime + stime) over %.0f s.\n" % (t1 - t0))
-    csv.write("cpu,3x50Hz,%f,,\n" % share)
+    print("| %s | < 5 %% | %s |" % (spread(shares, "%.1f"), ", ".join(
+        "%s %s" % (k, spread(v, "%.1f")) for k, v in sorted(rates.items()))))
+    print("\nMedian (lowest-highest) over the runs; /proc/<pid>/stat (utime + stime) over %.0f s "
+          "each.\n" % seconds)
+    csv.write("cpu,3x50Hz,%f,%f,%f\n" % (statistics.median(shares), min(shares), max(shares)))
 
 
 def main():
@@ -208,6 +307,11 @@ def main():
                         help="latency at each of these bauds (9600: the LC board's factory speed)")
     parser.add_argument("--cpu-seconds", type=float, default=10.0)
     parser.add_argument("--csv", default="node_bench.csv")
+    parser.add_argument("--repeats", type=int, default=5, help="runs of each figure")
+    parser.add_argument("--hog", type=int, default=0,
+                        help="busy processes for the tail-latency table (0: skip it)")
+    parser.add_argument("--realtime", type=int, default=50,
+                        help="SCHED_FIFO priority compared under --hog")
     args = parser.parse_args()
     port = free_port()
     os.environ["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
@@ -220,9 +324,12 @@ def main():
         with tempfile.TemporaryDirectory() as workdir, open(args.csv, "a") as csv:
             for baud in (int(b) for b in args.bauds.split(",") if b):
                 # A 9600 transaction is 12 x longer: fewer calls keep the run short.
-                latency(workdir, args.calls if baud > 19200 else max(50, args.calls // 3), csv, baud)
+                latency(workdir, args.calls if baud > 19200 else max(50, args.calls // 3), csv, baud,
+                        args.repeats)
+            if args.hog > 0:
+                tail_latency(workdir, args.calls, csv, args.hog, args.realtime, args.repeats)
             if args.cpu_seconds > 0:
-                cpu(workdir, args.cpu_seconds, csv)
+                cpu(workdir, args.cpu_seconds, csv, args.repeats)
     finally:
         master.terminate()
         master.wait(10)
