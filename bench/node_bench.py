@@ -116,6 +116,25 @@ class Node:
             fields = f.read().rsplit(")", 1)[1].split()
         return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
+    def thread_cpu_seconds(self):
+        """CPU seconds by thread name: the bus thread is 'modbus_bus', the rest are roscpp's
+        (publishing, the service spinner, timers, diagnostics)."""
+        by_name = {}
+        for tid in os.listdir("/proc/%d/task" % self.proc.pid):
+            try:
+                with open("/proc/%d/task/%s/stat" % (self.proc.pid, tid)) as f:
+                    fields = f.read().rsplit(")", 1)[1].split()
+            except OSError:
+                continue  # the thread ended
+            name = "bus thread" if self._comm(tid) == "modbus_bus" else "ROS threads"
+            seconds = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+            by_name[name] = by_name.get(name, 0.0) + seconds
+        return by_name
+
+    def _comm(self, tid):
+        with open("/proc/%d/task/%s/comm" % (self.proc.pid, tid)) as f:
+            return f.read().strip()
+
     def stop(self):
         self.proc.terminate()
         self.proc.wait(20)
@@ -272,29 +291,35 @@ def measure_cpu(workdir, seconds):
         node.wait_ready()
         sub = rospy.Subscriber("/diagnostics", DiagnosticArray, on_diag)
         time.sleep(3.0)
-        c0, t0 = node.cpu_seconds(), time.monotonic()
+        c0, th0, t0 = node.cpu_seconds(), node.thread_cpu_seconds(), time.monotonic()
         time.sleep(seconds)
-        c1, t1 = node.cpu_seconds(), time.monotonic()
+        c1, th1, t1 = node.cpu_seconds(), node.thread_cpu_seconds(), time.monotonic()
         sub.unregister()
     finally:
         node.stop()
         sim.stop()
-    return 100.0 * (c1 - c0) / (t1 - t0), rates
+    threads = {k: 100.0 * (th1.get(k, 0.0) - th0.get(k, 0.0)) / (t1 - t0) for k in th1}
+    return 100.0 * (c1 - c0) / (t1 - t0), rates, threads
 
 
 def cpu(workdir, seconds, csv, repeats):
     runs = [measure_cpu(workdir, seconds) for _ in range(repeats)]
-    shares = [share for share, _ in runs]
-    rates = {}
-    for _, r in runs:
+    shares = [run[0] for run in runs]
+    rates, threads = {}, {}
+    for _, r, th in runs:
         for k, v in r.items():
             rates.setdefault(k, []).append(v)
+        for k, v in th.items():
+            threads.setdefault(k, []).append(v)
     print("## Node CPU while polling 3 devices at 50 Hz (simulator answering at once, 115200, "
           "%d runs)\n" % repeats)
-    print("| CPU of one core [%] | target | achieved poll rates [Hz] |")
-    print("|---|---|---|")
-    print("| %s | < 5 %% | %s |" % (spread(shares, "%.1f"), ", ".join(
-        "%s %s" % (k, spread(v, "%.1f")) for k, v in sorted(rates.items()))))
+    print("| CPU of one core [%] | of it: bus thread / ROS threads [%] | target | "
+          "achieved poll rates [Hz] |")
+    print("|---|---|---|---|")
+    print("| %s | %s / %s | < 5 %% | %s |" % (
+        spread(shares, "%.1f"), spread(threads.get("bus thread", []), "%.1f"),
+        spread(threads.get("ROS threads", []), "%.1f"),
+        ", ".join("%s %s" % (k, spread(v, "%.1f")) for k, v in sorted(rates.items()))))
     print("\nMedian (lowest-highest) over the runs; /proc/<pid>/stat (utime + stime) over %.0f s "
           "each.\n" % seconds)
     csv.write("cpu,3x50Hz,%f,%f,%f\n" % (statistics.median(shares), min(shares), max(shares)))
