@@ -27,8 +27,8 @@ int waitReadable(int fd, double seconds) {
 }
 
 ReadStatus readFrame(int fd, double first, double between,
-                     const std::function<long(const Bytes&)>& length_of, size_t max_length,
-                     Bytes* out, int* error) {
+                     const std::function<long(const Bytes&)>& length_of, size_t shortest,
+                     size_t max_length, Bytes* out, int* error) {
   out->clear();
   size_t need = 0;
   while (need == 0 || out->size() < need) {
@@ -39,7 +39,8 @@ ReadStatus readFrame(int fd, double first, double between,
       return ReadStatus::kError;
     }
     uint8_t chunk[512];
-    const size_t want = need ? need - out->size() : 1;
+    const size_t want =
+        need ? need - out->size() : std::max<size_t>(1, shortest - std::min(shortest, out->size()));
     const ssize_t n = read(fd, chunk, std::min(sizeof chunk, want));
     if (n == 0) return ReadStatus::kClosed;
     if (n < 0) {

@@ -26,7 +26,7 @@ Result ModbusTcpLink::attempt(const Request& request) {
     Bytes reply;
     int error = 0;
     const ReadStatus status = readFrame(fd_, left, gatewayByteTimeout(config_), length_of,
-                                        kMaxMbapAduLength, &reply, &error);
+                                        kMbapHeaderLength + 1, kMaxMbapAduLength, &reply, &error);
     if (status == ReadStatus::kComplete && mbapTransaction(reply) != transaction) {
       addStaleBytes(reply.size());  // the late reply to an earlier request
       continue;

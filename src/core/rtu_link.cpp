@@ -217,7 +217,7 @@ Result RtuLink::readReply(const Request& request) {
   const ReadStatus status = readFrame(
       modbus_get_socket(ctx_), responseTimeout(request), effectiveByteTimeout(config_),
       [&](const Bytes& b) { return static_cast<long>(replyLengthFromHeader(request, b)); },
-      MODBUS_RTU_MAX_ADU_LENGTH, &reply, &error);
+      kShortestReply, MODBUS_RTU_MAX_ADU_LENGTH, &reply, &error);
   if (status == ReadStatus::kComplete) return decodeReply(request, reply);
   if (status == ReadStatus::kError) return fromErrno(request, error);
   if (status == ReadStatus::kClosed) return fromErrno(request, ECONNRESET);

@@ -70,7 +70,7 @@ Result RtuOverTcpLink::attempt(const Request& request) {
   const ReadStatus status = readFrame(
       fd_, responseTimeout(request), gatewayByteTimeout(config_),
       [&](const Bytes& b) { return static_cast<long>(replyLengthFromHeader(request, b)); },
-      kMaxAduLength, &reply, &error);
+      kShortestReply, kMaxAduLength, &reply, &error);
   if (status == ReadStatus::kComplete) return decodeReply(request, reply);
   return readFailure(request, status, reply, error, medium());
 }

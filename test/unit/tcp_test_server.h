@@ -60,7 +60,7 @@ class TestTcpServer {
  private:
   Bytes read(int fd, const std::function<long(const Bytes&)>& length_of) {
     Bytes frame;
-    if (readFrame(fd, 5.0, 5.0, length_of, 300, &frame, nullptr) != ReadStatus::kComplete)
+    if (readFrame(fd, 5.0, 5.0, length_of, 1, 300, &frame, nullptr) != ReadStatus::kComplete)
       return {};
     std::lock_guard<std::mutex> lock(mutex_);
     received_.push_back(frame);

@@ -16,9 +16,11 @@ enum class ReadStatus { kComplete, kTimeout, kClosed, kError, kBadHeader };
 
 // Reads one frame into `out`: the first byte within `first` s, each later one within `between`
 // s, and stops as soon as `length_of(bytes so far)` (0 = cannot tell yet, < 0 = not a frame)
-// says it is whole; never more than `max_length` bytes. `error` gets errno on kError.
+// says it is whole; never more than `max_length` bytes. Until the length is known it asks for
+// at most `shortest` bytes (the shortest frame there is), so it never reads into the next frame
+// and needs few reads. `error` gets errno on kError.
 ReadStatus readFrame(int fd, double first, double between,
-                     const std::function<long(const Bytes&)>& length_of, size_t max_length,
-                     Bytes* out, int* error);
+                     const std::function<long(const Bytes&)>& length_of, size_t shortest,
+                     size_t max_length, Bytes* out, int* error);
 
 }  // namespace modbus_rtu_driver
