@@ -3,6 +3,7 @@
 
 #include "modbus_rtu_driver/core/mbap.h"
 #include "modbus_rtu_driver/core/tcp_link.h"
+#include "modbus_rtu_driver/core/tcp_socket.h"
 
 namespace modbus_rtu_driver {
 
@@ -10,7 +11,10 @@ namespace {
 using Steady = std::chrono::steady_clock;
 }  // namespace
 
+// A connection the gateway closed while the bus was idle fails the request unsent (a late reply
+// still waiting is read and dropped by its transaction id below).
 Result ModbusTcpLink::attempt(const Request& request) {
+  if (closedByPeer(fd_)) return closedUnsent(request);
   const uint16_t transaction = ++next_transaction_;
   Result sent = send(request, rtuToMbap(transaction, encodeRequest(request)));
   if (!sent.ok()) return sent;
@@ -46,6 +50,7 @@ Result ModbusTcpLink::attempt(const Request& request) {
 
 // Unit id 0: the gateway broadcasts on its line and nobody answers.
 Result ModbusTcpLink::sendBroadcast(const Request& request) {
+  if (closedByPeer(fd_)) return closedUnsent(request);
   return send(request, rtuToMbap(++next_transaction_, encodeRequest(request)));
 }
 

@@ -42,6 +42,11 @@ double TcpLink::responseTimeout(const Request& request) const {
          reply_delay_[request.slave];
 }
 
+Result TcpLink::closedUnsent(const Request& request) const {
+  return Result::failure(ErrorKind::kIo,
+                         request.describe() + ": not sent, " + medium() + " closed the connection");
+}
+
 Result TcpLink::send(const Request& request, const Bytes& frame) {
   if (sendAll(fd_, frame)) return Result::success();
   return Result::failure(
@@ -60,9 +65,7 @@ bool RtuOverTcpLink::prepareLine(const Request& request) {
 }
 
 Result RtuOverTcpLink::attempt(const Request& request) {
-  if (!prepareLine(request))
-    return Result::failure(
-        ErrorKind::kIo, request.describe() + ": not sent, " + medium() + " closed the connection");
+  if (!prepareLine(request)) return closedUnsent(request);
   Result sent = send(request, encodeRequest(request));
   if (!sent.ok()) return sent;
   Bytes reply;
@@ -76,9 +79,7 @@ Result RtuOverTcpLink::attempt(const Request& request) {
 }
 
 Result RtuOverTcpLink::sendBroadcast(const Request& request) {
-  if (!prepareLine(request))
-    return Result::failure(
-        ErrorKind::kIo, request.describe() + ": not sent, " + medium() + " closed the connection");
+  if (!prepareLine(request)) return closedUnsent(request);
   return send(request, encodeRequest(request));
 }
 

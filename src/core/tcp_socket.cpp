@@ -119,4 +119,13 @@ long discardWaiting(int fd) {
   }
 }
 
+bool closedByPeer(int fd) {
+  uint8_t byte;
+  ssize_t n;
+  do {
+    n = recv(fd, &byte, 1, MSG_PEEK | MSG_DONTWAIT);
+  } while (n < 0 && errno == EINTR);
+  return n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK);
+}
+
 }  // namespace modbus_rtu_driver

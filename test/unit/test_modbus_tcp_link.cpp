@@ -2,6 +2,8 @@
 // transaction id, lost replies, a broken stream, a dropped connection and the reconnect.
 #include <gtest/gtest.h>
 
+#include <atomic>
+
 #include "modbus_rtu_driver/core/tcp_link.h"
 #include "tcp_test_server.h"
 #include "wait_for.h"
@@ -163,6 +165,27 @@ TEST(ModbusTcpLink, DroppedConnectionMidRequestIsAnIoErrorThenReconnects) {
   ASSERT_TRUE(link.connect(&error)) << error;
   EXPECT_TRUE(link.execute(Request::readHoldingRegisters(1, 0, 1)).ok());
   EXPECT_EQ(link.stats().reconnects, 1u);
+}
+
+TEST(ModbusTcpLink, AConnectionClosedWhileIdleFailsTheNextRequestAsAnIoError) {
+  TestTcpServer* s = nullptr;
+  std::atomic<bool> closed{false};
+  TestTcpServer srv([&](int fd) {
+    const Bytes f = s->readMbap(fd);
+    TestTcpServer::write(fd, replyTo(f, {7}));
+    shutdown(fd, SHUT_RDWR);  // then the gateway goes away while the bus is idle
+    closed = true;
+  });
+  s = &srv;
+  LinkConfig c = server(srv.port());
+  ModbusTcpLink link(c);
+  ASSERT_TRUE(link.connect(nullptr));
+  ASSERT_TRUE(link.execute(Request::readHoldingRegisters(1, 0, 1)).ok());
+  ASSERT_TRUE(waitFor([&] { return closed.load(); }));
+  const Result r = link.execute(Request::readHoldingRegisters(1, 0, 1));
+  EXPECT_EQ(r.error, ErrorKind::kIo) << r.message;
+  EXPECT_FALSE(link.connected());
+  EXPECT_EQ(srv.received().size(), 1u);
 }
 
 }  // namespace

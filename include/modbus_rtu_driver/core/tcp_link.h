@@ -29,6 +29,8 @@ class TcpLink : public Link {
   // Sends `frame`; a failure is kIo (not sent, or the connection is gone).
   Result send(const Request& request, const Bytes& frame);
   std::string medium() const;  // "gateway HOST:PORT"
+  // The failure of a request found the connection closed before it was sent.
+  Result closedUnsent(const Request& request) const;
 
   int fd_ = -1;
 

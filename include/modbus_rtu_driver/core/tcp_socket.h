@@ -20,5 +20,8 @@ bool sendAll(int fd, const Bytes& bytes);
 // Reads what is waiting without blocking and drops it; returns the byte count, or -1 when the
 // peer closed the connection or it failed.
 long discardWaiting(int fd);
+// True when the peer has closed the connection and nothing it sent before is still unread
+// (looked at without reading).
+bool closedByPeer(int fd);
 
 }  // namespace modbus_rtu_driver
