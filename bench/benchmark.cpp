@@ -1,7 +1,8 @@
 // modbus_rtu_benchmark: this package's bus layer against a plain libmodbus loop and a pymodbus
-// client, achieved transactions per second against the line's theoretical limit, and 1-32
-// devices on one line, all against the simulator on a pty in one run. Prints markdown tables and
-// writes CSV; figures are ratios for a noisy machine. (Node latency and CPU: node_bench.py.)
+// client, achieved transactions per second against the line's theoretical limit, 1-32 devices
+// on one line, all against the simulator on a pty, and the TCP transports against plain
+// libmodbus TCP (bench_transports.cpp), in one run. Prints markdown tables and writes CSV; figures
+// are ratios for a noisy machine. (Node latency and CPU: node_bench.py.)
 //   modbus_rtu_benchmark [--seconds S] [--csv FILE] [--pymodbus CLIENT_SCRIPT]
 #include <modbus/modbus.h>
 #include <unistd.h>
@@ -83,7 +84,8 @@ std::map<std::string, double> pymodbusRates(const std::string& script, const std
 
 namespace modbus_rtu_driver {
 void benchmarkScale(const std::string& dir, double seconds, std::ofstream& csv);
-}
+void benchmarkTransports(const std::string& dir, double seconds, std::ofstream& csv);
+}  // namespace modbus_rtu_driver
 
 int main(int argc, char** argv) {
   double seconds = 2.0;
@@ -202,6 +204,7 @@ int main(int argc, char** argv) {
   }
   std::printf("\n");
   modbus_rtu_driver::benchmarkScale(dir, seconds, csv);
+  modbus_rtu_driver::benchmarkTransports(dir, seconds, csv);
   std::printf("CSV: %s\n", csv_path.c_str());
   return 0;
 }

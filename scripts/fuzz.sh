@@ -19,8 +19,8 @@ build() {  # a target that does not build is run as missing below, and fails
     -lmodbus -lyaml-cpp -o "$OUT/$name") || echo "$name: build failed"
 }
 build fuzz_frames src/sim/sim_device.cpp src/sim/sim_ld58a08.cpp src/sim/sim_lc_relay8.cpp \
-  src/sim/sim_yespeed_pdu.cpp
-build fuzz_slave src/core/slave_server.cpp src/core/serial_port.cpp src/core/slave_config.cpp \
+  src/sim/sim_yespeed_pdu.cpp src/core/link_config.cpp
+build fuzz_slave src/core/slave_server.cpp src/core/serial_port.cpp src/core/fd_io.cpp src/core/slave_config.cpp \
   src/core/config_yaml.cpp src/core/link_config.cpp
 # Seed with the manuals' frames.
 grep -v '^#' "$REPO/test/data/golden_frames.tsv" | tail -n +2 | cut -f4 | while read -r hex; do

@@ -27,6 +27,9 @@ Commands:
     power_cycle                      every device off and on
     info                             #INDEX:TYPE:ADDRESS:BAUD:PARITY per device
     frames                           frames received, replies sent, byte runs dropped
+    gateway                          port P connections N accepted N dropped N (--rtu-tcp)
+    gateway_drop [MS]                the RTU-over-TCP gateway drops its connections; with MS
+                                     it refuses new ones for MS ms (a reboot)
     help
 """
 import socket

@@ -5,9 +5,19 @@
 namespace modbus_rtu_driver {
 namespace config {
 
-const std::set<std::string> kLinkKeys = {
-    "port",         "baud",    "parity",  "data_bits", "stop_bits",   "response_timeout",
-    "byte_timeout", "retries", "min_gap", "direction", "low_latency", "late_reply_guard"};
+const std::set<std::string> kLinkKeys = {"port",
+                                         "baud",
+                                         "parity",
+                                         "data_bits",
+                                         "stop_bits",
+                                         "response_timeout",
+                                         "byte_timeout",
+                                         "retries",
+                                         "min_gap",
+                                         "direction",
+                                         "low_latency",
+                                         "late_reply_guard",
+                                         "network_allowance"};
 
 [[noreturn]] void fail(const std::string& key, const std::string& what) {
   throw ConfigError{key + ": " + what};
@@ -63,6 +73,8 @@ void parseLink(const YAML::Node& root, LinkConfig* out) {
   if (root["retries"]) link.retries = getInt(root["retries"], "retries");
   if (root["late_reply_guard"])
     link.late_reply_guard = getNumber(root["late_reply_guard"], "late_reply_guard");
+  if (root["network_allowance"])
+    link.network_allowance = getNumber(root["network_allowance"], "network_allowance");
   if (root["min_gap"]) link.min_gap = getNumber(root["min_gap"], "min_gap");
   if (root["low_latency"])
     link.low_latency = get<bool>(root["low_latency"], "low_latency", "true or false");

@@ -1,13 +1,18 @@
 #include "modbus_rtu_driver/core/mbap.h"
 
+#include <algorithm>
+
 namespace modbus_rtu_driver {
 
 Bytes rtuToMbap(uint16_t transaction, const Bytes& rtu) {
   // unit + PDU: the RTU ADU without its 2 CRC bytes
   const size_t carried = rtu.size() >= 2 ? rtu.size() - 2 : 0;
-  Bytes out{static_cast<uint8_t>(transaction >> 8), static_cast<uint8_t>(transaction & 0xFF), 0, 0,
-            static_cast<uint8_t>(carried >> 8),     static_cast<uint8_t>(carried & 0xFF)};
-  out.insert(out.end(), rtu.begin(), rtu.begin() + static_cast<std::ptrdiff_t>(carried));
+  Bytes out(6 + carried);
+  out[0] = static_cast<uint8_t>(transaction >> 8);
+  out[1] = static_cast<uint8_t>(transaction & 0xFF);
+  out[4] = static_cast<uint8_t>(carried >> 8);
+  out[5] = static_cast<uint8_t>(carried & 0xFF);
+  std::copy(rtu.begin(), rtu.begin() + static_cast<std::ptrdiff_t>(carried), out.begin() + 6);
   return out;
 }
 

@@ -6,6 +6,7 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -16,8 +17,6 @@
 namespace modbus_rtu_driver {
 
 namespace {
-
-using Steady = std::chrono::steady_clock;
 
 #if LIBMODBUS_VERSION_CHECK(3, 1, 7)
 constexpr bool kHasQuirks = true;
@@ -36,19 +35,8 @@ void toTimeval(double seconds, uint32_t* sec, uint32_t* usec) {
 
 }  // namespace
 
-RtuLink::RtuLink(LinkConfig config) : config_(std::move(config)) {}
-
 RtuLink::~RtuLink() {
   disconnect();
-}
-
-void RtuLink::setReplyDelay(uint8_t slave, double seconds) {
-  reply_delay_[slave] = seconds;
-}
-
-LinkStats RtuLink::stats() const {
-  std::lock_guard<std::mutex> lock(stats_mutex_);
-  return stats_;
 }
 
 bool RtuLink::connect(std::string* error) {
@@ -83,12 +71,7 @@ bool RtuLink::connect(std::string* error) {
       low_latency_ = ioctl(fd, TIOCSSERIAL, &ss) == 0;
     }
   }
-  {
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    if (ever_connected_) ++stats_.reconnects;
-  }
-  ever_connected_ = true;
-  last_activity_ = Steady::now();
+  noteConnected();
   return true;
 }
 
@@ -97,40 +80,11 @@ void RtuLink::disconnect() {
   ctx_ = nullptr;
 }
 
-Result RtuLink::execute(const Request& request) {
-  const std::string problem = request.validate();
-  if (!problem.empty())
-    return Result::failure(ErrorKind::kInvalidArgument, request.describe() + ": " + problem);
-  if (!ctx_)
-    return Result::failure(ErrorKind::kNotConnected, "port " + config_.port + " is not open");
-  {
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    ++stats_.requests;
-  }
-  if (!request.expectsReply()) return sendBroadcast(request);
-  const auto start = Steady::now();
-  Result r;
-  for (int attempt_no = 0;; ++attempt_no) {
-    r = attempt(request);
-    if (r.ok() || !answerLost(r.error) || !request.repeatable || attempt_no >= config_.retries ||
-        !ctx_)
-      break;
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    ++stats_.retries;
-  }
-  account(r, std::chrono::duration<double>(Steady::now() - start).count());
-  return r;
-}
-
 Result RtuLink::attempt(const Request& request) {
   prepareLine(request);
   uint32_t sec = 0, usec = 0;
   toTimeval(responseTimeout(request), &sec, &usec);
   modbus_set_response_timeout(ctx_, sec, usec);
-  {
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    ++stats_.attempts;
-  }
   const bool libmodbus_can_address =
       request.slave != kBroadcastAddress && (request.slave <= kMaxStandardSlave || kHasQuirks);
   Result r;
@@ -142,19 +96,7 @@ Result RtuLink::attempt(const Request& request) {
     // Writes: libmodbus receives, we compare the echo byte for byte (3.1.6 checks only lengths).
     r = exchangeRaw(request, false);
   }
-  last_activity_ = Steady::now();
-  countAttempt(r);
-  // A failure (not an answer) may be followed by a late reply. A success keeps an earlier
-  // entry: after a retry, the first attempt's reply may be the one taken, the second's late.
-  if (!r.ok() && r.error != ErrorKind::kException)
-    unsettled_[request.slave] = {last_activity_, encodeRequest(request)};
-  if (r.error == ErrorKind::kIo) disconnect();
   return r;
-}
-
-double RtuLink::responseTimeout(const Request& request) const {
-  return effectiveResponseTimeout(config_, 1 + encodeRequestPdu(request).size() + 2) +
-         reply_delay_[request.slave];
 }
 
 Result RtuLink::readViaLibmodbus(const Request& request) {
@@ -203,19 +145,9 @@ Result RtuLink::sendBroadcast(const Request& request) {
   const Bytes pdu = encodeRequestPdu(request);
   raw.insert(raw.end(), pdu.begin(), pdu.end());
   // Sent, not waited for: 3.1.6's write functions would wait for a reply nobody sends.
-  if (modbus_send_raw_request(ctx_, raw.data(), static_cast<int>(raw.size())) == -1) {
-    Result r = fromErrno(request, errno);
-    countAttempt(r);
-    account(r, 0);
-    if (r.error == ErrorKind::kIo) disconnect();
-    return r;
-  }
+  if (modbus_send_raw_request(ctx_, raw.data(), static_cast<int>(raw.size())) == -1)
+    return fromErrno(request, errno);
   tcdrain(modbus_get_socket(ctx_));
-  last_activity_ = Steady::now();
-  std::lock_guard<std::mutex> lock(stats_mutex_);
-  ++stats_.attempts;
-  ++stats_.broadcasts;
-  ++stats_.ok;
   return Result::success(request.values);
 }
 
@@ -244,44 +176,32 @@ Result RtuLink::fromErrno(const Request& request, int error) const {
   }
 }
 
-void RtuLink::account(const Result& r, double latency) {
-  std::lock_guard<std::mutex> lock(stats_mutex_);
-  if (r.ok()) {
-    ++stats_.ok;
-    stats_.last_latency = latency;
-    stats_.mean_latency += (latency - stats_.mean_latency) / static_cast<double>(stats_.ok);
-    stats_.max_latency = std::max(stats_.max_latency, latency);
-  } else {
-    ++stats_.failed;
+// Late replies first (the guard), then the gap; whatever is still in the input (a late reply,
+// noise, a long echo) belongs to nobody. Asking for the byte count first is cheaper than a
+// flush on every request.
+void RtuLink::prepareLine(const Request& request) {
+  settleLine(modbus_get_socket(ctx_), request);
+  keepGap();
+  int pending = 0;
+  if (ioctl(modbus_get_socket(ctx_), FIONREAD, &pending) != 0 || pending > 0) {
+    modbus_flush(ctx_);
+    addStaleBytes(static_cast<uint64_t>(std::max(pending, 0)));
   }
 }
 
-// Every failed attempt by kind, also those a retry made good: a flaky line shows in "crc
-// errors" before it costs a transaction.
-void RtuLink::countAttempt(const Result& r) {
-  std::lock_guard<std::mutex> lock(stats_mutex_);
-  switch (r.error) {
-    case ErrorKind::kNone:
-      break;
-    case ErrorKind::kTimeout:
-      ++stats_.timeouts;
-      break;
-    case ErrorKind::kCrc:
-      ++stats_.crc_errors;
-      break;
-    case ErrorKind::kWrongAddress:
-      ++stats_.wrong_address;
-      break;
-    case ErrorKind::kException:
-      ++stats_.exceptions;
-      break;
-    case ErrorKind::kMalformed:
-      ++stats_.malformed;
-      break;
-    default:
-      ++stats_.io_errors;
-      break;
-  }
+// Our own reader for the addresses libmodbus filters out: first byte within the response
+// timeout, then byte timeouts, and stop as soon as the header says the frame is complete.
+Result RtuLink::readReply(const Request& request) {
+  Bytes reply;
+  int error = 0;
+  const ReadStatus status = readFrame(
+      modbus_get_socket(ctx_), responseTimeout(request), effectiveByteTimeout(config_),
+      [&](const Bytes& b) { return static_cast<long>(replyLengthFromHeader(request, b)); },
+      kShortestReply, MODBUS_RTU_MAX_ADU_LENGTH, &reply, &error);
+  if (status == ReadStatus::kComplete) return decodeReply(request, reply);
+  if (status == ReadStatus::kError) return fromErrno(request, error);
+  if (status == ReadStatus::kClosed) return fromErrno(request, ECONNRESET);
+  return readFailure(request, status, reply, error, config_.port);
 }
 
 }  // namespace modbus_rtu_driver

@@ -1,3 +1,5 @@
+#include "modbus_rtu_driver/core/serial_port.h"
+
 #include <modbus/modbus.h>
 #include <poll.h>
 #include <sys/file.h>
@@ -7,8 +9,6 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
-
-#include "modbus_rtu_driver/core/serial_port.h"
 
 namespace modbus_rtu_driver {
 
@@ -38,22 +38,6 @@ void closeSerialPort(modbus_t* ctx) {
   releasePort(modbus_get_socket(ctx));
   modbus_close(ctx);
   modbus_free(ctx);
-}
-
-int waitReadable(int fd, double seconds) {
-  using Steady = std::chrono::steady_clock;
-  const auto until = Steady::now() + std::chrono::duration_cast<Steady::duration>(
-                                         std::chrono::duration<double>(std::max(0.0, seconds)));
-  for (;;) {
-    const double left = std::max(0.0, std::chrono::duration<double>(until - Steady::now()).count());
-    timespec wait{static_cast<time_t>(left),
-                  static_cast<long>((left - std::floor(left)) * 1e9)};  // NOLINT: timespec's type
-    pollfd p{fd, POLLIN, 0};
-    const int ready = ppoll(&p, 1, &wait, nullptr);
-    if (ready == -1 && errno == EINTR) continue;
-    // Readable, or hung up / failed: the read that follows tells which.
-    return ready > 0 ? 1 : ready;
-  }
 }
 
 bool claimPort(int fd, const std::string& port, std::string* error) {

@@ -48,6 +48,8 @@ void parseSlave(const YAML::Node& root, SlaveConfig* out) {
   parseLink(root, &out->link);
   const std::string role = root["role"] ? get<std::string>(root["role"], "role", "slave") : "";
   if (role != "slave") fail("role", "'" + role + "' is not slave");
+  if (out->link.port.find("://") != std::string::npos)
+    fail("port", "'" + out->link.port + "': the slave role serves a serial port only");
   out->diagnostic_period = parseDiagnosticPeriod(root);
   if (!root["slave_id"]) fail("slave_id", "missing (the address this node answers, 1-247)");
   out->slave_id = getInt(root["slave_id"], "slave_id");

@@ -5,6 +5,7 @@
 
 #include <cerrno>
 
+#include "modbus_rtu_driver/core/fd_io.h"
 #include "modbus_rtu_driver/core/serial_port.h"
 
 namespace modbus_rtu_driver {

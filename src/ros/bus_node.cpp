@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "modbus_rtu_driver/core/make_transport.h"
 #include "modbus_rtu_driver/core/realtime.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
@@ -102,7 +103,7 @@ bool BusNode::start() {
     ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());
     return false;
   }
-  link_ = std::make_unique<RtuLink>(config_.link);
+  link_ = makeTransport(config_.link);
   bus_ = std::make_unique<BusScheduler>(*link_, schedulingOptions());
   for (const DeviceConfig& dc : config_.devices) {
     std::shared_ptr<Device> device = createDevice(dc);  // dc was validated as it was parsed
@@ -148,8 +149,9 @@ bool BusNode::start() {
     a->setPublishPolicy({config_.publish_on_change, config_.keep_alive});
     a->start();
   }
-  ROS_INFO("bus %s at %d baud, %s parity: %zu device(s)", config_.link.port.c_str(),
-           config_.link.baud, parityName(config_.link.parity), adapters_.size());
+  ROS_INFO("bus %s (%s) at %d baud, %s parity: %zu device(s)", config_.link.port.c_str(),
+           portKindName(link_->kind()), config_.link.baud, parityName(config_.link.parity),
+           adapters_.size());
   return true;
 }
 
@@ -201,12 +203,16 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.summary(DiagnosticStatus::OK, "link up");
   }
   status.add("port", config_.link.port);
+  status.add("transport", portKindName(link_->kind()));
   status.add("baud", config_.link.baud);
   status.add("parity", parityName(config_.link.parity));
   // Whether the adapter took ASYNC_LOW_LATENCY: without it an FTDI adapter holds replies up to
   // its latency timer (16 ms by default).
-  status.add("low latency",
-             link_->lowLatency() ? "yes" : "no (the adapter refused it or it is off)");
+  if (link_->kind() == PortKind::kSerial)
+    status.add("low latency",
+               link_->lowLatency() ? "yes" : "no (the adapter refused it or it is off)");
+  else
+    status.add("network allowance [s]", config_.link.network_allowance);
   {
     std::lock_guard<std::mutex> lock(realtime_mutex_);
     status.add("bus thread scheduling", realtime_status_);

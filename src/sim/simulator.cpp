@@ -58,7 +58,8 @@ bool Simulator::start(std::string* error) {
   }
   loadState(SimClock::now());
   if (!pty_.open(options_.link, config_.factory.baud, error, config_.factory.parity) ||
-      !openControl(error)) {
+      !openControl(error) ||
+      (options_.rtu_tcp_port >= 0 && !gateway_.listen(options_.rtu_tcp_port, error))) {
     stop();
     return false;
   }
@@ -78,6 +79,7 @@ void Simulator::stop() {
     unlink(options_.control.c_str());
   }
   listen_fd_ = -1;
+  gateway_.close();
   pty_.close();
   outgoing_.clear();
 }
@@ -87,6 +89,7 @@ void Simulator::run() {
     // clients_ belongs to this thread; the mutex guards the devices and the line state.
     std::vector<pollfd> fds{{pty_.fd(), POLLIN, 0}, {listen_fd_, POLLIN, 0}};
     for (const Client& c : clients_) fds.push_back({c.fd, POLLIN, 0});
+    gateway_.addPollFds(&fds);
     timespec wait{};
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -101,6 +104,7 @@ void Simulator::run() {
     if (power_cycle_requested_.exchange(false)) powerCycle(now);
     for (auto& d : devices_) d->tick(now);
     if (fds[0].revents & POLLIN) receive(now);
+    if (Bytes in; gateway_.receive(now, &in)) take(in.data(), in.size(), now);
     const bool silence = framer_.pending() && now - last_byte_ >= silenceOf(line_);
     for (const Bytes& frame : framer_.take(silence)) processFrame(frame, now);
     flushOutgoing(SimClock::now());
@@ -121,9 +125,12 @@ SimClock::duration Simulator::waitTime(SimClock::time_point now) const {
 void Simulator::receive(SimClock::time_point now) {
   uint8_t buf[512];
   const ssize_t n = read(pty_.fd(), buf, sizeof buf);
-  if (n <= 0) return;
+  if (n > 0) take(buf, static_cast<size_t>(n), now);
+}
+
+void Simulator::take(const uint8_t* data, size_t size, SimClock::time_point now) {
   if (!framer_.pending()) rx_start_ = now;  // a new request starts on the wire
-  framer_.push(buf, static_cast<size_t>(n));
+  framer_.push(data, size);
   last_byte_ = now;
   line_ = pty_.lineSettings();
 }
@@ -273,6 +280,8 @@ void Simulator::flushOutgoing(SimClock::time_point now) {
     size_t due = o.bytes.size();  // bytes whose last bit is on the wire by now
     if (o.per_byte.count() > 0)
       due = std::min(due, static_cast<size_t>((now - o.start) / o.per_byte));
+    // The gateway forwards what the line carries, whether or not anyone reads the pty.
+    if (o.sent < due) gateway_.send(o.bytes.data() + o.sent, due - o.sent);
     while (o.sent < due) {
       const ssize_t n = write(pty_.fd(), o.bytes.data() + o.sent, due - o.sent);
       if (n <= 0) {

@@ -20,6 +20,9 @@
 //   info               -> ok #0:TYPE:ADDRESS:BAUD:PARITY #1:...   (one item per device)
 //   frames             -> ok RECEIVED ANSWERED DROPPED   (valid frames in, replies out, runs of
 //                         bytes dropped: bad CRC or noise)
+//   gateway            -> ok port P connections N accepted N dropped N   (RTU over TCP)
+//   gateway_drop [MS]  the gateway closes its connections; with MS it refuses new ones for MS
+//                         ms (a gateway reboot)
 //   help               -> ok <the command list>
 #include <sys/socket.h>
 #include <sys/un.h>
@@ -121,6 +124,16 @@ std::string Simulator::doCommand(const std::string& line) {
     powerCycle(SimClock::now());
     return "ok";
   }
+  if (verb == "gateway" || verb == "gateway_drop") {
+    if (!gateway_.enabled()) return "error no RTU-over-TCP gateway (start with --rtu-tcp PORT)";
+    if (verb == "gateway") return "ok " + gateway_.status();
+    std::string ms_text;
+    long ms = 0;
+    if (in >> ms_text && !parseNumber(ms_text, 0, 600000, &ms))
+      return "error gateway_drop: MS '" + ms_text + "' is not 0-600000";
+    gateway_.drop(static_cast<double>(ms) / 1000.0, SimClock::now());
+    return "ok";
+  }
   if (verb == "frames")
     return "ok " + std::to_string(frames_) + " " + std::to_string(answered_) + " " +
            std::to_string(framer_.dropped());
@@ -135,7 +148,7 @@ std::string Simulator::doCommand(const std::string& line) {
   }
   if (verb == "help")
     return "ok get set silence fail corrupt truncate wrong_address noise late drop stats "
-           "power_cycle info frames help; " +
+           "power_cycle info frames gateway gateway_drop help; " +
            std::string(kUsage);
   static const char* kDeviceVerbs[] = {"get",     "set",      "silence",       "fail",
                                        "corrupt", "truncate", "wrong_address", "noise",

@@ -48,6 +48,10 @@ int main(int argc, char** argv) {
       ->type_name("FILE");
   app.add_option("--control", options.control, "Unix socket for test commands (default: PATH.ctl)")
       ->type_name("SOCKET");
+  app.add_option("--rtu-tcp", options.rtu_tcp_port,
+                 "also serve the line as a transparent RTU-over-TCP gateway on 127.0.0.1:PORT")
+      ->type_name("PORT")
+      ->check(CLI::Range(1, 65535));
   app.add_flag("--pace", pace, "the line runs at its real speed (also `pace: true` in the config)");
   app.add_flag("--verbose", options.verbose,
                "print every frame: rx/tx followed by the bytes in hex");
@@ -75,9 +79,11 @@ int main(int argc, char** argv) {
     return 1;
   }
   const std::string info = sim.command("info");
-  std::fprintf(stderr, "modbus_rtu_simulator: devices%s; control socket %s%s\n",
-               info.substr(2).c_str(), sim.controlPath().c_str(),
-               config.pace ? "; pacing the line" : "");
+  std::fprintf(
+      stderr, "modbus_rtu_simulator: devices%s; control socket %s%s%s\n", info.substr(2).c_str(),
+      sim.controlPath().c_str(), config.pace ? "; pacing the line" : "",
+      sim.rtuTcpPort() ? ("; rtu+tcp://127.0.0.1:" + std::to_string(sim.rtuTcpPort())).c_str()
+                       : "");
   std::printf("simulator ready on %s\n", options.link.c_str());
   std::fflush(stdout);
   while (!g_stop) {

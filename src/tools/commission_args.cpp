@@ -160,7 +160,9 @@ struct Cli {
     app.fallthrough();
     app.require_subcommand(0, 1);
     app.set_help_all_flag("--help-all", "help of every command");
-    app.add_option("--port", w.port, "the serial device, e.g. /dev/ttyUSB0 (needed)")
+    app.add_option(
+           "--port", w.port,
+           "the serial device (/dev/ttyUSB0), tcp://HOST:PORT or rtu+tcp://HOST:PORT (needed)")
         ->type_name("PORT");
     app.add_option("--baud", w.baud, "line speed (default 9600)")->type_name("B")->check(kBaud);
     app.add_option("--parity", w.parity, "line parity (default none)")
@@ -286,6 +288,9 @@ struct Parsed {
 void parseLink(const Parsed& p, CommissionCommand& c) {
   if (!p.top.count("--port")) bad("--port: missing (the serial device, e.g. /dev/ttyUSB0)");
   c.link.port = p.w.port;
+  PortAddress address;
+  std::string port_error;
+  if (!parsePortAddress(c.link.port, &address, &port_error)) bad("--" + port_error);
   if (p.top.count("--baud")) c.link.baud = intIn("--baud", p.w.baud, 1200, 115200);
   if (p.top.count("--parity")) parseParity(p.w.parity, &c.link.parity);
   c.link.retries = 0;

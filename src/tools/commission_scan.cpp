@@ -3,7 +3,7 @@
 #include <set>
 
 #include "modbus_rtu_driver/core/device_types.h"
-#include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/core/make_transport.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
@@ -109,7 +109,8 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
     config.baud = cmd.bauds[i / cmd.parities.size()];
     config.parity = cmd.parities[i % cmd.parities.size()];
     const std::string line = lineName(config.baud, config.parity);
-    RtuLink link(config);
+    const std::unique_ptr<Link> owned = makeTransport(config);
+    Link& link = *owned;
     std::string error;
     if (!link.connect(&error)) return out.fail(kExitBusError, error);
     for (const int address : cmd.addresses) {

@@ -2,9 +2,10 @@
 #include "modbus_rtu_driver/tools/commission_session.h"
 
 #include <istream>
+#include <memory>
 #include <ostream>
 
-#include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/core/make_transport.h"
 
 namespace modbus_rtu_driver {
 
@@ -32,10 +33,10 @@ bool Session::confirm(const std::string& question) {
 int runCommission(const CommissionCommand& cmd, const CommissionIo& io) {
   Output out(cmd.json, io.out, io.err);
   if (cmd.command == "scan") return runScan(cmd, out, io.stop, io.err_is_terminal);
-  RtuLink link(cmd.link);
+  const std::unique_ptr<Link> link = makeTransport(cmd.link);
   std::string error;
-  if (!link.connect(&error)) return out.fail(kExitBusError, error);
-  Session session{cmd, link, out, io.in, io.stop};
+  if (!link->connect(&error)) return out.fail(kExitBusError, error);
+  Session session{cmd, *link, out, io.in, io.stop};
   const bool table = cmd.command == "read" || cmd.command == "write" || cmd.command == "watch";
   return table ? runTableCommand(session) : runDeviceCommand(session);
 }

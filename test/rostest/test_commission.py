@@ -32,7 +32,8 @@ def executable(name):
 class Simulator:
     """modbus_rtu_simulator with its own config and state file; every frame logged."""
 
-    def __init__(self, workdir, devices):
+    def __init__(self, workdir, devices, rtu_tcp=None):
+        self.rtu_tcp = rtu_tcp  # also serve the line as an RTU-over-TCP gateway on this port
         self.dir = workdir
         self.link = os.path.join(workdir, "tty")
         self.config = os.path.join(workdir, "sim.yaml")
@@ -50,7 +51,9 @@ class Simulator:
         log = open(self.log_path, "a")
         self.proc = subprocess.Popen(
             [executable("modbus_rtu_simulator"), "--config", self.config, "--link", self.link,
-             "--state-file", self.state, "--verbose"], stdout=log, stderr=subprocess.STDOUT)
+             "--state-file", self.state, "--verbose"] +
+            (["--rtu-tcp", str(self.rtu_tcp)] if self.rtu_tcp else []),
+            stdout=log, stderr=subprocess.STDOUT)
         log.close()
         deadline = time.time() + 20
         while True:
@@ -102,11 +105,14 @@ class CommissionTest(unittest.TestCase):
             self.sim.stop()
         shutil.rmtree(self.tmp, ignore_errors=True)
 
-    def start_sim(self, devices):
-        self.sim = Simulator(self.tmp, devices)
+    def start_sim(self, devices, rtu_tcp=None):
+        self.sim = Simulator(self.tmp, devices, rtu_tcp)
 
     def argv(self, args):
-        return [self.tool, "--port", self.sim.link if self.sim else "/nonexistent"] + args
+        port = self.sim.link if self.sim else "/nonexistent"
+        if self.sim and self.sim.rtu_tcp:
+            port = "rtu+tcp://127.0.0.1:%d" % self.sim.rtu_tcp
+        return [self.tool, "--port", port] + args
 
     def run_tool(self, args, stdin=""):
         """(exit code, stdout, stderr)"""
@@ -371,6 +377,20 @@ class CommissionTest(unittest.TestCase):
             proc.send_signal(signal.SIGINT)
             proc.wait(10)
         self.assertEqual(proc.returncode, OK)
+
+    def test_through_an_rtu_over_tcp_gateway(self):
+        # The rostest runs in its own network namespace: a fixed port is free.
+        self.start_sim([("lc_relay8", 255), ("yespeed_pdu", 2)], rtu_tcp=15030)
+        self.assertEqual(self.scan("--addresses", "1-3,255"),
+                         [(2, "yespeed_pdu", 9600, "none"), (255, "lc_relay8", 9600, "none")])
+        self.ok(["write", "--address", "255", "coils", "0", "1", "1"])
+        self.assertEqual(self.sim.control.get("255", "coil", 0, 2), [1, 1])
+        self.assertEqual(self.ok(["get-address", "--type", "lc_relay8"]),  # through address 0
+                         "lc_relay8 address: 255\n")
+        p = subprocess.run([self.tool, "--port", "tcp://127.0.0.1", "scan"], capture_output=True,
+                           text=True, env=self.env, timeout=60)
+        self.assertEqual(p.returncode, BAD_ARGUMENTS)
+        self.assertIn("--port: 'tcp://127.0.0.1' is not tcp://HOST:PORT", p.stderr)
 
 
 if __name__ == "__main__":

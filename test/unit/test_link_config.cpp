@@ -59,3 +59,40 @@ TEST(LinkConfig, Parity) {
   EXPECT_FALSE(parseParity("mark", &p));
   EXPECT_STREQ(parityName(Parity::kNone), "none");
 }
+
+TEST(LinkConfig, PortForms) {
+  PortAddress a;
+  std::string error;
+  ASSERT_TRUE(parsePortAddress("/dev/ttyUSB0", &a, &error));
+  EXPECT_EQ(a.kind, PortKind::kSerial);
+  ASSERT_TRUE(parsePortAddress("tcp://192.168.1.7:502", &a, &error));
+  EXPECT_EQ(a.kind, PortKind::kModbusTcp);
+  EXPECT_EQ(a.host, "192.168.1.7");
+  EXPECT_EQ(a.tcp_port, 502);
+  ASSERT_TRUE(parsePortAddress("rtu+tcp://gw-3.local:8899", &a, &error));
+  EXPECT_EQ(a.kind, PortKind::kRtuOverTcp);
+  EXPECT_EQ(a.host, "gw-3.local");
+  ASSERT_TRUE(parsePortAddress("tcp://[fd00::5]:502", &a, &error));
+  EXPECT_EQ(a.host, "fd00::5");
+  for (const char* bad : {"tcp://host", "tcp://:502", "tcp://host:0", "tcp://host:65536",
+                          "rtu+tcp://host:50x", "udp://host:502", "tcp://a/b:502"}) {
+    EXPECT_FALSE(parsePortAddress(bad, &a, &error)) << bad;
+    EXPECT_NE(error.find(std::string("'") + bad + "'"), std::string::npos) << error;
+  }
+  EXPECT_FALSE(parsePortAddress("udp://host:502", &a, &error));
+  EXPECT_NE(error.find("not a device path, tcp:// or rtu+tcp://"), std::string::npos) << error;
+  LinkConfig c;
+  c.port = "tcp://host:99999";
+  EXPECT_NE(validateLinkConfig(c).find("tcp://HOST:PORT (port 1-65535)"), std::string::npos)
+      << validateLinkConfig(c);
+}
+
+TEST(LinkConfig, NetworkAllowanceIsRangeChecked) {
+  LinkConfig c;
+  c.network_allowance = 10.5;
+  EXPECT_NE(validateLinkConfig(c).find("network_allowance: 10.5"), std::string::npos);
+  c.network_allowance = -0.1;
+  EXPECT_NE(validateLinkConfig(c).find("network_allowance"), std::string::npos);
+  c.network_allowance = 0;
+  EXPECT_EQ(validateLinkConfig(c), "");
+}

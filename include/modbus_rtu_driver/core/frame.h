@@ -32,6 +32,8 @@ Bytes encodeRequest(const Request& request);
 // The request PDU without slave and CRC (what modbus_send_raw_request takes after the slave).
 Bytes encodeRequestPdu(const Request& request);
 
+// The shortest reply ADU there is: an exception (slave, function, code, CRC).
+constexpr size_t kShortestReply = 5;
 // Length of the normal reply ADU to `request` (exceptions are 5 bytes).
 size_t expectedReplyLength(const Request& request);
 // How many bytes a reply needs in total, judged from the bytes read so far; 0 = need more to

@@ -26,7 +26,21 @@ struct LinkConfig {
   double min_gap = 0.0;  // s, silence kept between frames; 0 = t3.5 of the baud
   DirectionControl direction = DirectionControl::kAuto;
   bool low_latency = true;  // ask the USB adapter driver for ASYNC_LOW_LATENCY
+  // s added to every timeout of a tcp:// or rtu+tcp:// port for the network and the gateway.
+  double network_allowance = 0.1;
 };
+
+// What `port` names: a serial device, a Modbus TCP server (tcp://HOST:PORT) or a transparent
+// gateway carrying RTU frames over TCP (rtu+tcp://HOST:PORT).
+enum class PortKind { kSerial, kModbusTcp, kRtuOverTcp };
+struct PortAddress {
+  PortKind kind = PortKind::kSerial;
+  std::string host;  // TCP forms only; an IPv6 address without its brackets
+  int tcp_port = 0;  // 1-65535
+};
+// False with a message naming the port and the expected form when it does not parse.
+bool parsePortAddress(const std::string& port, PortAddress* out, std::string* error);
+const char* portKindName(PortKind kind);  // "serial RTU", "Modbus TCP", "RTU over TCP"
 
 // What a device may take to start answering once a request is on the wire, USB adapters' latency
 // included: the auto response timeout's allowance.
@@ -56,5 +70,10 @@ double effectiveByteTimeout(const LinkConfig& config);
 double effectiveMinGap(const LinkConfig& config);
 // Seconds to wait for the first byte of the reply to a request of `request_bytes` bytes.
 double effectiveResponseTimeout(const LinkConfig& config, size_t request_bytes);
+// The same through a gateway, which forwards the reply once it has it whole: the serial
+// response timeout, plus the reply's wire time and network_allowance.
+double gatewayResponseTimeout(const LinkConfig& config, size_t request_bytes, size_t reply_bytes);
+// Silence between the bytes of one reply through a gateway: the byte timeout plus the allowance.
+double gatewayByteTimeout(const LinkConfig& config);
 
 }  // namespace modbus_rtu_driver

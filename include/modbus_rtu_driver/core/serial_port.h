@@ -1,5 +1,5 @@
 // A serial port, opened and claimed one way by the bus link, the slave role and the
-// commissioning tool (one owner per port), and read with one wait.
+// commissioning tool (one owner per port).
 #pragma once
 
 #include <string>
@@ -15,10 +15,6 @@ namespace modbus_rtu_driver {
 modbus_t* openSerialPort(const LinkConfig& link, std::string* error);
 // Gives the claim back, closes and frees `ctx` (null is fine).
 void closeSerialPort(modbus_t* ctx);
-
-// Waits until `fd` has bytes to read or `seconds` pass, resuming after signals: 1 readable,
-// 0 timed out, -1 failed (errno says why).
-int waitReadable(int fd, double seconds);
 
 // Claims the open port `fd` (named `port` in messages) for this process alone:
 //  - flock(LOCK_EX): another program of this project, or any that honours the lock, is told the

@@ -1,5 +1,6 @@
 // The one thing device code talks to: run a Modbus transaction, get the outcome.
-// Implemented by RtuLink (libmodbus on a serial port) and by the unit tests' ScriptedTransport.
+// Implemented by the links (core/link.h: serial RtuLink, ModbusTcpLink, RtuOverTcpLink) and by
+// the unit tests' ScriptedTransport.
 // Only the bus thread (BusScheduler) calls these.
 #pragma once
 

@@ -1,5 +1,5 @@
-// One node per serial bus: reads the configuration from the private namespace, owns the link,
-// the bus thread and every device on it, and reports to /diagnostics.
+// One node per bus (a serial port or a gateway): reads the configuration from the private
+// namespace, owns the link, the bus thread and every device on it, and reports to /diagnostics.
 #pragma once
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -13,7 +13,7 @@
 
 #include "modbus_rtu_driver/config/bus_config.h"
 #include "modbus_rtu_driver/core/bus_scheduler.h"
-#include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/core/link.h"
 #include "modbus_rtu_driver/core/watchdog.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 #include "modbus_rtu_driver/ros/raw_writes.h"
@@ -44,7 +44,7 @@ class BusNode {
 
   ros::NodeHandle nh_;
   BusConfig config_;
-  std::unique_ptr<RtuLink> link_;
+  std::unique_ptr<Link> link_;  // serial, Modbus TCP or RTU over TCP (by `port`)
   std::unique_ptr<BusScheduler> bus_;
   std::vector<std::unique_ptr<DeviceAdapter>> adapters_;
   std::unique_ptr<RawWrites> raw_writes_;

@@ -27,6 +27,7 @@
 #include "modbus_rtu_driver/core/request_framer.h"
 #include "modbus_rtu_driver/sim/pty_link.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
+#include "modbus_rtu_driver/sim/sim_gateway.h"
 
 namespace modbus_rtu_driver {
 
@@ -53,6 +54,7 @@ struct SimulatorOptions {
   std::string state_file;   // empty = no persistence
   bool verbose = false;     // print every frame ("rx 01 03 ...", "tx 01 03 ...") on stdout
   bool timestamps = false;  // verbose lines carry CLOCK_MONOTONIC seconds: "rx 12.345678 01 03"
+  int rtu_tcp_port = -1;    // also serve the line as an RTU-over-TCP gateway; 0 = a free port
 };
 
 class Simulator {
@@ -72,6 +74,8 @@ class Simulator {
   void requestPowerCycle() { power_cycle_requested_ = true; }
   const std::string& link() const { return options_.link; }
   const std::string& controlPath() const { return options_.control; }
+  // The RTU-over-TCP gateway's port on 127.0.0.1 (0 when not serving one); valid after start.
+  int rtuTcpPort() const { return gateway_.port(); }
 
  private:
   struct Outgoing {  // a reply on its way out
@@ -88,6 +92,7 @@ class Simulator {
   void run();
   SimClock::duration waitTime(SimClock::time_point now) const;
   void receive(SimClock::time_point now);
+  void take(const uint8_t* data, size_t size, SimClock::time_point now);  // bytes onto the line
   void processFrame(const Bytes& frame, SimClock::time_point now);
   void broadcast(const std::optional<Request>& request, const std::vector<SimDevice*>& hearing,
                  SimClock::time_point now, SimClock::time_point request_end);
@@ -111,6 +116,7 @@ class Simulator {
   std::atomic<bool> running_{false};
   std::atomic<bool> power_cycle_requested_{false};
   PtyLink pty_;
+  SimGateway gateway_;  // the same line, reached over TCP
   int listen_fd_ = -1;
   std::vector<Client> clients_;
   RequestFramer framer_;

@@ -1,0 +1,178 @@
+// Transport overhead: transactions per second of ModbusTcpLink against a plain libmodbus TCP
+// client loop (modbus_new_tcp), both to the same libmodbus TCP server in this process; and of
+// RtuOverTcpLink against RtuLink, both to the same simulator (its RTU-over-TCP gateway and its
+// pty). The servers answer at once, so the figures are the clients' software and socket costs.
+#include <modbus/modbus.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "modbus_rtu_driver/core/make_transport.h"
+#include "modbus_rtu_driver/sim/simulator.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+using Steady = std::chrono::steady_clock;
+
+double rateOf(double seconds, const std::function<bool()>& once) {
+  const auto start = Steady::now();
+  const auto end = start + std::chrono::duration<double>(seconds);
+  long n = 0;
+  while (Steady::now() < end) {
+    if (!once()) return 0;
+    ++n;
+  }
+  return n / std::chrono::duration<double>(Steady::now() - start).count();
+}
+
+// libmodbus's own TCP server on 127.0.0.1, one client at a time, until stopped.
+class LibmodbusTcpServer {
+ public:
+  LibmodbusTcpServer() {
+    ctx_ = modbus_new_tcp("127.0.0.1", 0);
+    mapping_ = modbus_mapping_new(100, 100, 100, 100);
+    listen_fd_ = modbus_tcp_listen(ctx_, 1);
+    sockaddr_storage addr{};
+    socklen_t len = sizeof addr;
+    getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
+    port_ = ntohs(reinterpret_cast<sockaddr_in&>(addr).sin_port);
+    thread_ = std::thread([this] { run(); });
+  }
+  ~LibmodbusTcpServer() {
+    stop_ = true;
+    thread_.join();
+    close(listen_fd_);
+    modbus_mapping_free(mapping_);
+    modbus_free(ctx_);
+  }
+  int port() const { return port_; }
+
+ private:
+  void run() {
+    while (!stop_) {
+      pollfd p{listen_fd_, POLLIN, 0};
+      if (poll(&p, 1, 20) <= 0) continue;
+      int fd = listen_fd_;
+      if (modbus_tcp_accept(ctx_, &fd) < 0) continue;
+      uint8_t query[MODBUS_TCP_MAX_ADU_LENGTH];
+      for (int rc; (rc = modbus_receive(ctx_, query)) != -1;)
+        if (rc > 0) modbus_reply(ctx_, query, rc, mapping_);
+      close(modbus_get_socket(ctx_));
+    }
+  }
+
+  modbus_t* ctx_ = nullptr;
+  modbus_mapping_t* mapping_ = nullptr;
+  int listen_fd_ = -1;
+  int port_ = 0;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+bool plainCall(modbus_t* ctx, const Request& r) {
+  uint8_t bits[16];
+  uint16_t regs[16];
+  switch (r.function) {
+    case FunctionCode::kReadCoils:
+      return modbus_read_bits(ctx, r.address, r.count, bits) == r.count;
+    case FunctionCode::kReadHoldingRegisters:
+      return modbus_read_registers(ctx, r.address, r.count, regs) == r.count;
+    case FunctionCode::kWriteSingleCoil:
+      return modbus_write_bit(ctx, r.address, r.values[0]) == 1;
+    case FunctionCode::kWriteMultipleRegisters:
+      return modbus_write_registers(ctx, r.address, r.count, r.values.data()) == r.count;
+    default:
+      return false;
+  }
+}
+
+// The best of 4 rounds of `once` (rounds of each side alternate with the caller's others).
+struct Best {
+  double value = 0;
+  void round(double seconds, const std::function<bool()>& once) {
+    value = std::max(value, rateOf(seconds, once));
+  }
+};
+
+}  // namespace
+
+void benchmarkTransports(const std::string& dir, double seconds, std::ofstream& csv) {
+  const std::vector<std::pair<const char*, Request>> ops = {
+      {"01 read 8 coils", Request::readCoils(2, 0, 8)},
+      {"03 read 3 holding", Request::readHoldingRegisters(2, 0, 3)},
+      {"05 write coil", Request::writeSingleCoil(2, 1, true)},
+      {"16 write 3 holding", Request::writeMultipleRegisters(2, 0, {2500, 2000, 1600})},
+  };
+  LibmodbusTcpServer tcp_server;
+  SimulatorConfig config;
+  config.factory.baud = 115200;
+  config.devices = {{"yespeed_pdu", 2}};
+  SimulatorOptions options;
+  options.link = dir + "/transports";
+  options.rtu_tcp_port = 0;
+  Simulator sim(config, options);
+  std::string error;
+  if (!sim.start(&error)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return;
+  }
+  LinkConfig base;
+  base.baud = 115200;
+  base.min_gap = 1e-6;  // libmodbus keeps no gap: compare the software alone
+  LinkConfig tcp = base, rtu_tcp = base, serial = base;
+  tcp.port = "tcp://127.0.0.1:" + std::to_string(tcp_server.port());
+  rtu_tcp.port = "rtu+tcp://127.0.0.1:" + std::to_string(sim.rtuTcpPort());
+  serial.port = options.link;
+
+  std::printf(
+      "## Transport overhead (servers answering at once, loopback, best of 4 rounds of %g s)\n\n",
+      seconds / 4);
+  std::printf(
+      "| function | plain libmodbus TCP [tx/s] | ModbusTcpLink [tx/s] | ratio | RtuOverTcpLink "
+      "[tx/s] (sim gateway) | RtuLink [tx/s] (sim pty) | ratio |\n|---|---|---|---|---|---|---|\n");
+  for (const auto& [name, request] : ops) {
+    Best plain, ours_tcp, ours_rtu_tcp, ours_serial;
+    for (int round = 0; round < 4; ++round) {
+      modbus_t* ctx = modbus_new_tcp("127.0.0.1", tcp_server.port());
+      modbus_connect(ctx);
+      modbus_set_slave(ctx, 2);
+      plain.round(seconds / 4, [&] { return plainCall(ctx, request); });
+      modbus_close(ctx);
+      modbus_free(ctx);
+      for (auto [config_of, best] : {std::pair{&tcp, &ours_tcp}, std::pair{&rtu_tcp, &ours_rtu_tcp},
+                                     std::pair{&serial, &ours_serial}}) {
+        const std::unique_ptr<Link> link = makeTransport(*config_of);
+        if (!link->connect(&error)) std::fprintf(stderr, "%s\n", error.c_str());
+        best->round(seconds / 4, [&] { return link->execute(request).ok(); });
+      }
+    }
+    const auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };
+    std::printf("| %s | %.0f | %.0f | %.2f | %.0f | %.0f | %.2f |\n", name, plain.value,
+                ours_tcp.value, ratio(plain.value, ours_tcp.value), ours_rtu_tcp.value,
+                ours_serial.value, ratio(ours_serial.value, ours_rtu_tcp.value));
+    csv << "transport_tcp," << name << "," << plain.value << "," << ours_tcp.value << ","
+        << ratio(plain.value, ours_tcp.value) << "\n";
+    csv << "transport_rtu_tcp," << name << "," << ours_serial.value << "," << ours_rtu_tcp.value
+        << "," << ratio(ours_serial.value, ours_rtu_tcp.value) << "\n";
+  }
+  std::printf(
+      "\nratio = plain libmodbus TCP / ModbusTcpLink (the first), RtuLink over the pty / "
+      "RtuOverTcpLink through the simulator's gateway (the second): above 1 = slower than the "
+      "reference. 0 = a transaction failed.\n\n");
+}
+
+}  // namespace modbus_rtu_driver

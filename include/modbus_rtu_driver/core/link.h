@@ -1,0 +1,106 @@
+// What every bus link shares, whatever carries its frames (serial port, Modbus TCP, RTU over
+// TCP): the retry rule (only lost answers, only repeatable requests), the statistics, the silence
+// between frames, and the late-reply guard. A subclass runs one attempt on its medium.
+// Only the bus thread calls execute/connect/disconnect; stats() is safe from any thread.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <string>
+
+#include "modbus_rtu_driver/core/fd_io.h"
+#include "modbus_rtu_driver/core/frame.h"
+#include "modbus_rtu_driver/core/link_config.h"
+#include "modbus_rtu_driver/core/transport.h"
+
+namespace modbus_rtu_driver {
+
+struct LinkStats {
+  uint64_t requests = 0;  // transactions asked for (not counting retries)
+  uint64_t attempts = 0;  // frames sent, retries included
+  uint64_t ok = 0;        // transactions that succeeded (after retries, if any)
+  uint64_t failed = 0;    // transactions that failed for good
+  uint64_t broadcasts = 0;
+  // Failed attempts by kind, retried ones included (a timeout retried once counts 2 if both
+  // attempts failed, 1 if the retry got through).
+  uint64_t timeouts = 0;
+  uint64_t crc_errors = 0;
+  uint64_t wrong_address = 0;
+  uint64_t exceptions = 0;
+  uint64_t malformed = 0;
+  uint64_t io_errors = 0;
+  uint64_t retries = 0;
+  uint64_t reconnects = 0;   // successful connects after the first
+  uint64_t stale_bytes = 0;  // thrown away before a request: late replies, noise
+  double last_latency = 0;   // s, request sent to reply decoded, successful transactions
+  double mean_latency = 0;   // s
+  double max_latency = 0;    // s
+};
+
+class Link : public Transport {
+ public:
+  explicit Link(LinkConfig config) : config_(std::move(config)) {}
+  Link(const Link&) = delete;
+  Link& operator=(const Link&) = delete;
+
+  // Validates, retries lost answers of repeatable requests, keeps the statistics.
+  Result execute(const Request& request) final;
+  void awaitLineFree() override {
+    if (connected()) keepGap();
+  }
+  // The response timeout for `slave` is raised by its reply delay (the LD58A08 can wait up to
+  // 1000 ms before answering).
+  void setReplyDelay(uint8_t slave, double seconds) { reply_delay_[slave] = seconds; }
+  const LinkConfig& config() const { return config_; }
+  LinkStats stats() const;
+  virtual PortKind kind() const = 0;
+  // True when a USB adapter accepted ASYNC_LOW_LATENCY (serial only). Any thread.
+  virtual bool lowLatency() const { return false; }
+
+ protected:
+  // One request out and its reply in (the line prepared first); a kIo result disconnects.
+  virtual Result attempt(const Request& request) = 0;
+  // Sends a request nobody answers; success once it is out.
+  virtual Result sendBroadcast(const Request& request) = 0;
+  // Silence kept between frames on the (far) serial line.
+  virtual double minGap() const { return effectiveMinGap(config_); }
+  // Seconds to wait for the first byte of the reply.
+  virtual double responseTimeout(const Request& request) const;
+
+  // Call after each successful connect: counts reconnects, restarts the line timing.
+  void noteConnected();
+  void keepGap();
+  // The late-reply guard: when a transaction with this slave failed less than
+  // late_reply_guard ago and this is a different request, drops what `fd` brings until it
+  // has been quiet that long.
+  void settleLine(int fd, const Request& request);
+  void addStaleBytes(uint64_t n);
+  // The failure a reader status means ("gateway" or the port in `medium` messages).
+  Result readFailure(const Request& request, ReadStatus status, const Bytes& partial, int error,
+                     const std::string& medium) const;
+
+  LinkConfig config_;
+  double reply_delay_[256] = {};
+  std::chrono::steady_clock::time_point last_activity_{};
+
+ private:
+  Result runAttempt(const Request& request);
+  Result runBroadcast(const Request& request);
+  void awaitQuietLine(int fd, std::chrono::steady_clock::time_point until);
+  void account(const Result& result, double latency);  // per transaction
+  void countAttempt(const Result& result);             // per attempt: failures by kind
+
+  mutable std::mutex stats_mutex_;
+  LinkStats stats_;
+  bool ever_connected_ = false;
+  struct Unsettled {  // a failed transaction whose reply may still come
+    std::chrono::steady_clock::time_point failed_at;
+    Bytes frame;
+  };
+  std::map<uint8_t, Unsettled> unsettled_;  // by slave
+};
+
+}  // namespace modbus_rtu_driver

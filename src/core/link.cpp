@@ -1,0 +1,157 @@
+// The part of every link that does not depend on the medium: retries, statistics, failures.
+#include "modbus_rtu_driver/core/link.h"
+
+#include <algorithm>
+#include <cstring>
+
+namespace modbus_rtu_driver {
+
+namespace {
+using Steady = std::chrono::steady_clock;
+}  // namespace
+
+LinkStats Link::stats() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return stats_;
+}
+
+void Link::noteConnected() {
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    if (ever_connected_) ++stats_.reconnects;
+  }
+  ever_connected_ = true;
+  unsettled_.clear();  // a new connection carries nothing from the old one
+  last_activity_ = Steady::now();
+}
+
+Result Link::execute(const Request& request) {
+  const std::string problem = request.validate();
+  if (!problem.empty())
+    return Result::failure(ErrorKind::kInvalidArgument, request.describe() + ": " + problem);
+  if (!connected())
+    return Result::failure(ErrorKind::kNotConnected, "port " + config_.port + " is not open");
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.requests;
+  }
+  if (!request.expectsReply()) return runBroadcast(request);
+  const auto start = Steady::now();
+  Result r;
+  for (int attempt_no = 0;; ++attempt_no) {
+    r = runAttempt(request);
+    // Only a lost answer is retried, and only when doing it twice does no harm; a dropped
+    // connection (kIo) is not: the request may have gone out, and the caller reads back.
+    if (r.ok() || !answerLost(r.error) || !request.repeatable || attempt_no >= config_.retries ||
+        !connected())
+      break;
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.retries;
+  }
+  account(r, std::chrono::duration<double>(Steady::now() - start).count());
+  return r;
+}
+
+Result Link::runAttempt(const Request& request) {
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.attempts;
+  }
+  Result r = attempt(request);
+  last_activity_ = Steady::now();
+  countAttempt(r);
+  // A failure (not an answer) may be followed by a late reply. A success keeps an earlier
+  // entry: after a retry, the first attempt's reply may be the one taken, the second's late.
+  if (!r.ok() && r.error != ErrorKind::kException)
+    unsettled_[request.slave] = {last_activity_, encodeRequest(request)};
+  if (r.error == ErrorKind::kIo) disconnect();
+  return r;
+}
+
+Result Link::runBroadcast(const Request& request) {
+  Result r = sendBroadcast(request);
+  last_activity_ = Steady::now();
+  if (!r.ok()) {  // not sent: not an attempt
+    countAttempt(r);
+    account(r, 0);
+    if (r.error == ErrorKind::kIo) disconnect();
+    return r;
+  }
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  ++stats_.attempts;
+  ++stats_.broadcasts;
+  ++stats_.ok;
+  return Result::success(request.values);
+}
+
+double Link::responseTimeout(const Request& request) const {
+  return effectiveResponseTimeout(config_, 1 + encodeRequestPdu(request).size() + 2) +
+         reply_delay_[request.slave];
+}
+
+Result Link::readFailure(const Request& request, ReadStatus status, const Bytes& partial, int error,
+                         const std::string& medium) const {
+  const std::string what = request.describe() + ": ";
+  switch (status) {
+    case ReadStatus::kTimeout:
+      return Result::failure(ErrorKind::kTimeout, partial.empty()
+                                                      ? what + "no reply"
+                                                      : what + "truncated reply " + toHex(partial));
+    case ReadStatus::kClosed:
+      // Sent, so it may have been carried out: a kIo is not retried, and the caller reads back.
+      return Result::failure(ErrorKind::kIo, what + medium +
+                                                 " closed the connection before the reply (the "
+                                                 "request may have been carried out)");
+    case ReadStatus::kBadHeader:
+      return Result::failure(ErrorKind::kMalformed, what + "not a reply: " + toHex(partial));
+    default:
+      return Result::failure(ErrorKind::kIo, what + medium + ": " + std::strerror(error));
+  }
+}
+
+void Link::account(const Result& r, double latency) {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  if (r.ok()) {
+    ++stats_.ok;
+    stats_.last_latency = latency;
+    stats_.mean_latency += (latency - stats_.mean_latency) / static_cast<double>(stats_.ok);
+    stats_.max_latency = std::max(stats_.max_latency, latency);
+  } else {
+    ++stats_.failed;
+  }
+}
+
+// Every failed attempt by kind, also those a retry made good: a flaky line shows in "crc
+// errors" before it costs a transaction.
+void Link::countAttempt(const Result& r) {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  switch (r.error) {
+    case ErrorKind::kNone:
+      break;
+    case ErrorKind::kTimeout:
+      ++stats_.timeouts;
+      break;
+    case ErrorKind::kCrc:
+      ++stats_.crc_errors;
+      break;
+    case ErrorKind::kWrongAddress:
+      ++stats_.wrong_address;
+      break;
+    case ErrorKind::kException:
+      ++stats_.exceptions;
+      break;
+    case ErrorKind::kMalformed:
+      ++stats_.malformed;
+      break;
+    default:
+      ++stats_.io_errors;
+      break;
+  }
+}
+
+void Link::addStaleBytes(uint64_t n) {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  stats_.stale_bytes += n;
+}
+
+}  // namespace modbus_rtu_driver
