@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/link_config.h"
+#include "modbus_rtu_driver/core/share_gateway.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace YAML {
@@ -33,6 +34,8 @@ struct BusConfig {
   std::string heartbeat_topic;
   double heartbeat_timeout = 0.0;
   double shutdown_timeout = 3.0;  // s
+  // `share`: Modbus TCP clients reach the bus through the node (docs/share.md); off unless set.
+  ShareConfig share;
   std::vector<DeviceConfig> devices;
 };
 
