@@ -78,10 +78,10 @@ class Simulator:
 
 
 class Node:
-    def __init__(self, workdir, port, rate, baud=115200):
+    def __init__(self, workdir, port, rate, baud=115200, extra_yaml=""):
         config = os.path.join(workdir, "bus.yaml")
         with open(config, "w") as f:
-            f.write(BUS_YAML % {"rate": rate, "baud": baud})
+            f.write(BUS_YAML % {"rate": rate, "baud": baud} + extra_yaml)
         subprocess.check_call(["rosparam", "delete", "/bench_bus"], stderr=subprocess.DEVNULL) \
             if self._has_params() else None
         subprocess.check_call(["rosparam", "load", config, "/bench_bus"])

@@ -18,9 +18,15 @@ const std::set<std::string> kDeviceKeys = {
     "safe_state", "on_restart", "on_start",  "command_timeout", "heartbeat"};
 
 // The master role's keys beside the link's.
-const std::set<std::string> kBusKeys = {
-    "role",       "diagnostic_period", "devices",         "allow_raw_writes", "publish_on_change",
-    "keep_alive", "heartbeat",         "shutdown_timeout", "share"};
+const std::set<std::string> kBusKeys = {"role",
+                                        "diagnostic_period",
+                                        "devices",
+                                        "allow_raw_writes",
+                                        "publish_on_change",
+                                        "keep_alive",
+                                        "heartbeat",
+                                        "shutdown_timeout",
+                                        "share"};
 const std::set<std::string> kShareKeys = {"listen", "read_only", "allow", "max_clients",
                                           "max_queue"};
 
@@ -120,11 +126,11 @@ void parseShare(const YAML::Node& n, ShareConfig* out) {
   checkKeys(n, "share/", kShareKeys);
   out->enabled = true;
   std::string error;
-  if (n["listen"] &&
-      !parseListenAddress(get<std::string>(n["listen"], "share/listen", "HOST:PORT"),
-                          &out->server.host, &out->server.port, &error))
+  if (n["listen"] && !parseListenAddress(get<std::string>(n["listen"], "share/listen", "HOST:PORT"),
+                                         &out->server.host, &out->server.port, &error))
     fail("share/listen", error);
-  if (n["read_only"]) out->read_only = get<bool>(n["read_only"], "share/read_only", "true or false");
+  if (n["read_only"])
+    out->read_only = get<bool>(n["read_only"], "share/read_only", "true or false");
   if (n["allow"]) {
     const std::vector<std::string> allow = getNames(n["allow"], "share/allow");
     if (allow.empty()) fail("share/allow", "empty (no client could connect)");

@@ -55,18 +55,18 @@ void BusScheduler::Pending::finish(Result r) {
 void BusScheduler::refuseQueued(std::unique_lock<std::mutex>& lock, const std::string& reason) {
   ClosedTransport closed;
   closed.reason = reason;
-  for (std::deque<Pending>* queue : {&writes_, &shared_}) {
-    while (!queue->empty()) {
-      Pending p = std::move(queue->front());
-      queue->pop_front();
-      lock.unlock();
-      Result r = p.job(closed);
-      lock.lock();
-      if (!r.ok() && !p.device.empty()) ++health_[p.device].writes_refused;
-      lock.unlock();  // `done` may take its caller's locks
-      p.finish(std::move(r));
-      lock.lock();
-    }
+  // Writes first; both queues again after each job, as more may come while the lock is free.
+  while (!writes_.empty() || !shared_.empty()) {
+    std::deque<Pending>& queue = writes_.empty() ? shared_ : writes_;
+    Pending p = std::move(queue.front());
+    queue.pop_front();
+    lock.unlock();
+    Result r = p.job(closed);
+    lock.lock();
+    if (!r.ok() && !p.device.empty()) ++health_[p.device].writes_refused;
+    lock.unlock();  // `done` may take its caller's locks
+    p.finish(std::move(r));
+    lock.lock();
   }
 }
 
@@ -233,6 +233,7 @@ void BusScheduler::run() {
       // Nobody waits for a bus that is not there: queued writes fail now, and what they took
       // from shared queues fails with them (never sent later).
       refuseQueued(lock, "port not open: " + connection_error_);
+      if (!running_) break;  // the lock was free while jobs ran: stop() may have come then
       clock_.waitUntil(lock, wake_, next_connect);
       continue;
     }

@@ -180,8 +180,8 @@ void ModbusTcpServer::run() {
 void ModbusTcpServer::acceptClient() {
   sockaddr_in peer{};
   socklen_t len = sizeof peer;
-  const int fd = accept4(listen_fd_, reinterpret_cast<sockaddr*>(&peer), &len,
-                         SOCK_NONBLOCK | SOCK_CLOEXEC);
+  const int fd =
+      accept4(listen_fd_, reinterpret_cast<sockaddr*>(&peer), &len, SOCK_NONBLOCK | SOCK_CLOEXEC);
   if (fd < 0) return;
   const uint32_t ip = ntohl(peer.sin_addr.s_addr);
   bool allowed = false;

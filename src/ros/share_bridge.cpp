@@ -8,8 +8,7 @@ namespace modbus_rtu_driver {
 
 ShareBridge::ShareBridge(BusScheduler& bus, const BusConfig& config) : config_(config.share) {
   std::map<uint8_t, std::string> device_at;
-  for (const DeviceConfig& d : config.devices)
-    device_at[static_cast<uint8_t>(d.address)] = d.name;
+  for (const DeviceConfig& d : config.devices) device_at[static_cast<uint8_t>(d.address)] = d.name;
   gateway_ = std::make_unique<ShareGateway>(bus, config_, [device_at](uint8_t slave) {
     auto it = device_at.find(slave);
     return it == device_at.end() ? std::string() : it->second;
@@ -27,10 +26,9 @@ void ShareBridge::stop() {
 void ShareBridge::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   using diagnostic_msgs::DiagnosticStatus;
   const ModbusTcpServer::Stats s = gateway_->server().stats();
-  const std::string where =
-      config_.server.host + ":" + std::to_string(gateway_->server().port());
-  status.summary(DiagnosticStatus::OK, "Modbus TCP on " + where + ", " +
-                                           std::to_string(s.connected) + " client(s)");
+  const std::string where = config_.server.host + ":" + std::to_string(gateway_->server().port());
+  status.summary(DiagnosticStatus::OK,
+                 "Modbus TCP on " + where + ", " + std::to_string(s.connected) + " client(s)");
   status.add("listen", where);
   status.add("read only", config_.read_only ? "yes" : "no");
   status.add("clients", s.connected);

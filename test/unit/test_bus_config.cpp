@@ -185,8 +185,8 @@ TEST(BusConfig, ShareKeysWithDefaultsAndRanges) {
   EXPECT_EQ(c.share.server.allow, std::vector<std::string>{"127.0.0.1"});  // localhost only
   EXPECT_EQ(c.share.server.max_clients, 4);
   EXPECT_EQ(c.share.max_queue, 16);
-  ASSERT_TRUE(parseBusConfig(YAML::Load(replaced("retries: 1", "retries: 1\nshare: {}")), &c,
-                             &error));
+  ASSERT_TRUE(
+      parseBusConfig(YAML::Load(replaced("retries: 1", "retries: 1\nshare: {}")), &c, &error));
   EXPECT_EQ(c.share.server.host, "127.0.0.1");
   EXPECT_EQ(c.share.server.port, 1502);
   auto shareError = [](const std::string& share) {

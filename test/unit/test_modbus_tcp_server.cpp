@@ -132,7 +132,7 @@ TEST(ModbusTcpServer, AFullQueueAnswersSlaveDeviceBusy) {
   TcpClient c(f.port());
   f.bus.hold();
   ASSERT_TRUE(c.send(1, Request::writeSingleRegister(1, 1, 11)));
-  ASSERT_TRUE(f.bus.awaitExecuted(1));  // on the bus, held
+  ASSERT_TRUE(f.bus.awaitExecuted(1));                             // on the bus, held
   ASSERT_TRUE(c.send(2, Request::writeSingleRegister(1, 2, 22)));  // waits in the queue
   ASSERT_TRUE(waitFor([&] { return f.gateway->queued() == 2; }));
   const Request third = Request::writeSingleRegister(1, 3, 33);

@@ -26,11 +26,11 @@ struct DeviceHealth {
   bool answered = false;  // it has answered at least once (online in /diagnostics only then)
   uint32_t consecutive_failures = 0;
   uint64_t polls_ok = 0, polls_failed = 0, writes_ok = 0, writes_failed = 0;
-  uint64_t writes_refused = 0;    // failed unsent: the port was not open or the bus stopped
+  uint64_t writes_refused = 0;  // failed unsent: the port was not open or the bus stopped
   uint64_t shared_ok = 0, shared_failed = 0;  // requests of Modbus TCP clients (submitShared)
-  std::string last_error;         // empty when none yet
-  double achieved_poll_rate = 0;  // Hz over the last seconds
-  bool rate_overrun = false;      // the bus could not keep the configured rate
+  std::string last_error;                     // empty when none yet
+  double achieved_poll_rate = 0;              // Hz over the last seconds
+  bool rate_overrun = false;                  // the bus could not keep the configured rate
 };
 
 class BusScheduler {

@@ -52,7 +52,7 @@ class ModbusTcpServer {
   // Runs on the server's thread; must not block. Answers with reply() now or later (any thread).
   using Handler = std::function<void(const Incoming&)>;
 
-  struct PeerCounts {       // per client address, over all its connections
+  struct PeerCounts {  // per client address, over all its connections
     uint64_t connections = 0;
     uint64_t requests = 0;  // complete frames received
     uint64_t exceptions = 0;
