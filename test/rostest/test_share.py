@@ -27,7 +27,8 @@ PDU = "2"
 def mbpoll(port, unit, table, ref, *values, count=1):
     """Runs mbpoll once (PDU addressing: -0); returns (exit code, output, values read)."""
     cmd = ["mbpoll", "-m", "tcp", "-p", str(port), "-a", str(unit), "-t", table, "-r", str(ref),
-           "-0", "-1", "-o", "3", "-c", str(count), "127.0.0.1"] + [str(v) for v in values]
+           "-0", "-1", "-o", "3"] + ([] if values else ["-c", str(count)]) + ["127.0.0.1"]
+    cmd += [str(v) for v in values]  # writing: as many as given
     out = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=30,
                          check=False)
     text = out.stdout.decode(errors="replace")
