@@ -84,11 +84,10 @@ class Simulator:
 
 
 class Node:
-    def __init__(self, workdir, port, rate, baud=115200, realtime=0):
+    def __init__(self, workdir, port, rate, baud=115200, extra_yaml=""):
         config = os.path.join(workdir, "bus.yaml")
         with open(config, "w") as f:
-            f.write(BUS_YAML % {"rate": rate, "baud": baud})
-            f.write("realtime_priority: %d\n" % realtime)
+            f.write(BUS_YAML % {"rate": rate, "baud": baud} + extra_yaml)
         subprocess.check_call(["rosparam", "delete", "/bench_bus"], stderr=subprocess.DEVNULL) \
             if self._has_params() else None
         subprocess.check_call(["rosparam", "load", config, "/bench_bus"])
@@ -183,7 +182,7 @@ def measure_latency(workdir, calls, baud, realtime=0, loaded=False):
     """One run: (to-the-wire seconds, to-the-answer seconds, failed calls, simulator raised)."""
     sim = Simulator(workdir, pace=True, baud=baud)
     sim_raised = raise_simulator(sim) if loaded else False
-    node = Node(workdir, sim.link, 10.0, baud, realtime)
+    node = Node(workdir, sim.link, 10.0, baud, "realtime_priority: %d\n" % realtime)
     try:
         node.wait_ready()
         pump = rospy.ServiceProxy("/bench_bus/relays/out0/set", SetBool, persistent=True)

@@ -59,6 +59,7 @@ ROSDEP_TO_DEBIAN = {
     "clang-tidy": ["clang-tidy"],
     "clang": ["clang", "libclang-rt-14-dev"],
     "xxd": ["xxd"],
+    "mbpoll": ["mbpoll"],
 }
 SHELL_SKIP = {
     "if", "then", "else", "elif", "fi", "for", "while", "until", "do", "done", "case", "esac",

@@ -20,7 +20,10 @@ const std::set<std::string> kDeviceKeys = {
 // The master role's keys beside the link's.
 const std::set<std::string> kBusKeys = {
     "role",       "diagnostic_period", "devices",          "allow_raw_writes",  "publish_on_change",
-    "keep_alive", "heartbeat",         "shutdown_timeout", "realtime_priority", "lock_memory"};
+    "keep_alive", "heartbeat",         "shutdown_timeout", "realtime_priority", "lock_memory",
+    "share"};
+const std::set<std::string> kShareKeys = {"listen", "read_only", "allow", "max_clients",
+                                          "max_queue"};
 
 std::vector<std::string> getNames(const YAML::Node& n, const std::string& key) {
   if (!n.IsSequence()) fail(key, show(n) + " is not a list of names");
@@ -111,6 +114,38 @@ void parseFailsafe(const YAML::Node& n, const std::string& where,
                    &out->heartbeat_timeout);
 }
 
+// share: {listen: "127.0.0.1:1502", read_only: false, allow: [127.0.0.1], max_clients: 4,
+// max_queue: 16}; every key optional.
+void parseShare(const YAML::Node& n, ShareConfig* out) {
+  if (!n.IsMap()) fail("share", show(n) + " is not a map {listen: HOST:PORT, allow: [...], ...}");
+  checkKeys(n, "share/", kShareKeys);
+  out->enabled = true;
+  std::string error;
+  if (n["listen"] && !parseListenAddress(get<std::string>(n["listen"], "share/listen", "HOST:PORT"),
+                                         &out->server.host, &out->server.port, &error))
+    fail("share/listen", error);
+  if (n["read_only"])
+    out->read_only = get<bool>(n["read_only"], "share/read_only", "true or false");
+  if (n["allow"]) {
+    const std::vector<std::string> allow = getNames(n["allow"], "share/allow");
+    if (allow.empty()) fail("share/allow", "empty (no client could connect)");
+    for (const std::string& entry : allow) {
+      uint32_t network = 0, mask = 0;
+      if (!parseAllowEntry(entry, &network, &mask, &error)) fail("share/allow", error);
+    }
+    out->server.allow = allow;
+  }
+  auto bounded = [&](const char* key, int low, int high, int* value) {
+    if (!n[key]) return;
+    *value = getInt(n[key], std::string("share/") + key);
+    if (*value < low || *value > high)
+      fail(std::string("share/") + key, std::to_string(*value) + " is outside " +
+                                            std::to_string(low) + "-" + std::to_string(high));
+  };
+  bounded("max_clients", 1, 64, &out->server.max_clients);
+  bounded("max_queue", 1, 1000, &out->max_queue);
+}
+
 DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
   const std::string where = "devices/" + name + "/";
   if (!isValidRosName(name))
@@ -176,6 +211,7 @@ void parse(const YAML::Node& root, BusConfig* out) {
   }
   if (root["lock_memory"])
     out->lock_memory = get<bool>(root["lock_memory"], "lock_memory", "true or false");
+  if (root["share"]) parseShare(root["share"], &out->share);
   const YAML::Node devices = root["devices"];
   if (!devices) fail("devices", "missing (a map of device name -> settings)");
   if (!devices.IsMap() || devices.size() == 0)
@@ -197,6 +233,7 @@ void parse(const YAML::Node& root, BusConfig* out) {
 std::vector<std::string> configKeys() {
   std::vector<std::string> keys(kLinkKeys.begin(), kLinkKeys.end());
   keys.insert(keys.end(), kBusKeys.begin(), kBusKeys.end());
+  for (const auto& k : kShareKeys) keys.push_back("share/" + k);
   for (const auto& k : kDeviceKeys) keys.push_back("devices/D/" + k);
   const auto slave = slaveConfigKeys();
   keys.insert(keys.end(), slave.begin(), slave.end());

@@ -47,17 +47,28 @@ Result BusScheduler::ClosedTransport::execute(const Request& /*request*/) {
   return Result::failure(ErrorKind::kNotConnected, reason);
 }
 
+void BusScheduler::Pending::finish(Result r) {
+  if (done)
+    done(r);
+  else
+    promise.set_value(std::move(r));
+}
+
 void BusScheduler::refuseQueued(std::unique_lock<std::mutex>& lock, const std::string& reason) {
   ClosedTransport closed;
   closed.reason = reason;
-  while (!writes_.empty()) {
-    Pending p = std::move(writes_.front());
-    writes_.pop_front();
+  // Writes first; both queues again after each job, as more may come while the lock is free.
+  while (!writes_.empty() || !shared_.empty()) {
+    std::deque<Pending>& queue = writes_.empty() ? shared_ : writes_;
+    Pending p = std::move(queue.front());
+    queue.pop_front();
     lock.unlock();
     Result r = p.job(closed);
     lock.lock();
-    if (!r.ok()) ++health_[p.device].writes_refused;
-    p.promise.set_value(std::move(r));
+    if (!r.ok() && !p.device.empty()) ++health_[p.device].writes_refused;
+    lock.unlock();  // `done` may take its caller's locks
+    p.finish(std::move(r));
+    lock.lock();
   }
 }
 
@@ -100,6 +111,26 @@ std::future<Result> BusScheduler::submit(const std::string& device, Job job) {
   return f;
 }
 
+void BusScheduler::submitShared(const std::string& device, Job job, ResultCallback done) {
+  Pending p;
+  p.device = device;
+  p.job = std::move(job);
+  p.done = std::move(done);
+  p.shared = true;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (running_) {
+      shared_.push_back(std::move(p));
+      p.done = nullptr;
+    }
+  }
+  if (p.done) {
+    p.done(Result::failure(ErrorKind::kIo, "bus stopped"));
+    return;
+  }
+  clock_.notifyAll(wake_);
+}
+
 DeviceHealth BusScheduler::health(const std::string& device) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = health_.find(device);
@@ -116,11 +147,14 @@ std::string BusScheduler::connectionError() const {
   return connection_error_;
 }
 
-void BusScheduler::record(const std::string& device, const Result& result, bool is_poll) {
+void BusScheduler::record(const std::string& device, const Result& result, Kind kind) {
   if (result.error == ErrorKind::kInvalidArgument) return;  // never reached the bus
+  if (device.empty()) return;                               // a shared request to nobody known
   const auto now = clock_.now();
   DeviceHealth& h = health_[device];
-  if (is_poll) {
+  if (kind == Kind::kShared) {
+    (result.ok() ? h.shared_ok : h.shared_failed)++;
+  } else if (kind == Kind::kPoll) {
     (result.ok() ? h.polls_ok : h.polls_failed)++;
     auto& times = poll_times_[device];
     times.push_back(now);
@@ -147,27 +181,29 @@ void BusScheduler::record(const std::string& device, const Result& result, bool 
   backoff_until_[device] = now + seconds(b);
 }
 
-// Runs the oldest queued write, if any, with `lock` held on entry and on return.
-bool BusScheduler::runOneWrite(std::unique_lock<std::mutex>& lock) {
-  if (writes_.empty()) return false;
-  Pending p = std::move(writes_.front());
-  writes_.pop_front();
+bool BusScheduler::runOneQueued(std::unique_lock<std::mutex>& lock) {
+  std::deque<Pending>& queue = writes_.empty() ? shared_ : writes_;
+  if (queue.empty()) return false;
+  Pending p = std::move(queue.front());
+  queue.pop_front();
   lock.unlock();
   Result r = p.job(transport_);
   lock.lock();
-  record(p.device, r, false);
+  record(p.device, r, p.shared ? Kind::kShared : Kind::kWrite);
   if (r.error == ErrorKind::kIo) transport_.disconnect();
-  p.promise.set_value(std::move(r));
+  lock.unlock();  // `done` may take its caller's locks
+  p.finish(std::move(r));
+  lock.lock();
   return true;
 }
 
-// A poll of several transactions lets queued writes go first before each of them, so a write
-// waits for at most one transaction, not a whole poll.
+// A poll of several transactions lets queued writes and shared requests go first before each of
+// them, so they wait for at most one transaction, not a whole poll.
 Result BusScheduler::PollTransport::execute(const Request& request) {
   owner.transport_.awaitLineFree();  // a write that comes during the gap still goes first
   {
     std::unique_lock<std::mutex> lock(owner.mutex_);
-    while (owner.transport_.connected() && owner.runOneWrite(lock)) {
+    while (owner.transport_.connected() && owner.runOneQueued(lock)) {
     }
   }
   return owner.transport_.execute(request);
@@ -202,12 +238,13 @@ void BusScheduler::run() {
       // Nobody waits for a bus that is not there: queued writes fail now, and what they took
       // from shared queues fails with them (never sent later).
       refuseQueued(lock, "port not open: " + connection_error_);
+      if (!running_) break;  // the lock was free while jobs ran: stop() may have come then
       clock_.waitUntil(lock, wake_, next_connect);
       continue;
     }
     connected_ = true;
 
-    if (runOneWrite(lock)) continue;  // writes go ahead of polls
+    if (runOneQueued(lock)) continue;  // writes, then shared requests, go ahead of polls
 
     // The poll due first; an offline device waits out its backoff.
     Poll* next = nullptr;
@@ -239,7 +276,7 @@ void BusScheduler::run() {
     Result r = next->job(poll_transport_);
     if (next->on_result) next->on_result(r);
     lock.lock();
-    record(next->device, r, true);
+    record(next->device, r, Kind::kPoll);
     if (r.error == ErrorKind::kIo) transport_.disconnect();
     // Keep the schedule, so a poll delayed by a slow transaction (an offline device's probe)
     // is caught up and the average rate holds. Lagging more than 1 s means the bus cannot carry

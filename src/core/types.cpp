@@ -61,6 +61,12 @@ std::string exceptionName(uint8_t code) {
       return "illegal data value (03)";
     case kSlaveDeviceFailure:
       return "slave device failure (04)";
+    case kSlaveDeviceBusy:
+      return "slave device busy (06)";
+    case kGatewayPathUnavailable:
+      return "gateway path unavailable (0A)";
+    case kGatewayTargetFailed:
+      return "gateway target device failed to respond (0B)";
     default: {
       char buf[40];
       std::snprintf(buf, sizeof buf, "exception %02X", code);

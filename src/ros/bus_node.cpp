@@ -18,7 +18,8 @@ namespace modbus_rtu_driver {
 BusNode::BusNode(const ros::NodeHandle& private_nh) : nh_(private_nh) {}
 
 BusNode::~BusNode() {
-  // The bus thread calls into the adapters: stop it before they go.
+  // The bus thread calls into the adapters and the share: stop it before they go.
+  if (share_) share_->stop();
   if (bus_) bus_->stop();
 }
 
@@ -66,6 +67,7 @@ void BusNode::checkDeadlines() {
 void BusNode::shutdown() {
   if (!bus_) return;
   failsafe_timer_.stop();
+  if (share_) share_->stop();  // no client request after the safe states
   // Safe states before the port closes, bounded: a device that cannot be reached is logged and
   // the node exits anyway.
   const auto deadline = std::chrono::steady_clock::now() +
@@ -148,6 +150,17 @@ bool BusNode::start() {
   for (auto& a : adapters_) {
     a->setPublishPolicy({config_.publish_on_change, config_.keep_alive});
     a->start();
+  }
+  if (config_.share.enabled) {
+    share_ = std::make_unique<ShareBridge>(*bus_, config_);
+    if (!share_->start(&error)) {
+      ROS_FATAL("share: %s", error.c_str());
+      return false;
+    }
+    diagnostics_->add("share", share_.get(), &ShareBridge::diagnose);
+    ROS_INFO("share: Modbus TCP on %s:%u (%s)", config_.share.server.host.c_str(),
+             static_cast<unsigned>(config_.share.server.port),
+             config_.share.read_only ? "read only" : "reads and writes");
   }
   ROS_INFO("bus %s (%s) at %d baud, %s parity: %zu device(s)", config_.link.port.c_str(),
            portKindName(link_->kind()), config_.link.baud, parityName(config_.link.parity),

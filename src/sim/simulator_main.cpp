@@ -11,6 +11,7 @@
 
 #include "modbus_rtu_driver/sim/command_line.h"
 #include "modbus_rtu_driver/sim/simulator.h"
+#include "modbus_rtu_driver/sim/simulator_tcp.h"
 
 namespace {
 
@@ -31,6 +32,7 @@ int main(int argc, char** argv) {
   std::string config_path;
   SimulatorOptions options;
   bool pace = false;
+  std::string tcp;
   CLI::App app(
       "Modbus RTU devices on a pseudo-terminal; prints \"simulator ready on PATH\" once "
       "the link exists.",
@@ -52,6 +54,9 @@ int main(int argc, char** argv) {
                  "also serve the line as a transparent RTU-over-TCP gateway on 127.0.0.1:PORT")
       ->type_name("PORT")
       ->check(CLI::Range(1, 65535));
+  app.add_option("--tcp", tcp,
+                 "also serve the devices over Modbus TCP at HOST:PORT (a gateway on the line)")
+      ->type_name("HOST:PORT");
   app.add_flag("--pace", pace, "the line runs at its real speed (also `pace: true` in the config)");
   app.add_flag("--verbose", options.verbose,
                "print every frame: rx/tx followed by the bytes in hex");
@@ -78,12 +83,19 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "modbus_rtu_simulator: %s\n", error.c_str());
     return 1;
   }
+  SimulatorTcp gateway(config, options.link);
+  if (!tcp.empty() && !gateway.start(tcp, &error)) {
+    std::fprintf(stderr, "modbus_rtu_simulator: --tcp %s: %s\n", tcp.c_str(), error.c_str());
+    return 1;
+  }
   const std::string info = sim.command("info");
   std::fprintf(
       stderr, "modbus_rtu_simulator: devices%s; control socket %s%s%s\n", info.substr(2).c_str(),
       sim.controlPath().c_str(), config.pace ? "; pacing the line" : "",
       sim.rtuTcpPort() ? ("; rtu+tcp://127.0.0.1:" + std::to_string(sim.rtuTcpPort())).c_str()
                        : "");
+  if (!tcp.empty())
+    std::fprintf(stderr, "modbus_rtu_simulator: Modbus TCP on port %u\n", gateway.port());
   std::printf("simulator ready on %s\n", options.link.c_str());
   std::fflush(stdout);
   while (!g_stop) {
@@ -93,6 +105,7 @@ int main(int argc, char** argv) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
+  gateway.stop();
   sim.stop();
   return 0;
 }

@@ -176,3 +176,38 @@ TEST(BusConfig, EveryKeyIsDocumentedAndEveryExampleParses) {
     EXPECT_TRUE(ok) << file << ": " << error;
   }
 }
+
+TEST(BusConfig, ShareKeysWithDefaultsAndRanges) {
+  BusConfig c;
+  std::string error;
+  ASSERT_TRUE(parseBusConfig(YAML::Load(kGood), &c, &error)) << error;
+  EXPECT_FALSE(c.share.enabled);  // off unless configured
+  const std::string shared =
+      replaced("retries: 1", "retries: 1\nshare: {listen: \"0.0.0.0:5020\", read_only: true}");
+  ASSERT_TRUE(parseBusConfig(YAML::Load(shared), &c, &error)) << error;
+  EXPECT_TRUE(c.share.enabled);
+  EXPECT_EQ(c.share.server.host, "0.0.0.0");
+  EXPECT_EQ(c.share.server.port, 5020);
+  EXPECT_TRUE(c.share.read_only);
+  EXPECT_EQ(c.share.server.allow, std::vector<std::string>{"127.0.0.1"});  // localhost only
+  EXPECT_EQ(c.share.server.max_clients, 4);
+  EXPECT_EQ(c.share.max_queue, 16);
+  ASSERT_TRUE(
+      parseBusConfig(YAML::Load(replaced("retries: 1", "retries: 1\nshare: {}")), &c, &error));
+  EXPECT_EQ(c.share.server.host, "127.0.0.1");
+  EXPECT_EQ(c.share.server.port, 1502);
+  auto shareError = [](const std::string& share) {
+    return errorOf(replaced("retries: 1", "retries: 1\nshare: " + share));
+  };
+  EXPECT_NE(shareError("{listen: \"localhost:1502\"}").find("share/listen"), std::string::npos);
+  EXPECT_NE(shareError("{listen: \"127.0.0.1:0\"}").find("1-65535"), std::string::npos);
+  EXPECT_NE(shareError("{allow: [10.0.0.0/40]}").find("share/allow"), std::string::npos);
+  EXPECT_NE(shareError("{allow: []}").find("share/allow: empty"), std::string::npos);
+  EXPECT_NE(shareError("{max_clients: 0}").find("share/max_clients: 0 is outside 1-64"),
+            std::string::npos);
+  EXPECT_NE(shareError("{max_queue: 1001}").find("share/max_queue: 1001 is outside 1-1000"),
+            std::string::npos);
+  EXPECT_NE(shareError("{read_only: maybe}").find("share/read_only"), std::string::npos);
+  EXPECT_NE(shareError("{port: 1502}").find("share/port"), std::string::npos);
+  EXPECT_NE(shareError("true").find("share"), std::string::npos);
+}

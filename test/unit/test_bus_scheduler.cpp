@@ -402,3 +402,125 @@ TEST_F(BusSchedulerTest, AWriteWaitsForOneTransactionNotAWholePoll) {
   EXPECT_EQ(bus.log[3], "1r");
   EXPECT_EQ(ms(bus.started[1]), 30);  // right after the first read
 }
+
+// Shared requests (Modbus TCP clients of the share): after every write, ahead of every poll,
+// also between a poll's transactions.
+TEST_F(BusSchedulerTest, SharedRequestsGoAfterWritesAndAheadOfPolls) {
+  bus.latency = 30ms;
+  BusScheduler& s = make();
+  s.addPoll(
+      "slow", 1.0,
+      [](Transport& t) {
+        for (int i = 0; i < 3; ++i) t.execute(Request::readCoils(1, 0, 8));
+        return Result::success();
+      },
+      nullptr);
+  bus.hold();  // the poll's first read stays on the bus while everything else queues
+  s.start();
+  ASSERT_TRUE(clock.awaitSleepers(1, kSafetyNet));
+  std::vector<std::promise<Result>> shared(2);
+  std::atomic<int> shared_runs{0};
+  auto submitShared = [&](uint8_t slave, std::promise<Result>& done) {
+    s.submitShared(
+        "",
+        [&shared_runs, slave](Transport& t) {
+          ++shared_runs;
+          return t.execute(Request::readHoldingRegisters(slave, 0, 1));
+        },
+        [&done](const Result& r) { done.set_value(r); });
+  };
+  submitShared(3, shared[0]);
+  auto w1 = s.submit("w", writeCoil(2));
+  submitShared(4, shared[1]);
+  auto w2 = s.submit("w", writeCoil(5));
+  bus.release();
+  for (auto& p : shared) {
+    auto f = p.get_future();
+    ASSERT_TRUE(ready(f));
+    EXPECT_TRUE(f.get().ok());
+  }
+  ASSERT_TRUE(ready(w1));
+  ASSERT_TRUE(ready(w2));
+  ASSERT_TRUE(runUntil(500ms));  // the rest of the poll
+  s.stop();
+  EXPECT_EQ(shared_runs.load(), 2);
+  std::lock_guard<std::mutex> lock(bus.m);
+  EXPECT_EQ(bus.log, (std::vector<std::string>{"1r", "2w", "5w", "3r", "4r", "1r", "1r"}));
+  EXPECT_EQ(ms(bus.started[3]), 90) << "right after the writes, inside the poll";
+}
+
+TEST_F(BusSchedulerTest, SharedRequestsAreRefusedWhileThePortIsClosed) {
+  bus.up = false;
+  bus.connected_ = false;
+  BusScheduler::Options o;
+  o.reconnect_initial = 0.05;
+  BusScheduler& s = make(o);
+  s.addDevice("d");
+  s.start();
+  ASSERT_TRUE(runUntil(10ms));
+  std::promise<Result> done;
+  std::atomic<int> runs{0};
+  s.submitShared(
+      "d",
+      [&](Transport& t) {
+        ++runs;
+        return t.execute(Request::readCoils(1, 0, 8));
+      },
+      [&](const Result& r) { done.set_value(r); });
+  auto f = done.get_future();
+  ASSERT_TRUE(ready(f));
+  const Result r = f.get();
+  EXPECT_EQ(r.error, ErrorKind::kNotConnected);
+  EXPECT_NE(r.message.find("/dev/fake"), std::string::npos) << r.message;
+  EXPECT_EQ(runs.load(), 1);
+  EXPECT_EQ(s.health("d").writes_refused, 1u);
+  EXPECT_EQ(s.health("d").shared_failed, 0u);  // refused unsent: not a failure of the device
+  s.stop();
+  std::lock_guard<std::mutex> lock(bus.m);
+  EXPECT_TRUE(bus.log.empty());
+}
+
+TEST_F(BusSchedulerTest, StopFailsSharedRequestsStillQueuedEachRunOnce) {
+  BusScheduler& s = make();
+  bus.release();
+  s.start();
+  std::promise<void> on_bus;
+  auto first = s.submit("a", [&](Transport& t) {
+    on_bus.set_value();
+    waitFor(
+        [&] {
+          // Queued probes are answered later, at stop: the promise must outlive this lambda.
+          auto probe = std::make_shared<std::promise<Result>>();
+          auto f = probe->get_future();
+          s.submitShared(
+              "a", [](Transport& t) { return t.execute(Request::readCoils(1, 0, 8)); },
+              [probe](const Result& r) { probe->set_value(r); });
+          return f.wait_for(0s) == std::future_status::ready && f.get().message == "bus stopped";
+        },
+        std::chrono::duration<double>(kSafetyNet).count());
+    return t.execute(Request::readCoils(1, 0, 8));
+  });
+  constexpr int kQueued = 4;
+  std::vector<std::promise<Result>> done(kQueued);
+  std::atomic<int> runs{0};
+  for (auto& d : done)
+    s.submitShared(
+        "a",
+        [&](Transport& t) {
+          ++runs;
+          return t.execute(Request::readCoils(2, 0, 8));
+        },
+        [&d](const Result& r) { d.set_value(r); });
+  ASSERT_EQ(on_bus.get_future().wait_for(kSafetyNet), std::future_status::ready);
+  s.stop();
+  ASSERT_TRUE(ready(first));
+  EXPECT_TRUE(first.get().ok());
+  for (auto& d : done) {
+    auto f = d.get_future();
+    ASSERT_TRUE(ready(f));
+    EXPECT_EQ(f.get().message, "bus stopped");
+  }
+  EXPECT_EQ(runs.load(), kQueued);  // each ran once, against the refusing transport
+  std::lock_guard<std::mutex> lock(bus.m);
+  EXPECT_EQ(bus.log, std::vector<std::string>{"1r"});
+}

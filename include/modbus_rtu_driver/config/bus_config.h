@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/link_config.h"
+#include "modbus_rtu_driver/core/share_gateway.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace YAML {
@@ -37,6 +38,8 @@ struct BusConfig {
   // locks its memory (mlockall). Both need the user's limits to allow them (docs/ros_api.md).
   int realtime_priority = 0;
   bool lock_memory = false;
+  // `share`: Modbus TCP clients reach the bus through the node (docs/share.md); off unless set.
+  ShareConfig share;
   std::vector<DeviceConfig> devices;
 };
 

@@ -1,6 +1,7 @@
 // The bus thread. It alone calls the Transport (and so libmodbus); everyone else hands it jobs.
-// Writes (submit) go ahead of polls; polls run at their device's rate, earliest due first, and a
-// device that stops answering is polled with backoff so it cannot stall the others.
+// Three priorities: writes (submit) first, then shared requests (submitShared: Modbus TCP
+// clients of the node's share), then polls; polls run at their device's rate, earliest due
+// first, and a device that stops answering is polled with backoff so it cannot stall the others.
 // Time comes from a Clock (the real steady clock unless one is given; tests use a ManualClock).
 #pragma once
 
@@ -25,10 +26,11 @@ struct DeviceHealth {
   bool answered = false;  // it has answered at least once (online in /diagnostics only then)
   uint32_t consecutive_failures = 0;
   uint64_t polls_ok = 0, polls_failed = 0, writes_ok = 0, writes_failed = 0;
-  uint64_t writes_refused = 0;    // failed unsent: the port was not open or the bus stopped
-  std::string last_error;         // empty when none yet
-  double achieved_poll_rate = 0;  // Hz over the last seconds
-  bool rate_overrun = false;      // the bus could not keep the configured rate
+  uint64_t writes_refused = 0;  // failed unsent: the port was not open or the bus stopped
+  uint64_t shared_ok = 0, shared_failed = 0;  // requests of Modbus TCP clients (submitShared)
+  std::string last_error;                     // empty when none yet
+  double achieved_poll_rate = 0;              // Hz over the last seconds
+  bool rate_overrun = false;                  // the bus could not keep the configured rate
 };
 
 class BusScheduler {
@@ -70,6 +72,12 @@ class BusScheduler {
   // it runs against a transport that refuses every request, so a job that took requests from a
   // shared queue (merged writes, command topics) fails them all and keeps nothing for later.
   std::future<Result> submit(const std::string& device, Job job);
+  // Runs `job` on the bus thread after every queued write and ahead of every poll (a shared
+  // request from a Modbus TCP client), with submit's guarantees: it runs exactly once, against
+  // the refusing transport while the port is not open or once the bus stops. `done` gets the
+  // outcome exactly once: on the bus thread, or on the caller's when the bus is not running.
+  // An empty `device` (a slave address no configured device has) keeps no health.
+  void submitShared(const std::string& device, Job job, ResultCallback done);
 
   DeviceHealth health(const std::string& device) const;
   bool connected() const;
@@ -88,6 +96,9 @@ class BusScheduler {
     std::string device;
     Job job;
     std::promise<Result> promise;
+    ResultCallback done;  // set instead of the promise for shared requests
+    bool shared = false;
+    void finish(Result r);
   };
 
   // What poll jobs see: the transport, with queued writes run before each transaction.
@@ -108,10 +119,12 @@ class BusScheduler {
   };
 
   void run();
-  bool runOneWrite(std::unique_lock<std::mutex>& lock);
+  // Runs the oldest write, else the oldest shared request; `lock` held on entry and on return.
+  bool runOneQueued(std::unique_lock<std::mutex>& lock);
   // Runs every queued job against a ClosedTransport saying `reason`; `lock` held on entry/exit.
   void refuseQueued(std::unique_lock<std::mutex>& lock, const std::string& reason);
-  void record(const std::string& device, const Result& result, bool is_poll);
+  enum class Kind { kPoll, kWrite, kShared };
+  void record(const std::string& device, const Result& result, Kind kind);
 
   Transport& transport_;
   Options options_;
@@ -119,6 +132,7 @@ class BusScheduler {
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::deque<Pending> writes_;
+  std::deque<Pending> shared_;
   std::deque<Poll> polls_;  // a deque: adding a poll keeps the one running valid
   std::map<std::string, DeviceHealth> health_;
   std::map<std::string, Clock::time_point> backoff_until_;

@@ -30,6 +30,9 @@ enum ExceptionCode : uint8_t {
   kIllegalDataAddress = 0x02,
   kIllegalDataValue = 0x03,
   kSlaveDeviceFailure = 0x04,
+  kSlaveDeviceBusy = 0x06,
+  kGatewayPathUnavailable = 0x0A,  // a gateway's answers (the node's share): the bus is not open
+  kGatewayTargetFailed = 0x0B,     // the device behind the gateway did not answer (properly)
 };
 std::string exceptionName(uint8_t code);
 

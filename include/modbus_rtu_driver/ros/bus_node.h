@@ -17,6 +17,7 @@
 #include "modbus_rtu_driver/core/watchdog.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 #include "modbus_rtu_driver/ros/raw_writes.h"
+#include "modbus_rtu_driver/ros/share_bridge.h"
 
 namespace modbus_rtu_driver {
 
@@ -48,6 +49,7 @@ class BusNode {
   std::unique_ptr<BusScheduler> bus_;
   std::vector<std::unique_ptr<DeviceAdapter>> adapters_;
   std::unique_ptr<RawWrites> raw_writes_;
+  std::unique_ptr<ShareBridge> share_;  // Modbus TCP clients of the bus; goes after the bus stops
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::Timer diagnostics_timer_;
   ros::Publisher failsafe_pub_;

@@ -1,0 +1,92 @@
+#!/usr/bin/env python3
+"""The share's benchmark row (a script, not a test): the latency of a request through the
+node's Modbus TCP share (FC01, 8 coils of the LC board) while the node polls three devices at
+10 Hz on a paced line, from the client's send to its complete reply. Starts its own rosmaster,
+the simulator and the node (bench/node_bench.py's pieces); prints a markdown table; appends CSV
+rows to --csv.
+
+    share_bench.py [--requests N] [--bauds 115200,9600] [--csv FILE]
+"""
+import argparse
+import os
+import socket
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+
+import node_bench
+
+
+def request(sock, transaction):
+    """One FC01 read of 8 coils at unit 255; returns the reply's PDU (raises on a bad one)."""
+    sock.sendall(struct.pack(">HHHBBHH", transaction, 0, 6, 255, 1, 0, 8))
+    reply = b""
+    while len(reply) < 6 or len(reply) < 6 + struct.unpack(">H", reply[4:6])[0]:
+        chunk = sock.recv(260)
+        if not chunk:
+            raise RuntimeError("the share closed the connection")
+        reply += chunk
+    if struct.unpack(">H", reply[:2])[0] != transaction or reply[7] != 1:
+        raise RuntimeError("unexpected reply %s" % reply.hex())
+    return reply[7:]
+
+
+def latency(workdir, requests, csv, baud):
+    sim = node_bench.Simulator(workdir, pace=True, baud=baud)
+    share_port = node_bench.free_port()
+    node = node_bench.Node(workdir, sim.link, 10.0, baud,
+                           extra_yaml='share: {listen: "127.0.0.1:%d"}\n' % share_port)
+    times = []
+    try:
+        node.wait_ready()
+        time.sleep(2.0)  # polling under way
+        with socket.create_connection(("127.0.0.1", share_port), timeout=10) as sock:
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            for i in range(requests):
+                t0 = time.monotonic()
+                request(sock, i & 0xFFFF)
+                times.append(time.monotonic() - t0)
+                time.sleep(0.01 + (i % 7) * 0.003)  # land at different points of the poll cycle
+    finally:
+        node.stop()
+        sim.stop()
+    p50, p99 = node_bench.percentile(times, 50), node_bench.percentile(times, 99)
+    print("| %d | %d | %.2f | %.2f | %.2f |" % (baud, len(times), 1e3 * p50, 1e3 * p99,
+                                                1e3 * max(times)))
+    csv.write("share_latency_%d,fc01_8_coils,%f,%f,\n" % (baud, p50, p99))
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--requests", type=int, default=300)
+    parser.add_argument("--bauds", default="115200,9600")
+    parser.add_argument("--csv", default="share_bench.csv")
+    args = parser.parse_args()
+    port = node_bench.free_port()
+    os.environ["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
+    master = subprocess.Popen(["rosmaster", "--core", "-p", str(port)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        time.sleep(1.5)
+        import rospy
+        rospy.init_node("modbus_rtu_share_bench", anonymous=True, disable_signals=True)
+        print("## Latency of a shared request (Modbus TCP, FC01 8 coils) while the node polls "
+              "3 devices at 10 Hz (paced line)\n")
+        print("| baud | requests | p50 [ms] | p99 [ms] | max [ms] |")
+        print("|---|---|---|---|---|")
+        with tempfile.TemporaryDirectory() as workdir, open(args.csv, "a") as csv:
+            for baud in (int(b) for b in args.bauds.split(",") if b):
+                latency(workdir, args.requests if baud > 19200 else max(50, args.requests // 3),
+                        csv, baud)
+        print("\nFrom the client's send to its complete reply: the wait for the transaction on the "
+              "line (a poll), then the request's own transaction.\n")
+    finally:
+        master.terminate()
+        master.wait(10)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

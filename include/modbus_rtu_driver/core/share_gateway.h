@@ -1,0 +1,59 @@
+// Sharing a bus: Modbus TCP clients (mbpoll, a commissioning tool, an HMI) reach the devices of
+// a bus that a BusScheduler owns. Each valid request is queued on the bus after the writes of
+// ROS and ahead of the polls (BusScheduler::submitShared) and answered when it has run, with
+// the client's transaction id and the slave address as unit id. What a client may see:
+//   01 a write while read_only (also a read at unit 0, a function the server does not know);
+//   06 the share's queue is full (max_queue requests waiting for the bus, all clients together);
+//   0A the port is not open (or the bus is stopping); 0B the device did not answer properly
+//   (timeout, CRC, garbled reply) after the link's retries; any other code is the device's own.
+// Unit 0 is a broadcast: nobody answers on the bus, so a write is answered with its normal
+// reply once it was sent (sent, not confirmed by any device).
+// ROS-free: the node's share and the simulator's TCP side both use it.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "modbus_rtu_driver/core/bus_scheduler.h"
+#include "modbus_rtu_driver/core/modbus_tcp_server.h"
+
+namespace modbus_rtu_driver {
+
+struct ShareConfig {
+  bool enabled = false;
+  TcpServerOptions server;  // listen, allow, max_clients
+  bool read_only = false;   // write functions (05, 06, 15, 16) answered with exception 01
+  int max_queue = 16;       // requests waiting for or on the bus, all clients together
+};
+
+// The gateway exception for a failed transaction, or the device's own exception code.
+uint8_t shareExceptionFor(const Result& result);
+// What the client gets for `request` once it ran with `result`: an RTU ADU (reply or exception).
+Bytes shareReplyFor(const Request& request, const Result& result);
+
+class ShareGateway {
+ public:
+  // `device_of(slave)` names the configured device at that address ("" when none): its health
+  // counts the shared requests. The bus must stop before the gateway goes (pending answers
+  // call back into it).
+  ShareGateway(BusScheduler& bus, ShareConfig config,
+               std::function<std::string(uint8_t)> device_of = nullptr);
+  ~ShareGateway();
+  bool start(std::string* error);
+  void stop();
+  ModbusTcpServer& server() { return *server_; }
+  int queued() const { return in_flight_.load(); }
+
+ private:
+  void handle(const ModbusTcpServer::Incoming& in);
+
+  BusScheduler& bus_;
+  ShareConfig config_;
+  std::function<std::string(uint8_t)> device_of_;
+  std::unique_ptr<ModbusTcpServer> server_;
+  std::atomic<int> in_flight_{0};
+};
+
+}  // namespace modbus_rtu_driver

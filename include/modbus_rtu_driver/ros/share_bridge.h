@@ -1,0 +1,29 @@
+// The node's share (`share` in the bus YAML): a ShareGateway on the node's bus thread, and its
+// /diagnostics entry (clients, refusals, requests per client address). See docs/share.md.
+#pragma once
+
+#include <diagnostic_updater/diagnostic_updater.h>
+
+#include <memory>
+#include <string>
+
+#include "modbus_rtu_driver/config/bus_config.h"
+#include "modbus_rtu_driver/core/share_gateway.h"
+
+namespace modbus_rtu_driver {
+
+class ShareBridge {
+ public:
+  ShareBridge(BusScheduler& bus, const BusConfig& config);
+  // Listens; false with the reason (address in use, ...).
+  bool start(std::string* error);
+  void stop();
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+  const ShareConfig& config() const { return config_; }
+
+ private:
+  ShareConfig config_;
+  std::unique_ptr<ShareGateway> gateway_;
+};
+
+}  // namespace modbus_rtu_driver

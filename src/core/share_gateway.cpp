@@ -1,0 +1,62 @@
+#include "modbus_rtu_driver/core/share_gateway.h"
+
+namespace modbus_rtu_driver {
+
+uint8_t shareExceptionFor(const Result& result) {
+  if (result.error == ErrorKind::kException) return result.exception_code;
+  if (answerLost(result.error)) return kGatewayTargetFailed;
+  if (result.error == ErrorKind::kInvalidArgument) return kIllegalDataValue;
+  return kGatewayPathUnavailable;  // kIo, kNotConnected: no way to the device
+}
+
+Bytes shareReplyFor(const Request& request, const Result& result) {
+  if (result.ok()) return encodeReply(request, result.values);
+  return encodeException(request.slave, static_cast<uint8_t>(request.function),
+                         shareExceptionFor(result));
+}
+
+ShareGateway::ShareGateway(BusScheduler& bus, ShareConfig config,
+                           std::function<std::string(uint8_t)> device_of)
+    : bus_(bus), config_(std::move(config)), device_of_(std::move(device_of)) {
+  server_ = std::make_unique<ModbusTcpServer>(
+      config_.server, [this](const ModbusTcpServer::Incoming& in) { handle(in); });
+}
+
+ShareGateway::~ShareGateway() {
+  stop();
+}
+
+bool ShareGateway::start(std::string* error) {
+  if (config_.max_queue < 1) {
+    if (error) *error = "max_queue: must be at least 1";
+    return false;
+  }
+  return server_->start(error);
+}
+
+void ShareGateway::stop() {
+  server_->stop();
+}
+
+// On the server's thread: never waits for the bus.
+void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
+  const Request& request = in.request;
+  if (config_.read_only && !isReadFunction(request.function))
+    return server_->replyException(in, kIllegalFunction);
+  if (++in_flight_ > config_.max_queue) {
+    --in_flight_;
+    return server_->replyException(in, kSlaveDeviceBusy);
+  }
+  Request sent = request;
+  // A client's write is sent once: it may start something, and the client decides on a retry.
+  sent.repeatable = isReadFunction(request.function);
+  const std::string device = device_of_ ? device_of_(request.slave) : "";
+  bus_.submitShared(
+      device, [sent](Transport& t) { return t.execute(sent); },
+      [this, in](const Result& r) {
+        server_->reply(in, shareReplyFor(in.request, r));
+        --in_flight_;
+      });
+}
+
+}  // namespace modbus_rtu_driver

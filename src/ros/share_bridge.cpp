@@ -1,0 +1,49 @@
+#include "modbus_rtu_driver/ros/share_bridge.h"
+
+#include <diagnostic_msgs/DiagnosticStatus.h>
+
+#include <map>
+
+namespace modbus_rtu_driver {
+
+ShareBridge::ShareBridge(BusScheduler& bus, const BusConfig& config) : config_(config.share) {
+  std::map<uint8_t, std::string> device_at;
+  for (const DeviceConfig& d : config.devices) device_at[static_cast<uint8_t>(d.address)] = d.name;
+  gateway_ = std::make_unique<ShareGateway>(bus, config_, [device_at](uint8_t slave) {
+    auto it = device_at.find(slave);
+    return it == device_at.end() ? std::string() : it->second;
+  });
+}
+
+bool ShareBridge::start(std::string* error) {
+  return gateway_->start(error);
+}
+
+void ShareBridge::stop() {
+  gateway_->stop();
+}
+
+void ShareBridge::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  using diagnostic_msgs::DiagnosticStatus;
+  const ModbusTcpServer::Stats s = gateway_->server().stats();
+  const std::string where = config_.server.host + ":" + std::to_string(gateway_->server().port());
+  status.summary(DiagnosticStatus::OK,
+                 "Modbus TCP on " + where + ", " + std::to_string(s.connected) + " client(s)");
+  status.add("listen", where);
+  status.add("read only", config_.read_only ? "yes" : "no");
+  status.add("clients", s.connected);
+  status.add("max clients", config_.server.max_clients);
+  status.add("queued", gateway_->queued());
+  status.add("max queue", config_.max_queue);
+  status.add("accepted", s.accepted);
+  status.add("refused (not allowed)", s.refused_not_allowed);
+  status.add("refused (too many clients)", s.refused_too_many);
+  status.add("closed (malformed)", s.malformed);
+  for (const auto& [peer, counts] : s.peers) {
+    status.add("requests from " + peer, counts.requests);
+    status.add("exceptions to " + peer, counts.exceptions);
+    status.add("connections from " + peer, counts.connections);
+  }
+}
+
+}  // namespace modbus_rtu_driver
