@@ -4,6 +4,7 @@
 #include <set>
 
 #include "modbus_rtu_driver/core/config_yaml.h"
+#include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"
@@ -29,6 +30,7 @@ const DeviceType kTypes[] = {
     {"ld58a08", 248, Ld58a08::kChannels, 0, make<Ld58a08>},
     {"lc_relay8", 255, LcRelay8::kChannels, LcRelay8::kChannels, make<LcRelay8>},
     {"yespeed_pdu", 247, YespeedPdu::kRelays, 0, make<YespeedPdu>},
+    {"generic", 247, 0, 0, make<GenericDevice>},
 };
 
 const DeviceType* find(const std::string& name) {

@@ -13,6 +13,7 @@ const Entry kAdapters[] = {
     {"ld58a08", makeLd58a08Adapter},
     {"lc_relay8", makeLcRelay8Adapter},
     {"yespeed_pdu", makeYespeedPduAdapter},
+    {"generic", makeGenericAdapter},
 };
 }  // namespace
 

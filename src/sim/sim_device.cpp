@@ -123,6 +123,7 @@ int maxSimAddress(const std::string& type) {
   if (type == "lc_relay8") return 255;
   if (type == "ld58a08") return 248;  // its manual: 0x01-0xF8
   if (type == "yespeed_pdu") return 247;
+  if (type == "generic") return 247;  // built by the simulator from its signals (sim_generic.h)
   return 0;
 }
 
