@@ -87,10 +87,8 @@ class GenericAdapter : public DeviceAdapter {
  private:
   GenericDevice& generic() const { return static_cast<GenericDevice&>(*device_); }
 
-  void onPoll(const Result& result) override {
-    DeviceAdapter::onPoll(result);
-    publishSignals(true);
-  }
+  // No outputs (the base's topics stay silent, no restart detection): only the signals.
+  void onPoll(const Result&) override { publishSignals(true); }
 
   Result write(size_t i, double value) {
     std::vector<uint16_t> words;

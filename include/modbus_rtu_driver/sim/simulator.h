@@ -37,7 +37,7 @@ struct SimulatorConfig {
   struct Entry {
     std::string type;
     int address;
-    SimGenericConfig generic;  // type generic: its signals and holes
+    SimGenericConfig generic{};  // type generic: its signals and holes
   };
   std::vector<Entry> devices;
 };
