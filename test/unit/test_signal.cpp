@@ -5,6 +5,8 @@
 #include <sys/stat.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 
 #include "modbus_rtu_driver/core/config_yaml.h"
@@ -180,6 +182,8 @@ TEST(SignalYaml, TemplatesRelativeAndByFindAndTheirErrors) {
   ASSERT_EQ(m.signals.size(), 2u);
   EXPECT_EQ(m.signals[0].name, "v");
   EXPECT_EQ(m.signals[1].name, "w");
+  const char* saved = std::getenv("ROS_PACKAGE_PATH");
+  const std::string saved_path = saved ? saved : "";
   setenv("ROS_PACKAGE_PATH", ("/nonexistent:" + dir).c_str(), 1);
   EXPECT_EQ(
       parseSignalMap(YAML::Load("template: $(find pkg)/t.yaml"), "devices/d/", "").signals.size(),
@@ -193,6 +197,11 @@ TEST(SignalYaml, TemplatesRelativeAndByFindAndTheirErrors) {
   // A template's own errors name the file and the key inside it.
   EXPECT_EQ(parseError("template: bad.yaml", dir),
             "devices/d/template " + dir + "/bad.yaml: signals[0]/address: missing");
+  if (saved)
+    setenv("ROS_PACKAGE_PATH", saved_path.c_str(), 1);
+  else
+    unsetenv("ROS_PACKAGE_PATH");
+  std::filesystem::remove_all(dir);
 }
 
 TEST(SignalYaml, TheShippedTemplatesParse) {
