@@ -46,13 +46,6 @@ double finite(const YAML::Node& n, const std::string& key) {
   return v;
 }
 
-// Addresses are often written in hex (0x0156), as YAML (and rosparam) allow for integers.
-int wholeNumber(const YAML::Node& n, const std::string& key) {
-  int v = 0;
-  if (n.IsScalar() && YAML::convert<int>::decode(n, v)) return v;
-  return getInt(n, key);
-}
-
 SignalConfig parseSignal(const YAML::Node& n, const std::string& where) {
   if (!n.IsMap()) fail(where, show(n) + " is not a map {name, table, address, type, ...}");
   checkKeys(n, where + "/", std::set<std::string>(kSignalKeys.begin(), kSignalKeys.end()));
@@ -72,7 +65,7 @@ SignalConfig parseSignal(const YAML::Node& n, const std::string& where) {
                                  {"discrete_input", SignalTable::kDiscreteInput},
                                  {"holding_register", SignalTable::kHoldingRegister},
                                  {"input_register", SignalTable::kInputRegister}});
-  const int address = wholeNumber(n["address"], at + "address");
+  const int address = getInt(n["address"], at + "address");
   if (address < 0 || address > 0xFFFF)
     fail(at + "address", std::to_string(address) + " is outside 0-65535");
   s.address = static_cast<uint16_t>(address);

@@ -1,7 +1,10 @@
 // Generic device: one latched topic per signal (published on change), D/signals with every
 // signal after each poll, D/<name>/set for writable signals, one poll per rate group.
+#include <diagnostic_msgs/DiagnosticStatus.h>
 #include <std_msgs/Float64.h>
 
+#include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "modbus_rtu_driver/SetValue.h"
@@ -43,8 +46,18 @@ class GenericAdapter : public DeviceAdapter {
             s.name + "/set", [this, i](SetValue::Request& req, SetValue::Response& res) {
               const Result r = write(i, req.value);
               res.success = r.ok();
+              const SignalConfig& sc = generic().signals()[i];
+              std::vector<uint16_t> words;
+              generic().encodeWrite(i, req.value, &words);
+              const double written =
+                  words.empty() ? req.value
+                                : sc.toValue(decodeRaw(sc.type, sc.word_order, words.data()));
               std::ostringstream what;
-              what << generic().signals()[i].name << " set to " << req.value;
+              what << sc.name << " set to " << req.value;
+              // Integer registers hold steps of `scale`, float32 has 24 bits: say what it is.
+              if (r.ok() &&
+                  std::abs(written - req.value) > 1e-9 * std::max(1.0, std::abs(req.value)))
+                what << " (written as " << written << ")";
               res.message = answer(r, what.str());
               return true;
             }));
@@ -53,6 +66,7 @@ class GenericAdapter : public DeviceAdapter {
 
   // One poll per rate group with signals in it: fast values do not drag slow ones along.
   void addPolls() override {
+    polled_.assign(generic().groups().size(), false);
     for (size_t g = 0; g < generic().groups().size(); ++g) {
       if (generic().groups()[g].signals.empty()) continue;
       auto device = device_;
@@ -61,17 +75,26 @@ class GenericAdapter : public DeviceAdapter {
           [device, g](Transport& t) {
             return static_cast<GenericDevice&>(*device).pollGroup(t, g);
           },
-          [this](const Result& r) { onPoll(r); });
+          [this, g](const Result& r) {
+            polled_[g] = true;
+            onPoll(r);
+          });
     }
   }
 
   void diagnoseType(diagnostic_updater::DiagnosticStatusWrapper& status) override {
     // Read on the diagnostics thread: the split list only grows, and copies are taken whole.
     std::vector<std::string> splits;
+    std::string unread;
     {
       std::lock_guard<std::mutex> lock(splits_mutex_);
       splits = splits_;
+      unread = unread_;
     }
+    // An exception still counts as an answer (the device is online): say which values lack.
+    if (!unread.empty())
+      status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN, "signals not read: " + unread);
+    status.add("signals not read", unread.empty() ? "none" : unread);
     status.add("signals", generic().signals().size());
     for (size_t g = 0; g < generic().groups().size(); ++g) {
       const auto& group = generic().groups()[g];
@@ -125,16 +148,26 @@ class GenericAdapter : public DeviceAdapter {
       }
     }
     if (after_poll) all_pub_.publish(all);
+    // Signals whose group was polled and whose last read failed.
+    std::string unread;
+    for (size_t g = 0; g < polled_.size(); ++g) {
+      if (!polled_[g]) continue;
+      for (size_t i : generic().groups()[g].signals)
+        if (!states[i].valid) unread += (unread.empty() ? "" : ", ") + signals[i].name;
+    }
     std::lock_guard<std::mutex> lock(splits_mutex_);
     splits_ = generic().splits();
+    unread_ = unread;
   }
 
   ros::Publisher all_pub_;
   std::vector<ros::Publisher> pubs_;
   std::vector<ros::ServiceServer> services_;
   std::vector<std::optional<double>> published_;  // bus thread only
-  std::mutex splits_mutex_;
-  std::vector<std::string> splits_;  // a copy for the diagnostics thread
+  std::vector<bool> polled_;                      // by poll group; bus thread only
+  std::mutex splits_mutex_;                       // the two below: copies for diagnostics
+  std::vector<std::string> splits_;
+  std::string unread_;
 };
 
 }  // namespace

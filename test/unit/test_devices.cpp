@@ -584,7 +584,8 @@ TEST(LcRelay8, FlashTimeIsCheckedOnTheTenthsWritten) {
 }
 
 TEST(Registry, TypesAddressesAndNames) {
-  EXPECT_EQ(knownDeviceTypes(), (std::vector<std::string>{"ld58a08", "lc_relay8", "yespeed_pdu"}));
+  EXPECT_EQ(knownDeviceTypes(),
+            (std::vector<std::string>{"ld58a08", "lc_relay8", "yespeed_pdu", "generic"}));
   std::string error;
   EXPECT_NE(createDevice(config("lc_relay8", 255), &error), nullptr) << error;
   EXPECT_EQ(createDevice(config("ld58a08", 249), &error), nullptr);

@@ -63,6 +63,17 @@ TEST(SimGeneric, TheSameYamlAsTheNodes) {
             "input_register");
 }
 
+TEST(SimGeneric, TheExampleConfigLoads) {
+  SimulatorConfig c;
+  std::string error;
+  ASSERT_TRUE(
+      loadSimulatorConfig(std::string(REPO_DIR) + "/config/simulator_generic.yaml", &c, &error))
+      << error;
+  ASSERT_EQ(c.devices.size(), 3u);
+  EXPECT_EQ(c.devices[0].generic.map.signals.size(), 4u);  // the XY-MD02 template
+  EXPECT_EQ(c.devices[2].generic.holes.at(0).from, 0x3002);
+}
+
 TEST(SimGeneric, BlocksHolesWritesAndInputs) {
   SimulatorConfig c = load(kConfig);
   SimGeneric d(7, {}, c.devices[0].generic);
