@@ -13,11 +13,11 @@ namespace {
 
 using namespace config;
 
+// The last three are the generic type's (core/signal.h: kSignalMapKeys).
 const std::set<std::string> kDeviceKeys = {
     "type",        "address",    "poll_rate",  "outputs",  "inputs",
     "reply_delay", "safe_state", "on_restart", "on_start", "command_timeout",
-    "heartbeat",   "signals",    "template",   "max_gap"};  // the last three: type generic
-                                                            // (core/signal.h)
+    "heartbeat",   "signals",    "template",   "max_gap"};
 
 // The master role's keys beside the link's.
 const std::set<std::string> kBusKeys = {

@@ -53,12 +53,12 @@ bool parseDevice(const YAML::Node& d, const std::string& where, const std::strin
     return false;
   }
   const bool generic = d["type"] && d["type"].IsScalar() && d["type"].Scalar() == "generic";
-  if (!onlyKeys(d,
-                generic ? std::set<std::string>{"type", "address", "signals", "template", "max_gap",
-                                                "holes"}
-                        : std::set<std::string>{"type", "address"},
-                where + "/", error))
-    return false;
+  std::set<std::string> keys = {"type", "address"};
+  if (generic) {  // the node's keys (core/signal.h), and the simulator's holes
+    keys.insert(kSignalMapKeys.begin(), kSignalMapKeys.end());
+    keys.insert("holes");
+  }
+  if (!onlyKeys(d, keys, where + "/", error)) return false;
   if (generic && !parseSimGeneric(d, where + "/", base_dir, &e->generic, error)) return false;
   if (!d["type"] || !d["address"]) {
     *error = where + (d["type"] ? "/address" : "/type") + ": missing";
