@@ -256,6 +256,14 @@ TEST(GenericDevice, ALostReplyIsConfirmedOrDeniedByReadingBack) {
   EXPECT_SCRIPT_DONE(bus);
 }
 
+TEST(GenericDevice, HasNoOutputs) {
+  GenericDevice d(generic({sig("a", kH, 0)}));
+  EXPECT_EQ(d.checkOutputs({0}, {true}), "channels: a generic device has no outputs");
+  ScriptedTransport bus;
+  EXPECT_EQ(d.setOutputs(bus, {0}, {true}).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(bus.executed(), 0);
+}
+
 TEST(GenericDevice, TheRegistryBuildsIt) {
   std::string error;
   auto d = createDevice(generic({sig("a", kH, 0)}), &error);
