@@ -13,15 +13,17 @@ namespace {
 
 using namespace config;
 
+// The last three are the generic type's (core/signal.h: kSignalMapKeys).
 const std::set<std::string> kDeviceKeys = {
-    "type",       "address",    "poll_rate", "outputs",         "inputs",   "reply_delay",
-    "safe_state", "on_restart", "on_start",  "command_timeout", "heartbeat"};
+    "type",        "address",    "poll_rate",  "outputs",  "inputs",
+    "reply_delay", "safe_state", "on_restart", "on_start", "command_timeout",
+    "heartbeat",   "signals",    "template",   "max_gap"};
 
 // The master role's keys beside the link's.
 const std::set<std::string> kBusKeys = {
     "role",       "diagnostic_period", "devices",          "allow_raw_writes",  "publish_on_change",
     "keep_alive", "heartbeat",         "shutdown_timeout", "realtime_priority", "lock_memory",
-    "share"};
+    "share",      "config_file"};
 const std::set<std::string> kShareKeys = {"listen", "read_only", "allow", "max_clients",
                                           "max_queue"};
 
@@ -146,7 +148,8 @@ void parseShare(const YAML::Node& n, ShareConfig* out) {
   bounded("max_queue", 1, 1000, &out->max_queue);
 }
 
-DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
+DeviceConfig parseDevice(const std::string& name, const YAML::Node& n,
+                         const std::string& config_dir) {
   const std::string where = "devices/" + name + "/";
   if (!isValidRosName(name))
     fail("devices/" + name,
@@ -170,6 +173,11 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n) {
   if (n["reply_delay"]) d.reply_delay = getNumber(n["reply_delay"], where + "reply_delay");
   if (n["outputs"]) d.outputs = getNames(n["outputs"], where + "outputs");
   if (n["inputs"]) d.inputs = getNames(n["inputs"], where + "inputs");
+  if (d.type == "generic")
+    d.generic = parseSignalMap(n, where, config_dir);
+  else
+    for (const auto& key : kSignalMapKeys)
+      if (n[key]) fail(where + key, "only for type generic");
   const std::string problem = validateDeviceConfig(d);
   if (!problem.empty()) throw ConfigError{problem};
   parseFailsafe(n, where, outputNamesOf(d), &d.failsafe);
@@ -212,6 +220,12 @@ void parse(const YAML::Node& root, BusConfig* out) {
   if (root["lock_memory"])
     out->lock_memory = get<bool>(root["lock_memory"], "lock_memory", "true or false");
   if (root["share"]) parseShare(root["share"], &out->share);
+  std::string config_dir;  // where relative template paths start
+  if (root["config_file"]) {
+    const std::string file = get<std::string>(root["config_file"], "config_file", "a file path");
+    const size_t slash = file.find_last_of('/');
+    config_dir = slash == std::string::npos ? "." : file.substr(0, slash);
+  }
   const YAML::Node devices = root["devices"];
   if (!devices) fail("devices", "missing (a map of device name -> settings)");
   if (!devices.IsMap() || devices.size() == 0)
@@ -219,7 +233,7 @@ void parse(const YAML::Node& root, BusConfig* out) {
   std::map<int, std::string> by_address;
   for (const auto& kv : devices) {
     const std::string name = kv.first.as<std::string>();
-    DeviceConfig d = parseDevice(name, kv.second);
+    DeviceConfig d = parseDevice(name, kv.second, config_dir);
     auto [it, fresh] = by_address.emplace(d.address, name);
     if (!fresh)
       fail("devices/" + name + "/address",
@@ -235,6 +249,7 @@ std::vector<std::string> configKeys() {
   keys.insert(keys.end(), kBusKeys.begin(), kBusKeys.end());
   for (const auto& k : kShareKeys) keys.push_back("share/" + k);
   for (const auto& k : kDeviceKeys) keys.push_back("devices/D/" + k);
+  for (const auto& k : kSignalKeys) keys.push_back("devices/D/signals[]/" + k);
   const auto slave = slaveConfigKeys();
   keys.insert(keys.end(), slave.begin(), slave.end());
   return keys;

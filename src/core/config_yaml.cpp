@@ -35,6 +35,9 @@ double getNumber(const YAML::Node& n, const std::string& key) {
 }
 
 int getInt(const YAML::Node& n, const std::string& key) {
+  int hex = 0;  // register addresses are often written 0x0156, as YAML (and rosparam) allow
+  if (n.IsScalar() && n.Scalar().rfind("0x", 0) == 0 && YAML::convert<int>::decode(n, hex))
+    return hex;
   const double v = getNumber(n, key);
   if (v != static_cast<int>(v)) fail(key, show(n) + " is not a whole number");
   return static_cast<int>(v);

@@ -23,6 +23,7 @@ std::vector<std::string> Device::inputNames() const {
 
 std::string Device::validateChannels(const std::vector<uint8_t>& channels,
                                      const std::vector<bool>& states) const {
+  if (outputCount() == 0) return std::string("channels: a ") + type() + " device has no outputs";
   if (channels.empty()) return "channels: empty, give at least one channel";
   if (states.size() != channels.size())
     return "states: " + std::to_string(states.size()) + " given for " +

@@ -4,6 +4,7 @@
 #include <set>
 
 #include "modbus_rtu_driver/core/config_yaml.h"
+#include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"
@@ -27,6 +28,7 @@ const DeviceType kTypes[] = {
     {&kLd58a08Type, make<Ld58a08>},
     {&kLcRelay8Type, make<LcRelay8>},
     {&kYespeedPduType, make<YespeedPdu>},
+    {&kGenericType, make<GenericDevice>},
 };
 
 const DeviceType* find(const std::string& name) {

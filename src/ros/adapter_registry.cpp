@@ -16,6 +16,7 @@ const Entry kAdapters[] = {
     {&kLd58a08Type, makeLd58a08Adapter},
     {&kLcRelay8Type, makeLcRelay8Adapter},
     {&kYespeedPduType, makeYespeedPduAdapter},
+    {&kGenericType, makeGenericAdapter},
 };
 }  // namespace
 

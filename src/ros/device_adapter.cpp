@@ -35,6 +35,10 @@ void DeviceAdapter::start() {
   }
   services_.push_back(nh_.advertiseService("set_outputs", &DeviceAdapter::onSetOutputs, this));
   advertise();
+  addPolls();
+}
+
+void DeviceAdapter::addPolls() {
   auto device = device_;
   bus_.addPoll(
       device_->name(), device_->config().poll_rate,
@@ -177,6 +181,7 @@ void DeviceAdapter::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("consecutive failures", h.consecutive_failures);
   status.add("last error", h.last_error.empty() ? "none" : h.last_error);
   diagnoseFailsafe(status);
+  diagnoseType(status);
 }
 
 }  // namespace modbus_rtu_driver

@@ -131,6 +131,7 @@ const SimType kSimTypes[] = {
     {&kLd58a08Type, make<SimLd58a08>},
     {&kLcRelay8Type, make<SimLcRelay8>},
     {&kYespeedPduType, make<SimYespeedPdu>},
+    {&kGenericType, nullptr},  // built from its signals (Simulator, sim_generic.h)
 };
 
 const SimType* findSimType(const std::string& name) {
@@ -144,7 +145,7 @@ const SimType* findSimType(const std::string& name) {
 std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t address,
                                          SimLineSettings line) {
   const SimType* t = findSimType(type);
-  return t ? t->make(address, line) : nullptr;
+  return t && t->make ? t->make(address, line) : nullptr;
 }
 
 const DeviceDescriptor* simDeviceType(const std::string& type) {

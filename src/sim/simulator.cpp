@@ -43,7 +43,11 @@ Simulator::Simulator(SimulatorConfig config, SimulatorOptions options)
     : config_(std::move(config)), options_(std::move(options)) {
   if (options_.control.empty()) options_.control = options_.link + ".ctl";
   for (const auto& e : config_.devices)
-    devices_.push_back(makeSimDevice(e.type, static_cast<uint8_t>(e.address), config_.factory));
+    devices_.push_back(
+        e.type == kGenericType.name
+            ? std::make_unique<SimGeneric>(static_cast<uint8_t>(e.address), config_.factory,
+                                           e.generic)
+            : makeSimDevice(e.type, static_cast<uint8_t>(e.address), config_.factory));
 }
 
 Simulator::~Simulator() {

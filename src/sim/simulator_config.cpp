@@ -46,13 +46,20 @@ bool onlyKeys(const YAML::Node& map, const std::set<std::string>& allowed, const
   return true;
 }
 
-bool parseDevice(const YAML::Node& d, const std::string& where, SimulatorConfig::Entry* e,
-                 std::string* error) {
+bool parseDevice(const YAML::Node& d, const std::string& where, const std::string& base_dir,
+                 SimulatorConfig::Entry* e, std::string* error) {
   if (!d.IsMap()) {
     *error = where + ": not a map {type: ..., address: ...}";
     return false;
   }
-  if (!onlyKeys(d, {"type", "address"}, where + "/", error)) return false;
+  const bool generic = d["type"] && d["type"].IsScalar() && d["type"].Scalar() == "generic";
+  std::set<std::string> keys = {"type", "address"};
+  if (generic) {  // the node's keys (core/signal.h), and the simulator's holes
+    keys.insert(kSignalMapKeys.begin(), kSignalMapKeys.end());
+    keys.insert("holes");
+  }
+  if (!onlyKeys(d, keys, where + "/", error)) return false;
+  if (generic && !parseSimGeneric(d, where + "/", base_dir, &e->generic, error)) return false;
   if (!d["type"] || !d["address"]) {
     *error = where + (d["type"] ? "/address" : "/type") + ": missing";
     return false;
@@ -77,7 +84,8 @@ bool parseDevice(const YAML::Node& d, const std::string& where, SimulatorConfig:
 
 }  // namespace
 
-bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::string* error) {
+bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::string* error,
+                          const std::string& base_dir) {
   YAML::Node root;
   try {
     root = YAML::Load(yaml);
@@ -114,7 +122,7 @@ bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::st
   }
   for (size_t i = 0; i < root["devices"].size(); ++i) {
     SimulatorConfig::Entry e;
-    if (!parseDevice(root["devices"][i], "devices[" + std::to_string(i) + "]", &e, error))
+    if (!parseDevice(root["devices"][i], "devices[" + std::to_string(i) + "]", base_dir, &e, error))
       return false;
     c.devices.push_back(e);
   }
@@ -130,7 +138,9 @@ bool loadSimulatorConfig(const std::string& path, SimulatorConfig* out, std::str
   }
   std::stringstream text;
   text << in.rdbuf();
-  return parseSimulatorConfig(text.str(), out, error);
+  const size_t slash = path.find_last_of('/');
+  return parseSimulatorConfig(text.str(), out, error,
+                              slash == std::string::npos ? "." : path.substr(0, slash));
 }
 
 // Written only when it changed, through a temporary file, so a crash never leaves half a file.

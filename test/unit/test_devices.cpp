@@ -624,7 +624,8 @@ TEST(LcRelay8, FlashTimeIsCheckedOnTheTenthsWritten) {
 }
 
 TEST(Registry, TypesAddressesAndNames) {
-  EXPECT_EQ(knownDeviceTypes(), (std::vector<std::string>{"ld58a08", "lc_relay8", "yespeed_pdu"}));
+  EXPECT_EQ(knownDeviceTypes(),
+            (std::vector<std::string>{"ld58a08", "lc_relay8", "yespeed_pdu", "generic"}));
   EXPECT_EQ(validateDeviceConfig(config("lc_relay8", 255)), "");
   EXPECT_EQ(validateDeviceConfig(config("ld58a08", 249)),
             "devices/dev/address: 249 is outside 1-248 for ld58a08");

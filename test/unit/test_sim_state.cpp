@@ -67,8 +67,9 @@ TEST(SimConfig, BadConfigsAreRefusedNamingTheKey) {
   EXPECT_EQ(configError("parity: mark\n" + devices), "parity: 'mark' is not none, even or odd");
   EXPECT_EQ(configError("pace: maybe\n" + devices), "pace: 'maybe' is not true or false");
   EXPECT_EQ(configError("baud: 9600\n"), "devices: missing or not a list of {type, address}");
-  EXPECT_EQ(configError("devices: [{type: plc, address: 1}]"),
-            "devices[0]/type: 'plc' is not a simulated type (ld58a08, lc_relay8, yespeed_pdu)");
+  EXPECT_EQ(
+      configError("devices: [{type: plc, address: 1}]"),
+      "devices[0]/type: 'plc' is not a simulated type (ld58a08, lc_relay8, yespeed_pdu, generic)");
   EXPECT_EQ(
       configError("devices: [{type: lc_relay8, address: 255}, {type: ld58a08, address: 249}]"),
       "devices[1]/address: 249 is outside 1-248 for ld58a08");

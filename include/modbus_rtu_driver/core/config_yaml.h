@@ -31,7 +31,7 @@ T get(const YAML::Node& n, const std::string& key, const char* expected) {
 }
 
 double getNumber(const YAML::Node& n, const std::string& key);
-int getInt(const YAML::Node& n, const std::string& key);
+int getInt(const YAML::Node& n, const std::string& key);  // decimal, or hex as 0x...
 // Fails on the first key of `map` that is not in `known`, listing the known ones.
 void checkKeys(const YAML::Node& map, const std::string& where, const std::set<std::string>& known);
 std::set<std::string> with(std::set<std::string> keys, const std::set<std::string>& more);

@@ -11,7 +11,7 @@
 
 namespace modbus_rtu_driver {
 
-struct FactorySettings {
+struct FactorySettings {  // 0 where the type has none of its own
   int address;
   int baud;
   char parity;  // 'N', 'E', 'O'
@@ -36,9 +36,14 @@ inline constexpr DeviceDescriptor kLcRelay8Type{
 inline constexpr DeviceDescriptor kYespeedPduType{
     "yespeed_pdu", 247, 8, 0, {1, 9600, 'N'}, "docs/devices/yespeed_pdu.md"};
 
-// Every built-in type, in the order the docs list them.
+// Any device described by its signals in the YAML (core/signal.h): no channels of its own, no
+// factory settings (its manual's), the standard's 1-247.
+inline constexpr DeviceDescriptor kGenericType{
+    "generic", 247, 0, 0, {0, 0, 'N'}, "docs/ros_api.md (generic devices)"};
+
+// Every type, in the order the docs list them.
 inline constexpr const DeviceDescriptor* kDeviceTypes[] = {&kLd58a08Type, &kLcRelay8Type,
-                                                           &kYespeedPduType};
+                                                           &kYespeedPduType, &kGenericType};
 
 // Null for a name that is not a built-in type.
 const DeviceDescriptor* findDeviceType(const std::string& name);

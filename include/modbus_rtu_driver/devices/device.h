@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "modbus_rtu_driver/core/signal.h"
 #include "modbus_rtu_driver/core/transport.h"
 #include "modbus_rtu_driver/core/types.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
@@ -16,13 +17,14 @@ namespace modbus_rtu_driver {
 
 struct DeviceConfig {
   std::string name;                  // ROS namespace of the device under the node
-  std::string type;                  // ld58a08 | lc_relay8 | yespeed_pdu
+  std::string type;                  // ld58a08 | lc_relay8 | yespeed_pdu | generic
   int address = 1;                   // 1-255
   double poll_rate = 1.0;            // Hz, 0 = never poll
   std::vector<std::string> outputs;  // channel names; empty = out0..outN-1
   std::vector<std::string> inputs;   // channel names; empty = in0..inN-1
   double reply_delay = 0.0;          // s the device waits before answering (LD58A08 0x00FC x 40 ms)
   FailsafeConfig failsafe;           // safe states and when they apply
+  SignalMapConfig generic;           // type generic: its signals (empty for the other types)
 };
 
 // `given` when it has `n` names, else prefix0..prefix<n-1>.

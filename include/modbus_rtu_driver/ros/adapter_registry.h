@@ -16,6 +16,8 @@ std::unique_ptr<DeviceAdapter> makeLcRelay8Adapter(std::shared_ptr<Device>, BusS
                                                    const ros::NodeHandle&);
 std::unique_ptr<DeviceAdapter> makeYespeedPduAdapter(std::shared_ptr<Device>, BusScheduler&,
                                                      const ros::NodeHandle&);
+std::unique_ptr<DeviceAdapter> makeGenericAdapter(std::shared_ptr<Device>, BusScheduler&,
+                                                  const ros::NodeHandle&);
 
 // Null for a type without an adapter.
 std::unique_ptr<DeviceAdapter> createAdapter(std::shared_ptr<Device> device, BusScheduler& bus,

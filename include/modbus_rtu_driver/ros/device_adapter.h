@@ -64,6 +64,10 @@ class DeviceAdapter {
  protected:
   // The type's own topics and services (start() calls it before the first poll can run).
   virtual void advertise() {}
+  // Registers the device's polls with the scheduler (the base: one, at the device's rate).
+  virtual void addPolls();
+  // The type's own lines in its /diagnostics status.
+  virtual void diagnoseType(diagnostic_updater::DiagnosticStatusWrapper& status) { (void)status; }
   // Runs after each poll on the bus thread; the base publishes outputs (and inputs).
   virtual void onPoll(const Result& result);
   // Runs `job` on the bus thread and waits for the real outcome. The message of a failure says

@@ -118,7 +118,8 @@ class SimDevice {
   SimLineSettings line_;
 };
 
-// Builds a device of `type` (a name in core/device_types.h); null for a type not simulated.
+// Builds a device of `type` (a name in core/device_types.h); null for a type not simulated and
+// for `generic`, which the simulator builds from its signals.
 std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t address,
                                          SimLineSettings line);
 // The descriptor of a simulated type (its address range); null for a type not simulated.

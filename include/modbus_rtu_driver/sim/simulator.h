@@ -28,6 +28,7 @@
 #include "modbus_rtu_driver/sim/pty_link.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 #include "modbus_rtu_driver/sim/sim_gateway.h"
+#include "modbus_rtu_driver/sim/sim_generic.h"
 
 namespace modbus_rtu_driver {
 
@@ -37,13 +38,16 @@ struct SimulatorConfig {
   struct Entry {
     std::string type;
     int address;
+    SimGenericConfig generic{};  // type generic: its signals and holes
   };
   std::vector<Entry> devices;
 };
 
 // False with a message naming the key when the YAML does not fit.
 bool loadSimulatorConfig(const std::string& path, SimulatorConfig* out, std::string* error);
-bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::string* error);
+// `base_dir`: where a generic device's relative template path starts (the file's directory).
+bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::string* error,
+                          const std::string& base_dir = "");
 
 // What the line carries when several devices answer at once: garbled bytes, never a valid frame.
 Bytes collideReplies(const std::vector<Bytes>& replies);

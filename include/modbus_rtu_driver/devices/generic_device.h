@@ -1,0 +1,67 @@
+// Any Modbus device described in YAML (type `generic`): a list of signals, each a bit or a
+// number in one of the four tables. Signals are polled in groups by rate (group 0 at the
+// device's poll_rate, one group per other rate), with merged reads (signal_map.h). Writable
+// signals are written with FC05 (coil), FC06 (one register) or FC16 (several), confirmed by the
+// echo, or by reading back when the reply was lost.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "modbus_rtu_driver/core/device_types.h"
+#include "modbus_rtu_driver/devices/device.h"
+#include "modbus_rtu_driver/devices/signal_map.h"
+
+namespace modbus_rtu_driver {
+
+struct SignalState {
+  double value = 0.0;  // engineering units (bits: 0 or 1)
+  bool valid = false;  // the last read of it succeeded
+  bool known = false;  // it was read (or written) at least once
+};
+
+class GenericDevice : public Device {
+ public:
+  struct PollGroup {
+    double rate = 0.0;            // Hz
+    std::vector<size_t> signals;  // indices into signals()
+  };
+
+  explicit GenericDevice(DeviceConfig config);
+
+  const char* type() const override { return kGenericType.name; }
+  size_t outputCount() const override { return 0; }
+  // Reads group 0 (the signals at the device's own poll_rate).
+  Result poll(Transport& bus) override { return pollGroup(bus, 0); }
+  Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                    const std::vector<bool>& states) override;
+
+  const std::vector<SignalConfig>& signals() const { return planner_.signals(); }
+  const std::vector<SignalState>& states() const { return states_; }
+  // Group 0 always exists (it may be empty); one more per distinct signal poll_rate.
+  const std::vector<PollGroup>& groups() const { return groups_; }
+  // Reads the group's signals. A span refused with exception 02 is split and both parts read
+  // again at once. Signals whose read failed turn invalid; the Result is the first failure.
+  Result pollGroup(Transport& bus, size_t group);
+
+  // The registers (or the bit) that `value` of `signal` becomes, or a message naming the
+  // signal and the allowed range (min/max, then the type's). Nothing is sent here.
+  std::string encodeWrite(size_t signal, double value, std::vector<uint16_t>* words) const;
+  // Checks (encodeWrite), writes and confirms; on success the state holds the written value.
+  Result writeSignal(Transport& bus, size_t signal, double value);
+
+  // Merged spans split after exception 02, in words (diagnostics).
+  const std::vector<std::string>& splits() const { return planner_.splits(); }
+  size_t spansPerPoll(size_t group) const { return planner_.plan(groups_[group].signals).size(); }
+
+ private:
+  // Reads one span; false when the device did not answer (the rest of the poll is skipped).
+  bool readSpan(Transport& bus, const ReadSpan& span, Result* first_failure);
+  void setFromWords(size_t signal, const uint16_t* words);
+
+  ReadPlanner planner_;
+  std::vector<PollGroup> groups_;
+  std::vector<SignalState> states_;
+};
+
+}  // namespace modbus_rtu_driver

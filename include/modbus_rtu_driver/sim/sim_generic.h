@@ -1,0 +1,52 @@
+// Simulated generic device: built from the same signal description as the bus node's generic
+// device (core/signal.h). Each table answers from its lowest to its highest signal register (a
+// device's register block, gaps included, 0 until set); elsewhere, and in the configured
+// `holes`, it answers exception 02, so a merged read across a hole is refused as on a device
+// with an unmapped register. Coils and holding registers take writes; inputs are set through
+// the control socket (`set`). Values survive a power cycle (the state file keeps them).
+#pragma once
+
+#include <map>
+#include <vector>
+
+#include "modbus_rtu_driver/core/signal.h"
+#include "modbus_rtu_driver/sim/sim_device.h"
+
+namespace modbus_rtu_driver {
+
+struct SimGenericConfig {
+  SignalMapConfig map;
+  struct Hole {
+    SignalTable table;
+    uint16_t from, to;  // inclusive
+  };
+  std::vector<Hole> holes;
+};
+
+// Reads `signals`, `template`, `max_gap` and `holes` of a simulator device entry; false with a
+// message naming the key. `base_dir`: where a relative template path starts.
+bool parseSimGeneric(const YAML::Node& entry, const std::string& where, const std::string& base_dir,
+                     SimGenericConfig* out, std::string* error);
+
+class SimGeneric : public SimDevice {
+ public:
+  SimGeneric(uint8_t address, SimLineSettings line, SimGenericConfig config);
+  const char* type() const override { return kGenericType.name; }
+  void powerCycle(SimClock::time_point) override {}
+  void saveState(YAML::Node& node) const override;
+  void loadState(const YAML::Node& node, SimClock::time_point now) override;
+  uint8_t read(Table table, uint16_t address, SimClock::time_point now, uint16_t* value) override;
+  uint8_t write(Table table, uint16_t address, const std::vector<uint16_t>& values,
+                SimClock::time_point now) override;
+  uint8_t setDirect(Table table, uint16_t address, uint16_t value,
+                    SimClock::time_point now) override;
+
+ private:
+  bool mapped(SignalTable table, uint16_t address) const;
+
+  SimGenericConfig config_;
+  std::map<std::pair<SignalTable, uint16_t>, uint16_t> values_;
+  std::map<SignalTable, std::pair<uint16_t, uint16_t>> blocks_;  // first and last address
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,162 @@
+#include "modbus_rtu_driver/core/signal.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace modbus_rtu_driver {
+
+const char* tableName(SignalTable t) {
+  switch (t) {
+    case SignalTable::kCoil:
+      return "coil";
+    case SignalTable::kDiscreteInput:
+      return "discrete_input";
+    case SignalTable::kHoldingRegister:
+      return "holding_register";
+    case SignalTable::kInputRegister:
+      return "input_register";
+  }
+  return "?";
+}
+
+const char* typeName(SignalType t) {
+  switch (t) {
+    case SignalType::kBool:
+      return "bool";
+    case SignalType::kUint16:
+      return "uint16";
+    case SignalType::kInt16:
+      return "int16";
+    case SignalType::kUint32:
+      return "uint32";
+    case SignalType::kInt32:
+      return "int32";
+    case SignalType::kFloat32:
+      return "float32";
+    case SignalType::kUint64:
+      return "uint64";
+    case SignalType::kInt64:
+      return "int64";
+  }
+  return "?";
+}
+
+bool isBitTable(SignalTable t) {
+  return t == SignalTable::kCoil || t == SignalTable::kDiscreteInput;
+}
+
+uint16_t wordsOf(SignalType t) {
+  switch (t) {
+    case SignalType::kUint32:
+    case SignalType::kInt32:
+    case SignalType::kFloat32:
+      return 2;
+    case SignalType::kUint64:
+    case SignalType::kInt64:
+      return 4;
+    default:
+      return 1;
+  }
+}
+
+double rawMin(SignalType t) {
+  switch (t) {
+    case SignalType::kInt16:
+      return -32768.0;
+    case SignalType::kInt32:
+      return -2147483648.0;
+    case SignalType::kInt64:
+      return -9223372036854775808.0;
+    case SignalType::kFloat32:
+      return -std::numeric_limits<float>::max();
+    default:
+      return 0.0;
+  }
+}
+
+double rawMax(SignalType t) {
+  switch (t) {
+    case SignalType::kBool:
+      return 1.0;
+    case SignalType::kUint16:
+      return 65535.0;
+    case SignalType::kInt16:
+      return 32767.0;
+    case SignalType::kUint32:
+      return 4294967295.0;
+    case SignalType::kInt32:
+      return 2147483647.0;
+    case SignalType::kFloat32:
+      return std::numeric_limits<float>::max();
+    case SignalType::kUint64:
+      return 18446744073709551615.0;
+    case SignalType::kInt64:
+      return 9223372036854775807.0;
+  }
+  return 0.0;
+}
+
+namespace {
+
+// The value's words with the most significant first, from the registers in address order.
+uint64_t joinWords(uint16_t n, WordOrder order, const uint16_t* words) {
+  uint64_t v = 0;
+  for (uint16_t i = 0; i < n; ++i) v = (v << 16) | words[order == WordOrder::kBig ? i : n - 1 - i];
+  return v;
+}
+
+std::vector<uint16_t> splitWords(uint16_t n, WordOrder order, uint64_t v) {
+  std::vector<uint16_t> words(n);
+  for (uint16_t i = 0; i < n; ++i) {  // i = 0: the least significant word
+    const auto w = static_cast<uint16_t>(v >> (16 * i));
+    words[order == WordOrder::kBig ? n - 1 - i : i] = w;
+  }
+  return words;
+}
+
+}  // namespace
+
+double decodeRaw(SignalType type, WordOrder order, const uint16_t* words) {
+  const uint64_t bits = joinWords(wordsOf(type), order, words);
+  switch (type) {
+    case SignalType::kBool:
+      return bits ? 1.0 : 0.0;
+    case SignalType::kInt16:
+      return static_cast<int16_t>(bits);
+    case SignalType::kInt32:
+      return static_cast<int32_t>(bits);
+    case SignalType::kInt64:
+      return static_cast<double>(static_cast<int64_t>(bits));
+    case SignalType::kFloat32: {
+      const auto u = static_cast<uint32_t>(bits);
+      float f;
+      std::memcpy(&f, &u, sizeof f);
+      return f;
+    }
+    default:
+      return static_cast<double>(bits);
+  }
+}
+
+std::vector<uint16_t> encodeRaw(SignalType type, WordOrder order, double raw) {
+  uint64_t bits = 0;
+  if (type == SignalType::kFloat32) {
+    const auto f = static_cast<float>(raw);
+    uint32_t u;
+    std::memcpy(&u, &f, sizeof u);
+    bits = u;
+  } else if (type == SignalType::kBool) {
+    bits = raw != 0.0 ? 1 : 0;
+  } else if (type == SignalType::kUint64) {
+    // 2^64 as a double is the type's max rounded up: the top value.
+    bits = raw >= 18446744073709551615.0 ? ~uint64_t{0} : static_cast<uint64_t>(std::round(raw));
+  } else if (type == SignalType::kInt64 && raw >= 9223372036854775807.0) {
+    bits = static_cast<uint64_t>(std::numeric_limits<int64_t>::max());
+  } else {
+    bits = static_cast<uint64_t>(std::llround(raw));  // two's complement for the signed ones
+  }
+  return splitWords(wordsOf(type), order, bits);
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,138 @@
+#include "modbus_rtu_driver/devices/generic_device.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+std::string number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+GenericDevice::GenericDevice(DeviceConfig config)
+    : Device(std::move(config)),
+      planner_(this->config().generic.signals, this->config().generic.max_gap) {
+  states_.resize(signals().size());
+  groups_.push_back({this->config().poll_rate, {}});
+  for (size_t i = 0; i < signals().size(); ++i) {
+    const double rate = signals()[i].poll_rate.value_or(this->config().poll_rate);
+    size_t g = 0;
+    while (g < groups_.size() && groups_[g].rate != rate) ++g;
+    if (g == groups_.size()) groups_.push_back({rate, {}});
+    groups_[g].signals.push_back(i);
+  }
+}
+
+Result GenericDevice::setOutputs(Transport&, const std::vector<uint8_t>&,
+                                 const std::vector<bool>&) {
+  return Result::failure(ErrorKind::kInvalidArgument,
+                         "channels: a generic device has no outputs (write its signals)");
+}
+
+void GenericDevice::setFromWords(size_t i, const uint16_t* words) {
+  const SignalConfig& s = signals()[i];
+  SignalState& st = states_[i];
+  const double raw = decodeRaw(s.type, s.word_order, words);
+  st.value = s.type == SignalType::kBool ? raw : s.toValue(raw);
+  st.valid = st.known = true;
+}
+
+bool GenericDevice::readSpan(Transport& bus, const ReadSpan& span, Result* first_failure) {
+  Result r = bus.execute(span.request(address()));
+  if (r.ok() && r.values.size() == span.count) {
+    for (size_t i : span.signals) setFromWords(i, &r.values[signals()[i].address - span.address]);
+    return true;
+  }
+  if (r.ok()) r = Result::failure(ErrorKind::kMalformed, "wrong number of values");
+  ReadSpan a, b;
+  if (r.error == ErrorKind::kException && r.exception_code == kIllegalDataAddress &&
+      planner_.split(span, &a, &b)) {
+    if (readSpan(bus, a, first_failure)) return readSpan(bus, b, first_failure);
+    for (size_t i : b.signals) states_[i].valid = false;
+    return false;
+  }
+  for (size_t i : span.signals) states_[i].valid = false;
+  if (first_failure->ok()) {
+    *first_failure = r;
+    first_failure->message = span.describe(signals()) + ": " + r.message;
+  }
+  return !noProperAnswer(r.error);
+}
+
+Result GenericDevice::pollGroup(Transport& bus, size_t group) {
+  Result failure = Result::success();
+  const std::vector<ReadSpan> spans = planner_.plan(groups_.at(group).signals);
+  for (size_t k = 0; k < spans.size(); ++k) {
+    if (readSpan(bus, spans[k], &failure)) continue;
+    for (size_t rest = k + 1; rest < spans.size(); ++rest)  // not answering: stale, not asked
+      for (size_t i : spans[rest].signals) states_[i].valid = false;
+    break;
+  }
+  return failure;
+}
+
+std::string GenericDevice::encodeWrite(size_t i, double value, std::vector<uint16_t>* words) const {
+  if (i >= signals().size()) return "signal: " + std::to_string(i) + " does not exist";
+  const SignalConfig& s = signals()[i];
+  if (!s.writable) return s.name + ": not writable";
+  if (s.type == SignalType::kBool) {
+    if (value != 0.0 && value != 1.0) return s.name + ": " + number(value) + " is not 0 or 1";
+    *words = {static_cast<uint16_t>(value)};
+    return {};
+  }
+  if (!std::isfinite(value)) return s.name + ": " + number(value) + " is not a finite number";
+  const std::string unit = s.unit.empty() ? "" : " " + s.unit;
+  if ((s.min && value < *s.min) || (s.max && value > *s.max))
+    return s.name + ": " + number(value) + unit + " is outside " +
+           (s.min ? number(*s.min) : "-inf") + " to " + (s.max ? number(*s.max) : "inf") + unit;
+  double raw = s.toRaw(value);
+  if (s.type != SignalType::kFloat32) raw = std::round(raw);
+  if (raw < rawMin(s.type) || raw > rawMax(s.type))
+    return s.name + ": " + number(value) + unit + " is raw " + number(raw) + ", outside what " +
+           typeName(s.type) + " holds (" + number(rawMin(s.type)) + " to " +
+           number(rawMax(s.type)) + ")";
+  *words = encodeRaw(s.type, s.word_order, raw);
+  return {};
+}
+
+Result GenericDevice::writeSignal(Transport& bus, size_t i, double value) {
+  std::vector<uint16_t> words;
+  const std::string problem = encodeWrite(i, value, &words);
+  if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
+  const SignalConfig& s = signals()[i];
+  const bool coil = s.table == SignalTable::kCoil;
+  const Request write = coil ? Request::writeSingleCoil(address(), s.address, words[0] != 0)
+                        : words.size() == 1
+                            ? Request::writeSingleRegister(address(), s.address, words[0])
+                            : Request::writeMultipleRegisters(address(), s.address, words);
+  Result r = bus.execute(write);
+  if (r.ok()) {
+    setFromWords(i, words.data());
+    return r;
+  }
+  if (!mayHaveActed(r)) return r;
+  // The reply was lost: the device may have done it. Read it back to tell.
+  const Request back = coil ? Request::readCoils(address(), s.address, 1)
+                            : Request::readHoldingRegisters(address(), s.address, s.words());
+  const Result now = bus.execute(back);
+  if (!now.ok()) {
+    r.message += "; not confirmed: reading " + s.name + " back failed too (" + now.message + ")";
+    return r;
+  }
+  if (now.values.size() == words.size()) setFromWords(i, now.values.data());
+  if (now.values != words) {
+    r.message += "; read back: not done (" + s.name + " is " + number(states_[i].value) + ")";
+    return r;
+  }
+  Result ok = Result::success();
+  ok.message = "confirmed by reading " + s.name + " back (" + r.message + ")";
+  return ok;
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,180 @@
+// Generic device: one latched topic per signal (published on change), D/signals with every
+// signal after each poll, D/<name>/set for writable signals, one poll per rate group.
+#include <diagnostic_msgs/DiagnosticStatus.h>
+#include <std_msgs/Float64.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "modbus_rtu_driver/SetValue.h"
+#include "modbus_rtu_driver/SignalValues.h"
+#include "modbus_rtu_driver/devices/generic_device.h"
+#include "modbus_rtu_driver/ros/adapter_registry.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+class GenericAdapter : public DeviceAdapter {
+ public:
+  using DeviceAdapter::DeviceAdapter;
+
+  void advertise() override {
+    const auto& signals = generic().signals();
+    published_.assign(signals.size(), std::nullopt);
+    all_pub_ = nh_.advertise<SignalValues>("signals", 50);
+    for (size_t i = 0; i < signals.size(); ++i) {
+      const SignalConfig& s = signals[i];
+      const bool bit = s.type == SignalType::kBool;
+      pubs_.push_back(bit ? nh_.advertise<std_msgs::Bool>(s.name, 1, true)
+                          : nh_.advertise<std_msgs::Float64>(s.name, 1, true));
+      if (!s.writable) continue;
+      if (bit)
+        services_.push_back(
+            nh_.advertiseService<std_srvs::SetBool::Request, std_srvs::SetBool::Response>(
+                s.name + "/set",
+                [this, i](std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
+                  const Result r = write(i, req.data ? 1.0 : 0.0);
+                  res.success = r.ok();
+                  res.message =
+                      answer(r, generic().signals()[i].name + (req.data ? " on" : " off"));
+                  return true;
+                }));
+      else
+        services_.push_back(nh_.advertiseService<SetValue::Request, SetValue::Response>(
+            s.name + "/set", [this, i](SetValue::Request& req, SetValue::Response& res) {
+              const Result r = write(i, req.value);
+              res.success = r.ok();
+              const SignalConfig& sc = generic().signals()[i];
+              std::vector<uint16_t> words;
+              generic().encodeWrite(i, req.value, &words);
+              const double written =
+                  words.empty() ? req.value
+                                : sc.toValue(decodeRaw(sc.type, sc.word_order, words.data()));
+              std::ostringstream what;
+              what << sc.name << " set to " << req.value;
+              // Integer registers hold steps of `scale`, float32 has 24 bits: say what it is.
+              if (r.ok() &&
+                  std::abs(written - req.value) > 1e-9 * std::max(1.0, std::abs(req.value)))
+                what << " (written as " << written << ")";
+              res.message = answer(r, what.str());
+              return true;
+            }));
+    }
+  }
+
+  // One poll per rate group with signals in it: fast values do not drag slow ones along.
+  void addPolls() override {
+    polled_.assign(generic().groups().size(), false);
+    for (size_t g = 0; g < generic().groups().size(); ++g) {
+      if (generic().groups()[g].signals.empty()) continue;
+      auto device = device_;
+      bus_.addPoll(
+          device_->name(), generic().groups()[g].rate,
+          [device, g](Transport& t) {
+            return static_cast<GenericDevice&>(*device).pollGroup(t, g);
+          },
+          [this, g](const Result& r) {
+            polled_[g] = true;
+            onPoll(r);
+          });
+    }
+  }
+
+  void diagnoseType(diagnostic_updater::DiagnosticStatusWrapper& status) override {
+    // Read on the diagnostics thread: the split list only grows, and copies are taken whole.
+    std::vector<std::string> splits;
+    std::string unread;
+    {
+      std::lock_guard<std::mutex> lock(splits_mutex_);
+      splits = splits_;
+      unread = unread_;
+    }
+    // An exception still counts as an answer (the device is online): say which values lack.
+    if (!unread.empty())
+      status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN, "signals not read: " + unread);
+    status.add("signals not read", unread.empty() ? "none" : unread);
+    status.add("signals", generic().signals().size());
+    for (size_t g = 0; g < generic().groups().size(); ++g) {
+      const auto& group = generic().groups()[g];
+      if (group.signals.empty()) continue;
+      std::ostringstream key;
+      key << "poll group " << g << " [Hz]";
+      status.add(key.str(), group.rate);
+    }
+    status.add("merged reads split (device refused them)", splits.size());
+    for (size_t k = 0; k < splits.size(); ++k) status.add("split " + std::to_string(k), splits[k]);
+  }
+
+ private:
+  GenericDevice& generic() const { return static_cast<GenericDevice&>(*device_); }
+
+  // No outputs (the base's topics stay silent, no restart detection): only the signals.
+  void onPoll(const Result&) override { publishSignals(true); }
+
+  Result write(size_t i, double value) {
+    std::vector<uint16_t> words;
+    const std::string problem = generic().encodeWrite(i, value, &words);
+    if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
+    return runOnBus([this, i, value](Transport& t) {
+      Result r = generic().writeSignal(t, i, value);
+      publishSignals(false);
+      return r;
+    });
+  }
+
+  // Bus thread: each signal's topic when its value changed, D/signals after a poll.
+  void publishSignals(bool after_poll) {
+    const auto& signals = generic().signals();
+    const auto& states = generic().states();
+    SignalValues all;
+    all.header.stamp = ros::Time::now();
+    for (size_t i = 0; i < signals.size(); ++i) {
+      const SignalState& st = states[i];
+      all.names.push_back(signals[i].name);
+      all.values.push_back(st.value);
+      all.valid.push_back(st.valid);
+      if (!st.valid || (published_[i] && *published_[i] == st.value)) continue;
+      published_[i] = st.value;
+      if (signals[i].type == SignalType::kBool) {
+        std_msgs::Bool m;
+        m.data = st.value != 0.0;
+        pubs_[i].publish(m);
+      } else {
+        std_msgs::Float64 m;
+        m.data = st.value;
+        pubs_[i].publish(m);
+      }
+    }
+    if (after_poll) all_pub_.publish(all);
+    // Signals whose group was polled and whose last read failed.
+    std::string unread;
+    for (size_t g = 0; g < polled_.size(); ++g) {
+      if (!polled_[g]) continue;
+      for (size_t i : generic().groups()[g].signals)
+        if (!states[i].valid) unread += (unread.empty() ? "" : ", ") + signals[i].name;
+    }
+    std::lock_guard<std::mutex> lock(splits_mutex_);
+    splits_ = generic().splits();
+    unread_ = unread;
+  }
+
+  ros::Publisher all_pub_;
+  std::vector<ros::Publisher> pubs_;
+  std::vector<ros::ServiceServer> services_;
+  std::vector<std::optional<double>> published_;  // bus thread only
+  std::vector<bool> polled_;                      // by poll group; bus thread only
+  std::mutex splits_mutex_;                       // the two below: copies for diagnostics
+  std::vector<std::string> splits_;
+  std::string unread_;
+};
+
+}  // namespace
+
+std::unique_ptr<DeviceAdapter> makeGenericAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
+                                                  const ros::NodeHandle& nh) {
+  return std::make_unique<GenericAdapter>(std::move(device), bus, nh);
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,146 @@
+#include "modbus_rtu_driver/sim/sim_generic.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+
+#include "modbus_rtu_driver/core/config_yaml.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+SignalTable signalTable(Table t) {
+  switch (t) {
+    case Table::kCoil:
+      return SignalTable::kCoil;
+    case Table::kDiscreteInput:
+      return SignalTable::kDiscreteInput;
+    case Table::kHolding:
+      return SignalTable::kHoldingRegister;
+    case Table::kInputRegister:
+      break;
+  }
+  return SignalTable::kInputRegister;
+}
+
+const SignalTable kTables[] = {SignalTable::kCoil, SignalTable::kDiscreteInput,
+                               SignalTable::kHoldingRegister, SignalTable::kInputRegister};
+
+void parseHoles(const YAML::Node& n, const std::string& key, SimGenericConfig* out) {
+  using namespace config;
+  if (!n.IsSequence()) fail(key, show(n) + " is not a list of {table, from, to}");
+  for (size_t i = 0; i < n.size(); ++i) {
+    const std::string at = key + "[" + std::to_string(i) + "]/";
+    checkKeys(n[i], at, {"table", "from", "to"});
+    SimGenericConfig::Hole h{};
+    const std::string table = get<std::string>(n[i]["table"], at + "table", "a table");
+    bool found = false;
+    for (SignalTable t : kTables)
+      if (table == tableName(t)) {
+        h.table = t;
+        found = true;
+      }
+    if (!found)
+      fail(at + "table", "'" + table +
+                             "' is not coil, discrete_input, holding_register or "
+                             "input_register");
+    const int from = getInt(n[i]["from"], at + "from");
+    const int to = n[i]["to"] ? getInt(n[i]["to"], at + "to") : from;
+    if (from < 0 || to < from || to > 0xFFFF)
+      fail(at + "to",
+           std::to_string(from) + "-" + std::to_string(to) + " is not a range in 0-65535");
+    h.from = static_cast<uint16_t>(from);
+    h.to = static_cast<uint16_t>(to);
+    out->holes.push_back(h);
+  }
+}
+
+}  // namespace
+
+bool parseSimGeneric(const YAML::Node& entry, const std::string& where, const std::string& base_dir,
+                     SimGenericConfig* out, std::string* error) {
+  try {
+    out->map = parseSignalMap(entry, where, base_dir);
+    if (entry["holes"]) parseHoles(entry["holes"], where + "holes", out);
+    return true;
+  } catch (const config::ConfigError& e) {
+    *error = e.message;
+  } catch (const YAML::Exception& e) {
+    *error = where + ": " + e.what();
+  }
+  return false;
+}
+
+SimGeneric::SimGeneric(uint8_t address, SimLineSettings line, SimGenericConfig config)
+    : SimDevice(address, line), config_(std::move(config)) {
+  for (const SignalConfig& s : config_.map.signals) {
+    const uint16_t last = static_cast<uint16_t>(s.address + s.words() - 1);
+    auto it = blocks_.find(s.table);
+    if (it == blocks_.end())
+      blocks_[s.table] = {s.address, last};
+    else
+      it->second = {std::min(it->second.first, s.address), std::max(it->second.second, last)};
+  }
+}
+
+bool SimGeneric::mapped(SignalTable table, uint16_t address) const {
+  auto it = blocks_.find(table);
+  if (it == blocks_.end() || address < it->second.first || address > it->second.second)
+    return false;
+  for (const auto& h : config_.holes)
+    if (h.table == table && address >= h.from && address <= h.to) return false;
+  return true;
+}
+
+uint8_t SimGeneric::read(Table table, uint16_t address, SimClock::time_point, uint16_t* value) {
+  const SignalTable t = signalTable(table);
+  if (!mapped(t, address)) return kIllegalDataAddress;
+  auto it = values_.find({t, address});
+  *value = it == values_.end() ? 0 : it->second;
+  return 0;
+}
+
+// A write touching an unmapped address changes nothing (checked as a whole).
+uint8_t SimGeneric::write(Table table, uint16_t address, const std::vector<uint16_t>& values,
+                          SimClock::time_point) {
+  const SignalTable t = signalTable(table);
+  for (size_t i = 0; i < values.size(); ++i)
+    if (address + i > 0xFFFF || !mapped(t, static_cast<uint16_t>(address + i)))
+      return kIllegalDataAddress;
+  for (size_t i = 0; i < values.size(); ++i)
+    values_[{t, static_cast<uint16_t>(address + i)}] = values[i];
+  return 0;
+}
+
+uint8_t SimGeneric::setDirect(Table table, uint16_t address, uint16_t value,
+                              SimClock::time_point now) {
+  if (isBitTable(signalTable(table)) && value > 1) return kIllegalDataValue;
+  return write(table, address, {value}, now);
+}
+
+void SimGeneric::saveState(YAML::Node& n) const {
+  n["address"] = static_cast<int>(address_);
+  for (const auto& kv : values_) {
+    YAML::Node v;
+    v.push_back(tableName(kv.first.first));
+    v.push_back(kv.first.second);
+    v.push_back(kv.second);
+    n["values"].push_back(v);
+  }
+}
+
+void SimGeneric::loadState(const YAML::Node& n, SimClock::time_point) {
+  const int address = n["address"].as<int>(address_);
+  if (address >= 1 && address <= 247) address_ = static_cast<uint8_t>(address);
+  if (!n["values"] || !n["values"].IsSequence()) return;
+  for (const auto& v : n["values"]) {
+    if (!v.IsSequence() || v.size() != 3) continue;
+    const std::string table = v[0].as<std::string>("");
+    for (SignalTable t : kTables)
+      if (table == tableName(t) && mapped(t, v[1].as<uint16_t>(0)))
+        values_[{t, v[1].as<uint16_t>(0)}] = v[2].as<uint16_t>(0);
+  }
+}
+
+}  // namespace modbus_rtu_driver

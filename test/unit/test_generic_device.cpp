@@ -1,0 +1,275 @@
+// The generic device against a scripted transport (byte exact through the framing): merged
+// reads within max_gap and the protocol's limits, splitting after exception 02 (remembered),
+// poll groups by rate, writes checked before the bus and confirmed.
+#include <gtest/gtest.h>
+
+#include "modbus_rtu_driver/devices/generic_device.h"
+#include "modbus_rtu_driver/devices/registry.h"
+#include "scripted_transport.h"
+
+using namespace modbus_rtu_driver;
+
+namespace {
+
+SignalConfig sig(const std::string& name, SignalTable table, uint16_t address,
+                 SignalType type = SignalType::kUint16) {
+  SignalConfig s;
+  s.name = name;
+  s.table = table;
+  s.address = address;
+  s.type = isBitTable(table) ? SignalType::kBool : type;
+  return s;
+}
+
+DeviceConfig generic(std::vector<SignalConfig> signals, int max_gap = 8) {
+  DeviceConfig c;
+  c.name = "meter";
+  c.type = "generic";
+  c.address = 5;
+  c.poll_rate = 1.0;
+  c.generic.signals = std::move(signals);
+  c.generic.max_gap = max_gap;
+  return c;
+}
+
+void expectRead(ScriptedTransport& bus, const Request& r, std::vector<uint16_t> values) {
+  bus.expect(toHex(encodeRequest(r)), toHex(encodeReply(r, values)));
+}
+
+void expectRefused(ScriptedTransport& bus, const Request& r, uint8_t code) {
+  bus.expect(toHex(encodeRequest(r)),
+             toHex(encodeException(r.slave, static_cast<uint8_t>(r.function), code)));
+}
+
+#define EXPECT_SCRIPT_DONE(bus)        \
+  do {                                 \
+    EXPECT_EQ((bus).mismatches(), ""); \
+    EXPECT_TRUE((bus).usedUp());       \
+  } while (0)
+
+const auto kH = SignalTable::kHoldingRegister;
+const auto kI = SignalTable::kInputRegister;
+
+}  // namespace
+
+TEST(ReadPlanner, MergesWithinMaxGapByTable) {
+  ReadPlanner p({sig("a", kH, 0), sig("b", kH, 3, SignalType::kUint32), sig("c", kH, 14),
+                 sig("d", kI, 4), sig("e", SignalTable::kCoil, 0), sig("f", SignalTable::kCoil, 9)},
+                8);
+  const auto spans = p.plan({0, 1, 2, 3, 4, 5});
+  ASSERT_EQ(spans.size(), 4u);
+  EXPECT_EQ(spans[0].table, SignalTable::kCoil);  // coils 0 and 9: 8 bits apart, merged
+  EXPECT_EQ(spans[0].address, 0);
+  EXPECT_EQ(spans[0].count, 10);
+  EXPECT_EQ(spans[1].table, kH);  // a (0) and b (3-4): gap 2
+  EXPECT_EQ(spans[1].count, 5);
+  EXPECT_EQ(spans[1].signals, (std::vector<size_t>{0, 1}));
+  EXPECT_EQ(spans[2].address, 14);  // c: 9 registers after b, beyond max_gap 8
+  EXPECT_EQ(spans[3].table, kI);
+  // max_gap 0: only adjacent signals share a request.
+  ReadPlanner adjacent({sig("a", kH, 0), sig("b", kH, 1), sig("c", kH, 3)}, 0);
+  EXPECT_EQ(adjacent.plan({0, 1, 2}).size(), 2u);
+}
+
+TEST(ReadPlanner, KeepsTheProtocolLimits) {
+  // 125 registers at most: signals at 0 and 124 fit one request, 0 and 125 do not.
+  std::vector<SignalConfig> regs;
+  for (uint16_t a = 0; a <= 126; ++a) regs.push_back(sig("r" + std::to_string(a), kH, a));
+  ReadPlanner p(regs, 8);
+  std::vector<size_t> all;
+  for (size_t i = 0; i < regs.size(); ++i) all.push_back(i);
+  const auto spans = p.plan(all);
+  ASSERT_EQ(spans.size(), 2u);
+  EXPECT_EQ(spans[0].count, kMaxReadRegisters);
+  EXPECT_EQ(spans[1].address, 125);
+  // 2000 bits.
+  ReadPlanner bits(
+      {sig("a", SignalTable::kDiscreteInput, 0), sig("b", SignalTable::kDiscreteInput, 1999),
+       sig("c", SignalTable::kDiscreteInput, 2000)},
+      123);
+  EXPECT_EQ(bits.plan({0, 1}).size(), 2u);  // 1998 bits apart: beyond max_gap
+  std::vector<SignalConfig> many;
+  for (uint16_t a = 0; a < 2001; a += 100)
+    many.push_back(sig("b" + std::to_string(a), SignalTable::kDiscreteInput, a));
+  ReadPlanner wide(many, 123);
+  std::vector<size_t> idx;
+  for (size_t i = 0; i < many.size(); ++i) idx.push_back(i);
+  const auto bit_spans = wide.plan(idx);
+  ASSERT_EQ(bit_spans.size(), 2u);
+  EXPECT_EQ(bit_spans[0].count, 1901);  // 0..1900; 2000 would make 2001 bits
+  EXPECT_EQ(bit_spans[1].address, 2000);
+}
+
+TEST(GenericDevice, PollDecodesAMergedRead) {
+  auto t = sig("temperature", kI, 1, SignalType::kInt16);
+  t.scale = 0.1;
+  auto v = sig("voltage", kI, 4, SignalType::kFloat32);
+  auto big = sig("count", kI, 6, SignalType::kUint32);
+  big.word_order = WordOrder::kLittle;
+  big.offset = -1;
+  GenericDevice d(generic({t, v, big}));
+  ScriptedTransport bus;
+  // 1-7 in one FC04: -20.5 C, 2 unread, 230.0 V, 65538 - 1.
+  expectRead(bus, Request::readInputRegisters(5, 1, 7), {0xFF33, 0, 0, 0x4366, 0, 2, 1});
+  const Result r = d.poll(bus);
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_NEAR(d.states()[0].value, -20.5, 1e-9);
+  EXPECT_EQ(d.states()[1].value, 230.0);
+  EXPECT_EQ(d.states()[2].value, 65537.0);
+  EXPECT_TRUE(d.states()[0].valid && d.states()[1].valid && d.states()[2].valid);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(GenericDevice, RefusedMergedSpanIsSplitAndTheSplitRemembered) {
+  GenericDevice d(generic({sig("a", kH, 0), sig("b", kH, 2), sig("c", kH, 8)}));
+  ScriptedTransport bus;
+  // 0-8 refused (a hole at 3-7): split at the widest gap, between b and c.
+  expectRefused(bus, Request::readHoldingRegisters(5, 0, 9), kIllegalDataAddress);
+  expectRead(bus, Request::readHoldingRegisters(5, 0, 3), {10, 0, 12});
+  expectRead(bus, Request::readHoldingRegisters(5, 8, 1), {18});
+  const Result r = d.poll(bus);
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(d.states()[0].value, 10);
+  EXPECT_EQ(d.states()[1].value, 12);
+  EXPECT_EQ(d.states()[2].value, 18);
+  ASSERT_EQ(d.splits().size(), 1u);
+  EXPECT_NE(d.splits()[0].find("holding_register 0-8 (a, b, c) refused (exception 02)"),
+            std::string::npos)
+      << d.splits()[0];
+  // The next poll reads the two parts straight away.
+  expectRead(bus, Request::readHoldingRegisters(5, 0, 3), {11, 0, 13});
+  expectRead(bus, Request::readHoldingRegisters(5, 8, 1), {19});
+  EXPECT_TRUE(d.poll(bus).ok());
+  EXPECT_EQ(d.states()[2].value, 19);
+  EXPECT_EQ(d.splits().size(), 1u);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(GenericDevice, ASignalRefusedAloneTurnsInvalidAndThePollSaysWhich) {
+  GenericDevice d(generic({sig("a", kH, 0), sig("b", kH, 1)}));
+  ScriptedTransport bus;
+  expectRefused(bus, Request::readHoldingRegisters(5, 0, 2), kIllegalDataAddress);
+  expectRead(bus, Request::readHoldingRegisters(5, 0, 1), {7});
+  expectRefused(bus, Request::readHoldingRegisters(5, 1, 1), kIllegalDataAddress);
+  const Result r = d.poll(bus);
+  EXPECT_FALSE(r.ok());
+  EXPECT_EQ(r.exception_code, kIllegalDataAddress);
+  EXPECT_NE(r.message.find("holding_register 1-1 (b)"), std::string::npos) << r.message;
+  EXPECT_TRUE(d.states()[0].valid);
+  EXPECT_FALSE(d.states()[1].valid);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(GenericDevice, SilenceStopsThePollAndInvalidatesTheRest) {
+  GenericDevice d(generic({sig("a", kH, 0), sig("b", kI, 0)}));
+  ScriptedTransport bus;
+  bus.expect(toHex(encodeRequest(Request::readHoldingRegisters(5, 0, 1))));  // timeout
+  const Result r = d.poll(bus);
+  EXPECT_EQ(r.error, ErrorKind::kTimeout);
+  EXPECT_FALSE(d.states()[0].valid);
+  EXPECT_FALSE(d.states()[1].valid);
+  EXPECT_SCRIPT_DONE(bus);  // the input register was not asked
+}
+
+TEST(GenericDevice, SignalsWithTheirOwnRateFormGroups) {
+  auto fast = sig("current", kI, 6, SignalType::kFloat32);
+  fast.poll_rate = 20.0;
+  auto slow = sig("energy", kI, 0x48, SignalType::kFloat32);
+  slow.poll_rate = 0.2;
+  GenericDevice d(generic({sig("voltage", kI, 0, SignalType::kFloat32), fast, slow}));
+  ASSERT_EQ(d.groups().size(), 3u);
+  EXPECT_EQ(d.groups()[0].rate, 1.0);
+  EXPECT_EQ(d.groups()[0].signals, std::vector<size_t>{0});
+  EXPECT_EQ(d.groups()[1].rate, 20.0);
+  EXPECT_EQ(d.groups()[1].signals, std::vector<size_t>{1});
+  ScriptedTransport bus;
+  expectRead(bus, Request::readInputRegisters(5, 6, 2), {0x3FC0, 0});  // 1.5 A alone
+  EXPECT_TRUE(d.pollGroup(bus, 1).ok());
+  EXPECT_EQ(d.states()[1].value, 1.5);
+  EXPECT_FALSE(d.states()[0].known);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(GenericDevice, WritesAreCheckedBeforeTheBus) {
+  auto sp = sig("setpoint", kH, 10, SignalType::kInt16);
+  sp.writable = true;
+  sp.scale = 0.1;
+  sp.min = -50;
+  sp.max = 50;
+  auto raw = sig("raw", kH, 11, SignalType::kUint16);
+  raw.writable = true;
+  auto ro = sig("ro", kI, 0);
+  GenericDevice d(generic({sp, raw, ro}));
+  ScriptedTransport bus;  // nothing may be sent
+  EXPECT_EQ(d.writeSignal(bus, 0, 50.1).message, "setpoint: 50.1 is outside -50 to 50");
+  EXPECT_EQ(d.writeSignal(bus, 1, 65536).message,
+            "raw: 65536 is raw 65536, outside what uint16 holds (0 to 65535)");
+  EXPECT_EQ(d.writeSignal(bus, 1, -1).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(d.writeSignal(bus, 1, std::nan("")).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(d.writeSignal(bus, 2, 1).message, "ro: not writable");
+  EXPECT_EQ(bus.executed(), 0);
+}
+
+TEST(GenericDevice, WritesUseFc06Fc16Fc05AndTheEchoConfirms) {
+  auto sp = sig("setpoint", kH, 10, SignalType::kInt16);
+  sp.writable = true;
+  sp.scale = 0.1;
+  auto f = sig("limit", kH, 20, SignalType::kFloat32);
+  f.writable = true;
+  f.word_order = WordOrder::kLittle;
+  auto relay = sig("relay", SignalTable::kCoil, 3);
+  relay.writable = true;
+  GenericDevice d(generic({sp, f, relay}));
+  ScriptedTransport bus;
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleRegister(5, 10, 0xFF33))));  // -20.5
+  bus.expectEcho(
+      toHex(encodeRequest(Request::writeMultipleRegisters(5, 20, {0x0000, 0x4366}))));  // 230
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(5, 3, true))));
+  EXPECT_TRUE(d.writeSignal(bus, 0, -20.5).ok());
+  EXPECT_NEAR(d.states()[0].value, -20.5, 1e-9);
+  EXPECT_TRUE(d.writeSignal(bus, 1, 230.0).ok());
+  EXPECT_EQ(d.states()[1].value, 230.0);
+  EXPECT_TRUE(d.writeSignal(bus, 2, 1).ok());
+  EXPECT_EQ(d.states()[2].value, 1.0);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(GenericDevice, ALostReplyIsConfirmedOrDeniedByReadingBack) {
+  auto sp = sig("setpoint", kH, 10, SignalType::kUint32);
+  sp.writable = true;
+  GenericDevice d(generic({sp}));
+  ScriptedTransport bus;
+  const Request w = Request::writeMultipleRegisters(5, 10, {0x0001, 0x0002});
+  bus.expect(toHex(encodeRequest(w)));  // reply lost
+  expectRead(bus, Request::readHoldingRegisters(5, 10, 2), {0x0001, 0x0002});
+  Result r = d.writeSignal(bus, 0, 65538);
+  EXPECT_TRUE(r.ok());
+  EXPECT_NE(r.message.find("confirmed by reading setpoint back"), std::string::npos);
+  bus.expect(toHex(encodeRequest(w)));  // lost again, and not done this time
+  expectRead(bus, Request::readHoldingRegisters(5, 10, 2), {0, 7});
+  r = d.writeSignal(bus, 0, 65538);
+  EXPECT_FALSE(r.ok());
+  EXPECT_NE(r.message.find("read back: not done (setpoint is 7)"), std::string::npos) << r.message;
+  // A refusal is not read back: the device said no.
+  expectRefused(bus, w, kIllegalDataValue);
+  EXPECT_EQ(d.writeSignal(bus, 0, 65538).error, ErrorKind::kException);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+TEST(GenericDevice, HasNoOutputs) {
+  GenericDevice d(generic({sig("a", kH, 0)}));
+  EXPECT_EQ(d.checkOutputs({0}, {true}), "channels: a generic device has no outputs");
+  ScriptedTransport bus;
+  EXPECT_EQ(d.setOutputs(bus, {0}, {true}).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(bus.executed(), 0);
+}
+
+TEST(GenericDevice, TheRegistryBuildsIt) {
+  EXPECT_EQ(validateDeviceConfig(generic({sig("a", kH, 0)})), "");
+  auto d = createDevice(generic({sig("a", kH, 0)}));
+  ASSERT_TRUE(d);
+  EXPECT_STREQ(d->type(), "generic");
+  DeviceConfig bad = generic({sig("a", kH, 0)});
+  bad.address = 248;
+  EXPECT_EQ(validateDeviceConfig(bad), "devices/meter/address: 248 is outside 1-247 for generic");
+}
