@@ -178,6 +178,8 @@ void DeviceAdapter::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("writes ok", h.writes_ok);
   status.add("writes failed", h.writes_failed);
   status.add("writes refused unsent (port not open)", h.writes_refused);
+  status.add("shared requests ok", h.shared_ok);  // Modbus TCP clients of the share
+  status.add("shared requests failed", h.shared_failed);
   status.add("consecutive failures", h.consecutive_failures);
   status.add("last error", h.last_error.empty() ? "none" : h.last_error);
   diagnoseFailsafe(status);
