@@ -250,6 +250,13 @@ void SlaveServer::serve(const Bytes& frame) {
     ++stats_.other_slave;
     return;
   }
+  // Codes 0x80-0xFF are exception replies (another device's, or noise), never requests: no
+  // answer. (libmodbus's modbus_reply_exception would add 0x80 and send a wrong function code.)
+  if (frame[1] & 0x80) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++stats_.not_requests;
+    return;
+  }
   const uint8_t exception = predictException(frame);
   if (exception) {
     // For an unknown function or a bad quantity, modbus_reply (3.1.6) sleeps a response timeout

@@ -149,6 +149,7 @@ void SlaveNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   status.add("broadcasts", s.broadcasts);
   status.add("crc errors", s.crc_errors);
   status.add("frames for other ids", s.other_slave);
+  status.add("exception replies heard (ignored)", s.not_requests);
   status.add("since master last heard [s]", s.since_last_heard);
 }
 

@@ -105,6 +105,17 @@ TEST_F(SlaveServerTest, BroadcastIsAppliedNotAnswered) {
   EXPECT_TRUE(writes()[0].broadcast);
 }
 
+// A frame with a function code of 0x80 or above is an exception reply, not a request: never
+// answered (libmodbus would have sent function + 0x80, overflowed, found by the fuzzer).
+TEST_F(SlaveServerTest, ExceptionRepliesAreNotAnswered) {
+  const Bytes heard = encodeException(1, 0xDE, kIllegalFunction);  // "01 DE 01 ..."
+  EXPECT_TRUE(ask(heard, 1, 300).empty());
+  const Request r = Request::readHoldingRegisters(1, 0, 1);
+  EXPECT_EQ(toHex(ask(encodeRequest(r), 7)), toHex(encodeReply(r, {0})));
+  EXPECT_EQ(server_->stats().not_requests, 1u);
+  EXPECT_EQ(server_->stats().exceptions_sent, 0u);
+}
+
 TEST_F(SlaveServerTest, ValidRequestsAfterOtherIdsAndBadCrcsAreAnswered) {
   const Request mine = Request::readHoldingRegisters(1, 0, 2);
   const Bytes reply = encodeReply(mine, {0, 0});

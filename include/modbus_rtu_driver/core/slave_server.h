@@ -42,6 +42,7 @@ struct SlaveStats {
   uint64_t broadcasts = 0;       // applied, not answered
   uint64_t crc_errors = 0;       // frames (or noise) dropped for a bad CRC
   uint64_t other_slave = 0;      // valid frames for other ids, ignored
+  uint64_t not_requests = 0;     // function code 0x80-0xFF: an exception reply, ignored
   double since_last_heard = -1;  // s since the last valid frame for us; -1 = never
   bool port_open = false;
   std::string port_error;
