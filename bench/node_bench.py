@@ -57,7 +57,7 @@ def free_port():
 
 
 class Simulator:
-    """The simulator with --verbose --timestamps; keeps (monotonic time, hex) of every rx."""
+    """The simulator with --verbose --timestamps; keeps every frame with its times."""
 
     def __init__(self, workdir, pace, baud=115200):
         config = os.path.join(workdir, "sim.yaml")
@@ -67,16 +67,22 @@ class Simulator:
         args = [executable("modbus_rtu_simulator"), "--config", config, "--link", self.link,
                 "--verbose", "--timestamps"] + (["--pace"] if pace else [])
         self.proc = subprocess.Popen(args, stdout=subprocess.PIPE, text=True)
-        self.rx = []
+        self.rx = []  # (first byte, hex) of every request
+        self.frames = []  # (rx or tx, first byte, last byte, hex) in line order
         while "simulator ready" not in self.proc.stdout.readline():
             pass
         threading.Thread(target=self._read, daemon=True).start()
 
     def _read(self):
+        # "rx FIRST LAST HEX": when the request's first and last byte reached the simulator;
+        # "tx FIRST LAST HEX": when the reply's first and last byte were written.
         for line in self.proc.stdout:
-            parts = line.split(" ", 2)
-            if len(parts) == 3 and parts[0] == "rx":
-                self.rx.append((float(parts[1]), parts[2].strip()))
+            parts = line.split(" ", 3)
+            if len(parts) == 4 and parts[0] in ("rx", "tx"):
+                self.frames.append((parts[0], float(parts[1]), float(parts[2]),
+                                    parts[3].strip()))
+                if parts[0] == "rx":
+                    self.rx.append((float(parts[1]), parts[3].strip()))
 
     def stop(self):
         self.proc.terminate()

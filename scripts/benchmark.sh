@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Installs what is missing, builds, and runs the benchmark (a script, not a test): the bus layer
 # against plain libmodbus and pymodbus, line utilisation, 1-32 devices (modbus_rtu_benchmark),
-# then the node's latency and CPU use (bench/node_bench.py, its own rosmaster) and the latency
-# of a request through the node's Modbus TCP share (bench/share_bench.py). Writes
+# then where the line's time goes (bench/line_attribution.py: wire, silences, the simulator's
+# and the driver's turnaround), the node's latency and CPU use (bench/node_bench.py, its own
+# rosmaster) and the latency of a request through the node's Modbus TCP share
+# (bench/share_bench.py). Each node figure is the median (lowest-highest) of 5 runs. Writes
 # bench/results.md and bench/results.csv. Usage: scripts/benchmark.sh [SECONDS_PER_CELL]
 source "$(dirname "$0")/common.sh"
 install_deps
@@ -11,6 +13,8 @@ rm -f "$REPO/bench/results.csv"
 {
   "$WS/devel/lib/modbus_rtu_driver/modbus_rtu_benchmark" --seconds "${1:-2}" \
     --csv "$REPO/bench/results.csv"
+  /usr/bin/python3 "$REPO/bench/line_attribution.py" --seconds 5 --repeats 5 \
+    --csv "$REPO/bench/results.csv" 2> >(grep -v "^modbus_rtu_simulator\|wait_for_service" >&2)
   /usr/bin/python3 "$REPO/bench/node_bench.py" --calls 300 --repeats 5 --hog "$(nproc)" --cpu-seconds 10 \
     --csv "$REPO/bench/results.csv" 2> >(grep -v "^modbus_rtu_simulator\|wait_for_service" >&2)
   /usr/bin/python3 "$REPO/bench/share_bench.py" --requests 300 \

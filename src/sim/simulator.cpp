@@ -24,13 +24,18 @@ SimClock::duration silenceOf(const SimLineSettings& line) {
   return secs(std::max(simFrameGap(line), 0.004));
 }
 
+double monotonic(SimClock::time_point t) {
+  return std::chrono::duration<double>(t.time_since_epoch()).count();
+}
+
 // steady_clock is CLOCK_MONOTONIC on Linux: the same clock as Python's time.monotonic(), so a
-// benchmark can put a frame on the line next to its own events.
-void logFrame(const SimulatorOptions& o, const char* direction, const Bytes& frame) {
+// benchmark can put a frame on the line next to its own events. A frame's first and last byte:
+// for a request when they reached the simulator, for a reply when they were written.
+void logFrame(const SimulatorOptions& o, const char* direction, const Bytes& frame,
+              SimClock::time_point first, SimClock::time_point last) {
   if (!o.verbose) return;
   if (o.timestamps)
-    std::printf("%s %.6f %s\n", direction,
-                std::chrono::duration<double>(SimClock::now().time_since_epoch()).count(),
+    std::printf("%s %.6f %.6f %s\n", direction, monotonic(first), monotonic(last),
                 toHex(frame).c_str());
   else
     std::printf("%s %s\n", direction, toHex(frame).c_str());
@@ -141,7 +146,7 @@ void Simulator::take(const uint8_t* data, size_t size, SimClock::time_point now)
 
 void Simulator::processFrame(const Bytes& frame, SimClock::time_point now) {
   ++frames_;
-  logFrame(options_, "rx", frame);
+  logFrame(options_, "rx", frame, framer_.pending() ? now : rx_start_, now);
   // Wire time of the request: it started with its first byte, or once the line was free.
   SimClock::time_point request_end = now;
   if (config_.pace) {
@@ -286,6 +291,7 @@ void Simulator::flushOutgoing(SimClock::time_point now) {
       due = std::min(due, static_cast<size_t>((now - o.start) / o.per_byte));
     // The gateway forwards what the line carries, whether or not anyone reads the pty.
     if (o.sent < due) gateway_.send(o.bytes.data() + o.sent, due - o.sent);
+    if (o.sent == 0 && due > 0) o.first_written = now;
     while (o.sent < due) {
       const ssize_t n = write(pty_.fd(), o.bytes.data() + o.sent, due - o.sent);
       if (n <= 0) {
@@ -300,7 +306,7 @@ void Simulator::flushOutgoing(SimClock::time_point now) {
       continue;
     }
     ++answered_;
-    logFrame(options_, "tx", o.bytes);
+    logFrame(options_, "tx", o.bytes, o.first_written, now);
     it = outgoing_.erase(it);
   }
 }

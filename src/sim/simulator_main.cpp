@@ -61,7 +61,8 @@ int main(int argc, char** argv) {
   app.add_flag("--verbose", options.verbose,
                "print every frame: rx/tx followed by the bytes in hex");
   app.add_flag("--timestamps", options.timestamps,
-               "with --verbose: CLOCK_MONOTONIC seconds after rx/tx");
+               "with --verbose: CLOCK_MONOTONIC seconds of the frame's first and last byte after "
+               "rx/tx");
   if (const int code = parseCommandLine(app, argc, argv); code >= 0) return code;
   if (config_path.empty() || options.link.empty())
     return commandLineError(app, "--config and --link are needed");

@@ -53,12 +53,14 @@ bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::st
 Bytes collideReplies(const std::vector<Bytes>& replies);
 
 struct SimulatorOptions {
-  std::string link;         // path of the symlink to the pty's slave side
-  std::string control;      // Unix socket path; empty = link + ".ctl"
-  std::string state_file;   // empty = no persistence
-  bool verbose = false;     // print every frame ("rx 01 03 ...", "tx 01 03 ...") on stdout
-  bool timestamps = false;  // verbose lines carry CLOCK_MONOTONIC seconds: "rx 12.345678 01 03"
-  int rtu_tcp_port = -1;    // also serve the line as an RTU-over-TCP gateway; 0 = a free port
+  std::string link;        // path of the symlink to the pty's slave side
+  std::string control;     // Unix socket path; empty = link + ".ctl"
+  std::string state_file;  // empty = no persistence
+  bool verbose = false;    // print every frame ("rx 01 03 ...", "tx 01 03 ...") on stdout
+  // Verbose lines carry CLOCK_MONOTONIC seconds of the frame's first and last byte:
+  // "rx 12.345000 12.345678 01 03 ..." (reached the simulator), "tx ..." (written).
+  bool timestamps = false;
+  int rtu_tcp_port = -1;  // also serve the line as an RTU-over-TCP gateway; 0 = a free port
 };
 
 class Simulator {
@@ -87,6 +89,7 @@ class Simulator {
     size_t sent = 0;
     SimClock::time_point start;
     SimClock::duration per_byte{};  // zero: all at once
+    SimClock::time_point first_written{};
   };
   struct Client {
     int fd;
