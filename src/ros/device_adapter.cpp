@@ -17,7 +17,9 @@ DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
 void DeviceAdapter::start() {
   const auto names = device_->outputNames();
   const size_t n = device_->outputCount();
-  outputs_ = std::make_unique<DigitalStatesPublisher>(nh_, "outputs", names, publish_policy_);
+  // A device without outputs (a generic sensor) gets no outputs topic and no set_outputs.
+  if (n > 0)
+    outputs_ = std::make_unique<DigitalStatesPublisher>(nh_, "outputs", names, publish_policy_);
   if (device_->inputCount() > 0)
     inputs_ = std::make_unique<DigitalStatesPublisher>(nh_, "inputs", device_->inputNames(),
                                                        publish_policy_);
@@ -33,7 +35,8 @@ void DeviceAdapter::start() {
               return onSet(ch, req, res);
             }));
   }
-  services_.push_back(nh_.advertiseService("set_outputs", &DeviceAdapter::onSetOutputs, this));
+  if (n > 0)
+    services_.push_back(nh_.advertiseService("set_outputs", &DeviceAdapter::onSetOutputs, this));
   advertise();
   addPolls();
 }
@@ -51,7 +54,7 @@ void DeviceAdapter::onPoll(const Result& result) {
     if (inputs_) inputs_->publish(device_->inputs(), ros::Time::now());
     checkRestart();
   } else if (offline()) {
-    outputs_->markStale();
+    if (outputs_) outputs_->markStale();
     if (inputs_) inputs_->markStale();
   }
 }
