@@ -1,7 +1,7 @@
-// One serial RTU link through libmodbus. Slaves 1-247 go through libmodbus's own API; address 0
-// (broadcast, and the LC board's single-device commands) and 248-255, which libmodbus 3.1.6
-// cannot address or filters out, go through modbus_send_raw_request and a reply reader of our
-// own that checks the CRC. With libmodbus >= 3.1.7 its quirks are used instead.
+// One serial RTU link. libmodbus opens and configures the port and sends each frame (so its RS485
+// / RTS direction control applies); every reply, whatever the address (0, 1-247, 248-255 that
+// libmodbus 3.1.6 cannot address), is read by our own reader by its announced length, CRC and
+// layout checked (fd_io, frame.h): one transaction path, the one the TCP transports share.
 // Between transactions the link keeps a minimum silence (t3.5 by default) and flushes stale
 // input; after a failed one, before a different request to the same slave, it first waits
 // until the line has been quiet for late_reply_guard, so a late reply is not taken as that
@@ -36,8 +36,7 @@ class RtuLink : public Link {
   Result sendBroadcast(const Request& request) override;
 
  private:
-  Result readViaLibmodbus(const Request& request);
-  Result exchangeRaw(const Request& request, bool read_reply_ourselves);
+  Result exchange(const Request& request);
   Result readReply(const Request& request);
   Result fromErrno(const Request& request, int error) const;
   void prepareLine(const Request& request);
