@@ -27,7 +27,8 @@ import time
 import rospy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_bench import Node, Simulator, free_port, percentile, spread  # noqa: E402
+from node_bench import (Node, Simulator, free_port, percentile, raise_simulator,  # noqa: E402
+                        spread)
 
 
 def character(baud):
@@ -68,9 +69,12 @@ def attribute(frames, baud):
     return parts, (end - start) if start is not None else 0.0
 
 
-def run_once(workdir, seconds, baud):
+def run_once(workdir, seconds, baud, realtime):
     sim = Simulator(workdir, pace=True, baud=baud)
-    node = Node(workdir, sim.link, 1000.0, baud)  # every device always due: the line is full
+    if realtime:
+        raise_simulator(sim)
+    # Every device always due: the line is full.
+    node = Node(workdir, sim.link, 1000.0, baud, "realtime_priority: %d\n" % realtime)
     try:
         node.wait_ready()
         time.sleep(2.0)  # past the first polls, which read more
@@ -83,10 +87,12 @@ def run_once(workdir, seconds, baud):
     return attribute(frames, baud)
 
 
-def report(baud, runs, csv):
+def report(baud, runs, csv, realtime):
     names = list(runs[0][0].keys())
     print("## Where the line's time goes at %d baud (the node polls 3 devices back to back, "
-          "paced simulator, %d runs)\n" % (baud, len(runs)))
+          "paced simulator, %d runs%s)\n" % (baud, len(runs), (
+              ", bus thread and simulator at SCHED_FIFO: the machine's other load set aside"
+              if realtime else "")))
     print("| part | p50 [us] | p99 [us] | max [us] | share of the time [%] |")
     print("|---|---|---|---|---|")
     for name in names:
@@ -97,7 +103,8 @@ def report(baud, runs, csv):
         print("| %s | %s | %s | %s | %s |" % (name, spread(p50, "%.0f"), spread(p99, "%.0f"),
                                                spread(top, "%.0f"), spread(share, "%.2f")))
         if p50:
-            csv.write("attribution_%d,%s,%f,%f,%f\n" % (baud, name.replace(" ", "_"),
+            csv.write("attribution_%d%s,%s,%f,%f,%f\n" % (baud, "_rt" if realtime else "",
+                                                         name.replace(" ", "_"),
                                                        statistics.median(p50) / 1e6,
                                                        statistics.median(p99) / 1e6,
                                                        statistics.median(share)))
@@ -119,6 +126,8 @@ def main():
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--bauds", default="115200,9600")
     parser.add_argument("--csv", default="line_attribution.csv")
+    parser.add_argument("--realtime", type=int, default=0,
+                        help="also measure with the bus thread and the simulator at SCHED_FIFO P")
     args = parser.parse_args()
     port = free_port()
     os.environ["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
@@ -130,8 +139,10 @@ def main():
         logging.getLogger("rosout").setLevel(logging.ERROR)
         with tempfile.TemporaryDirectory() as workdir, open(args.csv, "a") as csv:
             for baud in (int(b) for b in args.bauds.split(",") if b):
-                runs = [run_once(workdir, args.seconds, baud) for _ in range(args.repeats)]
-                report(baud, runs, csv)
+                for realtime in sorted({0, args.realtime}):
+                    runs = [run_once(workdir, args.seconds, baud, realtime)
+                            for _ in range(args.repeats)]
+                    report(baud, runs, csv, realtime)
     finally:
         master.terminate()
         master.wait(10)

@@ -13,7 +13,7 @@ rm -f "$REPO/bench/results.csv"
 {
   "$WS/devel/lib/modbus_rtu_driver/modbus_rtu_benchmark" --seconds "${1:-2}" \
     --csv "$REPO/bench/results.csv"
-  /usr/bin/python3 "$REPO/bench/line_attribution.py" --seconds 5 --repeats 5 \
+  /usr/bin/python3 "$REPO/bench/line_attribution.py" --seconds 5 --repeats 5 --realtime 50 \
     --csv "$REPO/bench/results.csv" 2> >(grep -v "^modbus_rtu_simulator\|wait_for_service" >&2)
   /usr/bin/python3 "$REPO/bench/node_bench.py" --calls 300 --repeats 5 --hog "$(nproc)" --cpu-seconds 10 \
     --csv "$REPO/bench/results.csv" 2> >(grep -v "^modbus_rtu_simulator\|wait_for_service" >&2)
