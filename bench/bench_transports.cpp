@@ -19,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench_common.h"
 #include "modbus_rtu_driver/core/make_transport.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
@@ -27,17 +28,6 @@ namespace modbus_rtu_driver {
 namespace {
 
 using Steady = std::chrono::steady_clock;
-
-double rateOf(double seconds, const std::function<bool()>& once) {
-  const auto start = Steady::now();
-  const auto end = start + std::chrono::duration<double>(seconds);
-  long n = 0;
-  while (Steady::now() < end) {
-    if (!once()) return 0;
-    ++n;
-  }
-  return n / std::chrono::duration<double>(Steady::now() - start).count();
-}
 
 // libmodbus's own TCP server on 127.0.0.1, one client at a time, until stopped.
 class LibmodbusTcpServer {
@@ -83,28 +73,11 @@ class LibmodbusTcpServer {
   std::thread thread_;
 };
 
-bool plainCall(modbus_t* ctx, const Request& r) {
-  uint8_t bits[16];
-  uint16_t regs[16];
-  switch (r.function) {
-    case FunctionCode::kReadCoils:
-      return modbus_read_bits(ctx, r.address, r.count, bits) == r.count;
-    case FunctionCode::kReadHoldingRegisters:
-      return modbus_read_registers(ctx, r.address, r.count, regs) == r.count;
-    case FunctionCode::kWriteSingleCoil:
-      return modbus_write_bit(ctx, r.address, r.values[0]) == 1;
-    case FunctionCode::kWriteMultipleRegisters:
-      return modbus_write_registers(ctx, r.address, r.count, r.values.data()) == r.count;
-    default:
-      return false;
-  }
-}
-
 // The best of 4 rounds of `once` (rounds of each side alternate with the caller's others).
 struct Best {
   double value = 0;
   void round(double seconds, const std::function<bool()>& once) {
-    value = std::max(value, rateOf(seconds, once));
+    value = std::max(value, transactionRate(seconds, once));
   }
 };
 
@@ -150,7 +123,7 @@ void benchmarkTransports(const std::string& dir, double seconds, std::ofstream& 
       modbus_t* ctx = modbus_new_tcp("127.0.0.1", tcp_server.port());
       modbus_connect(ctx);
       modbus_set_slave(ctx, 2);
-      plain.round(seconds / 4, [&] { return plainCall(ctx, request); });
+      plain.round(seconds / 4, [&] { return plainLibmodbus(ctx, request); });
       modbus_close(ctx);
       modbus_free(ctx);
       for (auto [config_of, best] : {std::pair{&tcp, &ours_tcp}, std::pair{&rtu_tcp, &ours_rtu_tcp},

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_common.h"
 #include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/core/rtu_link.h"
 #include "modbus_rtu_driver/sim/simulator.h"
@@ -30,8 +31,27 @@ struct Op {
   Request request;
 };
 
-// Transactions per second of `once` over `seconds` (0 when one of them failed).
-double rate(double seconds, const std::function<bool()>& once) {
+// Transactions per second of Debian's pymodbus per function code ("01" -> rate), from
+// bench/pymodbus_client.py run against `port`; empty when it could not run.
+std::map<std::string, double> pymodbusRates(const std::string& script, const std::string& port,
+                                            double seconds) {
+  std::map<std::string, double> rates;
+  const std::string cmd =
+      "/usr/bin/python3 '" + script + "' '" + port + "' 2 " + std::to_string(seconds);
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return rates;
+  char code[8];
+  double rate = 0;
+  while (std::fscanf(p, "%7s %lf", code, &rate) == 2) rates[code] = rate;
+  pclose(p);
+  return rates;
+}
+
+}  // namespace
+
+namespace modbus_rtu_driver {
+
+double transactionRate(double seconds, const std::function<bool()>& once) {
   const auto end = Steady::now() + std::chrono::duration<double>(seconds);
   long n = 0;
   const auto start = Steady::now();
@@ -64,27 +84,6 @@ bool plainLibmodbus(modbus_t* ctx, const Request& r) {
   }
 }
 
-// Transactions per second of Debian's pymodbus per function code ("01" -> rate), from
-// bench/pymodbus_client.py run against `port`; empty when it could not run.
-std::map<std::string, double> pymodbusRates(const std::string& script, const std::string& port,
-                                            double seconds) {
-  std::map<std::string, double> rates;
-  const std::string cmd =
-      "/usr/bin/python3 '" + script + "' '" + port + "' 2 " + std::to_string(seconds);
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return rates;
-  char code[8];
-  double rate = 0;
-  while (std::fscanf(p, "%7s %lf", code, &rate) == 2) rates[code] = rate;
-  pclose(p);
-  return rates;
-}
-
-}  // namespace
-
-namespace modbus_rtu_driver {
-void benchmarkScale(const std::string& dir, double seconds, std::ofstream& csv);
-void benchmarkTransports(const std::string& dir, double seconds, std::ofstream& csv);
 }  // namespace modbus_rtu_driver
 
 int main(int argc, char** argv) {
@@ -143,18 +142,21 @@ int main(int argc, char** argv) {
         modbus_connect(ctx);
         modbus_set_slave(ctx, 2);
         modbus_set_response_timeout(ctx, 0, 500000);
-        plain = std::max(plain, rate(seconds / 4, [&] { return plainLibmodbus(ctx, op.request); }));
+        plain = std::max(
+            plain, transactionRate(seconds / 4, [&] { return plainLibmodbus(ctx, op.request); }));
         modbus_close(ctx);
         modbus_free(ctx);
         RtuLink fast(lc);
         fast.connect(nullptr);
-        ours = std::max(ours, rate(seconds / 4, [&] { return fast.execute(op.request).ok(); }));
+        ours = std::max(
+            ours, transactionRate(seconds / 4, [&] { return fast.execute(op.request).ok(); }));
         fast.disconnect();
       }
       lc.min_gap = 0;  // t3.5 = 1.75 ms
       RtuLink spec(lc);
       spec.connect(nullptr);
-      const double with_gap = rate(seconds, [&] { return spec.execute(op.request).ok(); });
+      const double with_gap =
+          transactionRate(seconds, [&] { return spec.execute(op.request).ok(); });
       spec.disconnect();
       const auto found = py.find(std::string(op.name).substr(0, 2));
       const double pym = found == py.end() ? 0.0 : found->second;
@@ -196,7 +198,8 @@ int main(int argc, char** argv) {
     const double ch = characterTime(lc), gap = frameGap(lc);
     // request (8 bytes), t3.5, reply (7 bytes), t3.5 before the next request
     const double theoretical = 1.0 / ((8 + 7) * ch + 2 * gap);
-    const double achieved = rate(std::max(seconds, 3.0), [&] { return link.execute(r).ok(); });
+    const double achieved =
+        transactionRate(std::max(seconds, 3.0), [&] { return link.execute(r).ok(); });
     std::printf("| %d | %.1f | %.1f | %.1f %% |\n", baud, theoretical, achieved,
                 100.0 * achieved / theoretical);
     csv << "line," << baud << "," << theoretical << "," << achieved << "," << achieved / theoretical
