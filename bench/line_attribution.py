@@ -16,19 +16,15 @@ its share of the line below 2 %. Starts its own rosmaster.
     line_attribution.py [--seconds S] [--repeats R] [--bauds 115200,9600] [--csv FILE]
 """
 import argparse
-import logging
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 
-import rospy
-
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_bench import (Node, Simulator, free_port, percentile, raise_simulator,  # noqa: E402
-                        spread)
+from node_bench import (Node, Simulator, own_master, percentile,  # noqa: E402
+                        raise_simulator, spread)
 
 
 def character(baud):
@@ -129,23 +125,13 @@ def main():
     parser.add_argument("--realtime", type=int, default=0,
                         help="also measure with the bus thread and the simulator at SCHED_FIFO P")
     args = parser.parse_args()
-    port = free_port()
-    os.environ["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
-    master = subprocess.Popen(["rosmaster", "--core", "-p", str(port)],
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        time.sleep(1.5)
-        rospy.init_node("modbus_rtu_line_attribution", anonymous=True, disable_signals=True)
-        logging.getLogger("rosout").setLevel(logging.ERROR)
+    with own_master("modbus_rtu_line_attribution"):
         with tempfile.TemporaryDirectory() as workdir, open(args.csv, "a") as csv:
             for baud in (int(b) for b in args.bauds.split(",") if b):
                 for realtime in sorted({0, args.realtime}):
                     runs = [run_once(workdir, args.seconds, baud, realtime)
                             for _ in range(args.repeats)]
                     report(baud, runs, csv, realtime)
-    finally:
-        master.terminate()
-        master.wait(10)
     return 0
 
 

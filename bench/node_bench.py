@@ -13,6 +13,7 @@ processes keep the CPUs loaded and the 115200 latency is measured again with the
 normal priority and at SCHED_FIFO --realtime P (the node's realtime_priority).
 """
 import argparse
+import contextlib
 import logging
 import os
 import socket
@@ -143,6 +144,24 @@ class Node:
     def stop(self):
         self.proc.terminate()
         self.proc.wait(20)
+
+
+@contextlib.contextmanager
+def own_master(node_name):
+    """A rosmaster of the benchmark's own on a free port, and this process as node_name on it,
+    so a benchmark never meets a running robot's graph."""
+    port = free_port()
+    os.environ["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
+    master = subprocess.Popen(["rosmaster", "--core", "-p", str(port)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        time.sleep(1.5)
+        rospy.init_node(node_name, anonymous=True, disable_signals=True)
+        logging.getLogger("rosout").setLevel(logging.ERROR)  # keep the tables clean
+        yield
+    finally:
+        master.terminate()
+        master.wait(10)
 
 
 def percentile(values, p):
@@ -343,14 +362,7 @@ def main():
     parser.add_argument("--realtime", type=int, default=50,
                         help="SCHED_FIFO priority compared under --hog")
     args = parser.parse_args()
-    port = free_port()
-    os.environ["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
-    master = subprocess.Popen(["rosmaster", "--core", "-p", str(port)],
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        time.sleep(1.5)
-        rospy.init_node("modbus_rtu_node_bench", anonymous=True, disable_signals=True)
-        logging.getLogger("rosout").setLevel(logging.ERROR)  # keep the tables clean
+    with own_master("modbus_rtu_node_bench"):
         with tempfile.TemporaryDirectory() as workdir, open(args.csv, "a") as csv:
             for baud in (int(b) for b in args.bauds.split(",") if b):
                 # A 9600 transaction is 12 x longer: fewer calls keep the run short.
@@ -360,9 +372,6 @@ def main():
                 tail_latency(workdir, args.calls, csv, args.hog, args.realtime, args.repeats)
             if args.cpu_seconds > 0:
                 cpu(workdir, args.cpu_seconds, csv, args.repeats)
-    finally:
-        master.terminate()
-        master.wait(10)
     return 0
 
 

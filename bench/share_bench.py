@@ -11,7 +11,6 @@ import argparse
 import os
 import socket
 import struct
-import subprocess
 import sys
 import tempfile
 import time
@@ -64,14 +63,7 @@ def main():
     parser.add_argument("--bauds", default="115200,9600")
     parser.add_argument("--csv", default="share_bench.csv")
     args = parser.parse_args()
-    port = node_bench.free_port()
-    os.environ["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
-    master = subprocess.Popen(["rosmaster", "--core", "-p", str(port)],
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        time.sleep(1.5)
-        import rospy
-        rospy.init_node("modbus_rtu_share_bench", anonymous=True, disable_signals=True)
+    with node_bench.own_master("modbus_rtu_share_bench"):
         print("## Latency of a shared request (Modbus TCP, FC01 8 coils) while the node polls "
               "3 devices at 10 Hz (paced line)\n")
         print("| baud | requests | p50 [ms] | p99 [ms] | max [ms] |")
@@ -82,9 +74,6 @@ def main():
                         csv, baud)
         print("\nFrom the client's send to its complete reply: the wait for the transaction on the "
               "line (a poll), then the request's own transaction.\n")
-    finally:
-        master.terminate()
-        master.wait(10)
     return 0
 
 
