@@ -21,6 +21,7 @@ BusNode::~BusNode() {
   // The bus thread calls into the adapters and the share: stop it before they go.
   if (share_) share_->stop();
   if (bus_) bus_->stop();
+  if (publish_queue_) publish_queue_->stop();  // what the bus thread left to publish
 }
 
 void BusNode::startFailsafe() {
@@ -39,7 +40,9 @@ void BusNode::startFailsafe() {
     watch(config_.heartbeat_topic, config_.heartbeat_timeout, bus_heartbeat_.get());
   }
   for (auto& a : adapters_) {
-    a->setFailsafeSink([this](const FailsafeEvent& e) { failsafe_pub_.publish(e); });
+    a->setFailsafeSink([this](const FailsafeEvent& e) {
+      publish_queue_->post([this, e] { failsafe_pub_.publish(e); });
+    });
     const FailsafeConfig& fs = a->failsafeConfig();
     if (a->heartbeat()) watch(fs.heartbeat_topic, fs.heartbeat_timeout, a->heartbeat());
     for (double s : fs.command_timeout) {
@@ -91,6 +94,7 @@ void BusNode::shutdown() {
                    r.message.c_str());
   }
   bus_->stop();
+  publish_queue_->stop();
 }
 
 bool BusNode::start() {
@@ -106,6 +110,7 @@ bool BusNode::start() {
     return false;
   }
   link_ = makeTransport(config_.link);
+  publish_queue_ = std::make_unique<TaskQueue>();
   bus_ = std::make_unique<BusScheduler>(*link_, schedulingOptions());
   for (const DeviceConfig& dc : config_.devices) {
     std::shared_ptr<Device> device = createDevice(dc);  // dc was validated as it was parsed
@@ -149,6 +154,7 @@ bool BusNode::start() {
   }
   for (auto& a : adapters_) {
     a->setPublishPolicy({config_.publish_on_change, config_.keep_alive});
+    a->setPublishQueue(publish_queue_.get());
     a->start();
   }
   if (config_.share.enabled) {
@@ -231,6 +237,10 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.add("bus thread scheduling", realtime_status_);
     status.add("memory", memory_status_);
   }
+  // The bus thread's ROS publishing, done on the publishing thread: a high-water mark near the
+  // capacity, or drops, mean subscribers cannot keep up with the polls.
+  status.add("publish queue high-water mark", publish_queue_->highWater());
+  status.add("publish queue dropped", publish_queue_->dropped());
   status.add("requests", s.requests);
   status.add("attempts", s.attempts);
   status.add("failed", s.failed);

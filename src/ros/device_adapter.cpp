@@ -51,12 +51,24 @@ void DeviceAdapter::addPolls() {
 void DeviceAdapter::onPoll(const Result& result) {
   if (result.ok()) {
     publishOutputs();
-    if (inputs_) inputs_->publish(device_->inputs(), ros::Time::now());
+    if (inputs_)
+      publishLater([this, states = device_->inputs(), stamp = ros::Time::now()] {
+        inputs_->publish(states, stamp);
+      });
     checkRestart();
   } else if (offline()) {
-    if (outputs_) outputs_->markStale();
-    if (inputs_) inputs_->markStale();
+    publishLater([this] {
+      if (outputs_) outputs_->markStale();
+      if (inputs_) inputs_->markStale();
+    });
   }
+}
+
+void DeviceAdapter::publishLater(std::function<void()> task) {
+  if (publish_queue_)
+    publish_queue_->post(std::move(task));
+  else
+    task();
 }
 
 Result DeviceAdapter::runOnBus(BusScheduler::Job job) {
@@ -86,7 +98,9 @@ Result DeviceAdapter::completeBatch(Transport& t,
 
 void DeviceAdapter::publishOutputs() {
   if (!outputs_) return;  // before start(): the start-up safe states
-  outputs_->publish(device_->outputs(), ros::Time::now());
+  publishLater([this, states = device_->outputs(), stamp = ros::Time::now()] {
+    outputs_->publish(states, stamp);
+  });
 }
 
 std::string DeviceAdapter::answer(const Result& result, const std::string& what) const {

@@ -140,14 +140,14 @@ class GenericAdapter : public DeviceAdapter {
       if (signals[i].type == SignalType::kBool) {
         std_msgs::Bool m;
         m.data = st.value != 0.0;
-        pubs_[i].publish(m);
+        publishLater(pubs_[i], m);
       } else {
         std_msgs::Float64 m;
         m.data = st.value;
-        pubs_[i].publish(m);
+        publishLater(pubs_[i], m);
       }
     }
-    if (after_poll) all_pub_.publish(all);
+    if (after_poll) publishLater(all_pub_, std::move(all));
     // Signals whose group was polled and whose last read failed.
     std::string unread;
     for (size_t g = 0; g < polled_.size(); ++g) {

@@ -49,7 +49,7 @@ class Ld58a08Adapter : public DeviceAdapter {
     last_ = msg;
     have_last_ = true;
     msg.header.stamp = ros::Time::now();
-    pwm_pub_.publish(msg);
+    publishLater(pwm_pub_, std::move(msg));
   }
 
   bool onSetPwm(SetPwm::Request& req, SetPwm::Response& res) {

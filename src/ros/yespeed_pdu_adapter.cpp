@@ -34,7 +34,7 @@ class YespeedPduAdapter : public DeviceAdapter {
       msg.voltage = static_cast<float>(r.voltage);
       msg.current = static_cast<float>(r.current);
       msg.power = static_cast<float>(r.power);
-      telemetry_pub_.publish(msg);
+      publishLater(telemetry_pub_, msg);
     }
     publishLimits();
   }
@@ -49,7 +49,7 @@ class YespeedPduAdapter : public DeviceAdapter {
     if (have_last_ && msg == last_) return;
     last_ = msg;
     have_last_ = true;
-    limits_pub_.publish(msg);
+    publishLater(limits_pub_, msg);
   }
 
   // A field left at 0 (the default of a field not given) keeps what the device holds: the

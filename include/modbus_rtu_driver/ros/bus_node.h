@@ -14,6 +14,7 @@
 #include "modbus_rtu_driver/config/bus_config.h"
 #include "modbus_rtu_driver/core/bus_scheduler.h"
 #include "modbus_rtu_driver/core/link.h"
+#include "modbus_rtu_driver/core/task_queue.h"
 #include "modbus_rtu_driver/core/watchdog.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 #include "modbus_rtu_driver/ros/raw_writes.h"
@@ -48,6 +49,8 @@ class BusNode {
   std::unique_ptr<Link> link_;  // serial, Modbus TCP or RTU over TCP (by `port`)
   std::unique_ptr<BusScheduler> bus_;
   std::vector<std::unique_ptr<DeviceAdapter>> adapters_;
+  // The bus thread's publishing runs here (stopped after the bus, before the adapters go).
+  std::unique_ptr<TaskQueue> publish_queue_;
   std::unique_ptr<RawWrites> raw_writes_;
   std::unique_ptr<ShareBridge> share_;  // Modbus TCP clients of the bus; goes after the bus stops
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;

@@ -20,6 +20,7 @@
 #include "modbus_rtu_driver/FailsafeEvent.h"
 #include "modbus_rtu_driver/SetOutputs.h"
 #include "modbus_rtu_driver/core/bus_scheduler.h"
+#include "modbus_rtu_driver/core/task_queue.h"
 #include "modbus_rtu_driver/core/watchdog.h"
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
@@ -37,6 +38,9 @@ class DeviceAdapter {
 
   // How state topics are published (every poll, or on change with a keep-alive); before start().
   void setPublishPolicy(const DigitalStatesPublisher::Policy& policy) { publish_policy_ = policy; }
+  // Where the bus thread hands its publishing (the node's publishing thread); before start().
+  // Without one, publishing runs on the bus thread.
+  void setPublishQueue(TaskQueue* queue) { publish_queue_ = queue; }
   // Advertises topics and services (the base's, then the type's own in advertise()), and only
   // then registers the poll with the scheduler: the bus may already run, and a poll's callback
   // publishes on them.
@@ -75,6 +79,13 @@ class DeviceAdapter {
   Result runOnBus(BusScheduler::Job job);
   // Bus thread only: publish the outputs message and the per-channel states that changed.
   void publishOutputs();
+  // Bus thread: runs `task` (publishing) on the publishing thread, in the order posted. The
+  // message is built from the device's state here; only ROS's part runs there.
+  void publishLater(std::function<void()> task);
+  template <class Message>
+  void publishLater(const ros::Publisher& publisher, Message message) {
+    publishLater([publisher, m = std::move(message)] { publisher.publish(m); });
+  }
   // A PWM run or a flash started on `channel`: the device changes it by itself.
   void markSelfTimed(uint8_t channel) { failsafe_.selfTimed(channel); }
   // Whether the last poll failed with the device now offline (its states are stale).
@@ -115,6 +126,8 @@ class DeviceAdapter {
   std::string last_failsafe_;    // the newest event in words
   std::string failsafe_active_;  // set by a safe write, cleared by a user's write
 
+  TaskQueue* publish_queue_ = nullptr;
+  // Touched on the publishing thread only (through publishLater), once start() made them.
   std::unique_ptr<DigitalStatesPublisher> outputs_;
   std::unique_ptr<DigitalStatesPublisher> inputs_;  // devices with inputs only
   std::vector<ros::Subscriber> command_subs_;
