@@ -1,8 +1,15 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer target (clang, with ASan + UBSan) and runs it for SECONDS (default 20).
+# Builds the libFuzzer targets (clang, with ASan + UBSan) and runs each for SECONDS (default 20).
 # A longer run by hand: scripts/fuzz.sh 3600. With RESULTS_DIR, writes a JUnit result there.
+#   fuzz.sh --build-only                  build only (test.sh builds while the rostests run)
+#   fuzz.sh --prebuilt SECONDS RESULTS    run what --build-only built
 set -euo pipefail
 REPO=$(cd "$(dirname "$0")/.." && pwd)
+MODE=all
+case "${1:-}" in
+  --build-only) MODE=build; shift ;;
+  --prebuilt) MODE=run; shift ;;
+esac
 SECONDS_TO_RUN=${1:-20}
 RESULTS=${2:-}
 OUT="$("$REPO/scripts/workspace.sh")/fuzz"
@@ -18,10 +25,13 @@ build() {  # a target that does not build is run as missing below, and fails
     -fno-sanitize-recover=all -Iinclude -I/usr/include/modbus "test/fuzz/$name.cpp" "${CORE[@]}" "$@" \
     -lmodbus -lyaml-cpp -o "$OUT/$name") || echo "$name: build failed"
 }
-build fuzz_frames src/sim/sim_device.cpp src/sim/sim_ld58a08.cpp src/sim/sim_lc_relay8.cpp \
-  src/sim/sim_yespeed_pdu.cpp src/core/link_config.cpp
-build fuzz_slave src/core/slave_server.cpp src/core/serial_port.cpp src/core/fd_io.cpp src/core/slave_config.cpp \
-  src/core/config_yaml.cpp src/core/link_config.cpp
+if [ $MODE != run ]; then
+  build fuzz_frames src/sim/sim_device.cpp src/sim/sim_ld58a08.cpp src/sim/sim_lc_relay8.cpp \
+    src/sim/sim_yespeed_pdu.cpp src/core/link_config.cpp
+  build fuzz_slave src/core/slave_server.cpp src/core/serial_port.cpp src/core/fd_io.cpp \
+    src/core/slave_config.cpp src/core/config_yaml.cpp src/core/link_config.cpp
+fi
+[ $MODE = build ] && exit 0
 # Seed with the manuals' frames.
 grep -v '^#' "$REPO/test/data/golden_frames.tsv" | tail -n +2 | cut -f4 | while read -r hex; do
   printf '%s' "$hex" | xxd -r -p >"$OUT/corpus/$(printf '%s' "$hex" | md5sum | cut -c1-12)"

@@ -1,20 +1,38 @@
 #!/usr/bin/env bash
-# Builds the ROS-free unit tests with ASan + UBSan and runs them; JUnit results go to $1.
+# Builds the ROS-free unit tests with ASan + UBSan and runs them; JUnit results go to RESULTS.
+#   sanitized_tests.sh RESULTS               build, then run
+#   sanitized_tests.sh --build-only          build only (test.sh builds while the rostests run)
+#   sanitized_tests.sh --prebuilt RESULTS    run what --build-only built (its failure counts)
 set -euo pipefail
 REPO=$(cd "$(dirname "$0")/.." && pwd)
-RESULTS=$1
+MODE=all
+case "${1:-}" in
+  --build-only) MODE=build; shift ;;
+  --prebuilt) MODE=run; shift ;;
+esac
+RESULTS=${1:-}
 BUILD="$("$REPO/scripts/workspace.sh")/sanitizers"
-mkdir -p "$BUILD" "$RESULTS"
 WS=$("$REPO/scripts/workspace.sh")
-cmake -S "$REPO/test/sanitizers" -B "$BUILD" -DCMAKE_CXX_COMPILER=g++ \
-  -DMSG_INCLUDE="$WS/devel/include" >/dev/null
-status=0
 mkdir -p "$BUILD/logs"
-# A build that fails must fail the run (old binaries would otherwise be tested as if new).
-if ! cmake --build "$BUILD" -j"$(nproc)" >"$BUILD/logs/build.log" 2>&1; then
-  grep -E "error|warning: " "$BUILD/logs/build.log" | head -20
+BUILD_STATUS=$BUILD/logs/build.status  # "ok" or "failed", written by the build
+if [ $MODE != run ]; then
+  rm -f "$BUILD_STATUS"
+  cmake -S "$REPO/test/sanitizers" -B "$BUILD" -DCMAKE_CXX_COMPILER=g++ \
+    -DMSG_INCLUDE="$WS/devel/include" >"$BUILD/logs/configure.log" 2>&1 &&
+    cmake --build "$BUILD" -j"$(nproc)" >"$BUILD/logs/build.log" 2>&1 &&
+    echo ok >"$BUILD_STATUS" || echo failed >"$BUILD_STATUS"
+  [ $MODE = build ] && exit 0
+fi
+[ -n "$RESULTS" ] || { echo "usage: $0 [--build-only | --prebuilt] RESULTS" >&2; exit 2; }
+mkdir -p "$RESULTS"
+status=0
+# A build that fails (or never ran) must fail the run: old binaries would otherwise be tested
+# as if new.
+if [ "$(cat "$BUILD_STATUS" 2>/dev/null)" != ok ]; then
+  cat "$BUILD/logs/configure.log" 2>/dev/null | grep -E "Error" | head -5 || true
+  grep -E "error|warning: " "$BUILD/logs/build.log" 2>/dev/null | head -20 || true
   printf '<testsuite name="sanitized-build" tests="1" failures="1"><testcase classname="sanitizers" name="build"><failure message="the sanitizer build failed, see %s"/></testcase></testsuite>\n' "$BUILD/logs/build.log" >"$RESULTS/sanitized-build.xml"
-  status=1
+  exit 1
 fi
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1
 for t in "$BUILD"/test_*; do

@@ -23,7 +23,7 @@ const std::set<std::string> kDeviceKeys = {
 const std::set<std::string> kBusKeys = {
     "role",       "diagnostic_period", "devices",          "allow_raw_writes",  "publish_on_change",
     "keep_alive", "heartbeat",         "shutdown_timeout", "realtime_priority", "lock_memory",
-    "share",      "config_file"};
+    "share",      "config_file",       "wire_log"};
 const std::set<std::string> kShareKeys = {"listen", "read_only", "allow", "max_clients",
                                           "max_queue"};
 
@@ -219,6 +219,10 @@ void parse(const YAML::Node& root, BusConfig* out) {
   }
   if (root["lock_memory"])
     out->lock_memory = get<bool>(root["lock_memory"], "lock_memory", "true or false");
+  if (root["wire_log"]) {
+    out->wire_log = get<std::string>(root["wire_log"], "wire_log", "a file path");
+    if (out->wire_log.empty()) fail("wire_log", "'' is not a file path (leave it out for none)");
+  }
   if (root["share"]) parseShare(root["share"], &out->share);
   std::string config_dir;  // where relative template paths start
   if (root["config_file"]) {

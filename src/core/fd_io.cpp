@@ -28,7 +28,7 @@ int waitReadable(int fd, double seconds) {
 
 ReadStatus readFrame(int fd, double first, double between,
                      const std::function<long(const Bytes&)>& length_of, size_t shortest,
-                     size_t max_length, Bytes* out, int* error) {
+                     size_t max_length, Bytes* out, int* error, ReadTimes* times) {
   out->clear();
   size_t need = 0;
   while (need == 0 || out->size() < need) {
@@ -47,6 +47,10 @@ ReadStatus readFrame(int fd, double first, double between,
       if (errno == EINTR || errno == EAGAIN) continue;
       if (error) *error = errno;
       return errno == ECONNRESET ? ReadStatus::kClosed : ReadStatus::kError;
+    }
+    if (times) {
+      times->last = std::chrono::steady_clock::now();
+      if (out->empty()) times->first = times->last;
     }
     out->insert(out->end(), chunk, chunk + n);
     const long length = length_of(*out);

@@ -2,6 +2,7 @@
 #include "modbus_rtu_driver/core/link.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 
 namespace modbus_rtu_driver {
@@ -9,6 +10,15 @@ namespace modbus_rtu_driver {
 namespace {
 using Steady = std::chrono::steady_clock;
 }  // namespace
+
+std::string formatWireEvent(const WireEvent& e) {
+  const auto seconds = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(t.time_since_epoch()).count();
+  };
+  char times[64];
+  std::snprintf(times, sizeof times, " %.6f %.6f ", seconds(e.first), seconds(e.last));
+  return (e.outgoing ? "tx" : "rx") + std::string(times) + toHex(e.frame);
+}
 
 LinkStats Link::stats() const {
   std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -107,6 +117,20 @@ Result Link::readFailure(const Request& request, ReadStatus status, const Bytes&
     default:
       return Result::failure(ErrorKind::kIo, what + medium + ": " + std::strerror(error));
   }
+}
+
+Result Link::readRtuReply(int fd, const Request& request, double byte_timeout,
+                          const std::string& medium) {
+  Bytes reply;
+  int error = 0;
+  ReadTimes times;
+  const ReadStatus status = readFrame(
+      fd, responseTimeout(request), byte_timeout,
+      [&](const Bytes& b) { return static_cast<long>(replyLengthFromHeader(request, b)); },
+      kShortestReply, kMaxAduLength, &reply, &error, &times);
+  if (!reply.empty()) noteWire(false, times.first, times.last, reply);
+  if (status == ReadStatus::kComplete) return decodeReply(request, reply);
+  return readFailure(request, status, reply, error, medium);
 }
 
 void Link::account(const Result& r, double latency) {

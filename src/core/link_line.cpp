@@ -3,6 +3,7 @@
 #include <sys/prctl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <thread>
 
 #include "modbus_rtu_driver/core/link.h"
@@ -21,19 +22,30 @@ void Link::keepGap() {
   const double gap = minGap();
   if (gap <= 0) return;
   const auto ready = last_activity_ + seconds(gap);
-  auto now = Steady::now();
-  if (now >= ready) return;
-  // A few microseconds cost less spun than slept (a sleep is a syscall and a wake-up).
-  if (ready - now < std::chrono::microseconds(20)) {
-    while (Steady::now() < ready) {
-    }
-    return;
+  const auto wake_at = ready - gap_spin_margin_;
+  if (Steady::now() < wake_at) {
+    // The default timer slack (50 us) would stretch every sub-millisecond gap; this thread owns
+    // the line, so it asks for 1 us.
+    static thread_local bool slack_set = prctl(PR_SET_TIMERSLACK, 1000UL, 0, 0, 0) == 0;
+    (void)slack_set;
+    std::this_thread::sleep_until(wake_at);
+    adaptSpinMargin(Steady::now() - wake_at);
   }
-  // The default timer slack (50 us) would stretch every sub-millisecond gap; this thread owns
-  // the line, so it asks for 1 us.
-  static thread_local bool slack_set = prctl(PR_SET_TIMERSLACK, 1000UL, 0, 0, 0) == 0;
-  (void)slack_set;
-  std::this_thread::sleep_until(ready);
+  // The rest is spun: a sleep ends late by the scheduler's wake-up latency, which would add to
+  // every back-to-back transaction.
+  while (Steady::now() < ready) {
+  }
+}
+
+// The margin follows how late wake-ups come (a slow average, times 1.5, plus 10 us), so a quiet
+// machine spins a few microseconds and a VM that wakes 100 us late spins about that; never more
+// than kMaxGapSpin per gap.
+void Link::adaptSpinMargin(Steady::duration lateness) {
+  using std::chrono::microseconds;
+  const auto late = std::clamp<Steady::duration>(lateness, Steady::duration::zero(), kMaxGapSpin);
+  wake_lateness_ += (late - wake_lateness_) / 8;
+  gap_spin_margin_ =
+      std::min<Steady::duration>(wake_lateness_ * 3 / 2 + microseconds(10), kMaxGapSpin);
 }
 
 // Before a request: if a transaction with this slave failed less than late_reply_guard ago,

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 
 #include "modbus_rtu_driver/core/frame.h"
@@ -59,24 +60,29 @@ Result RtuLink::attempt(const Request& request) {
 }
 
 Result RtuLink::exchange(const Request& request) {
-  Bytes raw{request.slave};
-  const Bytes pdu = encodeRequestPdu(request);
-  raw.insert(raw.end(), pdu.begin(), pdu.end());
-  if (modbus_send_raw_request(ctx_, raw.data(), static_cast<int>(raw.size())) == -1)
-    return fromErrno(request, errno);
-  return readReply(request);
+  if (!send(request)) return fromErrno(request, errno);
+  return readRtuReply(modbus_get_socket(ctx_), request, effectiveByteTimeout(config_),
+                      config_.port);
 }
 
 Result RtuLink::sendBroadcast(const Request& request) {
   prepareLine(request);
+  // Sent, not waited for: 3.1.6's write functions would wait for a reply nobody sends.
+  if (!send(request)) return fromErrno(request, errno);
+  tcdrain(modbus_get_socket(ctx_));
+  return Result::success(request.values);
+}
+
+// libmodbus sends (it adds the CRC, and drives RTS in RS485 mode); false with errno set.
+bool RtuLink::send(const Request& request) {
   Bytes raw{request.slave};
   const Bytes pdu = encodeRequestPdu(request);
   raw.insert(raw.end(), pdu.begin(), pdu.end());
-  // Sent, not waited for: 3.1.6's write functions would wait for a reply nobody sends.
-  if (modbus_send_raw_request(ctx_, raw.data(), static_cast<int>(raw.size())) == -1)
-    return fromErrno(request, errno);
-  tcdrain(modbus_get_socket(ctx_));
-  return Result::success(request.values);
+  const auto start = std::chrono::steady_clock::now();
+  if (modbus_send_raw_request(ctx_, raw.data(), static_cast<int>(raw.size())) == -1) return false;
+  if (observingWire())
+    noteWire(true, start, std::chrono::steady_clock::now(), encodeRequest(request));
+  return true;
 }
 
 Result RtuLink::fromErrno(const Request& request, int error) const {
@@ -115,21 +121,6 @@ void RtuLink::prepareLine(const Request& request) {
     modbus_flush(ctx_);
     addStaleBytes(static_cast<uint64_t>(std::max(pending, 0)));
   }
-}
-
-// The reply: first byte within the response timeout, then byte timeouts, and stop as soon as
-// the header says the frame is complete.
-Result RtuLink::readReply(const Request& request) {
-  Bytes reply;
-  int error = 0;
-  const ReadStatus status = readFrame(
-      modbus_get_socket(ctx_), responseTimeout(request), effectiveByteTimeout(config_),
-      [&](const Bytes& b) { return static_cast<long>(replyLengthFromHeader(request, b)); },
-      kShortestReply, MODBUS_RTU_MAX_ADU_LENGTH, &reply, &error);
-  if (status == ReadStatus::kComplete) return decodeReply(request, reply);
-  if (status == ReadStatus::kError) return fromErrno(request, error);
-  if (status == ReadStatus::kClosed) return fromErrno(request, ECONNRESET);
-  return readFailure(request, status, reply, error, config_.port);
 }
 
 }  // namespace modbus_rtu_driver

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 
 #include "modbus_rtu_driver/core/tcp_socket.h"
@@ -48,7 +49,11 @@ Result TcpLink::closedUnsent(const Request& request) const {
 }
 
 Result TcpLink::send(const Request& request, const Bytes& frame) {
-  if (sendAll(fd_, frame)) return Result::success();
+  const auto start = std::chrono::steady_clock::now();
+  if (sendAll(fd_, frame)) {
+    noteWire(true, start, std::chrono::steady_clock::now(), frame);
+    return Result::success();
+  }
   return Result::failure(
       ErrorKind::kIo, request.describe() + ": not sent, " + medium() + ": " + std::strerror(errno));
 }
@@ -68,14 +73,7 @@ Result RtuOverTcpLink::attempt(const Request& request) {
   if (!prepareLine(request)) return closedUnsent(request);
   Result sent = send(request, encodeRequest(request));
   if (!sent.ok()) return sent;
-  Bytes reply;
-  int error = 0;
-  const ReadStatus status = readFrame(
-      fd_, responseTimeout(request), gatewayByteTimeout(config_),
-      [&](const Bytes& b) { return static_cast<long>(replyLengthFromHeader(request, b)); },
-      kShortestReply, kMaxAduLength, &reply, &error);
-  if (status == ReadStatus::kComplete) return decodeReply(request, reply);
-  return readFailure(request, status, reply, error, medium());
+  return readRtuReply(fd_, request, gatewayByteTimeout(config_), medium());
 }
 
 Result RtuOverTcpLink::sendBroadcast(const Request& request) {

@@ -4,8 +4,10 @@
 #include <topic_tools/shape_shifter.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 
 #include "modbus_rtu_driver/core/make_transport.h"
 #include "modbus_rtu_driver/core/realtime.h"
@@ -111,6 +113,10 @@ bool BusNode::start() {
   }
   link_ = makeTransport(config_.link);
   publish_queue_ = std::make_unique<TaskQueue>();
+  if (!config_.wire_log.empty() && !openWireLog(&error)) {
+    ROS_FATAL("wire_log: %s", error.c_str());
+    return false;
+  }
   bus_ = std::make_unique<BusScheduler>(*link_, schedulingOptions());
   for (const DeviceConfig& dc : config_.devices) {
     std::shared_ptr<Device> device = createDevice(dc);  // dc was validated as it was parsed
@@ -171,6 +177,22 @@ bool BusNode::start() {
   ROS_INFO("bus %s (%s) at %d baud, %s parity: %zu device(s)", config_.link.port.c_str(),
            portKindName(link_->kind()), config_.link.baud, parityName(config_.link.parity),
            adapters_.size());
+  return true;
+}
+
+// The bus thread copies each frame and its times; the publishing thread formats and writes it
+// (line-buffered, so `tail -f` shows it as it happens).
+bool BusNode::openWireLog(std::string* error) {
+  wire_log_.reset(std::fopen(config_.wire_log.c_str(), "w"));
+  if (!wire_log_) {
+    *error = "cannot write " + config_.wire_log + ": " + std::strerror(errno);
+    return false;
+  }
+  std::setvbuf(wire_log_.get(), nullptr, _IOLBF, 0);
+  link_->setWireObserver([this](const WireEvent& e) {
+    publish_queue_->post(
+        [this, e] { std::fprintf(wire_log_.get(), "%s\n", formatWireEvent(e).c_str()); });
+  });
   return true;
 }
 

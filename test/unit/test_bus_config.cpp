@@ -120,6 +120,8 @@ TEST(BusConfig, EachBadValueIsNamed) {
        "port: /dev/ttyUSB0\nrealtime_priority: high",
        {"realtime_priority", "high"}},
       {"port: /dev/ttyUSB0", "port: /dev/ttyUSB0\nlock_memory: maybe", {"lock_memory", "maybe"}},
+      {"port: /dev/ttyUSB0", "port: /dev/ttyUSB0\nwire_log: ''", {"wire_log", "file path"}},
+      {"port: /dev/ttyUSB0", "port: /dev/ttyUSB0\nwire_log: [a]", {"wire_log"}},
       {"  relays:", "  bad-name:", {"bad-name", "ROS name"}},
       {"[pump, valve,", "[pump, 2valve,", {"devices/relays/outputs", "2valve"}},
       {"[pump, valve,", "[pump, pump,", {"devices/relays/outputs", "pump"}},

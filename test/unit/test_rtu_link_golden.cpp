@@ -99,3 +99,35 @@ TEST(RtuLinkGolden, RepliesDecodeToTheManualsValues) {
     EXPECT_EQ(r.values, c.values) << c.request.describe();
   }
 }
+
+// The wire observer (wire_log, the benchmark's attribution) sees the bytes that went out and
+// came in, in order, with times that follow each other.
+TEST(RtuLinkGolden, WireObserverSeesEachFrameWithItsTimes) {
+  PtyPair pty;
+  RtuLink link(configFor(pty));
+  std::vector<WireEvent> events;
+  link.setWireObserver([&](const WireEvent& e) { events.push_back(e); });
+  std::string error;
+  ASSERT_TRUE(link.connect(&error)) << error;
+  const Bytes request = *fromHex("01 03 00 80 00 01 85 E2");
+  const Bytes reply = *fromHex("01 03 02 00 7C B9 A5");
+  auto device = std::async(std::launch::async, [&] {
+    Bytes got = pty.read(request.size());
+    pty.write(reply);
+    return got;
+  });
+  const Result r = link.execute(Request::readHoldingRegisters(1, 0x80, 1));
+  EXPECT_EQ(toHex(device.get()), toHex(request));
+  ASSERT_TRUE(r.ok()) << r.message;
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_TRUE(events[0].outgoing);
+  EXPECT_EQ(toHex(events[0].frame), toHex(request));
+  EXPECT_FALSE(events[1].outgoing);
+  EXPECT_EQ(toHex(events[1].frame), toHex(reply));
+  EXPECT_LE(events[0].first, events[0].last);
+  EXPECT_LE(events[0].last, events[1].first);
+  EXPECT_LE(events[1].first, events[1].last);
+  const std::string line = formatWireEvent(events[1]);
+  EXPECT_EQ(line.rfind("rx ", 0), 0u) << line;
+  EXPECT_NE(line.find(" 01 03 02 00 7C B9 A5"), std::string::npos) << line;
+}

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <string>
@@ -40,6 +41,19 @@ struct LinkStats {
   double max_latency = 0;    // s
 };
 
+// One frame as the link put it on its medium or took it off, and when (CLOCK_MONOTONIC, the
+// clock of the simulator's --timestamps): a request from just before its write to the write's
+// return, a reply (or what came of one) from its first byte read to its last. For the wire log
+// and the benchmark's split of the line's time.
+struct WireEvent {
+  bool outgoing = false;
+  std::chrono::steady_clock::time_point first{}, last{};
+  Bytes frame;
+};
+using WireObserver = std::function<void(const WireEvent&)>;
+// "tx|rx FIRST LAST HEX", times in seconds: the simulator's --timestamps form.
+std::string formatWireEvent(const WireEvent& event);
+
 class Link : public Transport {
  public:
   explicit Link(LinkConfig config) : config_(std::move(config)) {}
@@ -59,6 +73,9 @@ class Link : public Transport {
   virtual PortKind kind() const = 0;
   // True when a USB adapter accepted ASYNC_LOW_LATENCY (serial only). Any thread.
   virtual bool lowLatency() const { return false; }
+  // Called on the bus thread with every frame sent and every reply read; set it before the bus
+  // starts. It should only copy the event and hand it on.
+  void setWireObserver(WireObserver observer) { wire_observer_ = std::move(observer); }
 
  protected:
   // One request out and its reply in (the line prepared first); a kIo result disconnects.
@@ -72,6 +89,7 @@ class Link : public Transport {
 
   // Call after each successful connect: counts reconnects, restarts the line timing.
   void noteConnected();
+  // Waits out the silence before the next frame: sleeps to just before its end, spins the rest.
   void keepGap();
   // The late-reply guard: when a transaction with this slave failed less than
   // late_reply_guard ago and this is a different request, drops what `fd` brings until it
@@ -81,6 +99,16 @@ class Link : public Transport {
   // The failure a reader status means ("gateway" or the port in `medium` messages).
   Result readFailure(const Request& request, ReadStatus status, const Bytes& partial, int error,
                      const std::string& medium) const;
+  // The RTU reply to `request` on `fd` (a serial port, or a transparent gateway's socket): its
+  // first byte within the response timeout, each next one within `byte_timeout`, read by its
+  // announced length and decoded (frame.h's checks); failures name `medium`.
+  Result readRtuReply(int fd, const Request& request, double byte_timeout,
+                      const std::string& medium);
+  bool observingWire() const { return static_cast<bool>(wire_observer_); }
+  void noteWire(bool outgoing, std::chrono::steady_clock::time_point first,
+                std::chrono::steady_clock::time_point last, const Bytes& frame) const {
+    if (wire_observer_) wire_observer_(WireEvent{outgoing, first, last, frame});
+  }
 
   LinkConfig config_;
   double reply_delay_[256] = {};
@@ -90,6 +118,7 @@ class Link : public Transport {
   Result runAttempt(const Request& request);
   Result runBroadcast(const Request& request);
   void awaitQuietLine(int fd, std::chrono::steady_clock::time_point until);
+  void adaptSpinMargin(std::chrono::steady_clock::duration lateness);
   void account(const Result& result, double latency);  // per transaction
   void countAttempt(const Result& result);             // per attempt: failures by kind
 
@@ -101,6 +130,11 @@ class Link : public Transport {
     Bytes frame;
   };
   std::map<uint8_t, Unsettled> unsettled_;  // by slave
+  WireObserver wire_observer_;
+  // keepGap: how late sleeps have woken (an average), and how much of each gap is spun.
+  static constexpr std::chrono::microseconds kMaxGapSpin{200};
+  std::chrono::steady_clock::duration wake_lateness_{},
+      gap_spin_margin_{std::chrono::microseconds(50)};
 };
 
 }  // namespace modbus_rtu_driver

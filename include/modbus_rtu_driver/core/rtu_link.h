@@ -37,7 +37,7 @@ class RtuLink : public Link {
 
  private:
   Result exchange(const Request& request);
-  Result readReply(const Request& request);
+  bool send(const Request& request);
   Result fromErrno(const Request& request, int error) const;
   void prepareLine(const Request& request);
 

@@ -5,6 +5,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/ros.h>
 
+#include <cstdio>
 #include <deque>
 #include <memory>
 #include <mutex>
@@ -40,6 +41,8 @@ class BusNode {
   uint64_t recentLineErrors(const LinkStats& stats);
   // realtime_priority and lock_memory: asked for here, their outcome shown in the diagnostics.
   BusScheduler::Options schedulingOptions();
+  // wire_log: opens the file and has the link report every frame to it.
+  bool openWireLog(std::string* error);
 
   static constexpr int kErrorWindowSeconds = 10;
   std::deque<std::pair<ros::WallTime, uint64_t>> error_totals_;  // (when, line errors so far)
@@ -51,6 +54,7 @@ class BusNode {
   std::vector<std::unique_ptr<DeviceAdapter>> adapters_;
   // The bus thread's publishing runs here (stopped after the bus, before the adapters go).
   std::unique_ptr<TaskQueue> publish_queue_;
+  std::unique_ptr<FILE, int (*)(FILE*)> wire_log_{nullptr, &std::fclose};  // publishing thread
   std::unique_ptr<RawWrites> raw_writes_;
   std::unique_ptr<ShareBridge> share_;  // Modbus TCP clients of the bus; goes after the bus stops
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;

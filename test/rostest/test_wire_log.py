@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""wire_log: the node writes every frame it sends and reads, "tx|rx FIRST LAST HEX" with
+CLOCK_MONOTONIC seconds; each request is followed by its reply from the same slave, every frame
+has a valid CRC, times run forward, and a service write shows as its frame."""
+import os
+import time
+import unittest
+
+import rospy
+import rostest
+from std_srvs.srv import SetBool
+
+import helpers
+
+
+def crc16(data):
+    crc = 0xFFFF
+    for b in data:
+        crc ^= b
+        for _ in range(8):
+            crc = (crc >> 1) ^ 0xA001 if crc & 1 else crc >> 1
+    return crc
+
+
+def frames(path):
+    if not os.path.exists(path):
+        return []
+    out = []
+    with open(path) as f:
+        for line in f:
+            if not line.endswith("\n"):
+                break  # being written
+            direction, first, last, hexed = line.rstrip("\n").split(" ", 3)
+            out.append((direction, float(first), float(last), bytes.fromhex(hexed)))
+    return out
+
+
+class WireLogTest(unittest.TestCase):
+    def test_frames_in_the_log(self):
+        rospy.init_node("test_wire_log", anonymous=True)
+        path = rospy.get_param("~wire_log")
+        set_lamp = helpers.service("/bus/relays/lamp/set", SetBool)
+        started = time.monotonic()
+        res = set_lamp(True)
+        self.assertTrue(res.success, res.message)
+        # The write to coil 2 of slave 255 (FC05, ON = FF00) and its echo, after the call began.
+        write = bytes([0xFF, 0x05, 0x00, 0x02, 0xFF, 0x00])
+
+        def logged():
+            got = frames(path)
+            return got if any(f[0] == "tx" and f[3][:6] == write and f[1] >= started
+                              for f in got) else None
+        log = helpers.wait_until(logged, 10, "the lamp's write in " + path)
+        self.assertGreater(len(log), 10)
+        pairs = 0
+        for i, (direction, first, last, frame) in enumerate(log):
+            self.assertIn(direction, ("tx", "rx"))
+            self.assertLessEqual(first, last)
+            self.assertGreaterEqual(len(frame), 4)
+            self.assertEqual(crc16(frame[:-2]), frame[-2] | frame[-1] << 8, frame.hex())
+            if i > 0:
+                self.assertGreaterEqual(first, log[i - 1][2], "times run forward")
+            if direction == "rx":
+                request = log[i - 1]
+                self.assertEqual(request[0], "tx", "a reply follows its request")
+                self.assertEqual(request[3][0], frame[0], "from the slave asked")
+                pairs += 1
+        self.assertGreater(pairs, 5)
+        index = next(i for i, f in enumerate(log) if f[0] == "tx" and f[3][:6] == write)
+        self.assertEqual(log[index + 1][3][:6], write, "the board echoes the write")
+
+
+if __name__ == "__main__":
+    rostest.rosrun("modbus_rtu_driver", "wire_log", WireLogTest)
