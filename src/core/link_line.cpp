@@ -1,5 +1,6 @@
 // The line discipline every link keeps on the serial line (its own, or a gateway's far side):
 // the silence between frames and the wait for a late reply to die out.
+#include <sched.h>
 #include <sys/prctl.h>
 #include <unistd.h>
 
@@ -22,7 +23,10 @@ void Link::keepGap() {
   const double gap = minGap();
   if (gap <= 0) return;
   const auto ready = last_activity_ + seconds(gap);
-  const auto wake_at = ready - gap_spin_margin_;
+  // Only a real-time bus thread spins (realtime_priority): it cannot be preempted by the
+  // machine's other work while it does, and its user asked for latency over CPU time.
+  static thread_local const bool spin = sched_getscheduler(0) == SCHED_FIFO;
+  const auto wake_at = spin ? ready - gap_spin_margin_ : ready;
   if (Steady::now() < wake_at) {
     // The default timer slack (50 us) would stretch every sub-millisecond gap; this thread owns
     // the line, so it asks for 1 us.
@@ -33,7 +37,7 @@ void Link::keepGap() {
   }
   // The rest is spun: a sleep ends late by the scheduler's wake-up latency, which would add to
   // every back-to-back transaction.
-  while (Steady::now() < ready) {
+  while (spin && Steady::now() < ready) {
   }
 }
 

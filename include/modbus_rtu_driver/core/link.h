@@ -89,7 +89,7 @@ class Link : public Transport {
 
   // Call after each successful connect: counts reconnects, restarts the line timing.
   void noteConnected();
-  // Waits out the silence before the next frame: sleeps to just before its end, spins the rest.
+  // Waits out the silence before the next frame (a real-time thread spins its last part).
   void keepGap();
   // The late-reply guard: when a transaction with this slave failed less than
   // late_reply_guard ago and this is a different request, drops what `fd` brings until it
