@@ -1,9 +1,5 @@
 #include "modbus_rtu_driver/sim/sim_device.h"
 
-#include "modbus_rtu_driver/sim/sim_lc_relay8.h"
-#include "modbus_rtu_driver/sim/sim_ld58a08.h"
-#include "modbus_rtu_driver/sim/sim_yespeed_pdu.h"
-
 namespace modbus_rtu_driver {
 
 bool parseTable(const std::string& name, Table* out) {
@@ -112,51 +108,6 @@ uint8_t SimDevice::setDirect(Table table, uint16_t address, uint16_t value,
                              SimClock::time_point now) {
   if (table == Table::kCoil || table == Table::kHolding) return write(table, address, {value}, now);
   return kIllegalDataAddress;
-}
-
-namespace {
-
-struct SimType {
-  const DeviceDescriptor* type;
-  std::unique_ptr<SimDevice> (*make)(uint8_t address, SimLineSettings line);
-};
-
-template <typename T>
-std::unique_ptr<SimDevice> make(uint8_t address, SimLineSettings line) {
-  return std::make_unique<T>(address, line);
-}
-
-// One line per simulated device type.
-const SimType kSimTypes[] = {
-    {&kLd58a08Type, make<SimLd58a08>},
-    {&kLcRelay8Type, make<SimLcRelay8>},
-    {&kYespeedPduType, make<SimYespeedPdu>},
-    {&kGenericType, nullptr},  // built from its signals (Simulator, sim_generic.h)
-};
-
-const SimType* findSimType(const std::string& name) {
-  for (const auto& t : kSimTypes)
-    if (name == t.type->name) return &t;
-  return nullptr;
-}
-
-}  // namespace
-
-std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t address,
-                                         SimLineSettings line) {
-  const SimType* t = findSimType(type);
-  return t && t->make ? t->make(address, line) : nullptr;
-}
-
-const DeviceDescriptor* simDeviceType(const std::string& type) {
-  const SimType* t = findSimType(type);
-  return t ? t->type : nullptr;
-}
-
-std::string simDeviceTypeNames() {
-  std::string list;
-  for (const auto& t : kSimTypes) list += (list.empty() ? "" : ", ") + std::string(t.type->name);
-  return list;
 }
 
 }  // namespace modbus_rtu_driver

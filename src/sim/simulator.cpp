@@ -47,12 +47,7 @@ void logFrame(const SimulatorOptions& o, const char* direction, const Bytes& fra
 Simulator::Simulator(SimulatorConfig config, SimulatorOptions options)
     : config_(std::move(config)), options_(std::move(options)) {
   if (options_.control.empty()) options_.control = options_.link + ".ctl";
-  for (const auto& e : config_.devices)
-    devices_.push_back(
-        e.type == kGenericType.name
-            ? std::make_unique<SimGeneric>(static_cast<uint8_t>(e.address), config_.factory,
-                                           e.generic)
-            : makeSimDevice(e.type, static_cast<uint8_t>(e.address), config_.factory));
+  for (const auto& e : config_.devices) devices_.push_back(makeSimDevice(e, config_.factory));
 }
 
 Simulator::~Simulator() {

@@ -12,12 +12,7 @@ namespace modbus_rtu_driver {
 namespace {
 
 LinkConfig server(int port) {
-  LinkConfig c;
-  c.port = "tcp://127.0.0.1:" + std::to_string(port);
-  c.baud = 115200;
-  c.retries = 1;
-  c.network_allowance = 0.2;
-  return c;
+  return testTcpLinkConfig(TcpFraming::kMbap, port);
 }
 
 // The reply to the MBAP request `mbap`, as a Modbus TCP server sends it (same transaction id).
@@ -26,16 +21,13 @@ Bytes replyTo(const Bytes& mbap, const std::vector<uint16_t>& values) {
   return rtuToMbap(mbapTransaction(mbap), encodeReply(r, values));
 }
 
-std::function<void(int)> answering(TestTcpServer** s) {
-  return [s](int fd) {
-    for (Bytes f; !(f = (*s)->readMbap(fd)).empty();) TestTcpServer::write(fd, replyTo(f, {7}));
-  };
+// Answers every request with the value 7.
+TestTcpServer::Serve answeringSeven() {
+  return answering([](const Bytes& f) { return replyTo(f, {7}); });
 }
 
 TEST(ModbusTcpLink, SendsTheMbapFrameByteForByteWithTheAddressAsUnitId) {
-  TestTcpServer* s = nullptr;
-  TestTcpServer srv(answering(&s));
-  s = &srv;
+  TestTcpServer srv(TcpFraming::kMbap, answeringSeven());
   ModbusTcpLink link(server(srv.port()));
   ASSERT_TRUE(link.connect(nullptr));
   const Result r = link.execute(Request::readHoldingRegisters(1, 0x00FD, 1));
@@ -48,12 +40,7 @@ TEST(ModbusTcpLink, SendsTheMbapFrameByteForByteWithTheAddressAsUnitId) {
 }
 
 TEST(ModbusTcpLink, BroadcastGoesToUnitZeroAndIsNotWaitedFor) {
-  TestTcpServer* s = nullptr;
-  TestTcpServer srv([&](int fd) {
-    while (!s->readMbap(fd).empty()) {
-    }
-  });
-  s = &srv;
+  TestTcpServer srv(TcpFraming::kMbap, hearingOnly());
   ModbusTcpLink link(server(srv.port()));
   ASSERT_TRUE(link.connect(nullptr));
   EXPECT_TRUE(link.execute(Request::writeSingleRegister(0, 3, 7)).ok());
@@ -62,16 +49,14 @@ TEST(ModbusTcpLink, BroadcastGoesToUnitZeroAndIsNotWaitedFor) {
 }
 
 TEST(ModbusTcpLink, DropsRepliesWithAnotherTransactionId) {
-  TestTcpServer* s = nullptr;
-  TestTcpServer srv([&](int fd) {
-    for (Bytes f; !(f = s->readMbap(fd)).empty();) {
+  TestTcpServer srv(TcpFraming::kMbap, [](TestTcpServer& s, int fd) {
+    for (Bytes f; !(f = s.readRequest(fd)).empty();) {
       Bytes stale = replyTo(f, {99});
       stale[1] ^= 0x40;  // an earlier transaction's late reply comes first
       TestTcpServer::write(fd, stale);
       if (mbapTransaction(f) == 1) TestTcpServer::write(fd, replyTo(f, {7}));
     }
   });
-  s = &srv;
   LinkConfig c = server(srv.port());
   c.retries = 0;
   ModbusTcpLink link(c);
@@ -87,27 +72,18 @@ TEST(ModbusTcpLink, DropsRepliesWithAnotherTransactionId) {
 }
 
 TEST(ModbusTcpLink, AReplyFromAnotherUnitIsAWrongAddress) {
-  TestTcpServer* s = nullptr;
-  TestTcpServer srv([&](int fd) {
-    for (Bytes f; !(f = s->readMbap(fd)).empty();) {
-      Bytes reply = replyTo(f, {7});
-      reply[6] = 9;
-      TestTcpServer::write(fd, reply);
-    }
-  });
-  s = &srv;
+  TestTcpServer srv(TcpFraming::kMbap, answering([](const Bytes& f) {
+                      Bytes reply = replyTo(f, {7});
+                      reply[6] = 9;
+                      return reply;
+                    }));
   ModbusTcpLink link(server(srv.port()));
   ASSERT_TRUE(link.connect(nullptr));
   EXPECT_EQ(link.execute(Request::readHoldingRegisters(1, 0, 1)).error, ErrorKind::kWrongAddress);
 }
 
 TEST(ModbusTcpLink, LostReplyOfANonRepeatableWriteIsNotResent) {
-  TestTcpServer* s = nullptr;
-  TestTcpServer srv([&](int fd) {
-    while (!s->readMbap(fd).empty()) {
-    }
-  });
-  s = &srv;
+  TestTcpServer srv(TcpFraming::kMbap, hearingOnly());
   ModbusTcpLink link(server(srv.port()));
   ASSERT_TRUE(link.connect(nullptr));
   Request once = Request::writeSingleCoil(1, 0, true);
@@ -123,15 +99,13 @@ TEST(ModbusTcpLink, LostReplyOfANonRepeatableWriteIsNotResent) {
 }
 
 TEST(ModbusTcpLink, AStreamOutOfStepIsMalformedAndReconnects) {
-  TestTcpServer* s = nullptr;
-  TestTcpServer srv([&](int fd) {
-    for (Bytes f; !(f = s->readMbap(fd)).empty();) {
+  TestTcpServer srv(TcpFraming::kMbap, [](TestTcpServer& s, int fd) {
+    for (Bytes f; !(f = s.readRequest(fd)).empty();) {
       Bytes reply = replyTo(f, {7});
-      if (s->accepted() == 1) reply[3] = 1;  // protocol id 1: not Modbus
+      if (s.accepted() == 1) reply[3] = 1;  // protocol id 1: not Modbus
       TestTcpServer::write(fd, reply);
     }
   });
-  s = &srv;
   ModbusTcpLink link(server(srv.port()));
   ASSERT_TRUE(link.connect(nullptr));
   const Result r = link.execute(Request::readHoldingRegisters(1, 0, 1));
@@ -143,15 +117,8 @@ TEST(ModbusTcpLink, AStreamOutOfStepIsMalformedAndReconnects) {
 }
 
 TEST(ModbusTcpLink, DroppedConnectionMidRequestIsAnIoErrorThenReconnects) {
-  TestTcpServer* s = nullptr;
-  TestTcpServer srv([&](int fd) {
-    if (s->accepted() == 1) {
-      s->readMbap(fd);
-      return;  // the gateway goes away with the request
-    }
-    answering (&s)(fd);
-  });
-  s = &srv;
+  // The gateway goes away with the request; later connections answer.
+  TestTcpServer srv(TcpFraming::kMbap, droppingTheFirstConnection(answeringSeven()));
   ModbusTcpLink link(server(srv.port()));
   ASSERT_TRUE(link.connect(nullptr));
   Request write = Request::writeSingleRegister(1, 3, 5);
@@ -168,15 +135,13 @@ TEST(ModbusTcpLink, DroppedConnectionMidRequestIsAnIoErrorThenReconnects) {
 }
 
 TEST(ModbusTcpLink, AConnectionClosedWhileIdleFailsTheNextRequestAsAnIoError) {
-  TestTcpServer* s = nullptr;
   std::atomic<bool> closed{false};
-  TestTcpServer srv([&](int fd) {
-    const Bytes f = s->readMbap(fd);
+  TestTcpServer srv(TcpFraming::kMbap, [&](TestTcpServer& s, int fd) {
+    const Bytes f = s.readRequest(fd);
     TestTcpServer::write(fd, replyTo(f, {7}));
     shutdown(fd, SHUT_RDWR);  // then the gateway goes away while the bus is idle
     closed = true;
   });
-  s = &srv;
   LinkConfig c = server(srv.port());
   ModbusTcpLink link(c);
   ASSERT_TRUE(link.connect(nullptr));

@@ -12,25 +12,17 @@ namespace modbus_rtu_driver {
 namespace {
 
 LinkConfig gateway(int port) {
-  LinkConfig c;
-  c.port = "rtu+tcp://127.0.0.1:" + std::to_string(port);
-  c.baud = 115200;
-  c.retries = 1;
+  LinkConfig c = testTcpLinkConfig(TcpFraming::kRtu, port);
   c.late_reply_guard = 0;
-  c.network_allowance = 0.2;
   return c;
 }
 
 // Answers every request as a device would, with `reply_of(request)`, until the client closes.
-std::function<void(int)> answering(TestTcpServer** server,
-                                   std::function<Bytes(const Request&)> reply_of) {
-  return [server, reply_of](int fd) {
-    for (Bytes frame; !(frame = (*server)->readRtu(fd)).empty();) {
-      const auto request = decodeRequest(frame);
-      if (!request) return;
-      TestTcpServer::write(fd, reply_of(*request));
-    }
-  };
+TestTcpServer::Serve answeringAsADevice(std::function<Bytes(const Request&)> reply_of) {
+  return answering([reply_of](const Bytes& frame) {
+    const auto request = decodeRequest(frame);
+    return request ? reply_of(*request) : Bytes{};
+  });
 }
 
 Bytes holdingReply(const Request& r) {
@@ -48,9 +40,7 @@ TEST(RtuOverTcpLink, FactoryChoosesByPortForm) {
 }
 
 TEST(RtuOverTcpLink, SendsTheRtuFrameByteForByteAndReadsTheReply) {
-  TestTcpServer* server = nullptr;
-  TestTcpServer s(answering(&server, holdingReply));
-  server = &s;
+  TestTcpServer s(TcpFraming::kRtu, answeringAsADevice(holdingReply));
   RtuOverTcpLink link(gateway(s.port()));
   std::string error;
   ASSERT_TRUE(link.connect(&error)) << error;
@@ -62,9 +52,7 @@ TEST(RtuOverTcpLink, SendsTheRtuFrameByteForByteAndReadsTheReply) {
 }
 
 TEST(RtuOverTcpLink, ReachesAddressesLibmodbusCannotAndBroadcasts) {
-  TestTcpServer* server = nullptr;
-  TestTcpServer s(answering(&server, holdingReply));
-  server = &s;
+  TestTcpServer s(TcpFraming::kRtu, answeringAsADevice(holdingReply));
   RtuOverTcpLink link(gateway(s.port()));
   ASSERT_TRUE(link.connect(nullptr));
   EXPECT_TRUE(link.execute(Request::readHoldingRegisters(255, 2, 2)).ok());
@@ -79,15 +67,13 @@ TEST(RtuOverTcpLink, ReachesAddressesLibmodbusCannotAndBroadcasts) {
 }
 
 TEST(RtuOverTcpLink, ThrowsAwayStaleBytesBeforeARequest) {
-  TestTcpServer* server = nullptr;
   // Noise right behind the first reply, in the same segment: it waits in the socket.
-  TestTcpServer s(answering(&server, [](const Request& r) {
-    Bytes reply = holdingReply(r);
-    if (r.address == 1)
-      for (uint8_t b : {0x00, 0xFF, 0x55, 0x03, 0x13}) reply.push_back(b);
-    return reply;
-  }));
-  server = &s;
+  TestTcpServer s(TcpFraming::kRtu, answeringAsADevice([](const Request& r) {
+                    Bytes reply = holdingReply(r);
+                    if (r.address == 1)
+                      for (uint8_t b : {0x00, 0xFF, 0x55, 0x03, 0x13}) reply.push_back(b);
+                    return reply;
+                  }));
   RtuOverTcpLink link(gateway(s.port()));
   ASSERT_TRUE(link.connect(nullptr));
   ASSERT_TRUE(link.execute(Request::readHoldingRegisters(1, 1, 1)).ok());
@@ -97,14 +83,12 @@ TEST(RtuOverTcpLink, ThrowsAwayStaleBytesBeforeARequest) {
 }
 
 TEST(RtuOverTcpLink, BadCrcIsALostAnswerAndRetried) {
-  TestTcpServer* server = nullptr;
   int replies = 0;
-  TestTcpServer s(answering(&server, [&](const Request& r) {
-    Bytes reply = holdingReply(r);
-    if (replies++ == 0) reply.back() ^= 0xA5;
-    return reply;
-  }));
-  server = &s;
+  TestTcpServer s(TcpFraming::kRtu, answeringAsADevice([&](const Request& r) {
+                    Bytes reply = holdingReply(r);
+                    if (replies++ == 0) reply.back() ^= 0xA5;
+                    return reply;
+                  }));
   RtuOverTcpLink link(gateway(s.port()));
   ASSERT_TRUE(link.connect(nullptr));
   const Result r = link.execute(Request::readHoldingRegisters(1, 0, 1));
@@ -114,12 +98,7 @@ TEST(RtuOverTcpLink, BadCrcIsALostAnswerAndRetried) {
 }
 
 TEST(RtuOverTcpLink, LostReplyTimesOutAndANonRepeatableWriteIsSentOnce) {
-  TestTcpServer* server = nullptr;
-  TestTcpServer s([&](int fd) {
-    while (!server->readRtu(fd).empty()) {  // hears everything, answers nothing
-    }
-  });
-  server = &s;
+  TestTcpServer s(TcpFraming::kRtu, hearingOnly());
   RtuOverTcpLink link(gateway(s.port()));
   ASSERT_TRUE(link.connect(nullptr));
   Request once = Request::writeSingleCoil(1, 0, true);
@@ -135,15 +114,9 @@ TEST(RtuOverTcpLink, LostReplyTimesOutAndANonRepeatableWriteIsSentOnce) {
 }
 
 TEST(RtuOverTcpLink, DroppedConnectionIsAnIoErrorNotResentThenReconnects) {
-  TestTcpServer* server = nullptr;
-  TestTcpServer s([&](int fd) {
-    const Bytes frame = server->readRtu(fd);
-    // The first connection dies mid-request (a gateway reboot); later ones answer.
-    if (server->accepted() == 1) return;
-    for (Bytes f = frame; !f.empty(); f = server->readRtu(fd))
-      TestTcpServer::write(fd, encodeReply(*decodeRequest(f), {1}));
-  });
-  server = &s;
+  // The first connection dies mid-request (a gateway reboot); later ones answer.
+  TestTcpServer s(TcpFraming::kRtu, droppingTheFirstConnection(answeringAsADevice(
+                                        [](const Request& r) { return encodeReply(r, {1}); })));
   RtuOverTcpLink link(gateway(s.port()));
   ASSERT_TRUE(link.connect(nullptr));
   const Result r = link.execute(Request::writeSingleCoil(1, 0, true));
@@ -162,7 +135,7 @@ TEST(RtuOverTcpLink, DroppedConnectionIsAnIoErrorNotResentThenReconnects) {
 TEST(RtuOverTcpLink, ConnectToNothingSaysWhere) {
   int port = 0;
   {
-    TestTcpServer gone([](int) {});
+    TestTcpServer gone(TcpFraming::kRtu, hearingOnly());
     port = gone.port();
   }
   RtuOverTcpLink link(gateway(port));

@@ -74,6 +74,19 @@ TEST(SimGeneric, TheExampleConfigLoads) {
   EXPECT_EQ(c.devices[2].generic.holes.at(0).from, 0x3002);
 }
 
+TEST(SimGeneric, IsBuiltThroughTheRegistryLikeEveryType) {
+  const SimulatorConfig c = load(kConfig);
+  const auto d = makeSimDevice(c.devices[0], c.factory);
+  ASSERT_NE(d, nullptr);
+  EXPECT_STREQ(d->type(), "generic");
+  EXPECT_EQ(d->address(), 7);
+  // The entry's signals and holes came with it.
+  const Request read = Request::readHoldingRegisters(7, 102, 2);
+  EXPECT_EQ(ask(*d, read), toHex(encodeReply(read, {0, 0})));
+  EXPECT_EQ(ask(*d, Request::readInputRegisters(7, 0, 8)), exceptionHex(7, 0x04, 0x02));
+  EXPECT_EQ(makeSimDevice({"no_such_type", 7}, c.factory), nullptr);
+}
+
 TEST(SimGeneric, BlocksHolesWritesAndInputs) {
   SimulatorConfig c = load(kConfig);
   SimGeneric d(7, {}, c.devices[0].generic);

@@ -5,7 +5,7 @@
 #include <map>
 
 #include "golden_frames.h"
-#include "modbus_rtu_driver/sim/sim_device.h"
+#include "modbus_rtu_driver/sim/simulator.h"
 #include "test_sim_helpers.h"
 
 using namespace modbus_rtu_driver;
@@ -19,7 +19,7 @@ bool simulated(const GoldenFrame& g) {
 
 // A device at its factory address, in the state a printed read reply shows.
 std::unique_ptr<SimDevice> deviceFor(const GoldenFrame& g, const Request& r) {
-  auto d = makeSimDevice(g.device, g.device == "lc_relay8" ? 255 : 1, SimLineSettings{});
+  auto d = makeSimDevice({g.device, g.device == "lc_relay8" ? 255 : 1}, SimLineSettings{});
   const auto now = SimClock::now();
   const Bytes& reply = g.response;
   if (reply.empty() || !isReadFunction(r.function)) return d;
@@ -68,7 +68,7 @@ TEST(SimGolden, EveryRequestWithoutAPrintedReplyIsAccepted) {
   for (const auto& g : loadGoldenFrames(GOLDEN_FRAMES_PATH)) {
     if (!simulated(g) || !g.response.empty()) continue;
     auto& device = devices[g.device];
-    if (!device) device = makeSimDevice(g.device, g.device == "lc_relay8" ? 255 : 1, {});
+    if (!device) device = makeSimDevice({g.device, g.device == "lc_relay8" ? 255 : 1}, {});
     const std::string reply = ask(*device, toHex(g.request));
     ASSERT_GE(reply.size(), 8u) << g.meaning;
     EXPECT_EQ(fromHex(reply)->at(1), g.request[1]) << "not an exception: " << g.meaning;
@@ -79,7 +79,7 @@ TEST(SimGolden, EveryRequestWithoutAPrintedReplyIsAccepted) {
 
 TEST(SimGolden, RepliesFollowFromStateNotFromTheTable) {
   // The same read in another state gives another (CRC-correct) reply.
-  auto ld = makeSimDevice("ld58a08", 1, {});
+  auto ld = makeSimDevice({"ld58a08", 1}, {});
   EXPECT_EQ(ask(*ld, "01 01 00 00 00 08 3D CC"),
             toHex(encodeReply(Request::readCoils(1, 0, 8), {0, 0, 0, 0, 0, 0, 0, 0})));
   EXPECT_EQ(ask(*ld, "01 0F 00 00 00 08 01 89 3F 33"), "01 0F 00 00 00 08 54 0D");

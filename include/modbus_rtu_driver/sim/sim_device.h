@@ -1,6 +1,7 @@
 // A simulated slave: the register map and behaviour of one device type, driven by decoded
 // requests and by time. ROS-free; one subclass per device type (sim_ld58a08.h, sim_lc_relay8.h,
-// sim_yespeed_pdu.h). The line (simulator.h) decides which device hears a frame.
+// sim_yespeed_pdu.h, sim_generic.h), built through the registry in simulator.h (makeSimDevice). The
+// line (simulator.h) decides which device hears a frame.
 #pragma once
 
 #include <chrono>
@@ -117,13 +118,5 @@ class SimDevice {
   uint8_t address_;
   SimLineSettings line_;
 };
-
-// Builds a device of `type` (a name in core/device_types.h); null for a type not simulated and
-// for `generic`, which the simulator builds from its signals.
-std::unique_ptr<SimDevice> makeSimDevice(const std::string& type, uint8_t address,
-                                         SimLineSettings line);
-// The descriptor of a simulated type (its address range); null for a type not simulated.
-const DeviceDescriptor* simDeviceType(const std::string& type);
-std::string simDeviceTypeNames();  // "ld58a08, lc_relay8, yespeed_pdu"
 
 }  // namespace modbus_rtu_driver

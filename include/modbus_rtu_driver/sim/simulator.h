@@ -43,6 +43,13 @@ struct SimulatorConfig {
   std::vector<Entry> devices;
 };
 
+// The registry of simulated types (simulator_config.cpp). Builds the device an entry describes,
+// listening at `line` (the factory settings); null for a type not simulated.
+std::unique_ptr<SimDevice> makeSimDevice(const SimulatorConfig::Entry& entry, SimLineSettings line);
+// The descriptor of a simulated type (its address range); null for a type not simulated.
+const DeviceDescriptor* simDeviceType(const std::string& type);
+std::string simDeviceTypeNames();  // "ld58a08, lc_relay8, yespeed_pdu, generic"
+
 // False with a message naming the key when the YAML does not fit.
 bool loadSimulatorConfig(const std::string& path, SimulatorConfig* out, std::string* error);
 // `base_dir`: where a generic device's relative template path starts (the file's directory).
