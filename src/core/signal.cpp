@@ -97,6 +97,30 @@ double rawMax(SignalType t) {
   return 0.0;
 }
 
+int SignalConfig::writeFunction() const {
+  if (write_function != 0) return write_function;
+  if (table == SignalTable::kCoil) return 5;
+  return words() == 1 ? 6 : 16;
+}
+
+std::string writeFunctionProblem(const SignalConfig& s) {
+  const int fc = s.writeFunction();
+  const std::string given = std::to_string(fc);
+  if (s.table == SignalTable::kCoil) {
+    if (fc == 5 || fc == 15) return {};
+    return given + " is not a coil write (5 = write single coil, 15 = write multiple coils)";
+  }
+  if (s.table != SignalTable::kHoldingRegister)
+    return std::string("a ") + tableName(s.table) + " cannot be written";
+  if (fc == 16 || (fc == 6 && s.words() == 1)) return {};
+  if (fc == 6)
+    return "6 (write single register) cannot write the " + std::to_string(s.words()) +
+           " registers of " + typeName(s.type) + "; use 16 (write multiple registers)";
+  return given +
+         " is not a holding register write (6 = write single register, 16 = write multiple "
+         "registers)";
+}
+
 namespace {
 
 // The value's words with the most significant first, from the registers in address order.

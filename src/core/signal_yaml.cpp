@@ -15,9 +15,9 @@ namespace modbus_rtu_driver {
 using namespace config;
 
 const std::vector<std::string> kSignalMapKeys = {"signals", "template", "max_gap"};
-const std::vector<std::string> kSignalKeys = {"name",       "table", "address", "type",
-                                              "word_order", "scale", "offset",  "unit",
-                                              "writable",   "min",   "max",     "poll_rate"};
+const std::vector<std::string> kSignalKeys = {
+    "name", "table",    "address", "type", "word_order", "scale",         "offset",
+    "unit", "writable", "min",     "max",  "poll_rate",  "write_function"};
 
 namespace {
 
@@ -115,6 +115,15 @@ SignalConfig parseSignal(const YAML::Node& n, const std::string& where) {
   }
   if (s.min && s.max && *s.min > *s.max)
     fail(at + "min", number(*s.min) + " is above max " + number(*s.max));
+  if (n["write_function"]) {
+    if (!s.writable) fail(at + "write_function", "only for writable signals (writable: true)");
+    s.write_function = getInt(n["write_function"], at + "write_function");
+    if (s.write_function == 0)  // 0 stands for the default in SignalConfig, not in the YAML
+      fail(at + "write_function",
+           std::string("0 is not a write function (") + (bits ? "5 or 15)" : "6 or 16)"));
+    const std::string problem = writeFunctionProblem(s);
+    if (!problem.empty()) fail(at + "write_function", problem);
+  }
   if (n["poll_rate"]) {
     const double r = getNumber(n["poll_rate"], at + "poll_rate");
     if (!(r >= 0.0 && r <= 1000.0))

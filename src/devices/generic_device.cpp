@@ -15,6 +15,19 @@ std::string number(double v) {
 
 }  // namespace
 
+void PollRateMeter::record(time_point t) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  times_.push_back(t);
+  while (times_.size() > 2 && t - times_.front() > std::chrono::seconds(5)) times_.pop_front();
+}
+
+double PollRateMeter::rate() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (times_.size() < 2) return 0.0;
+  const double span = std::chrono::duration<double>(times_.back() - times_.front()).count();
+  return span > 0 ? (times_.size() - 1) / span : 0.0;
+}
+
 GenericDevice::GenericDevice(DeviceConfig config)
     : Device(std::move(config)),
       planner_(this->config().generic.signals, this->config().generic.max_gap) {
@@ -77,10 +90,26 @@ Result GenericDevice::pollGroup(Transport& bus, size_t group) {
   return failure;
 }
 
+Request GenericDevice::writeRequest(const SignalConfig& s,
+                                    const std::vector<uint16_t>& words) const {
+  switch (s.writeFunction()) {
+    case 5:
+      return Request::writeSingleCoil(address(), s.address, words[0] != 0);
+    case 15:
+      return Request::writeMultipleCoils(address(), s.address, {words[0] != 0});
+    case 6:
+      return Request::writeSingleRegister(address(), s.address, words[0]);
+    default:  // 16 (encodeWrite refused the rest)
+      return Request::writeMultipleRegisters(address(), s.address, words);
+  }
+}
+
 std::string GenericDevice::encodeWrite(size_t i, double value, std::vector<uint16_t>* words) const {
   if (i >= signals().size()) return "signal: " + std::to_string(i) + " does not exist";
   const SignalConfig& s = signals()[i];
   if (!s.writable) return s.name + ": not writable";
+  const std::string bad_function = writeFunctionProblem(s);
+  if (!bad_function.empty()) return s.name + ": write_function " + bad_function;
   if (s.type == SignalType::kBool) {
     if (value != 0.0 && value != 1.0) return s.name + ": " + number(value) + " is not 0 or 1";
     *words = {static_cast<uint16_t>(value)};
@@ -107,11 +136,7 @@ Result GenericDevice::writeSignal(Transport& bus, size_t i, double value) {
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
   const SignalConfig& s = signals()[i];
   const bool coil = s.table == SignalTable::kCoil;
-  const Request write = coil ? Request::writeSingleCoil(address(), s.address, words[0] != 0)
-                        : words.size() == 1
-                            ? Request::writeSingleRegister(address(), s.address, words[0])
-                            : Request::writeMultipleRegisters(address(), s.address, words);
-  Result r = bus.execute(write);
+  Result r = bus.execute(writeRequest(s, words));
   if (r.ok()) {
     setFromWords(i, words.data());
     return r;

@@ -4,6 +4,7 @@
 #include <std_msgs/Float64.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -77,6 +78,7 @@ class GenericAdapter : public DeviceAdapter {
           },
           [this, g](const Result& r) {
             polled_[g] = true;
+            rates_[g].record(std::chrono::steady_clock::now());
             onPoll(r);
           });
     }
@@ -96,12 +98,20 @@ class GenericAdapter : public DeviceAdapter {
       status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN, "signals not read: " + unread);
     status.add("signals not read", unread.empty() ? "none" : unread);
     status.add("signals", generic().signals().size());
+    // The scheduler's achieved rate counts every group's polls under the device's name: a sum
+    // of different rates says nothing. Each group's own rate replaces it.
+    auto& values = status.values;
+    values.erase(std::remove_if(values.begin(), values.end(),
+                                [](const diagnostic_msgs::KeyValue& kv) {
+                                  return kv.key == "poll rate achieved [Hz]";
+                                }),
+                 values.end());
     for (size_t g = 0; g < generic().groups().size(); ++g) {
       const auto& group = generic().groups()[g];
       if (group.signals.empty()) continue;
-      std::ostringstream key;
-      key << "poll group " << g << " [Hz]";
-      status.add(key.str(), group.rate);
+      const std::string key = "poll group " + std::to_string(g);
+      status.add(key + " [Hz]", group.rate);
+      status.add(key + " achieved [Hz]", rates_[g].rate());
     }
     status.add("merged reads split (device refused them)", splits.size());
     for (size_t k = 0; k < splits.size(); ++k) status.add("split " + std::to_string(k), splits[k]);
@@ -165,7 +175,9 @@ class GenericAdapter : public DeviceAdapter {
   std::vector<ros::ServiceServer> services_;
   std::vector<std::optional<double>> published_;  // bus thread only
   std::vector<bool> polled_;                      // by poll group; bus thread only
-  std::mutex splits_mutex_;                       // the two below: copies for diagnostics
+  // By poll group: recorded on the bus thread, read by diagnostics (each locks itself).
+  std::vector<PollRateMeter> rates_ = std::vector<PollRateMeter>(generic().groups().size());
+  std::mutex splits_mutex_;  // the two below: copies for diagnostics
   std::vector<std::string> splits_;
   std::string unread_;
 };

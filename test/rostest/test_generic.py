@@ -2,7 +2,10 @@
 """A generic device (address 7: the SDM120 template plus writable signals) beside the three
 built-in types: reads follow the simulator, writes land in its registers, bad values are refused
 with nothing written, and the merged read the device refuses (input registers 2-5 answer
-exception 02) is split and reported in /diagnostics."""
+exception 02) is split and reported in /diagnostics. Signals with write_function 16 / 15 go out
+as those frames (the node's wire_log shows them) and land; /diagnostics shows each poll group's
+achieved rate beside its configured one."""
+import os
 import struct
 import unittest
 
@@ -82,6 +85,61 @@ class GenericDeviceTest(unittest.TestCase):
         helpers.Latest(NS + "relay", Bool).wait(10, lambda m: m.data, "the relay latched on")
         helpers.Latest(NS + "setpoint", Float64).wait(10, lambda m: abs(m.data + 12.3) < 1e-9,
                                                       "the setpoint latched")
+
+    def sent_frames(self):
+        """Requests the node sent, from its wire_log ("tx FIRST LAST HEX" lines)."""
+        path = rospy.get_param("~wire_log")
+        if not os.path.exists(path):
+            return []
+        with open(path) as f:
+            return [bytes.fromhex(line.split(" ", 3)[3]) for line in f
+                    if line.startswith("tx ") and line.endswith("\n")]
+
+    def test_write_function_16_and_15_for_one_value(self):
+        limit = helpers.service(NS + "limit/set", SetValue)
+        res = limit(1234)
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(self.sim.get(METER, "holding", 104), [1234])
+        lamp = helpers.service(NS + "lamp/set", SetBool)
+        res = lamp(True)
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(self.sim.get(METER, "coil", 1), [1])
+        # FC16 to register 104 (0x68): 1 register, 2 bytes, 1234 = 0x04D2; FC15 to coil 1: 1 coil,
+        # 1 byte, bit 0 (the CRC follows).
+        fc16 = bytes.fromhex("07 10 00 68 00 01 02 04 D2")
+        fc15 = bytes.fromhex("07 0F 00 01 00 01 01 01")
+        def both_logged():  # the log is written off the bus thread, a moment after the write
+            frames = self.sent_frames()
+            bodies = [x[:-2] for x in frames]
+            return frames if fc16 in bodies and fc15 in bodies else None
+        frames = helpers.wait_until(both_logged, 10, "the FC16 and FC15 frames in the wire log")
+        # Never as the single writes (FC06 to register 104, FC05 to coil 1).
+        self.assertFalse([x.hex() for x in frames if x[:4] in (bytes.fromhex("07 06 00 68"),
+                                                               bytes.fromhex("07 05 00 01"))])
+
+    def test_each_poll_group_shows_its_achieved_rate(self):
+        # meter: group 0 at the device's 5 Hz, group 1 the template's energies at 0.2 Hz. Wide
+        # bounds: the point is that each group is measured on its own, not summed (5.2 Hz).
+        def rates_near_configured():
+            s = self.status("meter")
+            if s is None:
+                return None
+            kv = {v.key: v.value for v in s.values}
+            if "poll group 0 achieved [Hz]" not in kv or "poll group 1 achieved [Hz]" not in kv:
+                return None
+            for g in ("0", "1"):
+                configured = float(kv["poll group %s [Hz]" % g])
+                achieved = float(kv["poll group %s achieved [Hz]" % g])
+                if not 0.5 * configured <= achieved <= 1.5 * configured:
+                    return None
+            return kv
+        kv = helpers.wait_until(rates_near_configured, 40, "each poll group near its own rate")
+        self.assertEqual(float(kv["poll group 0 [Hz]"]), 5.0)
+        self.assertEqual(float(kv["poll group 1 [Hz]"]), 0.2)
+        self.assertNotIn("poll group 2 [Hz]", kv)
+        # The scheduler's figure (all groups' polls together) is not shown for a generic device.
+        self.assertNotIn("poll rate achieved [Hz]", kv)
+        self.assertIn("poll rate achieved [Hz]", {v.key for v in self.status("relays").values})
 
     def test_bad_values_are_refused_and_nothing_is_written(self):
         self.sim.set(METER, "holding", 100, 100)

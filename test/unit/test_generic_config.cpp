@@ -33,6 +33,8 @@ TEST(GenericConfig, TheExampleParsesWithItsTemplates) {
   EXPECT_EQ(climate.generic.signals[2].address, 0x0103);  // hex in the template
   EXPECT_EQ(c.devices[1].generic.signals.size(), 10u);
   EXPECT_EQ(c.devices[2].generic.signals[0].address, 0x2000);
+  EXPECT_EQ(c.devices[2].generic.signals[0].writeFunction(), 16);  // write_function: 16
+  EXPECT_EQ(c.devices[2].generic.signals[1].writeFunction(), 5);   // a coil's default
   EXPECT_EQ(*c.devices[2].generic.signals[3].poll_rate, 20.0);
 }
 
@@ -53,4 +55,9 @@ TEST(GenericConfig, ErrorsNameTheKey) {
   EXPECT_EQ(parseError("devices: {m: {type: generic, address: 3, outputs: [a], signals: [{name: "
                        "a, table: coil, address: 0}]}}"),
             "devices/m/outputs: 1 names given, the device has 0");
+  EXPECT_EQ(parseError("devices: {m: {type: generic, address: 3, signals: [{name: a, table: "
+                       "holding_register, address: 0, type: float32, writable: true, "
+                       "write_function: 6}]}}"),
+            "devices/m/signals[0]/write_function: 6 (write single register) cannot write the 2 "
+            "registers of float32; use 16 (write multiple registers)");
 }

@@ -167,6 +167,47 @@ TEST(SignalYaml, ErrorsNameTheKey) {
             "devices/d/max_gap: 200 is outside 0-123");
 }
 
+TEST(SignalYaml, WriteFunctionDefaultsByTableAndWidthAndIsChecked) {
+  const auto m = parseSignalMap(YAML::Load(R"(
+signals:
+  - {name: c, table: coil, address: 0, writable: true}
+  - {name: c15, table: coil, address: 1, writable: true, write_function: 15}
+  - {name: r, table: holding_register, address: 0, writable: true}
+  - {name: r16, table: holding_register, address: 1, writable: true, write_function: 16}
+  - {name: wide, table: holding_register, address: 2, type: int32, writable: true}
+)"),
+                                "devices/d/", "");
+  ASSERT_EQ(m.signals.size(), 5u);
+  EXPECT_EQ(m.signals[0].writeFunction(), 5);
+  EXPECT_EQ(m.signals[1].writeFunction(), 15);
+  EXPECT_EQ(m.signals[2].writeFunction(), 6);
+  EXPECT_EQ(m.signals[3].writeFunction(), 16);
+  EXPECT_EQ(m.signals[4].writeFunction(), 16);
+  EXPECT_EQ(m.signals[4].write_function, 0);  // not given
+
+  const std::string key = "devices/d/signals[0]/write_function: ";
+  EXPECT_EQ(parseError(oneSignal("table: holding_register, address: 1, type: uint32, writable: "
+                                 "true, write_function: 6")),
+            key +
+                "6 (write single register) cannot write the 2 registers of uint32; use 16 "
+                "(write multiple registers)");
+  EXPECT_EQ(parseError(oneSignal("table: holding_register, address: 1, writable: true, "
+                                 "write_function: 5")),
+            key +
+                "5 is not a holding register write (6 = write single register, 16 = write "
+                "multiple registers)");
+  EXPECT_EQ(parseError(oneSignal("table: coil, address: 1, writable: true, write_function: 16")),
+            key + "16 is not a coil write (5 = write single coil, 15 = write multiple coils)");
+  EXPECT_EQ(parseError(oneSignal("table: holding_register, address: 1, writable: true, "
+                                 "write_function: 0")),
+            key + "0 is not a write function (6 or 16)");
+  EXPECT_EQ(parseError(oneSignal("table: coil, address: 1, write_function: 15")),
+            key + "only for writable signals (writable: true)");
+  EXPECT_EQ(parseError(oneSignal("table: coil, address: 1, writable: true, write_function: x"))
+                .rfind(key, 0),
+            0u);
+}
+
 TEST(SignalYaml, TemplatesRelativeAndByFindAndTheirErrors) {
   char dir_template[] = "/tmp/test_signal_XXXXXX";
   const std::string dir = mkdtemp(dir_template);

@@ -108,6 +108,13 @@ TEST(SimGeneric, BlocksHolesWritesAndInputs) {
   EXPECT_EQ(ask(d, Request::writeSingleCoil(7, 0, true)),
             toHex(encodeReply(Request::writeSingleCoil(7, 0, true), {})));
   EXPECT_EQ(get(d, Table::kCoil, 0), 1);
+  // One value written with the multiple writes (write_function 15 / 16 on the node) lands too.
+  const Request fc15 = Request::writeMultipleCoils(7, 0, {false});
+  EXPECT_EQ(ask(d, fc15), toHex(encodeReply(fc15, {})));
+  EXPECT_EQ(get(d, Table::kCoil, 0), 0);
+  const Request fc16 = Request::writeMultipleRegisters(7, 100, {0xFF33});
+  EXPECT_EQ(ask(d, fc16), toHex(encodeReply(fc16, {})));
+  EXPECT_EQ(get(d, Table::kHolding, 100), 0xFF33);
   // No discrete inputs configured: that table refuses everything.
   EXPECT_EQ(ask(d, Request::readDiscreteInputs(7, 0, 1)), exceptionHex(7, 0x02, 0x02));
   // State survives a save and load.

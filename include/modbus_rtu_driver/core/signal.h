@@ -40,12 +40,20 @@ struct SignalConfig {
   bool writable = false;            // coils and holding registers only
   std::optional<double> min, max;   // allowed written values, in engineering units
   std::optional<double> poll_rate;  // Hz; none = the device's
+  // Function code a write uses: 5 or 15 (coils), 6 or 16 (holding registers); 0 = the default.
+  int write_function = 0;
 
   uint16_t words() const { return wordsOf(type); }
+  // write_function, or the default: 5 for a coil, 6 for one register, 16 for more.
+  int writeFunction() const;
   // Engineering value <-> raw number.
   double toValue(double raw) const { return raw * scale + offset; }
   double toRaw(double value) const { return (value - offset) / scale; }
 };
+
+// Why `s.write_function` cannot write `s` (a message naming the value and what is allowed), or
+// empty when it can. Shared by the YAML check and the device, so a bad one never reaches the bus.
+std::string writeFunctionProblem(const SignalConfig& s);
 
 // The raw number in `words` (wordsOf(type) registers in address order; bits as 0/1).
 double decodeRaw(SignalType type, WordOrder order, const uint16_t* words);

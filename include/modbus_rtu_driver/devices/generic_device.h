@@ -1,10 +1,14 @@
 // Any Modbus device described in YAML (type `generic`): a list of signals, each a bit or a
 // number in one of the four tables. Signals are polled in groups by rate (group 0 at the
 // device's poll_rate, one group per other rate), with merged reads (signal_map.h). Writable
-// signals are written with FC05 (coil), FC06 (one register) or FC16 (several), confirmed by the
-// echo, or by reading back when the reply was lost.
+// signals are written with their write_function (by default FC05 for a coil, FC06 for one
+// register, FC16 for several; FC15 / FC16 for devices without the single writes), confirmed by
+// the echo, or by reading back when the reply was lost.
 #pragma once
 
+#include <chrono>
+#include <deque>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -18,6 +22,21 @@ struct SignalState {
   double value = 0.0;  // engineering units (bits: 0 or 1)
   bool valid = false;  // the last read of it succeeded
   bool known = false;  // it was read (or written) at least once
+};
+
+// The achieved rate of one poll group (the scheduler counts a device's polls together, which
+// for a generic device sums its groups). Polls are recorded on the bus thread, the rate is read
+// by diagnostics: both lock. Over the last 5 s of polls, as BusScheduler counts a device's.
+class PollRateMeter {
+ public:
+  using time_point = std::chrono::steady_clock::time_point;
+  void record(time_point poll_time);
+  // Hz; 0 before the second poll.
+  double rate() const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::deque<time_point> times_;
 };
 
 class GenericDevice : public Device {
@@ -57,6 +76,8 @@ class GenericDevice : public Device {
  private:
   // Reads one span; false when the device did not answer (the rest of the poll is skipped).
   bool readSpan(Transport& bus, const ReadSpan& span, Result* first_failure);
+  // The write of `words` (encodeWrite's) with the signal's write function.
+  Request writeRequest(const SignalConfig& s, const std::vector<uint16_t>& words) const;
   void setFromWords(size_t signal, const uint16_t* words);
 
   ReadPlanner planner_;
