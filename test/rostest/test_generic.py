@@ -119,7 +119,8 @@ class GenericDeviceTest(unittest.TestCase):
 
     def test_each_poll_group_shows_its_achieved_rate(self):
         # meter: group 0 at the device's 5 Hz, group 1 the template's energies at 0.2 Hz. Wide
-        # bounds: the point is that each group is measured on its own, not summed (5.2 Hz).
+        # bounds (a loaded machine may poll slower): the point is that each group is measured on
+        # its own; the sum of both (about 5 Hz) is far outside group 1's bounds.
         def rates_near_configured():
             s = self.status("meter")
             if s is None:
@@ -130,7 +131,7 @@ class GenericDeviceTest(unittest.TestCase):
             for g in ("0", "1"):
                 configured = float(kv["poll group %s [Hz]" % g])
                 achieved = float(kv["poll group %s achieved [Hz]" % g])
-                if not 0.5 * configured <= achieved <= 1.5 * configured:
+                if not 0.3 * configured <= achieved <= 1.5 * configured:
                     return None
             return kv
         kv = helpers.wait_until(rates_near_configured, 40, "each poll group near its own rate")
