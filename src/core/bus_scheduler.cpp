@@ -156,11 +156,9 @@ void BusScheduler::record(const std::string& device, const Result& result, Kind 
     (result.ok() ? h.shared_ok : h.shared_failed)++;
   } else if (kind == Kind::kPoll) {
     (result.ok() ? h.polls_ok : h.polls_failed)++;
-    auto& times = poll_times_[device];
-    times.push_back(now);
-    while (times.size() > 2 && now - times.front() > std::chrono::seconds(5)) times.pop_front();
-    const double span = std::chrono::duration<double>(times.back() - times.front()).count();
-    h.achieved_poll_rate = span > 0 ? (times.size() - 1) / span : 0.0;
+    RateMeter& polls = poll_rates_[device];
+    polls.record(now);
+    h.achieved_poll_rate = polls.rate();
   } else {
     (result.ok() ? h.writes_ok : h.writes_failed)++;
   }

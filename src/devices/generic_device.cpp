@@ -15,19 +15,6 @@ std::string number(double v) {
 
 }  // namespace
 
-void PollRateMeter::record(time_point t) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  times_.push_back(t);
-  while (times_.size() > 2 && t - times_.front() > std::chrono::seconds(5)) times_.pop_front();
-}
-
-double PollRateMeter::rate() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (times_.size() < 2) return 0.0;
-  const double span = std::chrono::duration<double>(times_.back() - times_.front()).count();
-  return span > 0 ? (times_.size() - 1) / span : 0.0;
-}
-
 GenericDevice::GenericDevice(DeviceConfig config)
     : Device(std::move(config)),
       planner_(this->config().generic.signals, this->config().generic.max_gap) {

@@ -188,8 +188,7 @@ void DeviceAdapter::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("type", device_->type());
   status.add("address", device_->config().address);
   status.add("online", h.online && h.answered);
-  status.add("poll rate configured [Hz]", device_->config().poll_rate);
-  status.add("poll rate achieved [Hz]", h.achieved_poll_rate);
+  diagnosePollRate(status, h);
   status.add("polls ok", h.polls_ok);
   status.add("polls failed", h.polls_failed);
   status.add("writes ok", h.writes_ok);
@@ -201,6 +200,12 @@ void DeviceAdapter::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("last error", h.last_error.empty() ? "none" : h.last_error);
   diagnoseFailsafe(status);
   diagnoseType(status);
+}
+
+void DeviceAdapter::diagnosePollRate(diagnostic_updater::DiagnosticStatusWrapper& status,
+                                     const DeviceHealth& health) {
+  status.add("poll rate configured [Hz]", device_->config().poll_rate);
+  status.add("poll rate achieved [Hz]", health.achieved_poll_rate);
 }
 
 }  // namespace modbus_rtu_driver

@@ -10,6 +10,7 @@
 
 #include "modbus_rtu_driver/SetValue.h"
 #include "modbus_rtu_driver/SignalValues.h"
+#include "modbus_rtu_driver/core/rate_meter.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
 
@@ -84,6 +85,19 @@ class GenericAdapter : public DeviceAdapter {
     }
   }
 
+  // The scheduler counts every group's polls under the device's name (a sum of different
+  // rates that says nothing): each group's own rates instead.
+  void diagnosePollRate(diagnostic_updater::DiagnosticStatusWrapper& status,
+                        const DeviceHealth&) override {
+    for (size_t g = 0; g < generic().groups().size(); ++g) {
+      const auto& group = generic().groups()[g];
+      if (group.signals.empty()) continue;
+      const std::string key = "poll group " + std::to_string(g);
+      status.add(key + " [Hz]", group.rate);
+      status.add(key + " achieved [Hz]", rates_[g].rate());
+    }
+  }
+
   void diagnoseType(diagnostic_updater::DiagnosticStatusWrapper& status) override {
     // Read on the diagnostics thread: the split list only grows, and copies are taken whole.
     std::vector<std::string> splits;
@@ -98,21 +112,6 @@ class GenericAdapter : public DeviceAdapter {
       status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN, "signals not read: " + unread);
     status.add("signals not read", unread.empty() ? "none" : unread);
     status.add("signals", generic().signals().size());
-    // The scheduler's achieved rate counts every group's polls under the device's name: a sum
-    // of different rates says nothing. Each group's own rate replaces it.
-    auto& values = status.values;
-    values.erase(std::remove_if(values.begin(), values.end(),
-                                [](const diagnostic_msgs::KeyValue& kv) {
-                                  return kv.key == "poll rate achieved [Hz]";
-                                }),
-                 values.end());
-    for (size_t g = 0; g < generic().groups().size(); ++g) {
-      const auto& group = generic().groups()[g];
-      if (group.signals.empty()) continue;
-      const std::string key = "poll group " + std::to_string(g);
-      status.add(key + " [Hz]", group.rate);
-      status.add(key + " achieved [Hz]", rates_[g].rate());
-    }
     status.add("merged reads split (device refused them)", splits.size());
     for (size_t k = 0; k < splits.size(); ++k) status.add("split " + std::to_string(k), splits[k]);
   }
@@ -176,7 +175,7 @@ class GenericAdapter : public DeviceAdapter {
   std::vector<std::optional<double>> published_;  // bus thread only
   std::vector<bool> polled_;                      // by poll group; bus thread only
   // By poll group: recorded on the bus thread, read by diagnostics (each locks itself).
-  std::vector<PollRateMeter> rates_ = std::vector<PollRateMeter>(generic().groups().size());
+  std::vector<RateMeter> rates_ = std::vector<RateMeter>(generic().groups().size());
   std::mutex splits_mutex_;  // the two below: copies for diagnostics
   std::vector<std::string> splits_;
   std::string unread_;

@@ -14,6 +14,7 @@
 
 #include "modbus_rtu_driver/core/bus_scheduler.h"
 #include "modbus_rtu_driver/core/clock.h"
+#include "modbus_rtu_driver/core/rate_meter.h"
 #include "wait_for.h"
 
 using namespace modbus_rtu_driver;
@@ -523,4 +524,25 @@ TEST_F(BusSchedulerTest, StopFailsSharedRequestsStillQueuedEachRunOnce) {
   EXPECT_EQ(runs.load(), kQueued);  // each ran once, against the refusing transport
   std::lock_guard<std::mutex> lock(bus.m);
   EXPECT_EQ(bus.log, std::vector<std::string>{"1r"});
+}
+
+TEST(RateMeter, TheRateOfTheLastFiveSeconds) {
+  RateMeter m;
+  const auto t0 = std::chrono::steady_clock::time_point{} + std::chrono::hours(1);
+  EXPECT_EQ(m.rate(), 0.0);
+  m.record(t0);
+  EXPECT_EQ(m.rate(), 0.0);  // one poll: no rate yet
+  for (int i = 1; i <= 10; ++i) m.record(t0 + std::chrono::milliseconds(100 * i));
+  EXPECT_NEAR(m.rate(), 10.0, 1e-9);
+  // Slower from 1 s on: 5 s later only the 2 Hz polls are in the window.
+  const auto t1 = t0 + std::chrono::seconds(1);
+  for (int i = 1; i <= 12; ++i) m.record(t1 + std::chrono::milliseconds(500 * i));
+  EXPECT_NEAR(m.rate(), 2.0, 1e-9);
+  // A slow group alone: two polls 5 s apart are 0.2 Hz.
+  RateMeter slow;
+  slow.record(t0);
+  slow.record(t0 + std::chrono::seconds(5));
+  EXPECT_NEAR(slow.rate(), 0.2, 1e-9);
+  slow.record(t0 + std::chrono::seconds(10));
+  EXPECT_NEAR(slow.rate(), 0.2, 1e-9);
 }

@@ -325,27 +325,6 @@ TEST(GenericDevice, AWriteFunctionThatCannotWriteTheSignalSendsNothing) {
   EXPECT_EQ(bus.executed(), 0);
 }
 
-TEST(PollRateMeter, EachGroupsRateOverTheLastFiveSeconds) {
-  PollRateMeter m;
-  const auto t0 = std::chrono::steady_clock::time_point{} + std::chrono::hours(1);
-  EXPECT_EQ(m.rate(), 0.0);
-  m.record(t0);
-  EXPECT_EQ(m.rate(), 0.0);  // one poll: no rate yet
-  for (int i = 1; i <= 10; ++i) m.record(t0 + std::chrono::milliseconds(100 * i));
-  EXPECT_NEAR(m.rate(), 10.0, 1e-9);
-  // Slower from 1 s on: 5 s later only the 2 Hz polls are in the window.
-  const auto t1 = t0 + std::chrono::seconds(1);
-  for (int i = 1; i <= 12; ++i) m.record(t1 + std::chrono::milliseconds(500 * i));
-  EXPECT_NEAR(m.rate(), 2.0, 1e-9);
-  // A slow group alone: two polls 5 s apart are 0.2 Hz.
-  PollRateMeter slow;
-  slow.record(t0);
-  slow.record(t0 + std::chrono::seconds(5));
-  EXPECT_NEAR(slow.rate(), 0.2, 1e-9);
-  slow.record(t0 + std::chrono::seconds(10));
-  EXPECT_NEAR(slow.rate(), 0.2, 1e-9);
-}
-
 TEST(GenericDevice, HasNoOutputs) {
   GenericDevice d(generic({sig("a", kH, 0)}));
   EXPECT_EQ(d.checkOutputs({0}, {true}), "channels: a generic device has no outputs");

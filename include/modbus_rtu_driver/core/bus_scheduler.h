@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/clock.h"
+#include "modbus_rtu_driver/core/rate_meter.h"
 #include "modbus_rtu_driver/core/transport.h"
 
 namespace modbus_rtu_driver {
@@ -137,7 +138,7 @@ class BusScheduler {
   std::map<std::string, DeviceHealth> health_;
   std::map<std::string, Clock::time_point> backoff_until_;
   std::map<std::string, double> backoff_;
-  std::map<std::string, std::deque<Clock::time_point>> poll_times_;
+  std::map<std::string, RateMeter> poll_rates_;
   PollTransport poll_transport_;
   bool running_ = false;
   bool connected_ = false;

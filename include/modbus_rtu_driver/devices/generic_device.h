@@ -24,21 +24,6 @@ struct SignalState {
   bool known = false;  // it was read (or written) at least once
 };
 
-// The achieved rate of one poll group (the scheduler counts a device's polls together, which
-// for a generic device sums its groups). Polls are recorded on the bus thread, the rate is read
-// by diagnostics: both lock. Over the last 5 s of polls, as BusScheduler counts a device's.
-class PollRateMeter {
- public:
-  using time_point = std::chrono::steady_clock::time_point;
-  void record(time_point poll_time);
-  // Hz; 0 before the second poll.
-  double rate() const;
-
- private:
-  mutable std::mutex mutex_;
-  std::deque<time_point> times_;
-};
-
 class GenericDevice : public Device {
  public:
   struct PollGroup {

@@ -70,6 +70,9 @@ class DeviceAdapter {
   virtual void advertise() {}
   // Registers the device's polls with the scheduler (the base: one, at the device's rate).
   virtual void addPolls();
+  // The configured and achieved poll rates in /diagnostics (the base: one poll per device).
+  virtual void diagnosePollRate(diagnostic_updater::DiagnosticStatusWrapper& status,
+                                const DeviceHealth& health);
   // The type's own lines in its /diagnostics status.
   virtual void diagnoseType(diagnostic_updater::DiagnosticStatusWrapper& status) { (void)status; }
   // Runs after each poll on the bus thread; the base publishes outputs (and inputs).
