@@ -76,15 +76,16 @@ def attribute(sim_frames, node_frames, baud):
         if (d0, d1, d2) != ("tx", "rx", "tx"):
             continue  # a broadcast or a lost reply: not a clean transaction
         # The simulator's view of the same request: the first it read after the node wrote it
-        # (within 50 ms; the node's log may start before the simulator's window).
+        # and before the node read the reply (the same bytes recur every few transactions, and
+        # the two logs need not start together).
         k = bisect.bisect_left(sim_times, sent - 1e-4)
-        while k < len(sim_frames) and sim_times[k] < sent + 0.05 and \
+        while k < len(sim_frames) and sim_times[k] <= read_last and \
                 (sim_frames[k][0], sim_frames[k][3]) != ("rx", rq_hex):
             k += 1
-        if k + 1 >= len(sim_frames) or sim_times[k] >= sent + 0.05:
+        if k + 1 >= len(sim_frames) or sim_times[k] > read_last:
             continue
         reply = sim_frames[k + 1]
-        if reply[0] != "tx" or reply[3] != rp_hex:
+        if reply[0] != "tx" or reply[3] != rp_hex or reply[2] > read_last:
             continue
         request_wire = frame_bytes(rq_hex) * ch
         reply_wire = frame_bytes(rp_hex) * ch

@@ -43,7 +43,10 @@ void BusNode::startFailsafe() {
   }
   for (auto& a : adapters_) {
     a->setFailsafeSink([this](const FailsafeEvent& e) {
-      publish_queue_->post([this, e] { failsafe_pub_.publish(e); });
+      if (config_.realtime_priority > 0)
+        publish_queue_->post([this, e] { failsafe_pub_.publish(e); });
+      else
+        failsafe_pub_.publish(e);
     });
     const FailsafeConfig& fs = a->failsafeConfig();
     if (a->heartbeat()) watch(fs.heartbeat_topic, fs.heartbeat_timeout, a->heartbeat());
@@ -160,7 +163,11 @@ bool BusNode::start() {
   }
   for (auto& a : adapters_) {
     a->setPublishPolicy({config_.publish_on_change, config_.keep_alive});
-    a->setPublishQueue(publish_queue_.get());
+    // A real-time bus thread hands its publishing to the publishing thread: roscpp's locks are
+    // shared with normal-priority threads (a priority inversion), and a subscriber's socket
+    // write has no place on it. At the normal priority it publishes itself: a thread hop per
+    // poll costs more CPU than publishing does (bench/results.md).
+    if (config_.realtime_priority > 0) a->setPublishQueue(publish_queue_.get());
     a->start();
   }
   if (config_.share.enabled) {
@@ -259,8 +266,8 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.add("bus thread scheduling", realtime_status_);
     status.add("memory", memory_status_);
   }
-  // The bus thread's ROS publishing, done on the publishing thread: a high-water mark near the
-  // capacity, or drops, mean subscribers cannot keep up with the polls.
+  // What the bus thread hands to the publishing thread (wire_log; with realtime_priority its
+  // ROS publishing too): a high-water mark near the capacity, or drops, mean it cannot keep up.
   status.add("publish queue high-water mark", publish_queue_->highWater());
   status.add("publish queue dropped", publish_queue_->dropped());
   status.add("requests", s.requests);

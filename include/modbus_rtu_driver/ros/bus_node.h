@@ -52,7 +52,8 @@ class BusNode {
   std::unique_ptr<Link> link_;  // serial, Modbus TCP or RTU over TCP (by `port`)
   std::unique_ptr<BusScheduler> bus_;
   std::vector<std::unique_ptr<DeviceAdapter>> adapters_;
-  // The bus thread's publishing runs here (stopped after the bus, before the adapters go).
+  // wire_log's writes, and with realtime_priority the bus thread's publishing, run here
+  // (stopped after the bus, before the adapters go).
   std::unique_ptr<TaskQueue> publish_queue_;
   std::unique_ptr<FILE, int (*)(FILE*)> wire_log_{nullptr, &std::fclose};  // publishing thread
   std::unique_ptr<RawWrites> raw_writes_;

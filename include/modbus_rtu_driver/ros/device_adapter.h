@@ -38,8 +38,8 @@ class DeviceAdapter {
 
   // How state topics are published (every poll, or on change with a keep-alive); before start().
   void setPublishPolicy(const DigitalStatesPublisher::Policy& policy) { publish_policy_ = policy; }
-  // Where the bus thread hands its publishing (the node's publishing thread); before start().
-  // Without one, publishing runs on the bus thread.
+  // Where the bus thread hands its publishing (the node's publishing thread, when the bus
+  // thread runs at real-time priority); before start(). Without one, it publishes itself.
   void setPublishQueue(TaskQueue* queue) { publish_queue_ = queue; }
   // Advertises topics and services (the base's, then the type's own in advertise()), and only
   // then registers the poll with the scheduler: the bus may already run, and a poll's callback
