@@ -119,16 +119,24 @@ Result Link::readFailure(const Request& request, ReadStatus status, const Bytes&
   }
 }
 
+ReadStatus Link::readObserved(int fd, double first, double between,
+                              const std::function<long(const Bytes&)>& length_of, size_t shortest,
+                              size_t max_length, Bytes* out, int* error) {
+  ReadTimes times;
+  const ReadStatus status =
+      readFrame(fd, first, between, length_of, shortest, max_length, out, error, &times);
+  if (!out->empty()) noteWire(false, times.first, times.last, *out);
+  return status;
+}
+
 Result Link::readRtuReply(int fd, const Request& request, double byte_timeout,
                           const std::string& medium) {
   Bytes reply;
   int error = 0;
-  ReadTimes times;
-  const ReadStatus status = readFrame(
+  const ReadStatus status = readObserved(
       fd, responseTimeout(request), byte_timeout,
       [&](const Bytes& b) { return static_cast<long>(replyLengthFromHeader(request, b)); },
-      kShortestReply, kMaxAduLength, &reply, &error, &times);
-  if (!reply.empty()) noteWire(false, times.first, times.last, reply);
+      kShortestReply, kMaxAduLength, &reply, &error);
   if (status == ReadStatus::kComplete) return decodeReply(request, reply);
   return readFailure(request, status, reply, error, medium);
 }

@@ -26,14 +26,16 @@ void Link::keepGap() {
   // Only a real-time bus thread spins (realtime_priority): it cannot be preempted by the
   // machine's other work while it does, and its user asked for latency over CPU time.
   static thread_local const bool spin = sched_getscheduler(0) == SCHED_FIFO;
-  const auto wake_at = spin ? ready - gap_spin_margin_ : ready;
+  const auto wake_at = spin ? ready - gapSpinMargin() : ready;
   if (Steady::now() < wake_at) {
     // The default timer slack (50 us) would stretch every sub-millisecond gap; this thread owns
     // the line, so it asks for 1 us.
     static thread_local bool slack_set = prctl(PR_SET_TIMERSLACK, 1000UL, 0, 0, 0) == 0;
     (void)slack_set;
     std::this_thread::sleep_until(wake_at);
-    adaptSpinMargin(Steady::now() - wake_at);
+    const auto late = std::clamp<Steady::duration>(Steady::now() - wake_at,
+                                                   Steady::duration::zero(), kMaxGapSpin);
+    wake_lateness_ += (late - wake_lateness_) / 8;
   }
   // The rest is spun: a sleep ends late by the scheduler's wake-up latency, which would add to
   // every back-to-back transaction.
@@ -41,15 +43,11 @@ void Link::keepGap() {
   }
 }
 
-// The margin follows how late wake-ups come (a slow average, times 1.5, plus 10 us), so a quiet
-// machine spins a few microseconds and a VM that wakes 100 us late spins about that; never more
-// than kMaxGapSpin per gap.
-void Link::adaptSpinMargin(Steady::duration lateness) {
-  using std::chrono::microseconds;
-  const auto late = std::clamp<Steady::duration>(lateness, Steady::duration::zero(), kMaxGapSpin);
-  wake_lateness_ += (late - wake_lateness_) / 8;
-  gap_spin_margin_ =
-      std::min<Steady::duration>(wake_lateness_ * 3 / 2 + microseconds(10), kMaxGapSpin);
+// The margin follows how late wake-ups come, so a quiet machine spins a few microseconds and a
+// VM that wakes 100 us late spins about that; never more than kMaxGapSpin per gap.
+Steady::duration Link::gapSpinMargin() const {
+  return std::min<Steady::duration>(wake_lateness_ * 3 / 2 + std::chrono::microseconds(10),
+                                    kMaxGapSpin);
 }
 
 // Before a request: if a transaction with this slave failed less than late_reply_guard ago,

@@ -29,11 +29,9 @@ Result ModbusTcpLink::attempt(const Request& request) {
     const double left = std::chrono::duration<double>(deadline - Steady::now()).count();
     Bytes reply;
     int error = 0;
-    ReadTimes times;
     const ReadStatus status =
-        readFrame(fd_, left, gatewayByteTimeout(config_), length_of, kMbapHeaderLength + 1,
-                  kMaxMbapAduLength, &reply, &error, &times);
-    if (!reply.empty()) noteWire(false, times.first, times.last, reply);
+        readObserved(fd_, left, gatewayByteTimeout(config_), length_of, kMbapHeaderLength + 1,
+                     kMaxMbapAduLength, &reply, &error);
     if (status == ReadStatus::kComplete && mbapTransaction(reply) != transaction) {
       addStaleBytes(reply.size());  // the late reply to an earlier request
       continue;

@@ -56,11 +56,8 @@ void RtuLink::disconnect() {
 
 Result RtuLink::attempt(const Request& request) {
   prepareLine(request);
-  return exchange(request);
-}
-
-Result RtuLink::exchange(const Request& request) {
-  if (!send(request)) return fromErrno(request, errno);
+  Result sent = send(request);
+  if (!sent.ok()) return sent;
   return readRtuReply(modbus_get_socket(ctx_), request, effectiveByteTimeout(config_),
                       config_.port);
 }
@@ -68,46 +65,25 @@ Result RtuLink::exchange(const Request& request) {
 Result RtuLink::sendBroadcast(const Request& request) {
   prepareLine(request);
   // Sent, not waited for: 3.1.6's write functions would wait for a reply nobody sends.
-  if (!send(request)) return fromErrno(request, errno);
+  Result sent = send(request);
+  if (!sent.ok()) return sent;
   tcdrain(modbus_get_socket(ctx_));
   return Result::success(request.values);
 }
 
-// libmodbus sends (it adds the CRC, and drives RTS in RS485 mode); false with errno set.
-bool RtuLink::send(const Request& request) {
+// libmodbus sends (it adds the CRC, and drives RTS in RS485 mode). Sending fails only as the
+// port does (the request was validated): an i/o error, which disconnects.
+Result RtuLink::send(const Request& request) {
   Bytes raw{request.slave};
   const Bytes pdu = encodeRequestPdu(request);
   raw.insert(raw.end(), pdu.begin(), pdu.end());
   const auto start = std::chrono::steady_clock::now();
-  if (modbus_send_raw_request(ctx_, raw.data(), static_cast<int>(raw.size())) == -1) return false;
+  if (modbus_send_raw_request(ctx_, raw.data(), static_cast<int>(raw.size())) == -1)
+    return Result::failure(
+        ErrorKind::kIo, request.describe() + ": " + config_.port + ": " + modbus_strerror(errno));
   if (observingWire())
     noteWire(true, start, std::chrono::steady_clock::now(), encodeRequest(request));
-  return true;
-}
-
-Result RtuLink::fromErrno(const Request& request, int error) const {
-  const std::string what = request.describe() + ": ";
-  if (error > MODBUS_ENOBASE && error <= EMBXGTAR) {
-    const auto code = static_cast<uint8_t>(error - MODBUS_ENOBASE);
-    return Result::failure(ErrorKind::kException, what + "device answered " + exceptionName(code),
-                           code);
-  }
-  switch (error) {
-    case ETIMEDOUT:
-      return Result::failure(ErrorKind::kTimeout, what + "no reply");
-    case EMBBADCRC:
-      return Result::failure(ErrorKind::kCrc, what + "bad CRC in reply");
-#ifdef EMBBADSLAVE
-    case EMBBADSLAVE:
-      return Result::failure(ErrorKind::kWrongAddress, what + "reply came from another slave");
-#endif
-    case EMBBADDATA:
-    case EMBMDATA:
-    case EMBBADEXC:
-      return Result::failure(ErrorKind::kMalformed, what + modbus_strerror(error));
-    default:
-      return Result::failure(ErrorKind::kIo, what + config_.port + ": " + modbus_strerror(error));
-  }
+  return Result::success();
 }
 
 // Late replies first (the guard), then the gap; whatever is still in the input (a late reply,

@@ -36,9 +36,7 @@ class RtuLink : public Link {
   Result sendBroadcast(const Request& request) override;
 
  private:
-  Result exchange(const Request& request);
-  bool send(const Request& request);
-  Result fromErrno(const Request& request, int error) const;
+  Result send(const Request& request);
   void prepareLine(const Request& request);
 
   modbus_t* ctx_ = nullptr;
