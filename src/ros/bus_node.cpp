@@ -43,10 +43,7 @@ void BusNode::startFailsafe() {
   }
   for (auto& a : adapters_) {
     a->setFailsafeSink([this](const FailsafeEvent& e) {
-      if (config_.realtime_priority > 0)
-        publish_queue_->post([this, e] { failsafe_pub_.publish(e); });
-      else
-        failsafe_pub_.publish(e);
+      postOrRun(rosPublishing(), [this, e] { failsafe_pub_.publish(e); });
     });
     const FailsafeConfig& fs = a->failsafeConfig();
     if (a->heartbeat()) watch(fs.heartbeat_topic, fs.heartbeat_timeout, a->heartbeat());
@@ -99,7 +96,7 @@ void BusNode::shutdown() {
                    r.message.c_str());
   }
   bus_->stop();
-  publish_queue_->stop();
+  if (publish_queue_) publish_queue_->stop();
 }
 
 bool BusNode::start() {
@@ -115,7 +112,9 @@ bool BusNode::start() {
     return false;
   }
   link_ = makeTransport(config_.link);
-  publish_queue_ = std::make_unique<TaskQueue>();
+  // Only what needs it starts the publishing thread (see rosPublishing()).
+  if (!config_.wire_log.empty() || config_.realtime_priority > 0)
+    publish_queue_ = std::make_unique<TaskQueue>();
   if (!config_.wire_log.empty() && !openWireLog(&error)) {
     ROS_FATAL("wire_log: %s", error.c_str());
     return false;
@@ -163,11 +162,7 @@ bool BusNode::start() {
   }
   for (auto& a : adapters_) {
     a->setPublishPolicy({config_.publish_on_change, config_.keep_alive});
-    // A real-time bus thread hands its publishing to the publishing thread: roscpp's locks are
-    // shared with normal-priority threads (a priority inversion), and a subscriber's socket
-    // write has no place on it. At the normal priority it publishes itself: a thread hop per
-    // poll costs more CPU than publishing does (bench/results.md).
-    if (config_.realtime_priority > 0) a->setPublishQueue(publish_queue_.get());
+    a->setPublishQueue(rosPublishing());
     a->start();
   }
   if (config_.share.enabled) {
@@ -201,6 +196,14 @@ bool BusNode::openWireLog(std::string* error) {
         [this, e] { std::fprintf(wire_log_.get(), "%s\n", formatWireEvent(e).c_str()); });
   });
   return true;
+}
+
+// A real-time bus thread hands its publishing to the publishing thread: roscpp's locks are
+// shared with normal-priority threads (a priority inversion), and a subscriber's socket write
+// has no place on it. At the normal priority it publishes itself: a thread hop per poll costs
+// more CPU than publishing does (bench/results.md).
+TaskQueue* BusNode::rosPublishing() const {
+  return config_.realtime_priority > 0 ? publish_queue_.get() : nullptr;
 }
 
 BusScheduler::Options BusNode::schedulingOptions() {
@@ -268,8 +271,10 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   }
   // What the bus thread hands to the publishing thread (wire_log; with realtime_priority its
   // ROS publishing too): a high-water mark near the capacity, or drops, mean it cannot keep up.
-  status.add("publish queue high-water mark", publish_queue_->highWater());
-  status.add("publish queue dropped", publish_queue_->dropped());
+  if (publish_queue_) {
+    status.add("publish queue high-water mark", publish_queue_->highWater());
+    status.add("publish queue dropped", publish_queue_->dropped());
+  }
   status.add("requests", s.requests);
   status.add("attempts", s.attempts);
   status.add("failed", s.failed);

@@ -65,10 +65,7 @@ void DeviceAdapter::onPoll(const Result& result) {
 }
 
 void DeviceAdapter::publishLater(std::function<void()> task) {
-  if (publish_queue_)
-    publish_queue_->post(std::move(task));
-  else
-    task();
+  postOrRun(publish_queue_, std::move(task));
 }
 
 Result DeviceAdapter::runOnBus(BusScheduler::Job job) {

@@ -1,6 +1,6 @@
-// One thread that runs posted tasks in the order they were posted. The bus thread hands its ROS
-// publishing here: serialising messages and writing to subscribers' sockets then never delays
-// the next request on the line, and a slow subscriber cannot hold the bus.
+// One thread that runs posted tasks in the order they were posted. The bus thread hands work
+// here that must not delay the next request on the line: the wire log's file writes, and on a
+// real-time bus thread its ROS publishing (roscpp's locks, subscribers' sockets).
 #pragma once
 
 #include <condition_variable>
@@ -41,5 +41,13 @@ class TaskQueue {
   size_t high_water_ = 0;
   std::thread thread_;
 };
+
+// Posts `task` to `queue`, or runs it here when there is none.
+inline void postOrRun(TaskQueue* queue, std::function<void()> task) {
+  if (queue)
+    queue->post(std::move(task));
+  else
+    task();
+}
 
 }  // namespace modbus_rtu_driver

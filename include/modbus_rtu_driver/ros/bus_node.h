@@ -41,6 +41,8 @@ class BusNode {
   uint64_t recentLineErrors(const LinkStats& stats);
   // realtime_priority and lock_memory: asked for here, their outcome shown in the diagnostics.
   BusScheduler::Options schedulingOptions();
+  // Where the bus thread's ROS publishing goes: the publishing thread, or none (itself).
+  TaskQueue* rosPublishing() const;
   // wire_log: opens the file and has the link report every frame to it.
   bool openWireLog(std::string* error);
 
@@ -52,8 +54,8 @@ class BusNode {
   std::unique_ptr<Link> link_;  // serial, Modbus TCP or RTU over TCP (by `port`)
   std::unique_ptr<BusScheduler> bus_;
   std::vector<std::unique_ptr<DeviceAdapter>> adapters_;
-  // wire_log's writes, and with realtime_priority the bus thread's publishing, run here
-  // (stopped after the bus, before the adapters go).
+  // wire_log's writes, and with realtime_priority the bus thread's publishing, run here; none
+  // without either (stopped after the bus, before the adapters go).
   std::unique_ptr<TaskQueue> publish_queue_;
   std::unique_ptr<FILE, int (*)(FILE*)> wire_log_{nullptr, &std::fclose};  // publishing thread
   std::unique_ptr<RawWrites> raw_writes_;
