@@ -48,6 +48,11 @@ class GenericDeviceTest(unittest.TestCase):
     def status(self, device):
         return self.statuses.get("device " + device)
 
+    def status_values(self, device):
+        """The device's /diagnostics values by key, or None before its first status."""
+        s = self.status(device)
+        return None if s is None else {v.key: v.value for v in s.values}
+
     def value(self, msg, name):
         i = msg.names.index(name)
         return msg.values[i], msg.valid[i]
@@ -122,10 +127,9 @@ class GenericDeviceTest(unittest.TestCase):
         # bounds (a loaded machine may poll slower): the point is that each group is measured on
         # its own; the sum of both (about 5 Hz) is far outside group 1's bounds.
         def rates_near_configured():
-            s = self.status("meter")
-            if s is None:
+            kv = self.status_values("meter")
+            if kv is None:
                 return None
-            kv = {v.key: v.value for v in s.values}
             if "poll group 0 achieved [Hz]" not in kv or "poll group 1 achieved [Hz]" not in kv:
                 return None
             for g in ("0", "1"):
@@ -167,11 +171,9 @@ class GenericDeviceTest(unittest.TestCase):
 
     def test_refused_merged_read_is_split_and_reported(self):
         def split_reported():
-            s = self.status("meter")
-            if s is None:
-                return None
-            kv = {v.key: v.value for v in s.values}
-            return kv if kv.get("merged reads split (device refused them)", "0") != "0" else None
+            kv = self.status_values("meter")
+            split = kv is not None and kv.get("merged reads split (device refused them)", "0")
+            return kv if split and split != "0" else None
         kv = helpers.wait_until(split_reported, 20, "the split in /diagnostics")
         self.assertIn("input_register 0-31", kv["split 0"])
         self.assertIn("refused (exception 02)", kv["split 0"])

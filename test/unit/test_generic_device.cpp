@@ -256,9 +256,11 @@ TEST(GenericDevice, ALostReplyIsConfirmedOrDeniedByReadingBack) {
   EXPECT_SCRIPT_DONE(bus);
 }
 
-// Devices that only implement the multiple writes: one value with FC16 / FC15, bytes as on the
-// wire (CRCs worked out by hand, not by frame.cpp).
-TEST(GenericDevice, WriteFunction16And15SendOneValueAsMultipleWrites) {
+namespace {
+
+// A device that only implements the multiple writes: setpoint (int16, x0.1, register 10) with
+// FC16 and relay (coil 3) with FC15.
+DeviceConfig multipleWritesOnly() {
   auto sp = sig("setpoint", kH, 10, SignalType::kInt16);
   sp.writable = true;
   sp.scale = 0.1;
@@ -266,7 +268,14 @@ TEST(GenericDevice, WriteFunction16And15SendOneValueAsMultipleWrites) {
   auto relay = sig("relay", SignalTable::kCoil, 3);
   relay.writable = true;
   relay.write_function = 15;
-  GenericDevice d(generic({sp, relay}));
+  return generic({sp, relay});
+}
+
+}  // namespace
+
+// One value with FC16 / FC15, bytes as on the wire (CRCs worked out by hand, not by frame.cpp).
+TEST(GenericDevice, WriteFunction16And15SendOneValueAsMultipleWrites) {
+  GenericDevice d(multipleWritesOnly());
   ScriptedTransport bus;
   // FC16: slave 5, register 10, 1 register, 2 bytes, 0xFF33 (-20.5 at scale 0.1); echo.
   bus.expect("05 10 00 0A 00 01 02 FF 33 95 DF", "05 10 00 0A 00 01 20 4F");
@@ -281,14 +290,7 @@ TEST(GenericDevice, WriteFunction16And15SendOneValueAsMultipleWrites) {
 }
 
 TEST(GenericDevice, ALostReplyToFc16OrFc15IsReadBack) {
-  auto sp = sig("setpoint", kH, 10, SignalType::kInt16);
-  sp.writable = true;
-  sp.scale = 0.1;
-  sp.write_function = 16;
-  auto relay = sig("relay", SignalTable::kCoil, 3);
-  relay.writable = true;
-  relay.write_function = 15;
-  GenericDevice d(generic({sp, relay}));
+  GenericDevice d(multipleWritesOnly());
   ScriptedTransport bus;
   bus.expect("05 10 00 0A 00 01 02 FF 33 95 DF");                 // reply lost
   bus.expect("05 03 00 0A 00 01 A5 8C", "05 03 02 FF 33 48 61");  // FC03 1 register: done
