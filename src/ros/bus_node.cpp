@@ -13,6 +13,7 @@
 #include "modbus_rtu_driver/core/realtime.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
+#include "modbus_rtu_driver/ros/publish_shared.h"
 #include "modbus_rtu_driver/ros/yaml_params.h"
 
 namespace modbus_rtu_driver {
@@ -43,7 +44,7 @@ void BusNode::startFailsafe() {
   }
   for (auto& a : adapters_) {
     a->setFailsafeSink([this](const FailsafeEvent& e) {
-      postOrRun(rosPublishing(), [this, e] { failsafe_pub_.publish(e); });
+      postOrRun(rosPublishing(), [this, e] { publishShared(failsafe_pub_, e); });
     });
     const FailsafeConfig& fs = a->failsafeConfig();
     if (a->heartbeat()) watch(fs.heartbeat_topic, fs.heartbeat_timeout, a->heartbeat());

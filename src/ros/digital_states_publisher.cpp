@@ -3,6 +3,7 @@
 #include <std_msgs/Bool.h>
 
 #include "modbus_rtu_driver/DigitalStates.h"
+#include "modbus_rtu_driver/ros/publish_shared.h"
 
 namespace modbus_rtu_driver {
 
@@ -27,7 +28,7 @@ void DigitalStatesPublisher::publish(const std::vector<bool>& states, ros::Time 
     sent_channels_[i] = states[i];
     std_msgs::Bool b;
     b.data = states[i];
-    channels_[i].publish(b);
+    publishShared(channels_[i], b);
   }
 }
 
@@ -43,7 +44,7 @@ void DigitalStatesPublisher::send(ros::Time stamp) {
   msg.states.assign(states_.begin(), states_.end());
   msg.names = names_;
   msg.stale = stale_;
-  array_.publish(msg);
+  publishShared(array_, std::move(msg));
   sent_any_ = true;
   last_sent_ = ros::WallTime::now();
 }

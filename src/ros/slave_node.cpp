@@ -6,6 +6,7 @@
 
 #include "modbus_rtu_driver/WrittenCoils.h"
 #include "modbus_rtu_driver/WrittenRegisters.h"
+#include "modbus_rtu_driver/ros/publish_shared.h"
 #include "modbus_rtu_driver/ros/yaml_params.h"
 
 namespace modbus_rtu_driver {
@@ -71,14 +72,14 @@ void SlaveNode::onWrite(const SlaveWrite& w) {
     msg.header.stamp = now;
     msg.address = w.address;
     msg.states.assign(w.values.begin(), w.values.end());
-    written_coils_.publish(msg);
+    publishShared(written_coils_, std::move(msg));
   } else {
     WrittenRegisters msg;
     msg.header.stamp = now;
     msg.address = w.address;
     msg.values = w.values;
     msg.bytes = registersToMacroBytes(w.values);
-    written_registers_.publish(msg);
+    publishShared(written_registers_, std::move(msg));
   }
   publishNamed(w.table, w.address, w.values);
 }
@@ -100,11 +101,11 @@ void SlaveNode::publishNamed(SlaveTable table, uint16_t address,
     if (table == SlaveTable::kCoils) {
       std_msgs::Bool b;
       b.data = values[i] != 0;
-      pub->second.publish(b);
+      publishShared(pub->second, b);
     } else {
       std_msgs::UInt16 u;
       u.data = values[i];
-      pub->second.publish(u);
+      publishShared(pub->second, u);
     }
   }
 }

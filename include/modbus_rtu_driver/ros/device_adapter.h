@@ -26,6 +26,7 @@
 #include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/devices/output_batch.h"
 #include "modbus_rtu_driver/ros/digital_states_publisher.h"
+#include "modbus_rtu_driver/ros/publish_shared.h"
 
 namespace modbus_rtu_driver {
 
@@ -87,7 +88,7 @@ class DeviceAdapter {
   void publishLater(std::function<void()> task);
   template <class Message>
   void publishLater(const ros::Publisher& publisher, Message message) {
-    publishLater([publisher, m = std::move(message)] { publisher.publish(m); });
+    publishLater([publisher, m = std::move(message)] { publishShared(publisher, m); });
   }
   // A PWM run or a flash started on `channel`: the device changes it by itself.
   void markSelfTimed(uint8_t channel) { failsafe_.selfTimed(channel); }
