@@ -14,7 +14,16 @@ first and last byte). The parts:
     its wake-up: the reply's last byte written -> the node's read of it returned (the kernel
     delivering it and scheduling the bus thread), and
     its own work: that read -> the next write, less t3.5 (decoding, scheduling, the gap's
-    timing).
+    timing), itself split (wire_log's late=) into
+      the gap's sleep waking late: the machine's timer and scheduler, and
+      the rest: the driver's code past the gap, and any preemption of it.
+  Beside them, the bus thread's CPU time from the reply's read to the next request's write
+  (wire_log's cpu=): the driver's code per transaction, most of it run inside t3.5 where it
+  costs the line nothing (so it has no share).
+
+Beside each run, modbus_rtu_wakeup_probe (bench/wakeup_probe.cpp) sleeps to a deadline every
+t3.5 at the bus thread's priority and measures how late the machine wakes a thread that does
+nothing: the machine's share, apart from the driver.
 
 Prints p50 / p99 / max of each, and each share of the elapsed time, as the median
 (lowest-highest) of --repeats runs. Targets: the driver's turnaround p50 < 100 us and p99 < 1 ms;
@@ -24,15 +33,17 @@ its share of the line below 2 %. Starts its own rosmaster.
 """
 import argparse
 import bisect
+import json
 import os
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_bench import (Node, Simulator, own_master, percentile,  # noqa: E402
-                        raise_simulator, spread)
+from node_bench import (Node, Simulator, executable, own_master,  # noqa: E402
+                        percentile, raise_simulator, spread)
 
 
 def character(baud):
@@ -48,17 +59,24 @@ def frame_bytes(hexed):
 
 
 def read_wire_log(path):
-    """The node's frames: (tx or rx, first, last, hex) in the order it sent and read them."""
+    """The node's frames: (tx or rx, first, last, hex, the bus thread's CPU seconds, how late
+    the gap's sleep before a request woke) in the order it sent and read them."""
     events = []
     with open(path) as f:
         for line in f:
             parts = line.split(" ", 3)
-            if len(parts) == 4 and parts[0] in ("tx", "rx"):
-                events.append((parts[0], float(parts[1]), float(parts[2]), parts[3].strip()))
+            if len(parts) == 4 and parts[0] in ("tx", "rx") and " cpu=" in parts[3]:
+                hexed, cpu = parts[3].split(" cpu=")
+                cpu, _, late = cpu.partition(" late=")
+                events.append((parts[0], float(parts[1]), float(parts[2]), hexed, float(cpu),
+                               float(late or 0)))
     return events
 
 
-DRIVER_PARTS = ("driver: wake-up", "driver: own work")  # within the driver's turnaround
+# Within the driver's turnaround: wake-up + own work; own work = late sleep + the rest.
+LATE, REST, CPU = ("driver: own work, the gap's sleep woke late", "driver: own work, the rest",
+                   "driver: CPU time, reply read to next request")
+DRIVER_PARTS = ("driver: wake-up", "driver: own work", LATE, REST, CPU)
 
 
 def attribute(sim_frames, node_frames, baud):
@@ -71,8 +89,8 @@ def attribute(sim_frames, node_frames, baud):
     start = end = None
     sim_times = [f[1] for f in sim_frames]
     for i in range(len(node_frames) - 2):
-        (d0, sent, _, rq_hex), (d1, _, read_last, rp_hex), (d2, next_sent, _, _) = \
-            node_frames[i:i + 3]
+        (d0, sent, _, rq_hex, _, _), (d1, _, read_last, rp_hex, read_cpu, _), \
+            (d2, next_sent, _, _, next_cpu, late) = node_frames[i:i + 3]
         if (d0, d1, d2) != ("tx", "rx", "tx"):
             continue  # a broadcast or a lost reply: not a clean transaction
         # The simulator's view of the same request: the first it read after the node wrote it
@@ -97,7 +115,13 @@ def attribute(sim_frames, node_frames, baud):
         parts["simulator turnaround"].append(max(0.0, reply_start - (sent + request_wire + gap)))
         parts["driver turnaround"].append(next_sent - reply[2] - gap)
         parts["driver: wake-up"].append(read_last - reply[2])
-        parts["driver: own work"].append(next_sent - read_last - gap)
+        own = next_sent - read_last - gap
+        late = min(late, max(own, 0.0))
+        parts["driver: own work"].append(own)
+        parts[LATE].append(late)
+        parts[REST].append(own - late)
+        # Never below 0: a spin preempted would be counted as spun for longer than it ran.
+        parts[CPU].append(max(0.0, next_cpu - read_cpu))
         start = sent if start is None else start
         end = next_sent
     return parts, (end - start) if start is not None else 0.0
@@ -116,13 +140,19 @@ def run_once(workdir, seconds, baud, realtime):
         time.sleep(2.0)  # past the first polls, which read more
         first = len(sim.frames)
         began = time.monotonic()
+        probe = subprocess.Popen(
+            [executable("modbus_rtu_wakeup_probe"), "--seconds", str(seconds), "--period-us",
+             str(int(silence(baud) * 1e6)), "--fifo", str(realtime)], stdout=subprocess.PIPE,
+            text=True)
         time.sleep(seconds)
         frames = list(sim.frames[first:])
+        machine = json.loads(probe.communicate(timeout=30)[0])
     finally:
         node.stop()
         sim.stop()
     node_frames = [f for f in read_wire_log(wire_log) if f[1] >= began - 0.1]
-    return attribute(frames, node_frames, baud)
+    parts, elapsed = attribute(frames, node_frames, baud)
+    return parts, elapsed, machine
 
 
 def report(baud, runs, csv, realtime):
@@ -134,10 +164,11 @@ def report(baud, runs, csv, realtime):
     print("| part | p50 [us] | p99 [us] | max [us] | share of the time [%] |")
     print("|---|---|---|---|---|")
     for name in names:
-        p50 = [1e6 * percentile(parts[name], 50) for parts, _ in runs if parts[name]]
-        p99 = [1e6 * percentile(parts[name], 99) for parts, _ in runs if parts[name]]
-        top = [1e6 * max(parts[name]) for parts, _ in runs if parts[name]]
-        share = [100.0 * sum(parts[name]) / elapsed for parts, elapsed in runs if elapsed > 0]
+        p50 = [1e6 * percentile(parts[name], 50) for parts, _, _ in runs if parts[name]]
+        p99 = [1e6 * percentile(parts[name], 99) for parts, _, _ in runs if parts[name]]
+        top = [1e6 * max(parts[name]) for parts, _, _ in runs if parts[name]]
+        share = [100.0 * sum(parts[name]) / elapsed for parts, elapsed, _ in runs
+                 if elapsed > 0 and name != CPU]
         print("| %s | %s | %s | %s | %s |" % (name, spread(p50, "%.0f"), spread(p99, "%.0f"),
                                                spread(top, "%.0f"), spread(share, "%.2f")))
         if p50:
@@ -145,26 +176,39 @@ def report(baud, runs, csv, realtime):
                                                          name.replace(" ", "_"),
                                                        statistics.median(p50) / 1e6,
                                                        statistics.median(p99) / 1e6,
-                                                       statistics.median(share)))
-    transactions = [len(parts["driver turnaround"]) for parts, _ in runs]
+                                                       statistics.median(share) if share
+                                                       else float("nan")))
+    machine = [m for _, _, m in runs]
+    late = {k: [m["late_us"][k] for m in machine] for k in ("p50", "p99", "max")}
+    print("| machine: a bare thread's wake-up lateness (%s) | %s | %s | %s | - |" % (
+        machine[0]["policy"], spread(late["p50"], "%.0f"), spread(late["p99"], "%.0f"),
+        spread(late["max"], "%.0f")))
+    csv.write("attribution_%d%s,machine_wakeup_lateness,%f,%f,\n" % (
+        baud, "_rt" if realtime else "", statistics.median(late["p50"]) / 1e6,
+        statistics.median(late["p99"]) / 1e6))
+    transactions = [len(parts["driver turnaround"]) for parts, _, _ in runs]
     verdict = lambda ok: "met" if ok else "NOT met"  # noqa: E731
 
     def judged(name):
-        p50 = statistics.median(1e6 * percentile(p[name], 50) for p, _ in runs)
-        p99 = statistics.median(1e6 * percentile(p[name], 99) for p, _ in runs)
-        share = statistics.median(100.0 * sum(p[name]) / e for p, e in runs if e > 0)
+        p50 = statistics.median(1e6 * percentile(p[name], 50) for p, _, _ in runs)
+        p99 = statistics.median(1e6 * percentile(p[name], 99) for p, _, _ in runs)
+        share = statistics.median(100.0 * sum(p[name]) / e for p, e, _ in runs if e > 0)
         return "p50 %.0f us (%s), p99 %.0f us (%s), share %.2f %% (%s)" % (
             p50, verdict(p50 < 100), p99, verdict(p99 < 1000), share, verdict(share < 2.0))
 
     print("\n%s transactions per run. Targets p50 < 100 us, p99 < 1000 us, share of the line "
-          "< 2 %%:\n\n- the driver's own work (its read of the reply's last byte to its write of "
-          "the next request, less t3.5): %s;\n- the driver's turnaround as the issue defines it "
+          "< 2 %%:\n\n- the driver's own work less the machine's lateness in waking it from the "
+          "gap's sleep: %s;\n"
+          "- the driver's own work (its read of the reply's last byte to its write of the next "
+          "request, less t3.5): %s;\n- the driver's turnaround as the issue defines it "
           "(the reply's last byte written by the simulator to the next request written, less "
           "t3.5), which adds the kernel's delivery of the reply through the pty and the bus "
           "thread's wake-up: %s.\n\nThe shares add up to the line's use, the driver's two parts "
           "counted once (in its turnaround): what is left is time no part claims (rounding, "
-          "frames not paired).\n" % (spread(transactions, "%d"), judged("driver: own work"),
-                                       judged("driver turnaround")))
+          "frames not paired). The machine's row: modbus_rtu_wakeup_probe sleeping to a deadline "
+          "every t3.5 beside the node, at the bus thread's priority.\n" % (
+              spread(transactions, "%d"), judged(REST),
+              judged("driver: own work"), judged("driver turnaround")))
 
 
 def main():

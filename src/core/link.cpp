@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 
 namespace modbus_rtu_driver {
 
@@ -15,9 +16,29 @@ std::string formatWireEvent(const WireEvent& e) {
   const auto seconds = [](std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(t.time_since_epoch()).count();
   };
-  char times[64];
+  char times[64], cpu[48];
   std::snprintf(times, sizeof times, " %.6f %.6f ", seconds(e.first), seconds(e.last));
-  return (e.outgoing ? "tx" : "rx") + std::string(times) + toHex(e.frame);
+  std::snprintf(cpu, sizeof cpu, e.outgoing ? " cpu=%.6f late=%.6f" : " cpu=%.6f", e.cpu,
+                e.gap_late);
+  return (e.outgoing ? "tx" : "rx") + std::string(times) + toHex(e.frame) + cpu;
+}
+
+void Link::noteWire(bool outgoing, std::chrono::steady_clock::time_point first,
+                    std::chrono::steady_clock::time_point last, const Bytes& frame, double cpu) {
+  if (!wire_observer_) return;
+  WireEvent e{outgoing, first, last, frame, cpu, 0};
+  if (outgoing) {
+    e.gap_late = std::chrono::duration<double>(gap_late_).count();
+    gap_late_ = {};
+  }
+  wire_observer_(e);
+}
+
+double Link::wireCpuSeconds() const {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9 -
+         std::chrono::duration<double>(spun_).count();
 }
 
 LinkStats Link::stats() const {
@@ -68,7 +89,9 @@ Result Link::runAttempt(const Request& request) {
     ++stats_.attempts;
   }
   Result r = attempt(request);
-  last_activity_ = Steady::now();
+  // The silence after a reply runs from its last byte as read, not from after its decoding.
+  last_activity_ = heard_at_.value_or(Steady::now());
+  heard_at_.reset();
   countAttempt(r);
   // A failure (not an answer) may be followed by a late reply. A success keeps an earlier
   // entry: after a retry, the first attempt's reply may be the one taken, the second's late.
@@ -125,7 +148,9 @@ ReadStatus Link::readObserved(int fd, double first, double between,
   ReadTimes times;
   const ReadStatus status =
       readFrame(fd, first, between, length_of, shortest, max_length, out, error, &times);
-  if (!out->empty()) noteWire(false, times.first, times.last, *out);
+  if (status == ReadStatus::kComplete) heard_at_ = times.last;
+  if (!out->empty() && observingWire())
+    noteWire(false, times.first, times.last, *out, wireCpuSeconds());
   return status;
 }
 

@@ -33,14 +33,19 @@ void Link::keepGap() {
     static thread_local bool slack_set = prctl(PR_SET_TIMERSLACK, 1000UL, 0, 0, 0) == 0;
     (void)slack_set;
     std::this_thread::sleep_until(wake_at);
-    const auto late = std::clamp<Steady::duration>(Steady::now() - wake_at,
-                                                   Steady::duration::zero(), kMaxGapSpin);
+    const auto woke = Steady::now();
+    const auto late =
+        std::clamp<Steady::duration>(woke - wake_at, Steady::duration::zero(), kMaxGapSpin);
     wake_lateness_ += (late - wake_lateness_) / 8;
+    gap_late_ = std::max(woke - ready, Steady::duration::zero());
   }
   // The rest is spun: a sleep ends late by the scheduler's wake-up latency, which would add to
   // every back-to-back transaction.
-  while (spin && Steady::now() < ready) {
+  if (!spin) return;
+  const auto spin_start = Steady::now();
+  while (Steady::now() < ready) {
   }
+  spun_ += Steady::now() - spin_start;
 }
 
 // The margin follows how late wake-ups come, so a quiet machine spins a few microseconds and a

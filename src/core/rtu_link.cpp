@@ -78,11 +78,12 @@ Result RtuLink::send(const Request& request) {
   const Bytes pdu = encodeRequestPdu(request);
   raw.insert(raw.end(), pdu.begin(), pdu.end());
   const auto start = std::chrono::steady_clock::now();
+  const double cpu = observingWire() ? wireCpuSeconds() : 0;
   if (modbus_send_raw_request(ctx_, raw.data(), static_cast<int>(raw.size())) == -1)
     return Result::failure(
         ErrorKind::kIo, request.describe() + ": " + config_.port + ": " + modbus_strerror(errno));
   if (observingWire())
-    noteWire(true, start, std::chrono::steady_clock::now(), encodeRequest(request));
+    noteWire(true, start, std::chrono::steady_clock::now(), encodeRequest(request), cpu);
   return Result::success();
 }
 

@@ -50,8 +50,9 @@ Result TcpLink::closedUnsent(const Request& request) const {
 
 Result TcpLink::send(const Request& request, const Bytes& frame) {
   const auto start = std::chrono::steady_clock::now();
+  const double cpu = observingWire() ? wireCpuSeconds() : 0;
   if (sendAll(fd_, frame)) {
-    noteWire(true, start, std::chrono::steady_clock::now(), frame);
+    noteWire(true, start, std::chrono::steady_clock::now(), frame, cpu);
     return Result::success();
   }
   return Result::failure(

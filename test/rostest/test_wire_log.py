@@ -30,8 +30,14 @@ def frames(path):
         for line in f:
             if not line.endswith("\n"):
                 break  # being written
-            direction, first, last, hexed = line.rstrip("\n").split(" ", 3)
-            out.append((direction, float(first), float(last), bytes.fromhex(hexed)))
+            direction, first, last, rest = line.rstrip("\n").split(" ", 3)
+            hexed, cpu = rest.split(" cpu=")
+            late = None  # a request: how late the gap's sleep before it woke, 0 without one
+            if direction == "tx":
+                cpu, late = cpu.split(" late=")
+                late = float(late)
+            out.append((direction, float(first), float(last), bytes.fromhex(hexed), float(cpu),
+                        late))
     return out
 
 
@@ -53,13 +59,18 @@ class WireLogTest(unittest.TestCase):
         log = helpers.wait_until(logged, 10, "the lamp's write and its echo in " + path)
         self.assertGreater(len(log), 10)
         pairs = 0
-        for i, (direction, first, last, frame) in enumerate(log):
+        for i, (direction, first, last, frame, cpu, late) in enumerate(log):
+            if direction == "tx":
+                self.assertGreaterEqual(late, 0.0)
+            else:
+                self.assertIsNone(late)
             self.assertIn(direction, ("tx", "rx"))
             self.assertLessEqual(first, last)
             self.assertGreaterEqual(len(frame), 4)
             self.assertEqual(crc16(frame[:-2]), frame[-2] | frame[-1] << 8, frame.hex())
             if i > 0:
                 self.assertGreaterEqual(first, log[i - 1][2], "times run forward")
+                self.assertGreaterEqual(cpu, log[i - 1][4], "the bus thread's CPU time too")
             if direction == "rx":
                 request = log[i - 1]
                 self.assertEqual(request[0], "tx", "a reply follows its request")

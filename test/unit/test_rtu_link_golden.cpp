@@ -1,6 +1,7 @@
 // The link puts exactly the manuals' bytes on the line and decodes the manuals' replies.
 #include <gtest/gtest.h>
 
+#include <ctime>
 #include <future>
 
 #include "golden_frames.h"
@@ -127,7 +128,22 @@ TEST(RtuLinkGolden, WireObserverSeesEachFrameWithItsTimes) {
   EXPECT_LE(events[0].first, events[0].last);
   EXPECT_LE(events[0].last, events[1].first);
   EXPECT_LE(events[1].first, events[1].last);
-  const std::string line = formatWireEvent(events[1]);
-  EXPECT_EQ(line.rfind("rx ", 0), 0u) << line;
-  EXPECT_NE(line.find(" 01 03 02 00 7C B9 A5"), std::string::npos) << line;
+  // The calling thread's CPU time runs forward, and nothing was spun (not a real-time thread).
+  EXPECT_GT(events[0].cpu, 0.0);
+  EXPECT_LE(events[0].cpu, events[1].cpu);
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  EXPECT_LE(events[1].cpu, static_cast<double>(now.tv_sec) + now.tv_nsec * 1e-9);
+  WireEvent e = events[1];
+  e.first = e.last = std::chrono::steady_clock::time_point(std::chrono::microseconds(12500001));
+  e.cpu = 0.0042;
+  EXPECT_EQ(formatWireEvent(e), "rx 12.500001 12.500001 01 03 02 00 7C B9 A5 cpu=0.004200");
+  // A request also says how late the gap's sleep before it woke.
+  EXPECT_GE(events[0].gap_late, 0.0);
+  e = events[0];
+  e.first = e.last = std::chrono::steady_clock::time_point(std::chrono::microseconds(12500001));
+  e.cpu = 0.0042;
+  e.gap_late = 0.000057;
+  EXPECT_EQ(formatWireEvent(e),
+            "tx 12.500001 12.500001 01 03 00 80 00 01 85 E2 cpu=0.004200 late=0.000057");
 }

@@ -10,6 +10,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "modbus_rtu_driver/core/fd_io.h"
@@ -49,9 +50,17 @@ struct WireEvent {
   bool outgoing = false;
   std::chrono::steady_clock::time_point first{}, last{};
   Bytes frame;
+  // The bus thread's CPU seconds at the event (a request: before its write; a reply: after its
+  // last read), less what keepGap spun: between a reply and the next request, the CPU the
+  // driver's own work took.
+  double cpu = 0;
+  // A request: how late the sleep for the gap before it woke (0 without one), the machine's
+  // part of the driver's turnaround.
+  double gap_late = 0;
 };
 using WireObserver = std::function<void(const WireEvent&)>;
-// "tx|rx FIRST LAST HEX", times in seconds: the simulator's --timestamps form.
+// "tx|rx FIRST LAST HEX cpu=SECONDS[ late=SECONDS]" (late: requests), the first four the
+// simulator's --timestamps form.
 std::string formatWireEvent(const WireEvent& event);
 
 class Link : public Transport {
@@ -109,10 +118,11 @@ class Link : public Transport {
                           const std::function<long(const Bytes&)>& length_of, size_t shortest,
                           size_t max_length, Bytes* out, int* error);
   bool observingWire() const { return static_cast<bool>(wire_observer_); }
+  // WireEvent::cpu now (a clock call: only while observed).
+  double wireCpuSeconds() const;
+  // A request takes the lateness of the gap's last sleep.
   void noteWire(bool outgoing, std::chrono::steady_clock::time_point first,
-                std::chrono::steady_clock::time_point last, const Bytes& frame) const {
-    if (wire_observer_) wire_observer_(WireEvent{outgoing, first, last, frame});
-  }
+                std::chrono::steady_clock::time_point last, const Bytes& frame, double cpu);
 
   LinkConfig config_;
   double reply_delay_[256] = {};
@@ -140,6 +150,10 @@ class Link : public Transport {
   // keepGap: how late sleeps have woken, a slow average (27 us before the first: a 50 us margin).
   static constexpr std::chrono::microseconds kMaxGapSpin{200};
   std::chrono::steady_clock::duration wake_lateness_{std::chrono::microseconds(27)};
+  std::chrono::steady_clock::duration spun_{};      // keepGap's spinning, in all
+  std::chrono::steady_clock::duration gap_late_{};  // its last sleep's lateness, for noteWire
+  // When readObserved returned the last byte of a whole frame, for the attempt's end.
+  std::optional<std::chrono::steady_clock::time_point> heard_at_;
 };
 
 }  // namespace modbus_rtu_driver
