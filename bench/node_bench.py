@@ -14,6 +14,7 @@ normal priority and at SCHED_FIFO --realtime P (the node's realtime_priority).
 """
 import argparse
 import contextlib
+import json
 import logging
 import os
 import socket
@@ -136,6 +137,16 @@ class Node:
             seconds = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
             by_name[name] = by_name.get(name, 0.0) + seconds
         return by_name
+
+    def bus_thread_wakeups(self):
+        """The bus thread's voluntary context switches so far: each is a sleep and a wake-up."""
+        for tid in os.listdir("/proc/%d/task" % self.proc.pid):
+            if self._comm(tid) == "modbus_bus":
+                with open("/proc/%d/task/%s/status" % (self.proc.pid, tid)) as f:
+                    for line in f:
+                        if line.startswith("voluntary_ctxt_switches:"):
+                            return int(line.split()[1])
+        return 0
 
     def _comm(self, tid):
         with open("/proc/%d/task/%s/comm" % (self.proc.pid, tid)) as f:
@@ -316,13 +327,22 @@ def measure_cpu(workdir, seconds):
         sub = rospy.Subscriber("/diagnostics", DiagnosticArray, on_diag)
         time.sleep(3.0)
         c0, th0, t0 = node.cpu_seconds(), node.thread_cpu_seconds(), time.monotonic()
+        w0 = node.bus_thread_wakeups()
         time.sleep(seconds)
         c1, th1, t1 = node.cpu_seconds(), node.thread_cpu_seconds(), time.monotonic()
+        wakeups = (node.bus_thread_wakeups() - w0) / (t1 - t0)
         sub.unregister()
     finally:
         node.stop()
         sim.stop()
     threads = {k: 100.0 * (th1.get(k, 0.0) - th0.get(k, 0.0)) / (t1 - t0) for k in th1}
+    # The floor: what sleeping and waking that often costs on this machine, by a thread that
+    # does nothing else (bench/wakeup_probe.cpp), run alone just after.
+    probe = json.loads(subprocess.check_output(
+        [executable("modbus_rtu_wakeup_probe"), "--seconds", str(seconds), "--period-us",
+         str(int(1e6 / max(wakeups, 1.0)))], text=True))
+    threads["floor"] = probe["cpu_percent"]
+    threads["wake-ups/s"] = wakeups
     return 100.0 * (c1 - c0) / (t1 - t0), rates, threads
 
 
@@ -337,15 +357,18 @@ def cpu(workdir, seconds, csv, repeats):
             threads.setdefault(k, []).append(v)
     print("## Node CPU while polling 3 devices at 50 Hz (simulator answering at once, 115200, "
           "%d runs)\n" % repeats)
-    print("| CPU of one core [%] | of it: bus thread / ROS threads [%] | target | "
-          "achieved poll rates [Hz] |")
-    print("|---|---|---|---|")
-    print("| %s | %s / %s | < 5 %% | %s |" % (
+    print("| CPU of one core [%] | of it: bus thread / ROS threads [%] | bus thread wake-ups "
+          "[1/s] | a bare thread waking as often [%] | target | achieved poll rates [Hz] |")
+    print("|---|---|---|---|---|---|")
+    print("| %s | %s / %s | %s | %s | < 5 %% | %s |" % (
         spread(shares, "%.1f"), spread(threads.get("bus thread", []), "%.1f"),
-        spread(threads.get("ROS threads", []), "%.1f"),
+        spread(threads.get("ROS threads", []), "%.1f"), spread(threads["wake-ups/s"], "%.0f"),
+        spread(threads["floor"], "%.1f"),
         ", ".join("%s %s" % (k, spread(v, "%.1f")) for k, v in sorted(rates.items()))))
     print("\nMedian (lowest-highest) over the runs; /proc/<pid>/stat (utime + stime) over %.0f s "
-          "each.\n" % seconds)
+          "each. A bus thread sleeps and wakes for each reply, each gap and each poll; the bare "
+          "thread (modbus_rtu_wakeup_probe, run alone after each run) does only that, as often: "
+          "the machine's floor for that many wake-ups.\n" % seconds)
     csv.write("cpu,3x50Hz,%f,%f,%f\n" % (statistics.median(shares), min(shares), max(shares)))
 
 

@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -39,7 +40,7 @@ double cpuSeconds() {
 double percentile(std::vector<double> v, double p) {  // nearest rank, as node_bench.py's
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  const auto rank = static_cast<size_t>(p / 100.0 * static_cast<double>(v.size()) + 0.5);
+  const auto rank = static_cast<size_t>(std::lround(p / 100.0 * static_cast<double>(v.size())));
   return v[std::min(v.size() - 1, rank > 0 ? rank - 1 : 0)];
 }
 
