@@ -37,11 +37,12 @@ double cpuSeconds() {
          static_cast<double>(r.ru_utime.tv_usec + r.ru_stime.tv_usec) * 1e-6;
 }
 
-double percentile(std::vector<double> v, double p) {  // nearest rank, as node_bench.py's
+double percentile(std::vector<double> v, double p) {  // as node_bench.py's
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  const auto rank = static_cast<size_t>(std::lround(p / 100.0 * static_cast<double>(v.size())));
-  return v[std::min(v.size() - 1, rank > 0 ? rank - 1 : 0)];
+  const auto index =
+      static_cast<size_t>(std::lround(p / 100.0 * static_cast<double>(v.size() - 1)));
+  return v[std::min(v.size() - 1, index)];
 }
 
 }  // namespace
