@@ -2,7 +2,9 @@
 # Installs what is missing, builds, and runs the benchmark (a script, not a test): the bus layer
 # against plain libmodbus and pymodbus, line utilisation, 1-32 devices (modbus_rtu_benchmark),
 # then where the line's time goes (bench/line_attribution.py: wire, silences, the simulator's
-# and the driver's turnaround), the node's latency and CPU use (bench/node_bench.py, its own
+# and the driver's turnaround, and beside them a bare thread's wake-up lateness from
+# modbus_rtu_wakeup_probe, the machine's share), the node's latency and CPU use against the CPU
+# a bare thread waking as often costs (bench/node_bench.py, its own
 # rosmaster) and the latency of a request through the node's Modbus TCP share
 # (bench/share_bench.py). Each node figure is the median (lowest-highest) of 5 runs. Writes
 # bench/results.md and bench/results.csv. Usage: scripts/benchmark.sh [SECONDS_PER_CELL]
