@@ -23,6 +23,7 @@ TEST(SimFaults, SilenceFailAndCorrupt) {
   const Bytes read = encodeRequest(kRead);
   ASSERT_EQ(line("silence 2 1"), "ok");
   EXPECT_EQ(client.exchange(read), "");
+  ASSERT_TRUE(line.tookFrames(1));  // heard while silenced, not answered after "silence 2 0"
   ASSERT_EQ(line("silence 2 0"), "ok");
   EXPECT_EQ(client.exchange(read, 6), good());
   ASSERT_EQ(line("fail 2 1"), "ok");
