@@ -126,7 +126,12 @@ class FailsafeTest(unittest.TestCase):
         pub = rospy.Publisher(NS + "relays/valve/command", Bool, queue_size=1)
         helpers.wait_until(lambda: pub.get_num_connections() > 0, 10, "the node subscribed")
         since = len(self.events)
-        # Renewed every 0.1 s (timeout 1 s): stays on.
+        # Renewed every 0.1 s (timeout 1 s): stays on. First renewed until the first command has
+        # reached the board (bounded: a loaded machine may be slow to deliver it), then for 2 s.
+        on_by = time.time() + 15.0
+        while self.coils(RELAYS, 2)[1] != 1 and time.time() < on_by:
+            pub.publish(Bool(True))
+            time.sleep(0.1)
         end = time.time() + 2.0
         while time.time() < end:
             pub.publish(Bool(True))

@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <stdlib.h>
+#include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -50,6 +51,13 @@ class PtyPair {
   }
   void write(const Bytes& bytes) {
     if (!bytes.empty() && ::write(master_, bytes.data(), bytes.size()) < 0) return;
+  }
+  // Bytes written on the master side that have reached the client's input queue and are not
+  // read yet. A pty hands written bytes on through a kernel worker, a moment later: a test that
+  // needs them to be there before the client acts waits for this instead of sleeping.
+  size_t pendingAtClient() const {
+    int n = 0;
+    return ioctl(slave_, FIONREAD, &n) == 0 && n > 0 ? static_cast<size_t>(n) : 0;
   }
 
  private:

@@ -12,6 +12,7 @@
 
 #include "modbus_rtu_driver/core/rtu_link.h"
 #include "pty_pair.h"
+#include "wait_for.h"
 
 using namespace modbus_rtu_driver;
 
@@ -97,8 +98,10 @@ TEST_F(RtuLinkFaults, AWriteWhoseEchoDiffersIsNotConfirmed) {
 TEST_F(RtuLinkFaults, ALateReplyIsNotTheAnswerToTheNextRequest) {
   const Request first = Request::readHoldingRegisters(1, 0, 1);
   // The reply to the first request arrives after its timeout (0.3 s) ...
-  EXPECT_EQ(exchange(first, withCrc({1, 0x03, 0x02, 0x11, 0x11}), 450).error, ErrorKind::kTimeout);
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const Bytes late = withCrc({1, 0x03, 0x02, 0x11, 0x11});
+  EXPECT_EQ(exchange(first, late, 450).error, ErrorKind::kTimeout);
+  // The late reply is on the link's side of the line before the next request goes out.
+  ASSERT_TRUE(waitFor([&] { return pty_.pendingAtClient() >= late.size(); }));
   // ... and must not be taken as the answer to the second.
   const Result second = exchange(first, withCrc({1, 0x03, 0x02, 0x22, 0x22}));
   ASSERT_TRUE(second.ok()) << second.message;
@@ -150,8 +153,11 @@ TEST_F(RtuLinkFaults, ARequestThatIsNotRepeatableIsSentOnce) {
 }
 
 TEST_F(RtuLinkFaults, StrayBytesBeforeARequestAreFlushed) {
-  pty_.write({0xFF, 0x10, 0x00, 0x00, 0x00});  // e.g. the tail of a long echo
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const Bytes stray{0xFF, 0x10, 0x00, 0x00, 0x00};  // e.g. the tail of a long echo
+  pty_.write(stray);
+  // On the link's side of the line before the request goes out (a pty passes them on a moment
+  // later; arriving mid-exchange they would be another test).
+  ASSERT_TRUE(waitFor([&] { return pty_.pendingAtClient() >= stray.size(); }));
   for (uint8_t slave : {1, 255}) {
     const Result r = exchange(Request::readCoils(slave, 0, 8), withCrc({slave, 0x01, 0x01, 0x81}));
     ASSERT_TRUE(r.ok()) << r.message;

@@ -23,6 +23,7 @@ TEST(SimFaults, SilenceFailAndCorrupt) {
   const Bytes read = encodeRequest(kRead);
   ASSERT_EQ(line("silence 2 1"), "ok");
   EXPECT_EQ(client.exchange(read), "");
+  ASSERT_TRUE(line.tookFrames(1));  // heard while silenced, not answered after "silence 2 0"
   ASSERT_EQ(line("silence 2 0"), "ok");
   EXPECT_EQ(client.exchange(read, 6), good());
   ASSERT_EQ(line("fail 2 1"), "ok");
@@ -70,10 +71,14 @@ TEST(SimFaults, DroppedRequestsDoNothingDroppedRepliesStillAct) {
   ASSERT_EQ(line("drop 2 100 request"), "ok");
   const Bytes on = encodeRequest(Request::writeSingleCoil(2, 0, true));
   EXPECT_EQ(client.exchange(on, 8, 100ms), "");
+  // 100 ms of silence does not mean the simulator has read the request: wait until it has
+  // (else the drop setting could change under it, and the state be read before it acted).
+  ASSERT_TRUE(line.tookFrames(1));
   EXPECT_EQ(line("get 2 coil 0"), "ok 0") << "never heard";
   ASSERT_EQ(line("drop 2 0 request"), "ok");
   ASSERT_EQ(line("drop 2 100 reply"), "ok");
   EXPECT_EQ(client.exchange(on, 8, 100ms), "");
+  ASSERT_TRUE(line.tookFrames(2));
   EXPECT_EQ(line("get 2 coil 0"), "ok 1") << "done, only the reply lost";
   EXPECT_EQ(line("stats 2"), "ok changes 1 dropped_requests 1 dropped_replies 1");
   ASSERT_EQ(line("drop 2 0 reply"), "ok");
@@ -86,8 +91,29 @@ TEST(SimFaults, ADropShareIsRoughlyKept) {
   Line line({{"yespeed_pdu", 2}});
   PtyClient client(line.link());
   ASSERT_EQ(line("drop 2 20 reply"), "ok");
+  // The simulator's replies so far: written whole, and dropped.
+  auto replies = [&] {
+    unsigned long long received = 0, answered = 0, dropped = 0, dropped_replies = 0;
+    std::sscanf(line("frames").c_str(), "ok %llu %llu %llu", &received, &answered, &dropped);
+    std::sscanf(line("stats 2").c_str(), "ok changes %*u dropped_requests %*u dropped_replies %llu",
+                &dropped_replies);
+    return std::make_pair(answered, dropped_replies);
+  };
   int lost = 0;
-  for (int i = 0; i < 200; ++i) lost += client.exchange(encodeRequest(kRead), 6, 150ms).empty();
+  unsigned long long dropped_before = 0;
+  for (int i = 0; i < 200; ++i) {
+    if (!client.exchange(encodeRequest(kRead), 6, 150ms).empty()) continue;
+    // Silence for 150 ms: a lost reply, or a late one on a loaded machine. Once the simulator is
+    // done with the request, a reply it says it wrote must arrive; one it dropped stays lost.
+    std::pair<unsigned long long, unsigned long long> done;
+    ASSERT_TRUE(waitFor([&] {
+      done = replies();
+      return done.first + done.second >= static_cast<unsigned long long>(i) + 1;
+    }));
+    const bool dropped = done.second > dropped_before;
+    dropped_before = done.second;
+    lost += dropped || client.receive(6, 2000ms).empty();
+  }
   EXPECT_GT(lost, 15);
   EXPECT_LT(lost, 70);
   EXPECT_EQ(line("stats 2"),

@@ -9,12 +9,14 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 
 #include "modbus_rtu_driver/core/frame.h"
 #include "modbus_rtu_driver/sim/sim_lc_relay8.h"
 #include "modbus_rtu_driver/sim/simulator.h"
+#include "wait_for.h"
 
 namespace modbus_rtu_driver {
 namespace simtest {
@@ -143,6 +145,22 @@ class Line {
   }
   Simulator& sim() { return *sim_; }
   std::string operator()(const std::string& command) { return sim_->command(command); }
+  // Frames the simulator has taken off the line so far: valid ones and runs of bytes it dropped
+  // (the "frames" command's RECEIVED + DROPPED).
+  uint64_t framesTaken() {
+    unsigned long long received = 0, answered = 0, dropped = 0;
+    const std::string f = sim_->command("frames");
+    if (std::sscanf(f.c_str(), "ok %llu %llu %llu", &received, &answered, &dropped) != 3) return 0;
+    return received + dropped;
+  }
+  // True once the simulator has taken `count` frames off the line (bounded wait). A silence heard
+  // by the client says nothing about whether the simulator's thread has read the request yet (a
+  // loaded machine): a test waits for this before it checks the devices or changes the line.
+  ::testing::AssertionResult tookFrames(uint64_t count) {
+    if (waitFor([&] { return framesTaken() >= count; })) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure()
+           << "the simulator took " << framesTaken() << " of " << count << " frames within 10 s";
+  }
   std::string link() const { return dir_ / "tty"; }
 
  private:

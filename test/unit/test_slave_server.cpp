@@ -11,7 +11,6 @@
 #include "wait_for.h"
 
 using namespace modbus_rtu_driver;
-using namespace std::chrono_literals;
 
 namespace {
 
@@ -76,9 +75,16 @@ TEST_F(SlaveServerTest, TheManualsTwoFrames) {
 TEST_F(SlaveServerTest, SettersAreWhatTheMasterReads) {
   EXPECT_EQ(server_->set(SlaveTable::kInputRegisters, 10, {500, 600}), "");
   EXPECT_EQ(server_->set(SlaveTable::kDiscreteInputs, 0, {1, 0, 1}), "");
-  std::this_thread::sleep_for(20ms);
+  // set() queues the change; the server thread applies it at the top of its next loop, so a
+  // request it is already waiting for may still be answered from the old table: ask again
+  // until the new values show (bounded), rather than sleeping and hoping the loop came round.
   const Request ir = Request::readInputRegisters(1, 10, 2);
-  EXPECT_EQ(toHex(ask(encodeRequest(ir), 9)), toHex(encodeReply(ir, {500, 600})));
+  const std::string ir_reply = toHex(encodeReply(ir, {500, 600}));
+  std::string got;
+  EXPECT_TRUE(waitFor([&] { return (got = toHex(ask(encodeRequest(ir), 9))) == ir_reply; }));
+  EXPECT_EQ(got, ir_reply);
+  // The discrete inputs were queued before that request went out: the server's loop applies
+  // them before it reads the next one.
   const Request di = Request::readDiscreteInputs(1, 0, 3);
   EXPECT_EQ(toHex(ask(encodeRequest(di), 6)), toHex(encodeReply(di, {1, 0, 1})));
   const std::string e = server_->set(SlaveTable::kHoldingRegisters, 63, {1, 2});
