@@ -16,10 +16,10 @@ std::string formatWireEvent(const WireEvent& e) {
   const auto seconds = [](std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(t.time_since_epoch()).count();
   };
-  char times[64], cpu[48];
+  char times[64], cpu[80];
   std::snprintf(times, sizeof times, " %.6f %.6f ", seconds(e.first), seconds(e.last));
-  std::snprintf(cpu, sizeof cpu, e.outgoing ? " cpu=%.6f late=%.6f" : " cpu=%.6f", e.cpu,
-                e.gap_late);
+  std::snprintf(cpu, sizeof cpu, e.outgoing ? " cpu=%.6f late=%.6f guard=%.6f" : " cpu=%.6f", e.cpu,
+                e.gap_late, e.guard_wait);
   return (e.outgoing ? "tx" : "rx") + std::string(times) + toHex(e.frame) + cpu;
 }
 
@@ -29,7 +29,8 @@ void Link::noteWire(bool outgoing, std::chrono::steady_clock::time_point first,
   WireEvent e{outgoing, first, last, frame, cpu, 0};
   if (outgoing) {
     e.gap_late = std::chrono::duration<double>(gap_late_).count();
-    gap_late_ = {};
+    e.guard_wait = std::chrono::duration<double>(guard_wait_).count();
+    gap_late_ = guard_wait_ = {};
   }
   wire_observer_(e);
 }

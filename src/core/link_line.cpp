@@ -75,7 +75,8 @@ void Link::settleLine(int fd, const Request& request) {
 // Reads and drops bytes until `until`, pushed back by late_reply_guard whenever bytes come
 // (1 s at most, so a babbling line cannot stall the bus).
 void Link::awaitQuietLine(int fd, Steady::time_point until) {
-  const auto give_up = Steady::now() + std::chrono::seconds(1);
+  const auto began = Steady::now();
+  const auto give_up = began + std::chrono::seconds(1);
   uint64_t dropped = 0;
   for (auto now = Steady::now(); now < until && now < give_up; now = Steady::now()) {
     if (waitReadable(fd, std::chrono::duration<double>(until - now).count()) <= 0) break;
@@ -86,6 +87,7 @@ void Link::awaitQuietLine(int fd, Steady::time_point until) {
     until = Steady::now() + seconds(config_.late_reply_guard);
   }
   last_activity_ = Steady::now();
+  guard_wait_ = last_activity_ - began;
   addStaleBytes(dropped);
 }
 

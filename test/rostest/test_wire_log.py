@@ -32,12 +32,12 @@ def frames(path):
                 break  # being written
             direction, first, last, rest = line.rstrip("\n").split(" ", 3)
             hexed, cpu = rest.split(" cpu=")
-            late = None  # a request: how late the gap's sleep before it woke, 0 without one
+            waits = None  # a request: how late the gap's sleep woke, the late-reply guard's wait
             if direction == "tx":
                 cpu, late = cpu.split(" late=")
-                late = float(late)
+                waits = tuple(float(w) for w in late.split(" guard="))
             out.append((direction, float(first), float(last), bytes.fromhex(hexed), float(cpu),
-                        late))
+                        waits))
     return out
 
 
@@ -59,11 +59,12 @@ class WireLogTest(unittest.TestCase):
         log = helpers.wait_until(logged, 10, "the lamp's write and its echo in " + path)
         self.assertGreater(len(log), 10)
         pairs = 0
-        for i, (direction, first, last, frame, cpu, late) in enumerate(log):
+        for i, (direction, first, last, frame, cpu, waits) in enumerate(log):
             if direction == "tx":
-                self.assertGreaterEqual(late, 0.0)
+                self.assertEqual(len(waits), 2, "late= and guard=")
+                self.assertGreaterEqual(min(waits), 0.0)
             else:
-                self.assertIsNone(late)
+                self.assertIsNone(waits)
             self.assertIn(direction, ("tx", "rx"))
             self.assertLessEqual(first, last)
             self.assertGreaterEqual(len(frame), 4)

@@ -144,6 +144,8 @@ TEST(RtuLinkGolden, WireObserverSeesEachFrameWithItsTimes) {
   e.first = e.last = std::chrono::steady_clock::time_point(std::chrono::microseconds(12500001));
   e.cpu = 0.0042;
   e.gap_late = 0.000057;
+  e.guard_wait = 0.05;
   EXPECT_EQ(formatWireEvent(e),
-            "tx 12.500001 12.500001 01 03 00 80 00 01 85 E2 cpu=0.004200 late=0.000057");
+            "tx 12.500001 12.500001 01 03 00 80 00 01 85 E2 cpu=0.004200 late=0.000057 "
+            "guard=0.050000");
 }

@@ -57,10 +57,12 @@ struct WireEvent {
   // A request: how late the sleep for the gap before it woke (0 without one), the machine's
   // part of the driver's turnaround.
   double gap_late = 0;
+  // A request: how long the late-reply guard held it after a failed transaction (0: not).
+  double guard_wait = 0;
 };
 using WireObserver = std::function<void(const WireEvent&)>;
-// "tx|rx FIRST LAST HEX cpu=SECONDS[ late=SECONDS]" (late: requests), the first four the
-// simulator's --timestamps form.
+// "tx|rx FIRST LAST HEX cpu=SECONDS[ late=SECONDS guard=SECONDS]" (late and guard: requests),
+// the first four the simulator's --timestamps form.
 std::string formatWireEvent(const WireEvent& event);
 
 class Link : public Transport {
@@ -150,8 +152,9 @@ class Link : public Transport {
   // keepGap: how late sleeps have woken, a slow average (27 us before the first: a 50 us margin).
   static constexpr std::chrono::microseconds kMaxGapSpin{200};
   std::chrono::steady_clock::duration wake_lateness_{std::chrono::microseconds(27)};
-  std::chrono::steady_clock::duration spun_{};      // keepGap's spinning, in all
-  std::chrono::steady_clock::duration gap_late_{};  // its last sleep's lateness, for noteWire
+  std::chrono::steady_clock::duration spun_{};        // keepGap's spinning, in all
+  std::chrono::steady_clock::duration gap_late_{};    // its last sleep's lateness, for noteWire
+  std::chrono::steady_clock::duration guard_wait_{};  // awaitQuietLine's last wait, for noteWire
   // When readObserved returned the last byte of a whole frame, for the attempt's end.
   std::optional<std::chrono::steady_clock::time_point> heard_at_;
 };
