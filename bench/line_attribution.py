@@ -134,6 +134,14 @@ def attribute(sim_frames, node_frames, baud):
     return parts, (end - start) if start is not None else 0.0
 
 
+def stolen_seconds():
+    """CPU time the hypervisor gave to others while this VM wanted it (/proc/stat's steal, summed
+    over the CPUs): a stall no process here can cause or prevent."""
+    with open("/proc/stat") as f:
+        fields = f.readline().split()
+    return int(fields[8]) / os.sysconf("SC_CLK_TCK") if len(fields) > 8 else 0.0
+
+
 def run_once(workdir, seconds, baud, realtime):
     sim = Simulator(workdir, pace=True, baud=baud)
     if realtime:
@@ -146,7 +154,7 @@ def run_once(workdir, seconds, baud, realtime):
         node.wait_ready()
         time.sleep(2.0)  # past the first polls, which read more
         first = len(sim.frames)
-        began = time.monotonic()
+        began, stolen = time.monotonic(), stolen_seconds()
         probe = subprocess.Popen(
             [executable("modbus_rtu_wakeup_probe"), "--seconds", str(seconds), "--period-us",
              str(int(silence(baud) * 1e6)), "--fifo", str(realtime)], stdout=subprocess.PIPE,
@@ -154,6 +162,8 @@ def run_once(workdir, seconds, baud, realtime):
         time.sleep(seconds)
         frames = list(sim.frames[first:])
         machine = json.loads(probe.communicate(timeout=30)[0])
+        machine["steal_percent"] = 100.0 * (stolen_seconds() - stolen) / (
+            (time.monotonic() - began) * os.cpu_count())
     finally:
         node.stop()
         sim.stop()
@@ -192,6 +202,8 @@ def report(baud, runs, csv, realtime):
     print("| machine: a bare thread's wake-up lateness (%s) | %s | %s | %s | - |" % (
         machine[0]["policy"], spread(late["p50"], "%.0f"), spread(late["p99"], "%.0f"),
         spread(late["max"], "%.0f")))
+    print("| machine: CPU time the hypervisor took (steal) [%% of the CPUs] | - | - | - | %s |" %
+          spread([m["steal_percent"] for m in machine], "%.2f"))
     csv.write("attribution_%d%s,machine_wakeup_lateness,%f,%f,\n" % (
         baud, "_rt" if realtime else "", statistics.median(late["p50"]) / 1e6,
         statistics.median(late["p99"]) / 1e6))
