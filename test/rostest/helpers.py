@@ -52,3 +52,24 @@ class Latest:
 def service(name, srv_type, timeout=20.0):
     rospy.wait_for_service(name, timeout=timeout)
     return rospy.ServiceProxy(name, srv_type)
+
+
+def wire_log(path):
+    """The node's wire_log (docs/ros_api.md): (direction, first, last, frame bytes, cpu, waits)
+    per whole line, where waits is (late, guard) for a request and None for a reply."""
+    if not os.path.exists(path):
+        return []
+    out = []
+    with open(path) as f:
+        for line in f:
+            if not line.endswith("\n"):
+                break  # being written
+            direction, first, last, rest = line.rstrip("\n").split(" ", 3)
+            hexed, cpu = rest.split(" cpu=")
+            waits = None
+            if direction == "tx":
+                cpu, late = cpu.split(" late=")
+                waits = tuple(float(w) for w in late.split(" guard="))
+            out.append((direction, float(first), float(last), bytes.fromhex(hexed), float(cpu),
+                        waits))
+    return out

@@ -5,7 +5,6 @@ with nothing written, and the merged read the device refuses (input registers 2-
 exception 02) is split and reported in /diagnostics. Signals with write_function 16 / 15 go out
 as those frames (the node's wire_log shows them) and land; /diagnostics shows each poll group's
 achieved rate beside its configured one."""
-import os
 import struct
 import unittest
 
@@ -92,13 +91,8 @@ class GenericDeviceTest(unittest.TestCase):
                                                       "the setpoint latched")
 
     def sent_frames(self):
-        """Requests the node sent, from its wire_log ("tx FIRST LAST HEX" lines)."""
-        path = rospy.get_param("~wire_log")
-        if not os.path.exists(path):
-            return []
-        with open(path) as f:
-            return [bytes.fromhex(line.split(" ", 3)[3]) for line in f
-                    if line.startswith("tx ") and line.endswith("\n")]
+        """Requests the node sent, from its wire_log."""
+        return [f[3] for f in helpers.wire_log(rospy.get_param("~wire_log")) if f[0] == "tx"]
 
     def test_write_function_16_and_15_for_one_value(self):
         limit = helpers.service(NS + "limit/set", SetValue)

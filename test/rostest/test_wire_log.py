@@ -1,8 +1,7 @@
 #!/usr/bin/env python3
-"""wire_log: the node writes every frame it sends and reads, "tx|rx FIRST LAST HEX" with
-CLOCK_MONOTONIC seconds; each request is followed by its reply from the same slave, every frame
+"""wire_log: the node writes every frame it sends and reads, "tx|rx FIRST LAST HEX cpu=..."
+with CLOCK_MONOTONIC seconds; each request is followed by its reply from the same slave, every frame
 has a valid CRC, times run forward, and a service write shows as its frame."""
-import os
 import time
 import unittest
 
@@ -22,25 +21,6 @@ def crc16(data):
     return crc
 
 
-def frames(path):
-    if not os.path.exists(path):
-        return []
-    out = []
-    with open(path) as f:
-        for line in f:
-            if not line.endswith("\n"):
-                break  # being written
-            direction, first, last, rest = line.rstrip("\n").split(" ", 3)
-            hexed, cpu = rest.split(" cpu=")
-            waits = None  # a request: how late the gap's sleep woke, the late-reply guard's wait
-            if direction == "tx":
-                cpu, late = cpu.split(" late=")
-                waits = tuple(float(w) for w in late.split(" guard="))
-            out.append((direction, float(first), float(last), bytes.fromhex(hexed), float(cpu),
-                        waits))
-    return out
-
-
 class WireLogTest(unittest.TestCase):
     def test_frames_in_the_log(self):
         rospy.init_node("test_wire_log", anonymous=True)
@@ -53,7 +33,7 @@ class WireLogTest(unittest.TestCase):
         write = bytes([0xFF, 0x05, 0x00, 0x02, 0xFF, 0x00])
 
         def logged():  # the log once it holds the write and the line after it
-            got = frames(path)
+            got = helpers.wire_log(path)
             return got if any(f[0] == "tx" and f[3][:6] == write and f[1] >= started
                               for f in got[:-1]) else None
         log = helpers.wait_until(logged, 10, "the lamp's write and its echo in " + path)
