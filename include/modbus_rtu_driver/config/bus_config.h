@@ -38,8 +38,8 @@ struct BusConfig {
   // locks its memory (mlockall). Both need the user's limits to allow them (docs/ros_api.md).
   int realtime_priority = 0;
   bool lock_memory = false;
-  // A file the node writes every frame to, with when it was sent or read ("tx|rx FIRST LAST
-  // HEX", CLOCK_MONOTONIC seconds, as the simulator's --timestamps); empty = none.
+  // A file the node writes every frame to, with when it was sent or read and the bus thread's
+  // CPU time (formatWireEvent, core/link.h); empty = none.
   std::string wire_log;
   // `share`: Modbus TCP clients reach the bus through the node (docs/share.md); off unless set.
   ShareConfig share;
