@@ -73,7 +73,9 @@ class LoadTest(unittest.TestCase):
         self.assertEqual(final, expected)
 
     def test_command_flood(self):
-        pub = rospy.Publisher(NS + "out6/command", Bool, queue_size=10000)
+        # queue_size=None: publish() returns once the message is in the socket to the node, so
+        # after the last one nothing older is still waiting in this process.
+        pub = rospy.Publisher(NS + "out6/command", Bool, queue_size=None)
         helpers.wait_until(lambda: pub.get_num_connections() > 0, 10, "the node to subscribe")
         rss_before = node_rss_kib()
         set_out5 = helpers.service(NS + "out5/set", SetBool)
@@ -85,7 +87,10 @@ class LoadTest(unittest.TestCase):
                 answers.append((set_out5(n % 2 == 0).success, time.time() - t0))
         pub.publish(Bool(True))  # the newest command
         helpers.wait_until(lambda: self.sim.get("255", "coil", 6) == [1], 10, "the newest command")
-        rospy.sleep(1.0)
+        # An older "on" may have set it: let the line carry 50 more frames (older commands still
+        # in the node would be written by then; the node merges them into one write) and look again.
+        after = self.sim.frames()[0] + 50
+        helpers.wait_until(lambda: self.sim.frames()[0] >= after, 30, "50 more frames on the line")
         self.assertEqual(self.sim.get("255", "coil", 6), [1], "newest command wins")
         self.assertTrue(all(ok for ok, _ in answers), answers)
         rss_after = node_rss_kib()
