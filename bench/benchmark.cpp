@@ -7,6 +7,7 @@
 #include <modbus/modbus.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -90,12 +91,12 @@ int main(int argc, char** argv) {
   double seconds = 2.0;
   std::string csv_path = "benchmark.csv";
   std::string pymodbus_script = PYMODBUS_CLIENT;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i];
-    if (a == "--seconds") seconds = std::stod(argv[i + 1]);
-    if (a == "--csv") csv_path = argv[i + 1];
-    if (a == "--pymodbus") pymodbus_script = argv[i + 1];
-  }
+  CLI::App app{"The bus layer against plain libmodbus and pymodbus, line use, scale, transports"};
+  app.add_option("--seconds", seconds, "time per cell [s]")->check(CLI::Range(0.1, 600.0));
+  app.add_option("--csv", csv_path, "CSV file to write");
+  app.add_option("--pymodbus", pymodbus_script, "pymodbus client script (bench/pymodbus_client.py)")
+      ->check(CLI::ExistingFile);
+  CLI11_PARSE(app, argc, argv);
   std::ofstream csv(csv_path);
   csv << "table,case,a,b,ratio\n";
   const std::string dir = "/tmp/modbus_rtu_benchmark_" + std::to_string(getpid());
