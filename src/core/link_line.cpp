@@ -23,11 +23,15 @@ void Link::keepGap() {
   const double gap = minGap();
   if (gap <= 0) return;
   const auto ready = last_activity_ + seconds(gap);
-  // Only a real-time bus thread spins (realtime_priority): it cannot be preempted by the
-  // machine's other work while it does, and its user asked for latency over CPU time.
+  // Only a real-time bus thread spins the end of a long gap (realtime_priority): it cannot be
+  // preempted by the machine's other work while it does, and its user asked for latency.
   static thread_local const bool spin = sched_getscheduler(0) == SCHED_FIFO;
   const auto wake_at = spin ? ready - gapSpinMargin() : ready;
-  if (Steady::now() < wake_at) {
+  // What is left of a gap shorter than a sleep's own wake-up cost is spun, at any priority:
+  // sleeping it would wake later than spinning ends (a sub-millisecond min_gap, a slow decode).
+  const auto now = Steady::now();
+  const bool brief = ready - now <= kBriefGap;
+  if (!brief && now < wake_at) {
     // The default timer slack (50 us) would stretch every sub-millisecond gap; this thread owns
     // the line, so it asks for 1 us.
     static thread_local bool slack_set = prctl(PR_SET_TIMERSLACK, 1000UL, 0, 0, 0) == 0;
@@ -41,7 +45,7 @@ void Link::keepGap() {
   }
   // The rest is spun: a sleep ends late by the scheduler's wake-up latency, which would add to
   // every back-to-back transaction.
-  if (!spin) return;
+  if (!spin && !brief) return;
   const auto spin_start = Steady::now();
   while (Steady::now() < ready) {
   }

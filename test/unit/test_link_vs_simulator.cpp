@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+
 #include "modbus_rtu_driver/core/rtu_link.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
@@ -184,4 +186,29 @@ TEST_F(LinkVsSimulator, Ld58a08At248WorksEndToEnd) {
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(settings.address, 248);
   EXPECT_EQ(link_->execute(Request::readCoils(1, 0, 8)).error, ErrorKind::kTimeout);
+}
+
+// A gap shorter than a sleep's own wake-up cost is spun, not slept, at normal priority: with a
+// 15 us gap (less than kBriefGap) no request waited in a sleep (one would show late= above zero).
+TEST_F(LinkVsSimulator, ABriefGapIsNotSlept) {
+  LinkConfig c;
+  c.port = sim_->link();
+  c.baud = 9600;
+  c.response_timeout = 0.15;
+  c.retries = 0;
+  c.min_gap = 15e-6;
+  link_.reset();
+  RtuLink link(c);
+  std::string error;
+  ASSERT_TRUE(link.connect(&error)) << error;
+  std::vector<double> late;
+  link.setWireObserver([&](const WireEvent& e) {
+    if (e.outgoing) late.push_back(e.gap_late);
+  });
+  for (int i = 0; i < 200; ++i) {
+    const Result r = link.execute(Request::readCoils(255, 0, 8));
+    ASSERT_TRUE(r.ok()) << r.message;
+  }
+  ASSERT_EQ(late.size(), 200u);
+  EXPECT_EQ(*std::max_element(late.begin(), late.end()), 0.0);
 }

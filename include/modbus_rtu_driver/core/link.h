@@ -151,6 +151,8 @@ class Link : public Transport {
   WireObserver wire_observer_;
   // keepGap: how late sleeps have woken, a slow average (27 us before the first: a 50 us margin).
   static constexpr std::chrono::microseconds kMaxGapSpin{200};
+  // keepGap: a rest of a gap this short is spun at any priority (a sleep costs more).
+  static constexpr std::chrono::microseconds kBriefGap{20};
   std::chrono::steady_clock::duration wake_lateness_{std::chrono::microseconds(27)};
   std::chrono::steady_clock::duration spun_{};        // keepGap's spinning, in all
   std::chrono::steady_clock::duration gap_late_{};    // its last sleep's lateness, for noteWire
