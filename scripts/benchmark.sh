@@ -5,8 +5,9 @@
 # and the driver's turnaround, and beside them a bare thread's wake-up lateness from
 # modbus_rtu_wakeup_probe, the machine's share), the node's latency and CPU use against the CPU
 # a bare thread waking as often costs (bench/node_bench.py, its own
-# rosmaster) and the latency of a request through the node's Modbus TCP share
-# (bench/share_bench.py). Each node figure is the median (lowest-highest) of 5 runs. Writes
+# rosmaster), the latency of a request through the node's Modbus TCP share
+# (bench/share_bench.py) and where the node's CPU goes, from perf's samples
+# (bench/profile_node.py). Each node figure is the median (lowest-highest) of 5 runs. Writes
 # bench/results.md and bench/results.csv. Usage: scripts/benchmark.sh [SECONDS_PER_CELL]
 source "$(dirname "$0")/common.sh"
 install_deps
@@ -20,5 +21,7 @@ rm -f "$REPO/bench/results.csv"
   /usr/bin/python3 "$REPO/bench/node_bench.py" --calls 300 --repeats 5 --hog "$(nproc)" --cpu-seconds 10 \
     --csv "$REPO/bench/results.csv" 2> >(grep -v "^modbus_rtu_simulator\|wait_for_service" >&2)
   /usr/bin/python3 "$REPO/bench/share_bench.py" --requests 300 \
+    --csv "$REPO/bench/results.csv" 2> >(grep -v "^modbus_rtu_simulator\|wait_for_service" >&2)
+  /usr/bin/python3 "$REPO/bench/profile_node.py" --seconds 20 \
     --csv "$REPO/bench/results.csv" 2> >(grep -v "^modbus_rtu_simulator\|wait_for_service" >&2)
 } | tee "$REPO/bench/results.md"

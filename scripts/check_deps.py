@@ -60,6 +60,7 @@ ROSDEP_TO_DEBIAN = {
     "clang": ["clang", "libclang-rt-14-dev"],
     "xxd": ["xxd"],
     "mbpoll": ["mbpoll"],
+    "linux-perf": ["linux-perf"],
 }
 SHELL_SKIP = {
     "if", "then", "else", "elif", "fi", "for", "while", "until", "do", "done", "case", "esac",
