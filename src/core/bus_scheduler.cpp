@@ -16,10 +16,10 @@ Clock::duration seconds(double s) {
 BusScheduler::BusScheduler(Transport& transport) : BusScheduler(transport, Options{}) {}
 
 BusScheduler::BusScheduler(Transport& transport, Options options)
-    : BusScheduler(transport, options, Clock::steady()) {}
+    : BusScheduler(transport, std::move(options), Clock::steady()) {}
 
 BusScheduler::BusScheduler(Transport& transport, Options options, Clock& clock)
-    : transport_(transport), options_(options), clock_(clock), poll_transport_(*this) {}
+    : transport_(transport), options_(std::move(options)), clock_(clock), poll_transport_(*this) {}
 
 BusScheduler::~BusScheduler() {
   stop();
@@ -112,20 +112,21 @@ std::future<Result> BusScheduler::submit(const std::string& device, Job job) {
 }
 
 void BusScheduler::submitShared(const std::string& device, Job job, ResultCallback done) {
-  Pending p;
-  p.device = device;
-  p.job = std::move(job);
-  p.done = std::move(done);
-  p.shared = true;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (running_) {
+      Pending p;
+      p.device = device;
+      p.job = std::move(job);
+      p.done = std::move(done);
+      p.shared = true;
       shared_.push_back(std::move(p));
-      p.done = nullptr;
+      done = nullptr;
     }
   }
-  if (p.done) {
-    p.done(Result::failure(ErrorKind::kIo, "bus stopped"));
+  // Called outside the lock: the callback may submit again.
+  if (done) {
+    done(Result::failure(ErrorKind::kIo, "bus stopped"));
     return;
   }
   clock_.notifyAll(wake_);

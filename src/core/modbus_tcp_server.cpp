@@ -18,7 +18,7 @@ namespace modbus_rtu_driver {
 namespace {
 
 // A client that does not read its replies is closed once this much waits for it.
-constexpr size_t kMaxPendingOutput = 64 * 1024;
+constexpr size_t kMaxPendingOutput = size_t{64} * 1024;
 
 bool parseIpv4(const std::string& text, uint32_t* host_order) {
   in_addr a{};
@@ -125,7 +125,7 @@ void ModbusTcpServer::stop() {
   }
 }
 
-void ModbusTcpServer::wake() {
+void ModbusTcpServer::wake() const {
   const uint64_t one = 1;
   [[maybe_unused]] const ssize_t n = write(wake_fd_, &one, sizeof one);
 }

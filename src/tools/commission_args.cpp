@@ -97,7 +97,7 @@ CLI::Validator secondsRange(double lo, double hi) {
 
 const CLI::Validator kBaud(
     [](std::string& text) -> std::string {
-      const std::string problem = outsideInts(text, 1200, 115200);
+      std::string problem = outsideInts(text, 1200, 115200);
       if (!problem.empty()) return problem;
       long v = 0;
       toLong(text, &v);
@@ -492,7 +492,7 @@ void parseTable(const Parsed& p, CommissionCommand& c) {
 
 // CLI11's own refusals, in this tool's words where they have a usual form.
 std::string describe(const CLI::ParseError& e) {
-  const std::string what = e.what();
+  std::string what = e.what();
   const size_t colon = what.find(':');
   if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && what.compare(0, 2, "--") == 0 &&
       what.find("required") != std::string::npos && what.find("missing") != std::string::npos)

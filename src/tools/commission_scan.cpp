@@ -134,6 +134,7 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
   const bool complete = !stop;
   if (out.json()) {
     std::vector<Json> devices;
+    devices.reserve(found.size());
     for (const auto& device : found)
       devices.push_back(Json()
                             .add("address", device.address)

@@ -107,9 +107,9 @@ class BusSchedulerTest : public ::testing::Test {
     scheduler.reset();
   }
 
-  BusScheduler& make(BusScheduler::Options o = {}) { return make(bus, o); }
+  BusScheduler& make(const BusScheduler::Options& o = {}) { return make(bus, o); }
   BusScheduler& make(Transport& transport, BusScheduler::Options o = {}) {
-    scheduler = std::make_unique<BusScheduler>(transport, o, clock);
+    scheduler = std::make_unique<BusScheduler>(transport, std::move(o), clock);
     return *scheduler;
   }
 
@@ -206,7 +206,7 @@ TEST_F(BusSchedulerTest, DevicesWithTheSameRateAreEachPolledAtIt) {
     EXPECT_NEAR(h.achieved_poll_rate, 10.0, 1e-9) << int(a);
     // One after the other at each period, in the same order every time.
     std::vector<long> expected;
-    for (long k = 0; k < 15; ++k) expected.push_back(k * 100 + 2 * (a - 1));
+    for (long k = 0; k < 15; ++k) expected.push_back(k * 100 + 2L * (a - 1));
     EXPECT_EQ(startsOf(a), expected) << int(a);
   }
 }

@@ -32,7 +32,7 @@ DeviceConfig generic(std::vector<SignalConfig> signals, int max_gap = 8) {
   return c;
 }
 
-void expectRead(ScriptedTransport& bus, const Request& r, std::vector<uint16_t> values) {
+void expectRead(ScriptedTransport& bus, const Request& r, const std::vector<uint16_t>& values) {
   bus.expect(toHex(encodeRequest(r)), toHex(encodeReply(r, values)));
 }
 

@@ -18,7 +18,7 @@ LinkConfig gateway(int port) {
 }
 
 // Answers every request as a device would, with `reply_of(request)`, until the client closes.
-TestTcpServer::Serve answeringAsADevice(std::function<Bytes(const Request&)> reply_of) {
+TestTcpServer::Serve answeringAsADevice(const std::function<Bytes(const Request&)>& reply_of) {
   return answering([reply_of](const Bytes& frame) {
     const auto request = decodeRequest(frame);
     return request ? reply_of(*request) : Bytes{};

@@ -98,7 +98,7 @@ class ModbusTcpServer {
   void handleFrame(ClientId id, const Bytes& adu);
   void flush(ClientId id);
   void closeClient(ClientId id);  // mutex_ held
-  void wake();
+  void wake() const;
 
   TcpServerOptions options_;
   Handler handler_;

@@ -31,7 +31,7 @@ inline int parseCommandLine(CLI::App& app, int argc, char** argv) {
   }
   for (const std::string& extra : app.remaining())
     return commandLineError(
-        app, (extra.rfind("-", 0) == 0 ? "unknown option " : "unexpected argument ") + extra);
+        app, (extra.rfind('-', 0) == 0 ? "unknown option " : "unexpected argument ") + extra);
   for (const std::string& word : ros_arguments) {
     const bool ros =
         word.empty() || word.rfind("__", 0) == 0 || word.find(":=") != std::string::npos;
