@@ -14,15 +14,17 @@ SECONDS_TO_RUN=${1:-20}
 RESULTS=${2:-}
 OUT="$("$REPO/scripts/workspace.sh")/fuzz"
 mkdir -p "$OUT/corpus"
-# Two targets: frames through the framer, decoder and simulated devices; and the slave role's
-# request handling (framer + libmodbus's modbus_reply on a real pty).
+# Three targets: frames through the framer, decoder and simulated devices; the slave role's
+# request handling (framer + libmodbus's modbus_reply on a real pty); and a Modbus TCP client's
+# bytes at the share (ShareGateway on a loopback socket over a BusScheduler, test/unit's
+# in-memory bus).
 CORE=(src/core/frame.cpp src/core/types.cpp src/core/request_framer.cpp)
 build() {  # a target that does not build is run as missing below, and fails
   local name=$1
   shift
   rm -f "$OUT/$name"
   (cd "$REPO" && clang++ -std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined \
-    -fno-sanitize-recover=all -Iinclude -I/usr/include/modbus "test/fuzz/$name.cpp" "${CORE[@]}" "$@" \
+    -fno-sanitize-recover=all -Iinclude -Itest/unit -I/usr/include/modbus "test/fuzz/$name.cpp" "${CORE[@]}" "$@" \
     -lmodbus -lyaml-cpp -o "$OUT/$name") || echo "$name: build failed"
 }
 if [ $MODE != run ]; then
@@ -30,6 +32,8 @@ if [ $MODE != run ]; then
     src/sim/sim_yespeed_pdu.cpp src/core/link_config.cpp
   build fuzz_slave src/core/slave_server.cpp src/core/serial_port.cpp src/core/fd_io.cpp \
     src/core/slave_config.cpp src/core/config_yaml.cpp src/core/link_config.cpp
+  build fuzz_share src/core/share_gateway.cpp src/core/modbus_tcp_server.cpp \
+    src/core/bus_scheduler.cpp src/core/mbap.cpp src/core/rate_meter.cpp -lpthread
 fi
 [ $MODE = build ] && exit 0
 # Seed with the manuals' frames.
@@ -37,7 +41,7 @@ grep -v '^#' "$REPO/test/data/golden_frames.tsv" | tail -n +2 | cut -f4 | while 
   printf '%s' "$hex" | xxd -r -p >"$OUT/corpus/$(printf '%s' "$hex" | md5sum | cut -c1-12)"
 done || true
 overall=0
-for name in fuzz_frames fuzz_slave; do
+for name in fuzz_frames fuzz_slave fuzz_share; do
   status=0
   mkdir -p "$OUT/corpus-$name"
   if [ -x "$OUT/$name" ]; then

@@ -26,7 +26,7 @@ catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests 2>&1 | tee "$WS/r
   grep -E '^\[ *(RUN|FAILED|PASSED|OK) |^\[Testcase|FAILURE|ERROR:|^Ran |testcase|^\[ROSUNIT\]|^ *\* ' || true
 wait $background_builds || true
 # The ROS-free unit tests again under AddressSanitizer + UndefinedBehaviorSanitizer, and a short
-# fuzz run of the frame and request handling (scripts/fuzz.sh 3600 for a long one).
+# fuzz run of the frame, request and share handling (scripts/fuzz.sh 3600 for a long one).
 "$REPO/scripts/sanitized_tests.sh" --prebuilt "$WS/build/test_results/sanitizers" || true
 "$REPO/scripts/fuzz.sh" --prebuilt 15 "$WS/build/test_results/fuzz" || true
 # catkin_lint (strict) and clang-format applied to every C++ file.

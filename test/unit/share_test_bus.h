@@ -14,6 +14,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <vector>
 
 #include "modbus_rtu_driver/core/bus_scheduler.h"
 #include "modbus_rtu_driver/core/mbap.h"
@@ -134,6 +135,31 @@ class TcpClient {
   int fd_ = -1;
   bool connected_ = false, eof_ = false;
 };
+
+// The complete frames a server can take from `input` before a header that is not MBAP.
+inline std::vector<Bytes> mbapFramesIn(Bytes input) {
+  std::vector<Bytes> frames;
+  for (;;) {
+    const int n = mbapLengthFromHeader(input);
+    if (n <= 0 || input.size() < static_cast<size_t>(n)) return frames;
+    frames.emplace_back(input.begin(), input.begin() + n);
+    input.erase(input.begin(), input.begin() + n);
+  }
+}
+
+// Removes from `unanswered` the frame `reply` answers (its transaction id and unit, the same
+// function or its exception); false when it answers none of them.
+inline bool takeAnswered(std::vector<Bytes>* unanswered, const Bytes& reply) {
+  if (reply.size() < 8) return false;
+  for (auto q = unanswered->begin(); q != unanswered->end(); ++q) {
+    const bool same_function = reply[7] == (*q)[7] || reply[7] == ((*q)[7] | 0x80);
+    if (mbapTransaction(*q) == mbapTransaction(reply) && (*q)[6] == reply[6] && same_function) {
+      unanswered->erase(q);
+      return true;
+    }
+  }
+  return false;
+}
 
 // The share on an ephemeral port over a MemoryBus.
 struct ShareFixture {
