@@ -45,8 +45,10 @@ for name in fuzz_frames fuzz_slave fuzz_share; do
   status=0
   mkdir -p "$OUT/corpus-$name"
   if [ -x "$OUT/$name" ]; then
-    "$OUT/$name" -max_total_time="$SECONDS_TO_RUN" -print_final_stats=1 "$OUT/corpus-$name" \
-      "$OUT/corpus" >"$OUT/$name.log" 2>&1 || status=$?
+    # A crashing input is kept beside the target (its log names it), never in the caller's folder.
+    "$OUT/$name" -max_total_time="$SECONDS_TO_RUN" -print_final_stats=1 \
+      -artifact_prefix="$OUT/$name-" "$OUT/corpus-$name" "$OUT/corpus" >"$OUT/$name.log" 2>&1 ||
+      status=$?
   else
     echo "$name was not built" >"$OUT/$name.log"
     status=127
