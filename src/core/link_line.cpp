@@ -30,7 +30,7 @@ void Link::keepGap() {
   // What is left of a gap shorter than a sleep's own wake-up cost is spun, at any priority:
   // sleeping it would wake later than spinning ends (a sub-millisecond min_gap, a slow decode).
   const auto now = Steady::now();
-  const bool brief = ready - now <= kBriefGap;
+  const bool brief = now < ready && ready - now <= kBriefGap;
   if (!brief && now < wake_at) {
     // The default timer slack (50 us) would stretch every sub-millisecond gap; this thread owns
     // the line, so it asks for 1 us.

@@ -140,13 +140,13 @@ std::string YespeedPdu::limitsText(const PduLimitRegisters& regs) {
 
 Result YespeedPdu::setLimits(Transport& bus, const PduLimitValues& l) {
   PduLimitRegisters regs{};
-  std::string problem = validateLimits(l, &regs);
+  const std::string problem = validateLimits(l, &regs);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
   return writeLimitRegisters(bus, regs);
 }
 
 Result YespeedPdu::writeLimitRegisters(Transport& bus, const PduLimitRegisters& regs) {
-  std::string problem = checkLimitRegisters(regs);
+  const std::string problem = checkLimitRegisters(regs);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
   Result w =
       bus.execute(Request::writeMultipleRegisters(address(), 0, {regs[0], regs[1], regs[2]}));
@@ -175,7 +175,7 @@ Result YespeedPdu::changeLimits(Transport& bus, const PduLimitChange& change) {
     current = limit_registers_;
   }
   const PduLimitRegisters merged = mergeLimits(current, change);
-  std::string problem = checkLimitRegisters(merged);
+  const std::string problem = checkLimitRegisters(merged);
   if (!problem.empty())
     return Result::failure(ErrorKind::kInvalidArgument,
                            partial ? problem + " (merged with the limits the device holds: " +
