@@ -27,10 +27,11 @@ class LinkVsSimulator : public ::testing::Test {
     ASSERT_TRUE(sim_->start(&error)) << error;
     link_ = makeLink(9600);
   }
-  std::unique_ptr<RtuLink> makeLink(int baud) {
+  std::unique_ptr<RtuLink> makeLink(int baud, double min_gap = 0) {
     LinkConfig c;
     c.port = sim_->link();
     c.baud = baud;
+    c.min_gap = min_gap;
     c.response_timeout = 0.15;
     c.retries = 0;
     auto link = std::make_unique<RtuLink>(c);
@@ -191,22 +192,14 @@ TEST_F(LinkVsSimulator, Ld58a08At248WorksEndToEnd) {
 // A gap shorter than a sleep's own wake-up cost is spun, not slept, at normal priority: with a
 // 15 us gap (less than kBriefGap) no request waited in a sleep (one would show late= above zero).
 TEST_F(LinkVsSimulator, ABriefGapIsNotSlept) {
-  LinkConfig c;
-  c.port = sim_->link();
-  c.baud = 9600;
-  c.response_timeout = 0.15;
-  c.retries = 0;
-  c.min_gap = 15e-6;
-  link_.reset();
-  RtuLink link(c);
-  std::string error;
-  ASSERT_TRUE(link.connect(&error)) << error;
+  link_.reset();  // one link on the pty at a time
+  link_ = makeLink(9600, 15e-6);
   std::vector<double> late;
-  link.setWireObserver([&](const WireEvent& e) {
+  link_->setWireObserver([&](const WireEvent& e) {
     if (e.outgoing) late.push_back(e.gap_late);
   });
   for (int i = 0; i < 200; ++i) {
-    const Result r = link.execute(Request::readCoils(255, 0, 8));
+    const Result r = link_->execute(Request::readCoils(255, 0, 8));
     ASSERT_TRUE(r.ok()) << r.message;
   }
   ASSERT_EQ(late.size(), 200u);
