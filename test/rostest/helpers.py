@@ -1,5 +1,6 @@
 """Shared pieces of the rostests: the simulator's control socket and waiting helpers."""
 import os
+import socket
 import sys
 import time
 
@@ -18,6 +19,13 @@ def sim():
             raise RuntimeError("simulator control socket %s never appeared" % path)
         time.sleep(0.1)
     return SimControl(path)
+
+
+def free_port():
+    """A TCP port free on 127.0.0.1 now (the kernel picks it), for a server the test starts."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
 
 
 def wait_until(predicate, timeout, what):

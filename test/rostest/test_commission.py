@@ -8,6 +8,7 @@ import os
 import queue
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -21,6 +22,14 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
 
 PKG = "modbus_rtu_driver"
+
+
+def free_port():
+    """A TCP port free on 127.0.0.1 now (the kernel picks it) for the simulator's gateway."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
 OK, BAD_ARGUMENTS, NOT_FOUND, REFUSED, BUS_ERROR, NOT_CONFIRMED = 0, 2, 3, 4, 5, 6
 
 
@@ -379,8 +388,7 @@ class CommissionTest(unittest.TestCase):
         self.assertEqual(proc.returncode, OK)
 
     def test_through_an_rtu_over_tcp_gateway(self):
-        # The rostest runs in its own network namespace: a fixed port is free.
-        self.start_sim([("lc_relay8", 255), ("yespeed_pdu", 2)], rtu_tcp=15030)
+        self.start_sim([("lc_relay8", 255), ("yespeed_pdu", 2)], rtu_tcp=free_port())
         self.assertEqual(self.scan("--addresses", "1-3,255"),
                          [(2, "yespeed_pdu", 9600, "none"), (255, "lc_relay8", 9600, "none")])
         self.ok(["write", "--address", "255", "coils", "0", "1", "1"])

@@ -19,7 +19,6 @@ from modbus_rtu_driver.msg import DigitalStates
 import helpers
 
 NS = "/bus/relays/"
-PORT = 15021
 COILS, INPUTS = 1, 2  # pymodbus function codes naming the tables
 
 
@@ -31,11 +30,12 @@ class ModbusTcpNodeTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         rospy.init_node("test_modbus_tcp_node")
+        cls.port = rospy.get_param("~server_port")  # chosen free by run_rostest.py
         cls.store = ModbusSlaveContext(co=block(), di=block(), hr=block(), ir=block(),
                                        zero_mode=True)
         context = ModbusServerContext(slaves={1: cls.store}, single=False)
         threading.Thread(target=StartTcpServer, daemon=True,
-                         kwargs=dict(context=context, address=("127.0.0.1", PORT))).start()
+                         kwargs=dict(context=context, address=("127.0.0.1", cls.port))).start()
         cls.bus = None
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls.on_diag)
         cls.outputs = helpers.Latest(NS + "outputs", DigitalStates)
@@ -71,7 +71,7 @@ class ModbusTcpNodeTest(unittest.TestCase):
             self.assertEqual(self.coil(2), state)
         helpers.wait_until(lambda: self.value("transport") == "Modbus TCP", 10,
                            "/diagnostics naming the transport")
-        self.assertEqual(self.value("port"), "tcp://127.0.0.1:%d" % PORT)
+        self.assertEqual(self.value("port"), "tcp://127.0.0.1:%d" % self.port)
         self.assertEqual(self.value("failed"), "0")
 
 
