@@ -52,7 +52,12 @@ void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
   sent.repeatable = isReadFunction(request.function);
   const std::string device = device_of_ ? device_of_(request.slave) : "";
   bus_.submitShared(
-      device, [sent](Transport& t) { return t.execute(sent); },
+      device,
+      [this, sent](Transport& t) {
+        Result r = t.execute(sent);
+        if (r.ok() && !isReadFunction(sent.function) && wrote_) wrote_(sent.slave);
+        return r;
+      },
       [this, in](const Result& r) {
         server_->reply(in, shareReplyFor(in.request, r));
         --in_flight_;

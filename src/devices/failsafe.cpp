@@ -63,7 +63,8 @@ FailsafeTracker::FailsafeTracker(FailsafeConfig config, size_t channels, Clock& 
       channels_(channels),
       clock_(clock),
       confirmed_(channels),
-      commanded_(channels),
+      written_(channels),
+      held_safe_(channels, false),
       settled_(channels, true),
       command_deadline_(channels) {}
 
@@ -82,23 +83,52 @@ OutputTargets FailsafeTracker::restoreTargets() const {
   std::lock_guard<std::mutex> lock(mutex_);
   OutputTargets t;
   for (size_t i = 0; i < channels_; ++i) {
-    if (!commanded_[i]) continue;
-    t.channels.push_back(static_cast<uint8_t>(i));
-    t.states.push_back(*commanded_[i]);
+    const SafeState safe = config_.safeStateOf(i);
+    if (held_safe_[i] && safe != SafeState::kHold) {
+      t.channels.push_back(static_cast<uint8_t>(i));
+      t.states.push_back(safe == SafeState::kOn);
+    } else if (written_[i]) {
+      t.channels.push_back(static_cast<uint8_t>(i));
+      t.states.push_back(*written_[i]);
+    }
   }
   return t;
 }
 
 void FailsafeTracker::confirmed(const std::vector<uint8_t>& channels,
-                                const std::vector<bool>& states, bool by_user) {
+                                const std::vector<bool>& states, Writer writer) {
   std::lock_guard<std::mutex> lock(mutex_);
   for (size_t i = 0; i < channels.size() && i < states.size(); ++i) {
     const uint8_t ch = channels[i];
     if (ch >= channels_) continue;
     confirmed_[ch] = states[i];
     settled_[ch] = true;
-    if (by_user) commanded_[ch] = states[i];
+    written_[ch] = states[i];
+    if (writer == Writer::kUser) held_safe_[ch] = false;
   }
+}
+
+void FailsafeTracker::holdSafe(const std::vector<uint8_t>& channels) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (uint8_t ch : channels)
+    if (ch < channels_ && config_.safeStateOf(ch) != SafeState::kHold) held_safe_[ch] = true;
+}
+
+bool FailsafeTracker::anyHeldSafe() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (bool held : held_safe_)
+    if (held) return true;
+  return false;
+}
+
+void FailsafeTracker::release(uint8_t channel) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (channel < channels_) held_safe_[channel] = false;
+}
+
+void FailsafeTracker::externalWrite() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  external_write_ = true;
 }
 
 void FailsafeTracker::observeWrite(const std::vector<bool>& outputs) {
@@ -117,17 +147,32 @@ FailsafeTracker::Verdict FailsafeTracker::observePoll(const std::vector<bool>& o
                                                       std::vector<uint8_t>* changed) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (changed) changed->clear();
+  const bool adopt = external_write_;  // someone else's confirmed write: not a restart
+  external_write_ = false;
   bool differs = false;
   for (size_t i = 0; i < channels_ && i < outputs.size(); ++i) {
     const bool timed = !settled_[i] || (i < self_timed.size() && self_timed[i]);
     if (!timed && confirmed_[i] && *confirmed_[i] != outputs[i]) {
-      differs = true;
-      if (changed) changed->push_back(static_cast<uint8_t>(i));
+      if (adopt) {
+        written_[i] = outputs[i];
+        held_safe_[i] = false;
+        took_external_ = true;
+      } else {
+        differs = true;
+        if (changed) changed->push_back(static_cast<uint8_t>(i));
+      }
     }
     confirmed_[i] = outputs[i];
   }
   if (was_offline) return Verdict::kCameBack;
   return differs ? Verdict::kOutputsChanged : Verdict::kNormal;
+}
+
+bool FailsafeTracker::tookExternalWrite() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const bool took = took_external_;
+  took_external_ = false;
+  return took;
 }
 
 void FailsafeTracker::commandReceived(uint8_t channel, bool state) {

@@ -70,6 +70,11 @@ void BusNode::checkDeadlines() {
   for (auto& a : adapters_) a->checkDeadlines();
 }
 
+void BusNode::externalWrite(uint8_t slave) {
+  for (auto& a : adapters_)
+    if (slave == kBroadcastAddress || a->address() == slave) a->externalWrite();
+}
+
 void BusNode::shutdown() {
   if (!bus_) return;
   failsafe_timer_.stop();
@@ -136,7 +141,8 @@ bool BusNode::start() {
   std::map<uint8_t, std::string> by_address;
   for (const DeviceConfig& dc : config_.devices)
     by_address[static_cast<uint8_t>(dc.address)] = dc.name;
-  raw_writes_ = std::make_unique<RawWrites>(nh_, *bus_, config_.allow_raw_writes, by_address);
+  raw_writes_ = std::make_unique<RawWrites>(nh_, *bus_, config_.allow_raw_writes, by_address,
+                                            [this](uint8_t slave) { externalWrite(slave); });
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>();
   diagnostics_->setHardwareID(config_.link.port);
@@ -167,7 +173,8 @@ bool BusNode::start() {
     a->start();
   }
   if (config_.share.enabled) {
-    share_ = std::make_unique<ShareBridge>(*bus_, config_);
+    share_ = std::make_unique<ShareBridge>(*bus_, config_,
+                                           [this](uint8_t slave) { externalWrite(slave); });
     if (!share_->start(&error)) {
       ROS_FATAL("share: %s", error.c_str());
       return false;

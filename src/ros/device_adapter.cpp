@@ -12,6 +12,8 @@ DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
       failsafe_(device_->config().failsafe, device_->outputCount()) {
   const FailsafeConfig& fs = failsafe_.config();
   if (!fs.heartbeat_topic.empty()) heartbeat_ = std::make_unique<Watchdog>(fs.heartbeat_timeout);
+  // Here, not in start(): the start-up safe states are reported before start().
+  if (device_->outputCount() > 0) failsafe_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 1, true);
 }
 
 void DeviceAdapter::start() {
@@ -85,7 +87,7 @@ Result DeviceAdapter::completeBatch(Transport& t,
   const bool sent = !entry->result;
   Result w = batch_.complete(*device_, t, entry,
                              [this](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
-                               failsafe_.confirmed(chs, sts, true);
+                               failsafe_.confirmed(chs, sts, FailsafeTracker::Writer::kUser);
                                endFailsafeState();
                              });
   failsafe_.observeWrite(device_->outputs());

@@ -35,6 +35,9 @@ std::future<Result> DeviceAdapter::applySafe(const std::string& trigger, const s
     targets.states.push_back(all.states[i]);
   }
   if (targets.empty()) return ready(Result::success());
+  // A trigger that lasts keeps these channels safe on every restore until a user commands them
+  // again, even if this write does not get through.
+  if (trigger == "heartbeat" || trigger == "command_timeout") failsafe_.holdSafe(targets.channels);
   return bus_.submit(device_->name(), [this, targets, trigger, reason](Transport& t) {
     return writeAndReport(t, targets, trigger, reason, "safe");
   });
@@ -73,8 +76,11 @@ Result DeviceAdapter::writeAndReport(Transport& t, const OutputTargets& targets,
     }
   }
   if (w.ok()) {
-    failsafe_.confirmed(targets.channels, targets.states, action == "restore");
+    // A safe write is a command like any other: a restore writes it again.
+    failsafe_.confirmed(targets.channels, targets.states, FailsafeTracker::Writer::kFailsafe);
     publishOutputs();
+    // A restore with no channel held safe put back what users had: no longer in a safe state.
+    if (action == "restore" && !failsafe_.anyHeldSafe()) endFailsafeState();
   }
   // A safe state not reached is tried again when the device answers again.
   if (action == "safe") failsafe_.setSafePending(!w.ok());
@@ -91,6 +97,9 @@ void DeviceAdapter::checkRestart() {
   for (size_t i = 0; i < timed.size(); ++i) timed[i] = device_->outputSelfTimed(i);
   std::vector<uint8_t> changed;
   const auto verdict = failsafe_.observePoll(device_->outputs(), timed, was_offline, &changed);
+  // A share client or raw write changed outputs: "in their safe state" is no longer true, unless
+  // a trigger still holds some.
+  if (failsafe_.tookExternalWrite() && !failsafe_.anyHeldSafe()) endFailsafeState();
   if (failsafe_.safePending()) {
     bus_.submit(device_->name(), [this](Transport& t) {
       return writeAndReport(t, failsafe_.safeTargets(), "restart",
@@ -165,7 +174,14 @@ void DeviceAdapter::report(const FailsafeEvent& e) {
   } else {
     ROS_ERROR("%s: fail-safe %s", device_->name().c_str(), text.c_str());
   }
+  // ~<device>/failsafe keeps this device's newest event for late subscribers; ~failsafe
+  // carries every device's events.
+  if (failsafe_pub_) publishLater(failsafe_pub_, e);
   if (failsafe_sink_) failsafe_sink_(e);
+}
+
+void DeviceAdapter::externalWrite() {
+  failsafe_.externalWrite();
 }
 
 void DeviceAdapter::endFailsafeState() {

@@ -31,6 +31,7 @@ class LcRelay8Adapter : public DeviceAdapter {
     const Result r = runOnBus([this, channel, state, duration](Transport& t) {
       markSelfTimed(channel);  // the board switches it back by itself
       Result w = board().pulse(t, channel, state, duration);
+      if (w.ok()) timedCommandConfirmed(channel);
       // The board changed the output by itself: read it back so the topics show it now.
       if (w.ok() && board().poll(t).ok()) publishOutputs();
       return w;

@@ -70,6 +70,7 @@ class Ld58a08Adapter : public DeviceAdapter {
     const Result r = runOnBus([this, s](Transport& t) {
       markSelfTimed(s.channel);  // the PWM drives the output from now on
       Result w = board().setPwm(t, s);
+      if (w.ok()) timedCommandConfirmed(s.channel);
       if (w.ok() && board().readPwm(t).ok()) publishPwm();
       return w;
     });

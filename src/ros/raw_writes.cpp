@@ -3,8 +3,8 @@
 namespace modbus_rtu_driver {
 
 RawWrites::RawWrites(ros::NodeHandle& nh, BusScheduler& bus, bool allowed,
-                     std::map<uint8_t, std::string> devices)
-    : bus_(bus), allowed_(allowed), devices_(std::move(devices)) {
+                     std::map<uint8_t, std::string> devices, std::function<void(uint8_t)> wrote)
+    : bus_(bus), allowed_(allowed), devices_(std::move(devices)), wrote_(std::move(wrote)) {
   registers_srv_ = nh.advertiseService("write_registers", &RawWrites::onRegisters, this);
   coils_srv_ = nh.advertiseService("write_coils", &RawWrites::onCoils, this);
 }
@@ -29,7 +29,14 @@ Result RawWrites::run(const Request& request) {
   const auto known = devices_.find(request.slave);
   const std::string owner =
       known != devices_.end() ? known->second : "slave " + std::to_string(request.slave);
-  return bus_.submit(owner, [request](Transport& t) { return t.execute(request); }).get();
+  return bus_
+      .submit(owner,
+              [this, request](Transport& t) {
+                Result r = t.execute(request);
+                if (r.ok() && wrote_) wrote_(request.slave);
+                return r;
+              })
+      .get();
 }
 
 bool RawWrites::onRegisters(WriteRegisters::Request& req, WriteRegisters::Response& res) {

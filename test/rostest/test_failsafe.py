@@ -4,6 +4,8 @@ simulator's coils, not only in the node's topics. The test runs the bus node its
 start it on outputs left on and stop it with SIGINT or SIGTERM."""
 import os
 import signal
+import socket
+import struct
 import tempfile
 import subprocess
 import threading
@@ -15,10 +17,11 @@ import rospkg
 import rospy
 import rostest
 import yaml
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from std_msgs.msg import Bool, String
 from std_srvs.srv import SetBool
 
-from modbus_rtu_driver.msg import FailsafeEvent
+from modbus_rtu_driver.msg import DigitalStates, FailsafeEvent
 
 import helpers
 
@@ -43,6 +46,7 @@ class FailsafeTest(unittest.TestCase):
         cls.beating = threading.Event()
         cls.beating.set()
         threading.Thread(target=cls.heartbeat, daemon=True).start()
+        cls.diag = helpers.Latest("/diagnostics", DiagnosticArray)
         cls.node = None
 
     @classmethod
@@ -199,6 +203,100 @@ class FailsafeTest(unittest.TestCase):
         # The other boards still got theirs.
         self.assertEqual(self.coils(PWM, 2), [0, 1])
         self.start_node()
+
+    def test_7_restore_keeps_what_the_fail_safe_set_while_the_heartbeat_is_lost(self):
+        # Issue #24 items 1, 2 and 7. on_start: safe writes pump off, valve off, lamp on; the
+        # user turns pump and fan on; the heartbeat is lost (pump off, lamp on); the board is
+        # power-cycled. The restore must write the last confirmed states with the held
+        # channels safe: pump stays off with no heartbeat, lamp (on only by the fail-safe) and
+        # fan (the user's) come back on.
+        if self.node is None:
+            self.start_node()
+        self.set("relays/pump", True)
+        self.set("relays/fan", True)
+        since = len(self.events)
+        self.beating.clear()
+        try:
+            helpers.wait_until(lambda: self.coils(RELAYS, 4) == [0, 0, 1, 1], 5, "relays safe")
+            self.event("heartbeat", "relays", since)
+            self.event("heartbeat", "pwm_board", since)
+            # A late subscriber sees each device's newest event (the bus-wide topic keeps one).
+            for device in ("relays", "pwm_board"):
+                late = helpers.Latest(NS + device + "/failsafe", FailsafeEvent)
+                e = late.wait(10, what="%s's latched fail-safe event" % device)
+                self.assertEqual((e.device, e.trigger), (device, "heartbeat"))
+            since = len(self.events)
+            self.sim.command("power_cycle")  # every output off
+            e = self.event("restart", "relays", since)
+            self.assertEqual(e.action, "restore")
+            self.assertTrue(e.confirmed, e.message)
+            helpers.wait_until(lambda: self.coils(RELAYS, 4) == [0, 0, 1, 1], 10,
+                               "pump held off, lamp and fan restored")
+            self.assertEqual(dict(zip(e.channels, e.states))["pump"], False)
+            status = self.diagnostics("relays")
+            self.assertEqual(status.level, DiagnosticStatus.WARN, status)
+            self.assertIn("safe state", status.message)
+        finally:
+            self.beating.set()
+        # A new command ends the hold: the next restore writes the user's state.
+        self.set("relays/pump", True)
+        since = len(self.events)
+        self.sim.command("power_cycle")
+        self.event("restart", "relays", since)
+        helpers.wait_until(lambda: self.coils(RELAYS, 4) == [1, 0, 1, 1], 10, "pump restored")
+
+    def test_8_a_share_clients_write_is_a_command_not_a_restart(self):
+        # Issue #24 item 3: a write through the share is confirmed by the board's reply; the
+        # next poll must not take it for a power cycle (nothing reverted, nothing counted), and
+        # a later restore writes it again.
+        self.stop_node(signal.SIGINT)
+        port = helpers.free_port()
+        self.config["share"] = {"listen": "127.0.0.1:%d" % port, "allow": ["127.0.0.1"]}
+        try:
+            self.start_node()
+            self.set("relays/fan", False)
+            restarts = self.diagnostics_value("relays", "restarts detected")
+            since = len(self.events)
+            self.assertEqual(modbus_tcp_write_coil(port, int(RELAYS), 3, True), "ok")
+            self.assertEqual(self.coils(RELAYS, 4)[3], 1)
+            # Enough polls (10 Hz) for a restart to have been seen.
+            outputs = helpers.Latest(NS + "relays/outputs", DigitalStates)
+            helpers.wait_until(lambda: outputs.count >= 6, 10, "5 more polls of the relays")
+            self.assertEqual(self.coils(RELAYS, 4)[3], 1, "the share's write was reverted")
+            self.assertFalse([e for e in self.events[since:] if e.trigger == "restart"])
+            self.assertEqual(self.diagnostics_value("relays", "restarts detected"), restarts)
+            self.sim.command("power_cycle")
+            self.event("restart", "relays", since)
+            helpers.wait_until(lambda: self.coils(RELAYS, 4)[3] == 1, 10, "fan restored")
+        finally:
+            del self.config["share"]
+
+    def diagnostics(self, device):
+        self.diag.msg = None  # one published after this call
+        status = helpers.wait_until(
+            lambda: next((s for s in (self.diag.msg.status if self.diag.msg else [])
+                          if s.name.endswith("device " + device)), None), 10,
+            "diagnostics of " + device)
+        return status
+
+    def diagnostics_value(self, device, key):
+        return next(kv.value for kv in self.diagnostics(device).values if kv.key == key)
+
+
+def modbus_tcp_write_coil(port, unit, coil, state):
+    """FC05 through a Modbus TCP server: "ok" on the echo, else the exception code."""
+    request = struct.pack(">HHHBBHH", 7, 0, 6, unit, 5, coil, 0xFF00 if state else 0)
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
+        s.sendall(request)
+        reply = b""
+        while len(reply) < 9:
+            chunk = s.recv(64)
+            if not chunk:
+                break
+            reply += chunk
+    if reply[7:8] == b"\x85":
+        return "exception %d" % reply[8]
+    return "ok" if reply[6:] == request[6:] else "unexpected %r" % reply
 
 
 if __name__ == "__main__":

@@ -125,7 +125,7 @@ TEST(FailsafeTracker, APollThatDiffersWithNoCommandIsARestart) {
   EXPECT_EQ(t.observePoll({true, false, true, false}, {}, false, &changed),
             FailsafeTracker::Verdict::kNormal);
   // A confirmed write moves the expectation: no restart.
-  t.confirmed({1}, {true}, true);
+  t.confirmed({1}, {true}, FailsafeTracker::Writer::kUser);
   EXPECT_EQ(t.observePoll({true, true, true, false}, {}, false, &changed),
             FailsafeTracker::Verdict::kNormal);
   // A power cycle turns everything off.
@@ -151,7 +151,7 @@ TEST(FailsafeTracker, ChannelsTheDeviceTimesItselfAreNotCompared) {
   EXPECT_EQ(t.observePoll({false, true}, {false, true}, false, nullptr),
             FailsafeTracker::Verdict::kNormal);
   // A plain write settles channel 0 again: it is compared from then on.
-  t.confirmed({0}, {true}, true);
+  t.confirmed({0}, {true}, FailsafeTracker::Writer::kUser);
   std::vector<uint8_t> changed;
   EXPECT_EQ(t.observePoll({false, true}, {false, true}, false, &changed),
             FailsafeTracker::Verdict::kOutputsChanged);
@@ -216,4 +216,57 @@ TEST(FailsafeTracker, TheSafeWriteIsOneFrame) {
   EXPECT_TRUE(board.setOutputs(bus, s.channels, s.states).ok());
   EXPECT_TRUE(bus.usedUp());
   EXPECT_EQ(bus.mismatches(), "");
+}
+
+// Issue #24 item 2: a safe write is a command like any other; a restore writes it again.
+TEST(FailsafeTracker, RestoreWritesWhatTheFailsafeConfirmedToo) {
+  FailsafeConfig config;
+  config.safe_state = {SafeState::kOff, SafeState::kHold, SafeState::kOn};
+  FailsafeTracker t(config, 3);
+  t.confirmed({0, 2}, {false, true}, FailsafeTracker::Writer::kFailsafe);  // on_start: safe
+  const OutputTargets r = t.restoreTargets();
+  EXPECT_EQ(r.channels, (std::vector<uint8_t>{0, 2}));
+  EXPECT_EQ(r.states, (std::vector<bool>{false, true}));
+}
+
+// Issue #24 item 1: while a lasting trigger holds a channel safe, a restore keeps it safe, even
+// when the safe write itself never got through; a user's command ends the hold.
+TEST(FailsafeTracker, ARestoreKeepsHeldChannelsSafeUntilCommandedAgain) {
+  FailsafeConfig config;
+  config.safe_state = {SafeState::kOff, SafeState::kHold, SafeState::kOn};
+  FailsafeTracker t(config, 3);
+  t.confirmed({0, 1, 2}, {true, true, false}, FailsafeTracker::Writer::kUser);
+  t.holdSafe({0, 1, 2});  // heartbeat lost; the safe write was not confirmed
+  EXPECT_TRUE(t.anyHeldSafe());
+  OutputTargets r = t.restoreTargets();
+  EXPECT_EQ(r.channels, (std::vector<uint8_t>{0, 1, 2}));
+  EXPECT_EQ(r.states, (std::vector<bool>{false, true, true}));    // 1 holds: the user's state
+  t.confirmed({2}, {false}, FailsafeTracker::Writer::kFailsafe);  // a restore: still held
+  EXPECT_TRUE(t.restoreTargets().states[2]);
+  t.confirmed({0, 2}, {true, false}, FailsafeTracker::Writer::kUser);  // commanded again
+  EXPECT_FALSE(t.anyHeldSafe());
+  r = t.restoreTargets();
+  EXPECT_EQ(r.states, (std::vector<bool>{true, true, false}));
+}
+
+// Issue #24 item 3: a write the node carried for a share client, confirmed by the reply, is
+// taken as a command at the next poll, not as a power cycle; a restore writes it again.
+TEST(FailsafeTracker, AnExternalWriteIsNotARestart) {
+  FailsafeConfig config;
+  config.safe_state = {SafeState::kOff, SafeState::kOff};
+  FailsafeTracker t(config, 2);
+  std::vector<uint8_t> changed;
+  t.observePoll({false, false}, {}, false, &changed);
+  t.confirmed({0}, {false}, FailsafeTracker::Writer::kUser);
+  t.holdSafe({1});
+  t.externalWrite();
+  EXPECT_EQ(t.observePoll({false, true}, {}, false, &changed), FailsafeTracker::Verdict::kNormal);
+  EXPECT_TRUE(changed.empty());
+  EXPECT_FALSE(t.anyHeldSafe());  // the client's write is a new command
+  const OutputTargets r = t.restoreTargets();
+  EXPECT_EQ(r.channels, (std::vector<uint8_t>{0, 1}));
+  EXPECT_EQ(r.states, (std::vector<bool>{false, true}));
+  // Only the next poll: a later change with no write is a restart again.
+  EXPECT_EQ(t.observePoll({false, false}, {}, false, &changed),
+            FailsafeTracker::Verdict::kOutputsChanged);
 }

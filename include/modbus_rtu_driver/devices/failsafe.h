@@ -58,14 +58,30 @@ class FailsafeTracker {
   const FailsafeConfig& config() const { return config_; }
   // Channels with a safe state other than hold, and that state.
   OutputTargets safeTargets() const;
-  // The states users last commanded that a restore writes again (channels never commanded by
-  // a plain output write are left out).
+  // What a restore writes again: per channel, the last state the node confirmed by a write of
+  // its own (a user's command, a safe write, a restore) or saw a share client or raw write set;
+  // a channel a trigger holds safe (holdSafe) gets its safe state instead. Channels never
+  // written are left out.
   OutputTargets restoreTargets() const;
 
-  // Bus thread, right after the device confirmed a write. `by_user`: a service or command (what
-  // restore re-applies), as opposed to the failsafe's own writes.
+  // Who made a confirmed write: a user's command (service, command topic) is a new command and
+  // ends a hold; the fail-safe's own writes and restores do not.
+  enum class Writer { kUser, kFailsafe };
+  // Bus thread, right after the device confirmed a write.
   void confirmed(const std::vector<uint8_t>& channels, const std::vector<bool>& states,
-                 bool by_user);
+                 Writer writer);
+  // A trigger that lasts (heartbeat lost, command timeout) holds these channels in their safe
+  // state, whether or not the safe write got through, until a user commands them again.
+  void holdSafe(const std::vector<uint8_t>& channels);
+  bool anyHeldSafe() const;
+  // A user's timed command (a pulse, a PWM run) on `channel` was confirmed: it ends the hold.
+  void release(uint8_t channel);
+  // Bus thread: a write the node carried for someone else (a share client, a raw write) was
+  // confirmed by the device's reply. The next poll takes the outputs it reads as written by a
+  // user (no restart is seen in them).
+  void externalWrite();
+  // Whether the last poll took such a write's changes as commanded (asked once).
+  bool tookExternalWrite();
   // Bus thread, after any write job (confirmed or not): the device's snapshot, read back where a
   // reply was lost, is what the next poll is compared with.
   void observeWrite(const std::vector<bool>& outputs);
@@ -96,10 +112,13 @@ class FailsafeTracker {
   Clock& clock_;
   mutable std::mutex mutex_;
   std::vector<std::optional<bool>> confirmed_;  // last known state per channel
-  std::vector<std::optional<bool>> commanded_;  // last state a user commanded per channel
+  std::vector<std::optional<bool>> written_;    // last state a write set, per channel
+  std::vector<bool> held_safe_;                 // a lasting trigger holds it safe
   std::vector<bool> settled_;                   // compared on polls
   std::vector<std::optional<Clock::time_point>> command_deadline_;
   bool safe_pending_ = false;
+  bool external_write_ = false;  // adopt the next poll's outputs as written
+  bool took_external_ = false;   // the last poll did
 };
 
 }  // namespace modbus_rtu_driver

@@ -38,6 +38,8 @@ class BusNode {
   // Fail-safe: ~failsafe, heartbeat subscriptions (any type), the deadline timer.
   void startFailsafe();
   void checkDeadlines();
+  // Bus thread: a share client's or raw write to `slave` (0: every device) was confirmed.
+  void externalWrite(uint8_t slave);
   uint64_t recentLineErrors(const LinkStats& stats);
   // realtime_priority and lock_memory: asked for here, their outcome shown in the diagnostics.
   BusScheduler::Options schedulingOptions();

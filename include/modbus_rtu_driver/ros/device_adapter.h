@@ -49,6 +49,7 @@ class DeviceAdapter {
   // Fills the device's /diagnostics status.
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   const std::string& name() const { return device_->name(); }
+  uint8_t address() const { return device_->address(); }
 
   // Fail-safe (device_failsafe.cpp). Where events go (the node's latched ~failsafe topic).
   using EventSink = std::function<void(const FailsafeEvent&)>;
@@ -58,6 +59,9 @@ class DeviceAdapter {
   // the outcome. Nothing to do: a ready success.
   std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
                                 const std::vector<uint8_t>& only = {});
+  // Bus thread: a write to this device that the node carried for someone else (a share
+  // client, a raw write) was confirmed by its reply; the fail-safe takes it as a command.
+  void externalWrite();
   // Timer (any thread): command deadlines that passed, this device's heartbeat.
   void checkDeadlines();
   // Whether the device has any safe state, and whether start-up puts it there.
@@ -92,6 +96,12 @@ class DeviceAdapter {
   }
   // A PWM run or a flash started on `channel`: the device changes it by itself.
   void markSelfTimed(uint8_t channel) { failsafe_.selfTimed(channel); }
+  // Bus thread: the device confirmed that timed command on `channel`: a user's command like a
+  // write, it ends the fail-safe's hold there and the "in their safe state" claim.
+  void timedCommandConfirmed(uint8_t channel) {
+    failsafe_.release(channel);
+    endFailsafeState();
+  }
   // Whether the last poll failed with the device now offline (its states are stale).
   bool offline() const { return !bus_.health(device_->name()).online; }
   // Service writes of outputs: checked, then merged with others queued for this device.
@@ -125,7 +135,8 @@ class DeviceAdapter {
   FailsafeTracker failsafe_;
   std::unique_ptr<Watchdog> heartbeat_;
   EventSink failsafe_sink_;
-  std::mutex failsafe_mutex_;  // the two below
+  ros::Publisher failsafe_pub_;  // ~<device>/failsafe, latched: this device's newest event
+  std::mutex failsafe_mutex_;    // the two below
   uint64_t restarts_detected_ = 0, failsafe_events_ = 0;
   std::string last_failsafe_;    // the newest event in words
   std::string failsafe_active_;  // set by a safe write, cleared by a user's write

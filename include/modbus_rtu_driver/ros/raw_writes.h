@@ -6,6 +6,7 @@
 
 #include <ros/ros.h>
 
+#include <functional>
 #include <map>
 #include <string>
 
@@ -18,8 +19,9 @@ namespace modbus_rtu_driver {
 class RawWrites {
  public:
   // `devices`: address -> device name of the configured devices (their health applies).
+  // `wrote(slave)`: on the bus thread, a raw write to `slave` was confirmed.
   RawWrites(ros::NodeHandle& nh, BusScheduler& bus, bool allowed,
-            std::map<uint8_t, std::string> devices);
+            std::map<uint8_t, std::string> devices, std::function<void(uint8_t)> wrote);
 
  private:
   bool onRegisters(WriteRegisters::Request& req, WriteRegisters::Response& res);
@@ -31,6 +33,7 @@ class RawWrites {
   BusScheduler& bus_;
   bool allowed_;
   std::map<uint8_t, std::string> devices_;
+  std::function<void(uint8_t)> wrote_;
   ros::ServiceServer registers_srv_, coils_srv_;
 };
 

@@ -4,6 +4,7 @@
 
 #include <diagnostic_updater/diagnostic_updater.h>
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -14,7 +15,8 @@ namespace modbus_rtu_driver {
 
 class ShareBridge {
  public:
-  ShareBridge(BusScheduler& bus, const BusConfig& config);
+  // `wrote(slave)`: on the bus thread, a client's write to `slave` was confirmed.
+  ShareBridge(BusScheduler& bus, const BusConfig& config, std::function<void(uint8_t)> wrote);
   // Listens; false with the reason (address in use, ...).
   bool start(std::string* error);
   void stop();
