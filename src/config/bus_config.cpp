@@ -24,8 +24,9 @@ const std::set<std::string> kBusKeys = {
     "role",       "diagnostic_period", "devices",          "allow_raw_writes",  "publish_on_change",
     "keep_alive", "heartbeat",         "shutdown_timeout", "realtime_priority", "lock_memory",
     "share",      "config_file",       "wire_log"};
-const std::set<std::string> kShareKeys = {"listen", "read_only", "allow", "max_clients",
-                                          "max_queue"};
+const std::set<std::string> kShareKeys = {
+    "listen",       "read_only",           "allow", "max_clients", "max_queue",
+    "idle_timeout", "broadcast_turnaround"};
 
 std::vector<std::string> getNames(const YAML::Node& n, const std::string& key) {
   if (!n.IsSequence()) fail(key, show(n) + " is not a list of names");
@@ -117,7 +118,7 @@ void parseFailsafe(const YAML::Node& n, const std::string& where,
 }
 
 // share: {listen: "127.0.0.1:1502", read_only: false, allow: [127.0.0.1], max_clients: 4,
-// max_queue: 16}; every key optional.
+// max_queue: 16, idle_timeout: 60, broadcast_turnaround: 0.1}; every key optional.
 void parseShare(const YAML::Node& n, ShareConfig* out) {
   if (!n.IsMap()) fail("share", show(n) + " is not a map {listen: HOST:PORT, allow: [...], ...}");
   checkKeys(n, "share/", kShareKeys);
@@ -146,6 +147,14 @@ void parseShare(const YAML::Node& n, ShareConfig* out) {
   };
   bounded("max_clients", 1, 64, &out->server.max_clients);
   bounded("max_queue", 1, 1000, &out->max_queue);
+  auto seconds = [&](const char* key, double high, const char* range, double* value) {
+    if (!n[key]) return;
+    *value = getNumber(n[key], std::string("share/") + key);
+    if (!(*value >= 0 && *value <= high))
+      fail(std::string("share/") + key, std::to_string(*value) + " s is outside " + range);
+  };
+  seconds("idle_timeout", 86400, "0-86400 s (0 = never)", &out->server.idle_timeout);
+  seconds("broadcast_turnaround", kMaxBroadcastTurnaround, "0-1 s", &out->broadcast_turnaround);
 }
 
 DeviceConfig parseDevice(const std::string& name, const YAML::Node& n,
@@ -208,8 +217,11 @@ void parse(const YAML::Node& root, BusConfig* out) {
     parseHeartbeat(root["heartbeat"], "heartbeat", &out->heartbeat_topic, &out->heartbeat_timeout);
   if (root["shutdown_timeout"]) {
     out->shutdown_timeout = getNumber(root["shutdown_timeout"], "shutdown_timeout");
-    if (!(out->shutdown_timeout >= 0 && out->shutdown_timeout <= 60))
-      fail("shutdown_timeout", std::to_string(out->shutdown_timeout) + " s is outside 0-60 s");
+    if (!(out->shutdown_timeout >= 0 && out->shutdown_timeout <= kMaxShutdownTimeout))
+      fail("shutdown_timeout",
+           std::to_string(out->shutdown_timeout) +
+               " s is outside 0-10 s (roslaunch sends SIGTERM 15 s after SIGINT, SIGKILL 2 s "
+               "later; the bus thread's last transaction needs the rest)");
   }
   if (root["realtime_priority"]) {
     out->realtime_priority = getInt(root["realtime_priority"], "realtime_priority");

@@ -29,6 +29,7 @@ void BusScheduler::start() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (running_) return;
   running_ = true;
+  finished_ = false;
   thread_ = std::thread(&BusScheduler::run, this);
 }
 
@@ -41,6 +42,21 @@ void BusScheduler::stop() {
   if (thread_.joinable()) thread_.join();
   std::unique_lock<std::mutex> lock(mutex_);
   refuseQueued(lock, "bus stopped");
+}
+
+bool BusScheduler::stopBy(std::chrono::steady_clock::time_point deadline) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    running_ = false;
+  }
+  clock_.notifyAll(wake_);
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (thread_.joinable() && !finished_cv_.wait_until(lock, deadline, [&] { return finished_; }))
+      return false;
+  }
+  stop();
+  return true;
 }
 
 Result BusScheduler::ClosedTransport::execute(const Request& /*request*/) {
@@ -112,9 +128,11 @@ std::future<Result> BusScheduler::submit(const std::string& device, Job job) {
 }
 
 void BusScheduler::submitShared(const std::string& device, Job job, ResultCallback done) {
+  Result refused = Result::failure(ErrorKind::kIo, "bus stopped");
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (running_) {
+    if (shared_closed_) refused = Result::failure(ErrorKind::kNotConnected, shared_closed_reason_);
+    if (running_ && !shared_closed_) {
       Pending p;
       p.device = device;
       p.job = std::move(job);
@@ -126,10 +144,33 @@ void BusScheduler::submitShared(const std::string& device, Job job, ResultCallba
   }
   // Called outside the lock: the callback may submit again.
   if (done) {
-    done(Result::failure(ErrorKind::kIo, "bus stopped"));
+    done(refused);
     return;
   }
   clock_.notifyAll(wake_);
+}
+
+void BusScheduler::closeShared(const std::string& reason) {
+  std::deque<Pending> refused;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    shared_closed_ = true;
+    shared_closed_reason_ = reason;
+    refused.swap(shared_);
+  }
+  // Outside the lock: `done` may take its caller's locks. Each job still runs exactly once,
+  // against a transport that sends nothing.
+  ClosedTransport closed;
+  closed.reason = reason;
+  for (Pending& p : refused) {
+    Result r = p.job(closed);
+    p.finish(std::move(r));
+  }
+}
+
+void BusScheduler::openShared() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  shared_closed_ = false;
 }
 
 DeviceHealth BusScheduler::health(const std::string& device) const {
@@ -288,6 +329,8 @@ void BusScheduler::run() {
     h.rate_overrun = h.online && lag > std::chrono::seconds(1);
     if (lag > std::chrono::seconds(3)) next->due = now;
   }
+  finished_ = true;
+  finished_cv_.notify_all();
 }
 
 }  // namespace modbus_rtu_driver

@@ -3,11 +3,13 @@
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <poll.h>
 #include <sys/eventfd.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -91,6 +93,9 @@ bool ModbusTcpServer::start(std::string* error) {
     allow_.push_back(rule);
   }
   if (options_.max_clients < 1) return fail("max_clients: must be at least 1");
+  if (!(options_.idle_timeout >= 0))
+    return fail("idle_timeout: " + std::to_string(options_.idle_timeout) +
+                " s is below 0 (0 = never)");
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
   addr.sin_port = htons(options_.port);
@@ -146,14 +151,18 @@ void ModbusTcpServer::run() {
   while (running_) {
     std::vector<pollfd> fds{{wake_fd_, POLLIN, 0}, {listen_fd_, POLLIN, 0}};
     std::vector<ClientId> ids;
+    int timeout_ms = -1;
     {
       std::lock_guard<std::mutex> lock(mutex_);
+      timeout_ms = closeFinished(std::chrono::steady_clock::now());
       for (const auto& [id, c] : clients_) {
-        fds.push_back({c.fd, static_cast<short>(POLLIN | (c.output.empty() ? 0 : POLLOUT)), 0});
+        // A half-closed client has nothing more to read (its socket would stay readable).
+        const short in = c.read_closed ? 0 : POLLIN;
+        fds.push_back({c.fd, static_cast<short>(in | (c.output.empty() ? 0 : POLLOUT)), 0});
         ids.push_back(id);
       }
     }
-    if (poll(fds.data(), fds.size(), -1) < 0 && errno != EINTR) break;
+    if (poll(fds.data(), fds.size(), timeout_ms) < 0 && errno != EINTR) break;
     if (fds[0].revents & POLLIN) {
       uint64_t count;
       [[maybe_unused]] const ssize_t n = read(wake_fd_, &count, sizeof count);
@@ -177,6 +186,33 @@ void ModbusTcpServer::run() {
   }
 }
 
+int ModbusTcpServer::closeFinished(std::chrono::steady_clock::time_point now) {
+  using std::chrono::duration;
+  using std::chrono::steady_clock;
+  const bool idle_close = options_.idle_timeout > 0;
+  const auto idle = std::chrono::duration_cast<steady_clock::duration>(
+      duration<double>(idle_close ? options_.idle_timeout : 0.0));
+  steady_clock::time_point next = steady_clock::time_point::max();
+  std::vector<ClientId> done;
+  for (const auto& [id, c] : clients_) {
+    if (c.read_closed && c.unanswered == 0 && c.output.empty()) {
+      done.push_back(id);  // everything it asked for is answered and sent
+      continue;
+    }
+    if (!idle_close || c.unanswered > 0) continue;  // waiting for the bus is not idle
+    const auto deadline = c.last_activity + idle;
+    if (now >= deadline) {
+      done.push_back(id);
+      ++stats_.idle_closed;
+    } else
+      next = std::min(next, deadline);
+  }
+  for (ClientId id : done) closeClient(id);
+  if (next == steady_clock::time_point::max()) return -1;
+  const auto ms = std::chrono::ceil<std::chrono::milliseconds>(next - now).count();
+  return static_cast<int>(std::max<long long>(1, std::min<long long>(ms, 60'000)));
+}
+
 void ModbusTcpServer::acceptClient() {
   sockaddr_in peer{};
   socklen_t len = sizeof peer;
@@ -196,9 +232,16 @@ void ModbusTcpServer::acceptClient() {
   }
   ++stats_.accepted;
   ++stats_.peers[text].connections;
+  // A peer that vanished (power loss, cable) never sends FIN: keep-alive finds it.
+  const int on = 1;
+  setsockopt(fd, SOL_SOCKET, SO_KEEPALIVE, &on, sizeof on);
+  setsockopt(fd, IPPROTO_TCP, TCP_KEEPIDLE, &kKeepAliveIdle, sizeof kKeepAliveIdle);
+  setsockopt(fd, IPPROTO_TCP, TCP_KEEPINTVL, &kKeepAliveInterval, sizeof kKeepAliveInterval);
+  setsockopt(fd, IPPROTO_TCP, TCP_KEEPCNT, &kKeepAliveCount, sizeof kKeepAliveCount);
   Client c;
   c.fd = fd;
   c.peer = text;
+  c.last_activity = std::chrono::steady_clock::now();
   clients_[next_id_++] = std::move(c);
 }
 
@@ -217,12 +260,23 @@ void ModbusTcpServer::receive(ClientId id) {
     if (it == clients_.end()) return;
     Client& c = it->second;
     uint8_t buf[1024];
+    if (c.read_closed) {  // POLLHUP / POLLERR after its FIN: the connection is gone
+      closeClient(id);
+      return;
+    }
     const ssize_t n = recv(c.fd, buf, sizeof buf, 0);
+    if (n == 0 && (c.unanswered > 0 || !c.output.empty())) {
+      // FIN after its requests (a half-close): their answers still go out, then it is closed.
+      c.read_closed = true;
+      ++stats_.half_closed;
+      return;
+    }
     if (n == 0 || (n < 0 && errno != EAGAIN && errno != EINTR)) {
       closeClient(id);  // the client went (or its socket failed): its pending replies go too
       return;
     }
     if (n < 0) return;
+    c.last_activity = std::chrono::steady_clock::now();
     c.input.insert(c.input.end(), buf, buf + n);
     for (;;) {
       const int length = mbapLengthFromHeader(c.input);
@@ -249,6 +303,7 @@ void ModbusTcpServer::handleFrame(ClientId id, const Bytes& adu) {
     auto it = clients_.find(id);
     if (it == clients_.end()) return;
     in.peer = it->second.peer;
+    ++it->second.unanswered;  // every path below answers exactly once (reply() counts it down)
   }
   const Bytes rtu = mbapToRtu(adu);  // unit, PDU, CRC: what decodeRequest reads
   const uint8_t unit = rtu[0], function = rtu[1];
@@ -258,7 +313,11 @@ void ModbusTcpServer::handleFrame(ClientId id, const Bytes& adu) {
   if (!request) return refuse(kIllegalDataValue);
   if (!request->validate().empty()) {
     const bool broadcast_read = unit == kBroadcastAddress && isReadFunction(request->function);
-    return refuse(broadcast_read ? kIllegalFunction : kIllegalDataValue);
+    if (broadcast_read) return refuse(kIllegalFunction);
+    // A quantity that is fine from address 0 but runs past 65535 from this start: 02.
+    Request from_zero = *request;
+    from_zero.address = 0;
+    return refuse(from_zero.validate().empty() ? kIllegalDataAddress : kIllegalDataValue);
   }
   in.request = std::move(*request);
   handler_(in);
@@ -274,6 +333,8 @@ void ModbusTcpServer::reply(const Incoming& in, const Bytes& rtu_adu) {
     auto it = clients_.find(in.client);
     if (it == clients_.end()) return;
     Client& c = it->second;
+    if (c.unanswered > 0) --c.unanswered;
+    c.last_activity = std::chrono::steady_clock::now();  // idle time counts from the answer
     if (rtu_adu.size() > 1 && (rtu_adu[1] & 0x80)) ++stats_.peers[c.peer].exceptions;
     const Bytes mbap = rtuToMbap(in.transaction, rtu_adu);
     c.output.insert(c.output.end(), mbap.begin(), mbap.end());

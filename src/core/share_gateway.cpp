@@ -1,5 +1,7 @@
 #include "modbus_rtu_driver/core/share_gateway.h"
 
+#include <thread>
+
 namespace modbus_rtu_driver {
 
 uint8_t shareExceptionFor(const Result& result) {
@@ -31,11 +33,22 @@ bool ShareGateway::start(std::string* error) {
     if (error) *error = "max_queue: must be at least 1";
     return false;
   }
+  if (!(config_.broadcast_turnaround >= 0 &&
+        config_.broadcast_turnaround <= kMaxBroadcastTurnaround)) {
+    if (error)
+      *error = "broadcast_turnaround: " + std::to_string(config_.broadcast_turnaround) +
+               " s is outside 0-1 s";
+    return false;
+  }
+  bus_.openShared();
   return server_->start(error);
 }
 
+// No new request (the server stops first), then none of the queued ones: the node calls this
+// before its safe writes at shutdown, and a client's write that ran after them would undo them.
 void ShareGateway::stop() {
   server_->stop();
+  bus_.closeShared("the share stopped (the node is stopping)");
 }
 
 // On the server's thread: never waits for the bus.
@@ -51,11 +64,15 @@ void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
   // A client's write is sent once: it may start something, and the client decides on a retry.
   sent.repeatable = isReadFunction(request.function);
   const std::string device = device_of_ ? device_of_(request.slave) : "";
+  const auto turnaround = std::chrono::duration<double>(
+      sent.slave == kBroadcastAddress ? config_.broadcast_turnaround : 0.0);
   bus_.submitShared(
       device,
-      [this, sent](Transport& t) {
+      [this, sent, turnaround](Transport& t) {
         Result r = t.execute(sent);
         if (r.ok() && !isReadFunction(sent.function) && wrote_) wrote_(sent.slave);
+        // On the bus thread, on purpose: nothing else may go on the line during the delay.
+        if (r.ok() && turnaround.count() > 0) std::this_thread::sleep_for(turnaround);
         return r;
       },
       [this, in](const Result& r) {

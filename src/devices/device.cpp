@@ -1,6 +1,7 @@
 #include "modbus_rtu_driver/devices/device.h"
 
 #include <algorithm>
+#include <map>
 #include <set>
 
 namespace modbus_rtu_driver {
@@ -37,41 +38,57 @@ std::string Device::validateChannels(const std::vector<uint8_t>& channels,
   return {};
 }
 
+std::vector<CoilRun> coilRuns(const std::vector<uint8_t>& channels,
+                              const std::vector<bool>& states) {
+  std::map<uint8_t, bool> sorted;
+  for (size_t i = 0; i < channels.size() && i < states.size(); ++i) sorted[channels[i]] = states[i];
+  std::vector<CoilRun> runs;
+  for (const auto& [channel, state] : sorted) {
+    if (runs.empty() || runs.back().first + runs.back().states.size() != channel)
+      runs.push_back(CoilRun{channel, {}});
+    runs.back().states.push_back(state);
+  }
+  return runs;
+}
+
 Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                                 const std::vector<bool>& states) {
   const std::string problem = validateChannels(channels, states);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
-  std::vector<bool> target = outputs_;
-  if (channels.size() == 1) {
-    Result r = bus.execute(Request::writeSingleCoil(address(), channels[0], states[0]));
-    if (!r.ok()) return confirmCoils(bus, std::move(r), channels, states);
-    if (target.size() == outputCount()) {
-      target[channels[0]] = states[0];
-      outputs_ = target;
+  // Only the channels asked for go on the wire: one frame per run of adjacent channels, so a
+  // channel between two requested ones is never rewritten (a rewrite would cancel its flash
+  // or fight its PWM on the board).
+  const std::vector<CoilRun> runs = coilRuns(channels, states);
+  std::string written;  // the channels of the runs confirmed so far, for a partial failure
+  Result last = Result::success();
+  for (const CoilRun& run : runs) {
+    std::vector<uint8_t> run_channels;
+    for (size_t i = 0; i < run.states.size(); ++i)
+      run_channels.push_back(static_cast<uint8_t>(run.first + i));
+    Result r = run.states.size() == 1
+                   ? bus.execute(Request::writeSingleCoil(address(), run.first, run.states[0]))
+                   : bus.execute(Request::writeMultipleCoils(address(), run.first, run.states));
+    if (!r.ok()) r = confirmCoils(bus, std::move(r), run_channels, run.states);
+    if (!r.ok()) {
+      if (!written.empty())
+        r.message += "; outputs " + written + " were written before, the others not";
+      return r;
     }
-    return r;
+    // The snapshot takes the run when the whole array is known (from a poll, or from
+    // confirmCoils reading every coil back).
+    if (outputs_.size() == outputCount())
+      for (size_t i = 0; i < run.states.size(); ++i) outputs_[run.first + i] = run.states[i];
+    for (uint8_t c : run_channels) written += (written.empty() ? "" : ", ") + std::to_string(c);
+    if (!r.message.empty()) last.message += (last.message.empty() ? "" : "; ") + r.message;
+    last.values = r.values;
   }
-  const uint8_t lo = *std::min_element(channels.begin(), channels.end());
-  const uint8_t hi = *std::max_element(channels.begin(), channels.end());
-  const size_t span = hi - lo + 1u;
-  if (span != channels.size()) {
-    // Gaps in the span keep their state: read the coils now rather than trust an old poll.
-    Result current =
-        bus.execute(Request::readCoils(address(), 0, static_cast<uint16_t>(outputCount())));
-    if (!current.ok()) return current;
-    target.assign(current.values.begin(), current.values.end());
-  } else if (target.size() != outputCount()) {
-    target.assign(outputCount(), false);
+  if (outputs_.size() != outputCount() && channels.size() == outputCount()) {
+    // Every channel written and confirmed: now the whole array is known.
+    outputs_.assign(outputCount(), false);
+    for (const CoilRun& run : runs)
+      for (size_t i = 0; i < run.states.size(); ++i) outputs_[run.first + i] = run.states[i];
   }
-  for (size_t i = 0; i < channels.size(); ++i) target[channels[i]] = states[i];
-  const std::vector<bool> bits(target.begin() + lo, target.begin() + hi + 1);
-  Result r = bus.execute(Request::writeMultipleCoils(address(), lo, bits));
-  if (!r.ok()) return confirmCoils(bus, std::move(r), channels, states);
-  // The whole array is known only if it was read or already known before.
-  if (r.ok() &&
-      (span != channels.size() || span == outputCount() || outputs_.size() == outputCount()))
-    outputs_ = target;
-  return r;
+  return last;
 }
 
 bool Device::mayHaveActed(const Result& r) {

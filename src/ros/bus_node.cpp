@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 #include "modbus_rtu_driver/core/make_transport.h"
@@ -78,15 +79,26 @@ void BusNode::externalWrite(uint8_t slave) {
 void BusNode::shutdown() {
   if (!bus_) return;
   failsafe_timer_.stop();
-  if (share_) share_->stop();  // no client request after the safe states
+  if (share_) share_->stop();  // no client request after the safe states, queued ones refused
   // Safe states before the port closes, bounded: a device that cannot be reached is logged and
-  // the node exits anyway.
-  const auto deadline = std::chrono::steady_clock::now() +
-                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                            std::chrono::duration<double>(config_.shutdown_timeout));
-  std::vector<std::pair<std::string, std::future<Result>>> pending;
+  // the node exits anyway. The whole stop fits in roslaunch's 15 s between SIGINT and SIGTERM
+  // (SIGKILL 2 s later): shutdown_timeout is at most kMaxShutdownTimeout, and the bus thread,
+  // which first finishes the transaction it is in, gets kBusStopGrace more.
+  const auto start = std::chrono::steady_clock::now();
+  const auto deadline = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                    std::chrono::duration<double>(config_.shutdown_timeout));
+  // Devices that answer first: one that does not (its last transaction failed) would take
+  // response_timeout x (retries + 1) per frame and leave the others' safe writes waiting.
+  std::vector<DeviceAdapter*> order;
   for (auto& a : adapters_)
-    if (a->hasSafeStates()) pending.emplace_back(a->name(), a->applySafe("shutdown", "node stops"));
+    if (a->hasSafeStates()) order.push_back(a.get());
+  std::stable_sort(order.begin(), order.end(), [this](DeviceAdapter* x, DeviceAdapter* y) {
+    return bus_->health(x->name()).consecutive_failures == 0 &&
+           bus_->health(y->name()).consecutive_failures > 0;
+  });
+  std::vector<std::pair<std::string, std::future<Result>>> pending;
+  for (DeviceAdapter* a : order)
+    pending.emplace_back(a->name(), a->applySafe("shutdown", "node stops"));
   for (auto& [name, done] : pending) {
     // rosconsole has shut down with ROS: stderr is what the user sees now.
     if (done.wait_until(deadline) != std::future_status::ready) {
@@ -101,7 +113,16 @@ void BusNode::shutdown() {
       std::fprintf(stderr, "[ERROR] %s: safe states not reached before exit: %s\n", name.c_str(),
                    r.message.c_str());
   }
-  bus_->stop();
+  if (!bus_->stopBy(deadline + kBusStopGrace)) {
+    // Still in one transaction (a silent device with long timeouts): waiting on would run into
+    // roslaunch's SIGKILL. The port is closed by the kernel as the process ends.
+    std::fprintf(stderr,
+                 "[ERROR] the bus thread is still in a transaction %.1f s after the stop began; "
+                 "exiting without waiting for it\n",
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    std::fflush(nullptr);
+    std::_Exit(0);
+  }
   if (publish_queue_) publish_queue_->stop();
 }
 

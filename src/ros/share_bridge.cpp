@@ -42,6 +42,9 @@ void ShareBridge::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) 
   status.add("refused (not allowed)", s.refused_not_allowed);
   status.add("refused (too many clients)", s.refused_too_many);
   status.add("closed (malformed)", s.malformed);
+  status.add("closed (idle)", s.idle_closed);
+  status.add("half-closed by the client", s.half_closed);
+  status.add("idle timeout [s]", config_.server.idle_timeout);
   for (const auto& [peer, counts] : s.peers) {
     status.add("requests from " + peer, counts.requests);
     status.add("exceptions to " + peer, counts.exceptions);

@@ -236,9 +236,11 @@ TEST(ModbusTcpServer, AnswersToAClientThatLeftAreDropped) {
     ASSERT_TRUE(c.send(1, Request::writeSingleRegister(1, 1, 1)));
     ASSERT_TRUE(f.bus.awaitExecuted(1));
   }  // gone while its request is on the bus
-  ASSERT_TRUE(waitFor([&] { return f.gateway->server().stats().connected == 0; }));
+  // Its FIN looks like a half-close (test_share_connections): the server keeps the connection
+  // until the answer is due, sends it into the void, then closes.
   f.bus.release();
   ASSERT_TRUE(waitFor([&] { return f.gateway->queued() == 0; }));
+  ASSERT_TRUE(waitFor([&] { return f.gateway->server().stats().connected == 0; }));
   EXPECT_EQ(f.bus.reg(1), 1);  // it ran (every queued job runs once)
   TcpClient next(f.port());
   const Request read = Request::readHoldingRegisters(1, 1, 1);

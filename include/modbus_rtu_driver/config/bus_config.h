@@ -16,6 +16,10 @@ class Node;
 
 namespace modbus_rtu_driver {
 
+// roslaunch sends SIGTERM 15 s after SIGINT and SIGKILL 2 s later: the safe writes at stop
+// (at most this) plus the bus thread's last transaction (BusNode::kBusStopGrace) fit before.
+constexpr double kMaxShutdownTimeout = 10.0;  // s
+
 struct BusConfig {
   LinkConfig link;
   std::string role = "master";     // master: the node polls devices; slave: a master polls the node
@@ -33,7 +37,7 @@ struct BusConfig {
   // spend writing safe states when it shuts down.
   std::string heartbeat_topic;
   double heartbeat_timeout = 0.0;
-  double shutdown_timeout = 3.0;  // s
+  double shutdown_timeout = 3.0;  // s, 0-kMaxShutdownTimeout
   // The bus thread's SCHED_FIFO priority, 1-99; 0 = the normal scheduler. And whether the node
   // locks its memory (mlockall). Both need the user's limits to allow them (docs/ros_api.md).
   int realtime_priority = 0;

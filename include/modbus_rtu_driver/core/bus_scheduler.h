@@ -58,6 +58,11 @@ class BusScheduler {
 
   void start();
   void stop();
+  // stop(), but waits for the job in progress (a transaction to a silent device may take
+  // response_timeout x (retries + 1)) only until `deadline` (real time). False when the thread
+  // is still in that job: it keeps running, so the scheduler must not be destroyed (the node
+  // then ends the process).
+  bool stopBy(std::chrono::steady_clock::time_point deadline);
 
   // Registers a device so its health is tracked.
   void addDevice(const std::string& device);
@@ -79,6 +84,11 @@ class BusScheduler {
   // outcome exactly once: on the bus thread, or on the caller's when the bus is not running.
   // An empty `device` (a slave address no configured device has) keeps no health.
   void submitShared(const std::string& device, Job job, ResultCallback done);
+  // Stops taking shared requests: those queued now and every later one fail unsent with
+  // `reason` (kNotConnected), the one on the bus right now finishes. The node calls it before
+  // its safe writes at shutdown, so no client's request runs after them. openShared() undoes it.
+  void closeShared(const std::string& reason);
+  void openShared();
 
   DeviceHealth health(const std::string& device) const;
   bool connected() const;
@@ -141,6 +151,10 @@ class BusScheduler {
   std::map<std::string, RateMeter> poll_rates_;
   PollTransport poll_transport_;
   bool running_ = false;
+  bool finished_ = false;                // run() has returned
+  std::condition_variable finished_cv_;  // real time, not clock_: stopBy's bound is wall time
+  bool shared_closed_ = false;
+  std::string shared_closed_reason_;
   bool connected_ = false;
   std::string connection_error_;
   std::thread thread_;

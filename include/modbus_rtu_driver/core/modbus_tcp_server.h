@@ -4,13 +4,22 @@
 // replies sent whenever the handler gives them, from any thread, so the loop never waits for a
 // bus. ROS-free: the node's share and the simulator's TCP side use it.
 //
-// What the server answers itself: a function it does not know -> exception 01; a PDU that does
-// not fit its function or a request Request::validate() refuses -> 03 (01 for a read at unit 0,
-// which nobody could answer). A header that is not Modbus (protocol id not 0, length outside
-// 2-254) closes that client: its byte stream cannot be resynchronised.
+// What the server answers itself: a function it does not know -> exception 01; a start address
+// plus quantity past 65535 -> 02 (the application protocol's order: quantity first, then the
+// address range); a PDU that does not fit its function or a request Request::validate()
+// refuses otherwise -> 03 (01 for a read at unit 0, which nobody could answer). A header that
+// is not Modbus (protocol id not 0, length outside 2-254) closes that client: its byte stream
+// cannot be resynchronised.
+//
+// Connections: TCP keep-alive on every accepted socket (a peer that vanished is found within
+// about a minute); a client with no request waiting for its answer that sends nothing for
+// `idle_timeout` s (silent, or stopped halfway through a frame) is closed, freeing its slot. A
+// client that half-closes (shutdown(SHUT_WR)) after its requests still gets their answers; the
+// connection is closed once they are sent.
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -30,7 +39,13 @@ struct TcpServerOptions {
   // everyone). Others are closed at accept.
   std::vector<std::string> allow{"127.0.0.1"};
   int max_clients = 4;  // connections at once; a further one is closed at accept
+  // s a client with no answer pending may stay silent before it is closed; 0 = never.
+  double idle_timeout = 60.0;
 };
+
+// Keep-alive on an accepted socket: first probe after 30 s of silence, then every 10 s, the
+// connection dropped after 3 unanswered probes.
+constexpr int kKeepAliveIdle = 30, kKeepAliveInterval = 10, kKeepAliveCount = 3;
 
 // "127.0.0.1:1502" -> host and port (1-65535). False with a message.
 bool parseListenAddress(const std::string& text, std::string* host, uint16_t* port,
@@ -59,7 +74,9 @@ class ModbusTcpServer {
   };
   struct Stats {
     uint64_t accepted = 0, refused_not_allowed = 0, refused_too_many = 0;
-    uint64_t malformed = 0;  // clients closed for a header that is not Modbus TCP
+    uint64_t malformed = 0;    // clients closed for a header that is not Modbus TCP
+    uint64_t idle_closed = 0;  // clients closed after idle_timeout with nothing pending
+    uint64_t half_closed = 0;  // clients that sent FIN with answers still to come
     size_t connected = 0;
     std::map<std::string, PeerCounts> peers;
   };
@@ -87,6 +104,9 @@ class ModbusTcpServer {
     int fd = -1;
     std::string peer;
     Bytes input, output;
+    std::chrono::steady_clock::time_point last_activity;  // last bytes in, or last answer out
+    int unanswered = 0;        // requests taken whose answer has not been given yet
+    bool read_closed = false;  // the client sent FIN: answer what it asked, then close
   };
   struct AllowRule {
     uint32_t network, mask;
@@ -98,6 +118,9 @@ class ModbusTcpServer {
   void handleFrame(ClientId id, const Bytes& adu);
   void flush(ClientId id);
   void closeClient(ClientId id);  // mutex_ held
+  // Closes idle clients and half-closed ones with nothing left to send; returns the poll
+  // timeout (ms, -1 = none) until the next idle deadline. mutex_ held.
+  int closeFinished(std::chrono::steady_clock::time_point now);
   void wake() const;
 
   TcpServerOptions options_;

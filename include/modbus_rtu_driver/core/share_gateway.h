@@ -4,14 +4,20 @@
 // the client's transaction id and the slave address as unit id. What a client may see:
 //   01 a write while read_only (also a read at unit 0, a function the server does not know);
 //   06 the share's queue is full (max_queue requests waiting for the bus, all clients together);
-//   0A the port is not open (or the bus is stopping); 0B the device did not answer properly
-//   (timeout, CRC, garbled reply) after the link's retries; any other code is the device's own.
+//   0A the port is not open (or the bus is stopping; requests still queued when the share stops
+//   are refused this way, unsent, as their connections close); 0B the device did not answer
+//   properly (timeout, CRC, garbled reply) after the link's retries; any other code is the device's
+//   own.
 // Unit 0 is a broadcast: nobody answers on the bus, so a write is answered with its normal
-// reply once it was sent (sent, not confirmed by any device).
+// reply once it was sent (sent, not confirmed by any device), and the bus then stays quiet for
+// `broadcast_turnaround` s (the serial line spec's turnaround delay, 100-200 ms: the devices are
+// still carrying the broadcast out, and LC boards even answer address 0) before its next
+// request; the client's answer comes after that delay.
 // ROS-free: the node's share and the simulator's TCP side both use it.
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <functional>
 #include <memory>
 #include <string>
@@ -23,10 +29,12 @@ namespace modbus_rtu_driver {
 
 struct ShareConfig {
   bool enabled = false;
-  TcpServerOptions server;  // listen, allow, max_clients
-  bool read_only = false;   // write functions (05, 06, 15, 16) answered with exception 01
-  int max_queue = 16;       // requests waiting for or on the bus, all clients together
+  TcpServerOptions server;            // listen, allow, max_clients
+  bool read_only = false;             // write functions (05, 06, 15, 16) answered with exception 01
+  int max_queue = 16;                 // requests waiting for or on the bus, all clients together
+  double broadcast_turnaround = 0.1;  // s of silence on the bus after a broadcast, 0-1
 };
+constexpr double kMaxBroadcastTurnaround = 1.0;  // s
 
 // The gateway exception for a failed transaction, or the device's own exception code.
 uint8_t shareExceptionFor(const Result& result);
@@ -42,6 +50,8 @@ class ShareGateway {
                std::function<std::string(uint8_t)> device_of = nullptr);
   ~ShareGateway();
   bool start(std::string* error);
+  // Closes the server and refuses every request still queued on the bus (unsent): none runs
+  // after this returns, except the one on the bus right now.
   void stop();
   ModbusTcpServer& server() { return *server_; }
   // Called on the bus thread with the slave address when a client's write got its normal reply

@@ -27,6 +27,15 @@ struct DeviceConfig {
   SignalMapConfig generic;           // type generic: its signals (empty for the other types)
 };
 
+// A run of adjacent coils to write in one frame: coils first, first+1, ... get states.
+struct CoilRun {
+  uint8_t first = 0;
+  std::vector<bool> states;
+};
+// `channels` / `states` as runs of adjacent channels, in channel order.
+std::vector<CoilRun> coilRuns(const std::vector<uint8_t>& channels,
+                              const std::vector<bool>& states);
+
 // `given` when it has `n` names, else prefix0..prefix<n-1>.
 std::vector<std::string> withDefaults(const std::vector<std::string>& given, size_t n,
                                       const char* prefix);
@@ -55,9 +64,9 @@ class Device {
   // Reads everything the device reports (outputs, inputs, telemetry, settings) into the
   // snapshot. On failure the snapshot keeps its previous values and the Result says why.
   virtual Result poll(Transport& bus) = 0;
-  // Sets channels[i] to states[i] with as few frames as the function codes allow; checks the
-  // arguments first (nothing is sent when they are bad). On success the snapshot holds the
-  // confirmed states.
+  // Sets channels[i] to states[i] and touches no other channel: one frame per run of adjacent
+  // channels (FC05 for a run of one, FC15 otherwise); checks the arguments first (nothing is
+  // sent when they are bad). On success the snapshot holds the confirmed states.
   virtual Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                             const std::vector<bool>& states) = 0;
 
@@ -79,8 +88,9 @@ class Device {
   // Shared check of setOutputs arguments: sizes match, channels in range, no duplicates.
   std::string validateChannels(const std::vector<uint8_t>& channels,
                                const std::vector<bool>& states) const;
-  // Writes the outputs of a board whose coils 0..N-1 are the outputs, with FC05 for one
-  // channel, FC15 over the span otherwise (reading the coils first when the span has gaps).
+  // Writes the outputs of a board whose coils 0..N-1 are the outputs: FC05 for a lone channel,
+  // FC15 per run of adjacent channels; a channel nobody asked for is never written. Stops at
+  // the first run that fails (the message says which outputs were written before).
   Result writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                           const std::vector<bool>& states);
   // True for failures after which the device may have done the write (its reply was lost or

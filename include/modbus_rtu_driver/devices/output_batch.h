@@ -1,8 +1,9 @@
-// Output writes to one device that queue up while the bus is busy, merged into one frame.
+// Output writes to one device that queue up while the bus is busy, merged into one write.
 // Every caller adds its request and queues a bus job; the first of those jobs to run writes
-// everything pending at that moment with one setOutputs call (FC05 for one channel, FC15 over
-// the span otherwise), newest state per channel winning, and every merged caller gets that
-// outcome. The later jobs find their request done and send nothing. ROS-free.
+// everything pending at that moment with one setOutputs call (FC05 for a lone channel, FC15
+// per run of adjacent channels; no other channel is written), newest state per channel winning, and
+// every merged caller gets that outcome. The later jobs find their request done and send nothing.
+// ROS-free.
 #pragma once
 
 #include <functional>

@@ -5,6 +5,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/ros.h>
 
+#include <chrono>
 #include <cstdio>
 #include <deque>
 #include <memory>
@@ -49,6 +50,9 @@ class BusNode {
   bool openWireLog(std::string* error);
 
   static constexpr int kErrorWindowSeconds = 10;
+  // After shutdown_timeout, how long the stop still waits for the bus thread to end the
+  // transaction it is in before the process exits without it (docs/failsafe.md).
+  static constexpr std::chrono::seconds kBusStopGrace{2};
   std::deque<std::pair<ros::WallTime, uint64_t>> error_totals_;  // (when, line errors so far)
 
   ros::NodeHandle nh_;
