@@ -24,7 +24,7 @@ import helpers
 
 NODE = "fsbus"
 NS = "/" + NODE + "/"
-RELAYS, PWM = "254", "1"
+RELAYS, PWM = "8", "1"
 
 
 class FailsafeTest(unittest.TestCase):
