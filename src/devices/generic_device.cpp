@@ -139,7 +139,6 @@ Result GenericDevice::writeSignal(Transport& bus, size_t i, double value) {
   return ok;
 }
 
-
 std::vector<size_t> GenericDevice::safeSignals() const {
   std::vector<size_t> out;
   for (size_t i = 0; i < signals().size(); ++i)
