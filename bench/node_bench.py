@@ -32,7 +32,7 @@ from std_srvs.srv import SetBool
 SIM_YAML = """baud: %(baud)d
 parity: none
 devices:
-  - {type: lc_relay8, address: 255}
+  - {type: lc_relay8, address: 8}
   - {type: ld58a08, address: 1}
   - {type: yespeed_pdu, address: 2}
 """
@@ -41,7 +41,7 @@ BUS_YAML = """baud: %(baud)d
 parity: none
 diagnostic_period: 0.5
 devices:
-  relays: {type: lc_relay8, address: 255, poll_rate: %(rate)s}
+  relays: {type: lc_relay8, address: 8, poll_rate: %(rate)s}
   pwm_board: {type: ld58a08, address: 1, poll_rate: %(rate)s}
   pdu: {type: yespeed_pdu, address: 2, poll_rate: %(rate)s}
 """
@@ -226,7 +226,7 @@ def measure_latency(workdir, calls, baud, realtime=0, loaded=False):
         wire, answer, failed = [], [], 0
         for i in range(calls):
             want = i % 2 == 0
-            frame = "FF 05 00 00 %s" % ("FF 00" if want else "00 00")
+            frame = "08 05 00 00 %s" % ("FF 00" if want else "00 00")
             seen = len(sim.rx)
             t0 = time.monotonic()
             res = pump(want)

@@ -4,6 +4,7 @@
 #include <set>
 
 #include "modbus_rtu_driver/core/config_yaml.h"
+#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/core/slave_config.h"
 #include "modbus_rtu_driver/devices/registry.h"
 
@@ -157,6 +158,24 @@ void parseShare(const YAML::Node& n, ShareConfig* out) {
   seconds("broadcast_turnaround", kMaxBroadcastTurnaround, "0-1 s", &out->broadcast_turnaround);
 }
 
+// The fail-safe of a generic device lives in its signals (safe_value); of the output keys it
+// takes heartbeat and on_start, which act on those values. The rest would do nothing: refused.
+void checkGenericFailsafe(const YAML::Node& n, const std::string& where,
+                          const SignalMapConfig& map) {
+  const std::map<std::string, std::string> not_for_generic = {
+      {"safe_state", "give writable signals a safe_value instead"},
+      {"command_timeout", "a generic device has no command topics"},
+      {"on_restart", "a generic device has no restart detection"}};
+  for (const auto& [key, why] : not_for_generic)
+    if (n[key]) fail(where + key, "not for type generic (" + why + ")");
+  bool any_safe = false;
+  for (const SignalConfig& s : map.signals) any_safe = any_safe || s.safe_value.has_value();
+  for (const char* key : {"heartbeat", "on_start"})
+    if (n[key] && !any_safe)
+      fail(where + key,
+           "no signal has a safe_value, so it would do nothing (give writable signals one)");
+}
+
 DeviceConfig parseDevice(const std::string& name, const YAML::Node& n,
                          const std::string& config_dir) {
   const std::string where = "devices/" + name + "/";
@@ -189,8 +208,29 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n,
       if (n[key]) fail(where + key, "only for type generic");
   const std::string problem = validateDeviceConfig(d);
   if (!problem.empty()) throw ConfigError{problem};
+  if (d.type == "generic") checkGenericFailsafe(n, where, d.generic);
   parseFailsafe(n, where, outputNamesOf(d), &d.failsafe);
   return d;
+}
+
+// An LD58A08 answers at 0xFF besides its own address ("whoever you are", its manual): an LC
+// board at its factory address 255 on the same bus would answer the same frames, and the two
+// replies garble on the line. Refused, with the way out.
+void checkAddress255(const std::vector<DeviceConfig>& devices) {
+  std::string lc, ld;
+  for (const DeviceConfig& d : devices) {
+    if (d.type == kLcRelay8Type.name && d.address == 0xFF && lc.empty()) lc = d.name;
+    if (d.type == kLd58a08Type.name) ld += (ld.empty() ? "'" : ", '") + d.name + "'";
+  }
+  if (lc.empty() || ld.empty()) return;
+  fail("devices/" + lc + "/address",
+       "255 collides with the LD58A08 " + ld +
+           " on this bus: an LD58A08 also answers at 0xFF, so both boards would answer and "
+           "their replies garble. Move the LC board '" +
+           lc +
+           "' off 255 (modbus_rtu_commission set-address --type lc_relay8 N, board alone "
+           "on the bus) and set devices/" +
+           lc + "/address to N");
 }
 
 void parse(const YAML::Node& root, BusConfig* out) {
@@ -256,6 +296,7 @@ void parse(const YAML::Node& root, BusConfig* out) {
            std::to_string(d.address) + " is already used by device '" + it->second + "'");
     out->devices.push_back(std::move(d));
   }
+  checkAddress255(out->devices);
 }
 
 }  // namespace

@@ -1,8 +1,10 @@
 #include "modbus_rtu_driver/core/signal.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <sstream>
 
 namespace modbus_rtu_driver {
 
@@ -123,6 +125,27 @@ std::string writeFunctionProblem(const SignalConfig& s) {
 
 namespace {
 
+std::string number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// The value a raw number becomes on the device (float32 keeps only its 24 bits).
+double writtenValue(const SignalConfig& s, double raw) {
+  if (s.type == SignalType::kFloat32) raw = static_cast<float>(raw);
+  return s.toValue(raw);
+}
+
+// min <= written <= max, up to the arithmetic's own error (0.1 * 3 is 0.30000000000000004):
+// far below one step of any scale, and below float32's precision for float32.
+bool withinLimits(const SignalConfig& s, double written) {
+  const double relative = s.type == SignalType::kFloat32 ? 1e-6 : 1e-9;
+  auto slack = [&](double bound) { return relative * std::max(1.0, std::abs(bound)); };
+  return !(s.min && written < *s.min - slack(*s.min)) &&
+         !(s.max && written > *s.max + slack(*s.max));
+}
+
 // The value's words with the most significant first, from the registers in address order.
 uint64_t joinWords(uint16_t n, WordOrder order, const uint16_t* words) {
   uint64_t v = 0;
@@ -140,6 +163,33 @@ std::vector<uint16_t> splitWords(uint16_t n, WordOrder order, uint64_t v) {
 }
 
 }  // namespace
+
+std::string writeValueProblem(const SignalConfig& s, double value, std::vector<uint16_t>* words) {
+  if (s.type == SignalType::kBool) {
+    if (value != 0.0 && value != 1.0) return number(value) + " is not 0 or 1";
+    *words = {static_cast<uint16_t>(value)};
+    return {};
+  }
+  if (!std::isfinite(value)) return number(value) + " is not a finite number";
+  const std::string unit = s.unit.empty() ? "" : " " + s.unit;
+  const std::string range =
+      (s.min ? number(*s.min) : "-inf") + " to " + (s.max ? number(*s.max) : "inf") + unit;
+  if ((s.min && value < *s.min) || (s.max && value > *s.max))
+    return number(value) + unit + " is outside " + range;
+  double raw = s.toRaw(value);
+  if (s.type != SignalType::kFloat32) raw = std::round(raw);
+  if (raw < rawMin(s.type) || raw > rawMax(s.type))
+    return number(value) + unit + " is raw " + number(raw) + ", outside what " + typeName(s.type) +
+           " holds (" + number(rawMin(s.type)) + " to " + number(rawMax(s.type)) + ")";
+  // min / max bound what the device gets, not what was asked: a register holds steps of
+  // `scale`, so 95 with scale 10 would be written as raw 10, which is 100.
+  const double written = writtenValue(s, raw);
+  if (!withinLimits(s, written))
+    return number(value) + unit + " would be written as " + number(written) + unit + " (raw " +
+           number(raw) + "), outside " + range;
+  *words = encodeRaw(s.type, s.word_order, raw);
+  return {};
+}
 
 double decodeRaw(SignalType type, WordOrder order, const uint16_t* words) {
   const uint64_t bits = joinWords(wordsOf(type), order, words);

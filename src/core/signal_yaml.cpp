@@ -16,8 +16,8 @@ using namespace config;
 
 const std::vector<std::string> kSignalMapKeys = {"signals", "template", "max_gap"};
 const std::vector<std::string> kSignalKeys = {
-    "name", "table",    "address", "type", "word_order", "scale",         "offset",
-    "unit", "writable", "min",     "max",  "poll_rate",  "write_function"};
+    "name", "table",    "address", "type", "word_order", "scale",          "offset",
+    "unit", "writable", "min",     "max",  "poll_rate",  "write_function", "safe_value"};
 
 namespace {
 
@@ -44,6 +44,28 @@ double finite(const YAML::Node& n, const std::string& key) {
   const double v = getNumber(n, key);
   if (!std::isfinite(v)) fail(key, show(n) + " is not a finite number");
   return v;
+}
+
+// safe_value: a bit takes on / off (true / false) or 1 / 0; a number is checked as a write of
+// it would be (min / max, after rounding to the register's steps, and the type's range).
+void parseSafeValue(const YAML::Node& n, const std::string& key, SignalConfig* s) {
+  if (!s->writable) fail(key, "only for writable signals (writable: true)");
+  double v = 0;
+  if (s->type == SignalType::kBool) {
+    bool on = false;
+    if (n.IsScalar() && YAML::convert<bool>::decode(n, on))
+      v = on ? 1.0 : 0.0;
+    else if (n.IsScalar() && (n.Scalar() == "0" || n.Scalar() == "1"))
+      v = n.Scalar() == "1" ? 1.0 : 0.0;
+    else
+      fail(key, show(n) + " is not on / off (true / false, 1 / 0) for the bit " + s->name);
+  } else {
+    v = finite(n, key);
+  }
+  std::vector<uint16_t> words;
+  const std::string problem = writeValueProblem(*s, v, &words);
+  if (!problem.empty()) fail(key, problem);
+  s->safe_value = v;
 }
 
 SignalConfig parseSignal(const YAML::Node& n, const std::string& where) {
@@ -124,6 +146,7 @@ SignalConfig parseSignal(const YAML::Node& n, const std::string& where) {
     const std::string problem = writeFunctionProblem(s);
     if (!problem.empty()) fail(at + "write_function", problem);
   }
+  if (n["safe_value"]) parseSafeValue(n["safe_value"], at + "safe_value", &s);
   if (n["poll_rate"]) {
     const double r = getNumber(n["poll_rate"], at + "poll_rate");
     if (!(r >= 0.0 && r <= 1000.0))

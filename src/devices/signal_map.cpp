@@ -68,7 +68,7 @@ std::vector<ReadSpan> ReadPlanner::plan(const std::vector<size_t>& which) const 
   return spans;
 }
 
-bool ReadPlanner::split(const ReadSpan& span, ReadSpan* first, ReadSpan* second) {
+bool ReadPlanner::split(const ReadSpan& span, ReadSpan* first, ReadSpan* second, uint8_t code) {
   if (span.signals.size() < 2) return false;
   size_t cut = 1;  // the first signal of the second part: after the widest gap
   long widest = -1;
@@ -85,8 +85,9 @@ bool ReadPlanner::split(const ReadSpan& span, ReadSpan* first, ReadSpan* second)
   breaks_.insert({after.table, after.address});
   *first = spanOf({span.signals.begin(), span.signals.begin() + static_cast<long>(cut)});
   *second = spanOf({span.signals.begin() + static_cast<long>(cut), span.signals.end()});
-  split_log_.push_back(span.describe(signals_) + " refused (exception 02): now read as " +
-                       first->describe(signals_) + " and " + second->describe(signals_));
+  split_log_.push_back(span.describe(signals_) + " refused (exception 0" + std::to_string(code) +
+                       "): now read as " + first->describe(signals_) + " and " +
+                       second->describe(signals_));
   return true;
 }
 

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <future>
 #include <sstream>
 
 #include "modbus_rtu_driver/SetValue.h"
@@ -98,6 +100,47 @@ class GenericAdapter : public DeviceAdapter {
     }
   }
 
+  // Fail-safe: the signals' safe values stand for the outputs' safe states. The triggers are
+  // the base's and the node's (shutdown, heartbeat, on_start); they reach the device here.
+  bool hasSafeStates() const override { return !generic().safeSignals().empty(); }
+
+  std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
+                                const std::vector<uint8_t>&) override {
+    if (!hasSafeStates()) {
+      std::promise<Result> nothing;
+      nothing.set_value(Result::success());
+      return nothing.get_future();
+    }
+    return bus_.submit(device_->name(), [this, trigger, reason](Transport& t) {
+      return writeSafe(t, trigger, reason);
+    });
+  }
+
+  void setFailsafeSink(EventSink sink) override {
+    failsafe_sink_ = sink;
+    DeviceAdapter::setFailsafeSink(std::move(sink));
+  }
+
+  // Only what a generic device has: no output safe states, no on_restart, no restart count.
+  void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status) override {
+    if (!hasSafeStates()) return;  // no fail-safe at all
+    std::string safe;
+    for (size_t i : generic().safeSignals())
+      safe += (safe.empty() ? "" : ", ") + describeSafeValue(i);
+    status.add("safe values", safe);
+    const FailsafeConfig& fs = failsafeConfig();
+    status.add("on_start", fs.on_start_safe ? "safe" : "keep");
+    if (!fs.heartbeat_topic.empty())
+      status.add("device heartbeat",
+                 fs.heartbeat_topic + " within " + number(fs.heartbeat_timeout) + " s");
+    std::lock_guard<std::mutex> lock(failsafe_mutex_);
+    status.add("fail-safe events", failsafe_events_);
+    status.add("last fail-safe event", last_failsafe_.empty() ? "none" : last_failsafe_);
+    if (!failsafe_active_.empty())
+      status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN,
+                          "signals at their safe values after " + failsafe_active_);
+  }
+
   void diagnoseType(diagnostic_updater::DiagnosticStatusWrapper& status) override {
     // Read on the diagnostics thread: the split list only grows, and copies are taken whole.
     std::vector<std::string> splits;
@@ -119,8 +162,17 @@ class GenericAdapter : public DeviceAdapter {
  private:
   GenericDevice& generic() const { return static_cast<GenericDevice&>(*device_); }
 
-  // No outputs (the base's topics stay silent, no restart detection): only the signals.
-  void onPoll(const Result&) override { publishSignals(true); }
+  // No outputs (the base's topics stay silent, no restart detection): only the signals. Safe
+  // values not reached (the device was silent) are written once it answers again.
+  void onPoll(const Result& r) override {
+    publishSignals(true);
+    if (!safe_pending_ || noProperAnswer(r.error)) return;
+    safe_pending_ = false;  // one retry queued; it sets this again if it fails too
+    bus_.submit(device_->name(), [this](Transport& t) {
+      return writeSafe(t, "restart",
+                       "the device answers again; its safe values were not reached before");
+    });
+  }
 
   Result write(size_t i, double value) {
     std::vector<uint16_t> words;
@@ -129,8 +181,77 @@ class GenericAdapter : public DeviceAdapter {
     return runOnBus([this, i, value](Transport& t) {
       Result r = generic().writeSignal(t, i, value);
       publishSignals(false);
+      if (r.ok()) {  // a user's confirmed write ends the fail-safe state in /diagnostics
+        std::lock_guard<std::mutex> lock(failsafe_mutex_);
+        failsafe_active_.clear();
+      }
       return r;
     });
+  }
+
+  static std::string number(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  }
+
+  std::string describeSafeValue(size_t i) const {
+    const SignalConfig& s = generic().signals()[i];
+    if (s.type == SignalType::kBool) return s.name + (*s.safe_value != 0 ? " on" : " off");
+    return s.name + " " + number(*s.safe_value) + (s.unit.empty() ? "" : " " + s.unit);
+  }
+
+  // Bus thread: writes every safe value, reads each back, reports the event.
+  Result writeSafe(Transport& t, const std::string& trigger, const std::string& reason) {
+    FailsafeEvent e;
+    e.header.stamp = ros::Time::now();
+    e.device = device_->name();
+    e.trigger = trigger;
+    e.reason = reason;
+    e.action = "safe";
+    for (size_t i : generic().safeSignals()) {
+      const double v = *generic().signals()[i].safe_value;
+      e.channels.push_back(generic().signals()[i].name);
+      e.states.push_back(v != 0.0);
+      e.values.push_back(v);
+    }
+    const Result w = generic().writeSafeValues(t);
+    // Not reached because the device did not answer: tried again when it answers. A refusal
+    // is the device's answer, and retrying it on every poll would only repeat the event.
+    safe_pending_ = !w.ok() && noProperAnswer(w.error);
+    if (!pubs_.empty()) publishSignals(false);  // not before start() (on_start: safe)
+    e.confirmed = w.ok();
+    e.message = w.ok() ? "confirmed by reading the signals back" : w.message;
+    report(e);
+    return w;
+  }
+
+  // The event in the log (stderr once ROS is down: at shutdown), the counters for
+  // /diagnostics, and the node's ~failsafe topic.
+  void report(const FailsafeEvent& e) {
+    std::string text = e.trigger + " (" + e.reason + "): ";
+    for (size_t k = 0; k < e.channels.size(); ++k) {
+      const auto i = static_cast<size_t>(
+          std::find_if(generic().signals().begin(), generic().signals().end(),
+                       [&](const SignalConfig& s) { return s.name == e.channels[k]; }) -
+          generic().signals().begin());
+      text += (k ? ", " : "") + describeSafeValue(i);
+    }
+    text += e.confirmed ? "" : "; NOT confirmed: " + e.message;
+    {
+      std::lock_guard<std::mutex> lock(failsafe_mutex_);
+      ++failsafe_events_;
+      last_failsafe_ = text;
+      failsafe_active_ = text;
+    }
+    if (!ros::ok())
+      std::fprintf(stderr, "[%s] %s: fail-safe %s\n", e.confirmed ? "WARN" : "ERROR",
+                   device_->name().c_str(), text.c_str());
+    else if (e.confirmed)
+      ROS_WARN("%s: fail-safe %s", device_->name().c_str(), text.c_str());
+    else
+      ROS_ERROR("%s: fail-safe %s", device_->name().c_str(), text.c_str());
+    if (failsafe_sink_) failsafe_sink_(e);
   }
 
   // Bus thread: each signal's topic when its value changed, D/signals after a poll.
@@ -144,7 +265,7 @@ class GenericAdapter : public DeviceAdapter {
       all.names.push_back(signals[i].name);
       all.values.push_back(st.value);
       all.valid.push_back(st.valid);
-      if (!st.valid || (published_[i] && *published_[i] == st.value)) continue;
+      if (!st.valid || (published_[i] && sameReading(*published_[i], st.value))) continue;
       published_[i] = st.value;
       if (signals[i].type == SignalType::kBool) {
         std_msgs::Bool m;
@@ -176,7 +297,13 @@ class GenericAdapter : public DeviceAdapter {
   std::vector<bool> polled_;                      // by poll group; bus thread only
   // By poll group: recorded on the bus thread, read by diagnostics (each locks itself).
   std::vector<RateMeter> rates_ = std::vector<RateMeter>(generic().groups().size());
-  std::mutex splits_mutex_;  // the two below: copies for diagnostics
+  EventSink failsafe_sink_;
+  bool safe_pending_ = false;  // bus thread only
+  std::mutex failsafe_mutex_;  // the three below
+  uint64_t failsafe_events_ = 0;
+  std::string last_failsafe_;    // the newest event in words
+  std::string failsafe_active_;  // set by a safe write, cleared by a user's write
+  std::mutex splits_mutex_;      // the two below: copies for diagnostics
   std::vector<std::string> splits_;
   std::string unread_;
 };

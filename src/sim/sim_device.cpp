@@ -56,7 +56,7 @@ std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point no
     case FunctionCode::kReadHoldingRegisters:
     case FunctionCode::kReadInputRegisters: {
       if (broadcast) return std::nullopt;  // a read cannot be broadcast
-      const uint16_t max = isBitFunction(r.function) ? kMaxReadBits : kMaxReadRegisters;
+      const uint16_t max = readLimit(isBitFunction(r.function));
       if (r.count < 1 || r.count > max) {
         exception = kIllegalDataValue;
         break;

@@ -58,11 +58,19 @@ void parseHoles(const YAML::Node& n, const std::string& key, SimGenericConfig* o
 
 }  // namespace
 
+const std::vector<std::string> kSimGenericKeys = {"holes", "max_read"};
+
 bool parseSimGeneric(const YAML::Node& entry, const std::string& where, const std::string& base_dir,
                      SimGenericConfig* out, std::string* error) {
   try {
     out->map = parseSignalMap(entry, where, base_dir);
     if (entry["holes"]) parseHoles(entry["holes"], where + "holes", out);
+    if (entry["max_read"]) {
+      const int n = config::getInt(entry["max_read"], where + "max_read");
+      if (n < 1 || n > kMaxReadBits)
+        config::fail(where + "max_read", std::to_string(n) + " is outside 1-2000");
+      out->max_read = static_cast<uint16_t>(n);
+    }
     return true;
   } catch (const config::ConfigError& e) {
     *error = e.message;
@@ -82,6 +90,11 @@ SimGeneric::SimGeneric(uint8_t address, SimLineSettings line, SimGenericConfig c
     else
       it->second = {std::min(it->second.first, s.address), std::max(it->second.second, last)};
   }
+}
+
+uint16_t SimGeneric::readLimit(bool bits) const {
+  const uint16_t protocol = SimDevice::readLimit(bits);
+  return config_.max_read == 0 ? protocol : std::min(protocol, config_.max_read);
 }
 
 bool SimGeneric::mapped(SignalTable table, uint16_t address) const {

@@ -155,12 +155,13 @@ void Simulator::processFrame(const Bytes& frame, SimClock::time_point now) {
   const std::optional<Request> request = decodeRequest(frame);
   if (slave == kBroadcastAddress) return broadcast(request, hearing, now, request_end);
 
-  SimDevice* target = nullptr;
+  std::vector<SimDevice*> targets;  // every device that takes this frame
   for (SimDevice* d : hearing)
-    if (!target && d->address() == slave) target = d;
-  for (SimDevice* d : hearing)
-    if (!target && d->answersTo(slave, request ? &*request : nullptr)) target = d;
-  if (!target) return;  // nobody at that address: silence
+    if (d->address() == slave || d->answersTo(slave, request ? &*request : nullptr))
+      targets.push_back(d);
+  if (targets.empty()) return;  // nobody at that address: silence
+  if (targets.size() > 1) return collide(request, slave, function, targets, now, request_end);
+  SimDevice* target = targets.front();
 
   if (chance(target->drop_request_percent)) {  // lost on the way: not heard, nothing done
     ++target->dropped_requests;
@@ -205,6 +206,35 @@ void Simulator::broadcast(const std::optional<Request>& request,
   if (replies.empty()) return;
   Bytes on_line = replies.size() == 1 ? std::move(replies[0]) : collideReplies(replies);
   send(*first_answer, std::move(on_line), first_answer->replyDelay(), request_end);
+}
+
+// An LD58A08 answering 0xFF and an LC board at 255 (or two devices at one address): each
+// takes the request as if alone (a write lands on both) and both answer at once.
+void Simulator::collide(const std::optional<Request>& request, uint8_t slave, uint8_t function,
+                        const std::vector<SimDevice*>& targets, SimClock::time_point now,
+                        SimClock::time_point request_end) {
+  const double delay = targets.front()->replyDelay();
+  std::vector<Bytes> replies;
+  for (SimDevice* d : targets) {
+    if (chance(d->drop_request_percent)) {
+      ++d->dropped_requests;
+      continue;
+    }
+    std::optional<Bytes> reply;
+    if (d->failing)
+      reply = encodeException(slave, function, kSlaveDeviceFailure);
+    else if (!isKnownFunction(function))
+      reply = d->unknownFunction(slave, function);
+    else if (!request)
+      reply = encodeException(slave, function, kIllegalDataValue);
+    else
+      reply = d->handle(*request, now);
+    if (reply) replies.push_back(std::move(*reply));
+  }
+  if (request && !isReadFunction(request->function)) saveState();
+  if (replies.empty()) return;
+  Bytes on_line = replies.size() == 1 ? std::move(replies[0]) : collideReplies(replies);
+  send(*targets.front(), std::move(on_line), delay, request_end);
 }
 
 // Several boards drive the line at once. A receiver gets neither reply: the model is the

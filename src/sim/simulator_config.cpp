@@ -90,9 +90,9 @@ bool parseDevice(const YAML::Node& d, const std::string& where, const std::strin
   }
   const bool generic = d["type"] && d["type"].IsScalar() && d["type"].Scalar() == "generic";
   std::set<std::string> keys = {"type", "address"};
-  if (generic) {  // the node's keys (core/signal.h), and the simulator's holes
+  if (generic) {  // the node's keys (core/signal.h), and the simulator's own (sim_generic.h)
     keys.insert(kSignalMapKeys.begin(), kSignalMapKeys.end());
-    keys.insert("holes");
+    keys.insert(kSimGenericKeys.begin(), kSimGenericKeys.end());
   }
   if (!onlyKeys(d, keys, where + "/", error)) return false;
   if (generic && !parseSimGeneric(d, where + "/", base_dir, &e->generic, error)) return false;

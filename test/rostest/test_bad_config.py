@@ -56,6 +56,19 @@ CASES = [
      ["devices/relays/heartbeat/timeout", "missing"]),
     (with_change(["heartbeat"], {"topic": "alive", "timeout": 0}), ["heartbeat/timeout", "outside"]),
     (with_change(["shutdown_timeout"], 120), ["shutdown_timeout", "outside"]),
+    # Issue 24/8: an LD58A08 answers at 0xFF too: the LC board at its factory 255 must move.
+    (with_change(["devices", "pwm_board"], {"type": "ld58a08", "address": 1}),
+     ["devices/relays/address", "255 collides with the LD58A08 'pwm_board'",
+      "Move the LC board 'relays' off 255"]),
+    # Issue 24/6: fail-safe keys that would do nothing on a generic device.
+    (with_change(["devices", "meter"], {"type": "generic", "address": 3, "safe_state": "off",
+                                        "signals": [{"name": "a", "table": "coil",
+                                                     "address": 0, "writable": True}]}),
+     ["devices/meter/safe_state", "not for type generic", "safe_value"]),
+    (with_change(["devices", "meter"], {"type": "generic", "address": 3, "signals": [
+        {"name": "a", "table": "holding_register", "address": 0, "scale": 10, "writable": True,
+         "max": 95, "safe_value": 95}]}),
+     ["devices/meter/signals[0]/safe_value", "would be written as 100"]),
 ]
 
 

@@ -27,7 +27,7 @@ import helpers
 
 NODE = "fsbus"
 NS = "/" + NODE + "/"
-RELAYS, PWM = "255", "1"
+RELAYS, PWM = "8", "1"
 
 
 class FailsafeTest(unittest.TestCase):

@@ -123,7 +123,7 @@ class FaultsTest(unittest.TestCase):
         # ... and comes back at the same path: the node reconnects without a restart.
         self.start_sim()
         helpers.wait_until(lambda: set_pump(True).success, 30, "the node to reconnect")
-        self.assertEqual(self.sim.get("255", "coil", 0), [1])
+        self.assertEqual(self.sim.get("8", "coil", 0), [1])
         helpers.wait_until(lambda: self.status("bus ").level != DiagnosticStatus.ERROR, 15,
                            "the bus reported up again")
 
@@ -161,14 +161,14 @@ class FaultsTest(unittest.TestCase):
         # controller would. Dead command topics never turn it on.)
         def out5_on():
             out5.publish(Bool(True))
-            return self.sim.get("255", "coil", 5) == [1]
+            return self.sim.get("8", "coil", 5) == [1]
         helpers.wait_until(out5_on, 15, "out5 on by command")
         # ... and services too; the refused fan (3) and out4 never reach the board. (The write
         # may be merged with an out5 command still on its way from out5_on(): the board's coils,
         # not the message, say what was written.)
         res = set_out7(True)
         self.assertTrue(res.success, res.message)
-        self.assertEqual(self.sim.get("255", "coil", 0, 8), [0, 0, 0, 0, 0, 1, 0, 1])
+        self.assertEqual(self.sim.get("8", "coil", 0, 8), [0, 0, 0, 0, 0, 1, 0, 1])
         outputs = helpers.Latest(NS + "relays/outputs", DigitalStates)
         outputs.wait(10, lambda m: list(m.states) == [False] * 5 + [True, False, True],
                      "outputs published as on the board")

@@ -13,7 +13,7 @@ from std_srvs.srv import SetBool
 import helpers
 
 NS = "/bus/relays/"
-BOARD = "255"
+BOARD = "8"
 
 
 class GatewayDropTest(unittest.TestCase):

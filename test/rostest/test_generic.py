@@ -185,7 +185,7 @@ class GenericDeviceTest(unittest.TestCase):
         helpers.wait_until(all_online, 20, "all four devices online and OK")
         relays = helpers.service("/bus/relays/out0/set", SetBool)
         self.assertTrue(relays(True).success)
-        self.assertEqual(self.sim.get("255", "coil", 0), [1])
+        self.assertEqual(self.sim.get("8", "coil", 0), [1])
 
 
 if __name__ == "__main__":

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""LC relay board at its factory address 255 through the bus node: every service and topic
+"""LC relay board (at 8: beside an LD58A08, its factory 255 would collide) through the bus node: every service and topic
 changes the simulated board's coils, and polled states follow changes on the board's side."""
 import time
 import unittest
@@ -17,7 +17,7 @@ from modbus_rtu_driver.srv import Pulse, SetOutputs
 import helpers
 
 NS = "/bus/relays/"
-BOARD = "255"  # the simulator names devices by address
+BOARD = "8"  # the simulator names devices by address
 
 
 class LcRelay8Test(unittest.TestCase):
@@ -103,7 +103,7 @@ class LcRelay8Test(unittest.TestCase):
         relays = next(s for n, s in by_name.items() if "device relays" in n)
         self.assertEqual(relays.level, DiagnosticStatus.OK, relays.message)
         values = {kv.key: kv.value for kv in relays.values}
-        self.assertEqual(values["address"], "255")
+        self.assertEqual(values["address"], "8")
         self.assertEqual(values["online"], "True")
         bus = next(s for n, s in by_name.items() if n.startswith("bus "))
         bus_values = {kv.key: kv.value for kv in bus.values}

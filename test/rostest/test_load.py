@@ -68,7 +68,7 @@ class LoadTest(unittest.TestCase):
         self.assertEqual(answered, CLIENTS * CALLS, "every call returns")
         self.assertEqual(succeeded, CLIENTS * CALLS, "no write failed on a healthy bus")
         # Each board output ends as its client's last call asked.
-        final = self.sim.get("255", "coil", 0, 8)
+        final = self.sim.get("8", "coil", 0, 8)
         expected = [int((CALLS - 1) % 2 == 0 if i % 2 else (CALLS - 1) % 2 == 1) for i in range(CLIENTS)]
         self.assertEqual(final, expected)
 
@@ -86,12 +86,12 @@ class LoadTest(unittest.TestCase):
                 t0 = time.time()
                 answers.append((set_out5(n % 2 == 0).success, time.time() - t0))
         pub.publish(Bool(True))  # the newest command
-        helpers.wait_until(lambda: self.sim.get("255", "coil", 6) == [1], 10, "the newest command")
+        helpers.wait_until(lambda: self.sim.get("8", "coil", 6) == [1], 10, "the newest command")
         # An older "on" may have set it: let the line carry 50 more frames (older commands still
         # in the node would be written by then; the node merges them into one write) and look again.
         after = self.sim.frames()[0] + 50
         helpers.wait_until(lambda: self.sim.frames()[0] >= after, 30, "50 more frames on the line")
-        self.assertEqual(self.sim.get("255", "coil", 6), [1], "newest command wins")
+        self.assertEqual(self.sim.get("8", "coil", 6), [1], "newest command wins")
         self.assertTrue(all(ok for ok, _ in answers), answers)
         rss_after = node_rss_kib()
         rospy.loginfo("node RSS %d KiB before, %d KiB after 5000 commands; service answers %s",

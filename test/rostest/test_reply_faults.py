@@ -17,7 +17,7 @@ from modbus_rtu_driver.srv import SetPwm, StopPwm
 import helpers
 
 NS = "/bus/"
-RELAYS, PWM, SLOW = "255", "1", "3"
+RELAYS, PWM, SLOW = "8", "1", "3"
 
 
 class ReplyFaultsTest(unittest.TestCase):

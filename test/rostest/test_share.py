@@ -20,7 +20,7 @@ import helpers
 from sim_control import SimControl
 
 NS = "/bus/"
-BOARD = "255"  # the LC relay board
+BOARD = "8"  # the LC relay board
 PDU = "2"
 
 

@@ -29,8 +29,8 @@ class WireLogTest(unittest.TestCase):
         started = time.monotonic()
         res = set_lamp(True)
         self.assertTrue(res.success, res.message)
-        # The write to coil 2 of slave 255 (FC05, ON = FF00) and its echo, after the call began.
-        write = bytes([0xFF, 0x05, 0x00, 0x02, 0xFF, 0x00])
+        # The write to coil 2 of slave 8 (FC05, ON = FF00) and its echo, after the call began.
+        write = bytes([0x08, 0x05, 0x00, 0x02, 0xFF, 0x00])
 
         def logged():  # the log once it holds the write and the line after it
             got = helpers.wire_log(path)

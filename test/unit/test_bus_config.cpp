@@ -24,7 +24,7 @@ retries: 1
 devices:
   relays:
     type: lc_relay8
-    address: 255
+    address: 254          # not 255: the LD58A08 below answers at 0xFF too
     poll_rate: 10.0
     outputs: [pump, valve, lamp, fan, out4, out5, out6, out7]
     inputs: [door, estop, in2, in3, in4, in5, in6, in7]
@@ -60,7 +60,7 @@ TEST(BusConfig, TheIssueExampleParses) {
   ASSERT_EQ(c.devices.size(), 3u);
   EXPECT_EQ(c.devices[0].name, "relays");  // document order is kept
   EXPECT_EQ(c.devices[0].type, "lc_relay8");
-  EXPECT_EQ(c.devices[0].address, 255);
+  EXPECT_EQ(c.devices[0].address, 254);
   EXPECT_DOUBLE_EQ(c.devices[0].poll_rate, 10.0);
   EXPECT_EQ(c.devices[0].outputs[0], "pump");
   EXPECT_EQ(c.devices[0].inputs[1], "estop");
@@ -107,8 +107,8 @@ TEST(BusConfig, EachBadValueIsNamed) {
       {"port: /dev/ttyUSB0", "port: ''", {"port"}},
       {"port: /dev/ttyUSB0", "port: /dev/ttyUSB0\ncolour: red", {"colour", "unknown key"}},
       {"type: lc_relay8", "type: ld99", {"devices/relays/type", "ld99"}},
-      {"address: 255", "address: 256", {"devices/relays/address", "256"}},
-      {"address: 255", "address: 0", {"devices/relays/address", "0"}},
+      {"address: 254", "address: 256", {"devices/relays/address", "256"}},
+      {"address: 254", "address: 0", {"devices/relays/address", "0"}},
       {"address: 1,", "address: 249,", {"devices/pwm_board/address", "249", "1-248"}},
       {"address: 2,", "address: 248,", {"devices/pdu/address", "248", "1-247"}},
       {"address: 2,", "address: 1,", {"devices/pdu/address", "already used", "pwm_board"}},
@@ -212,4 +212,24 @@ TEST(BusConfig, ShareKeysWithDefaultsAndRanges) {
   EXPECT_NE(shareError("{read_only: maybe}").find("share/read_only"), std::string::npos);
   EXPECT_NE(shareError("{port: 1502}").find("share/port"), std::string::npos);
   EXPECT_NE(shareError("true").find("share"), std::string::npos);
+}
+
+// Issue 24/8: an LD58A08 answers at 0xFF too, so an LC board at its factory address 255 on the
+// same bus collides with it. Refused with the devices, the key and the way out named; an LC
+// board at 255 without an LD58A08, or elsewhere beside one, is fine.
+TEST(BusConfig, AnLcBoardAt255BesideAnLd58a08IsRefused) {
+  const std::string error = errorOf(replaced("address: 254 ", "address: 255 "));
+  EXPECT_EQ(error.rfind("devices/relays/address: 255 collides with the LD58A08 'pwm_board'", 0), 0u)
+      << error;
+  EXPECT_NE(error.find("Move the LC board 'relays' off 255"), std::string::npos) << error;
+  EXPECT_NE(error.find("set devices/relays/address"), std::string::npos) << error;
+  EXPECT_EQ(errorOf("devices: {r: {type: lc_relay8, address: 255}, p: {type: yespeed_pdu, "
+                    "address: 2}}"),
+            "");
+  EXPECT_EQ(errorOf(kGood), "");
+  // Whatever the order in the file.
+  EXPECT_NE(errorOf("devices: {a: {type: ld58a08, address: 1}, b: {type: ld58a08, address: 2}, "
+                    "r: {type: lc_relay8, address: 255}}")
+                .find("devices/r/address: 255 collides with the LD58A08 'a', 'b'"),
+            std::string::npos);
 }

@@ -3,6 +3,8 @@
 // poll groups by rate, writes checked before the bus and confirmed.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "scripted_transport.h"
@@ -343,4 +345,115 @@ TEST(GenericDevice, TheRegistryBuildsIt) {
   DeviceConfig bad = generic({sig("a", kH, 0)});
   bad.address = 248;
   EXPECT_EQ(validateDeviceConfig(bad), "devices/meter/address: 248 is outside 1-247 for generic");
+}
+
+// Issue 24: min/max bound the value the device gets. Scale 10, max 95: 95 rounds to raw 10,
+// which is 100 on the device, and must be refused; 90 (raw 9) and 100 with max 100 pass.
+TEST(GenericDevice, MinMaxAreCheckedOnTheRoundedValue) {
+  auto sp = sig("flow", kH, 10, SignalType::kUint16);
+  sp.writable = true;
+  sp.scale = 10;
+  sp.max = 95;
+  sp.min = 12;
+  sp.unit = "l/h";
+  auto tenth = sig("temp", kH, 11, SignalType::kInt16);
+  tenth.writable = true;
+  tenth.scale = 0.1;
+  tenth.max = 0.3;  // 3 * 0.1 is 0.30000000000000004: not "above" 0.3
+  GenericDevice d(generic({sp, tenth}));
+  ScriptedTransport bus;  // nothing may be sent for the refused ones
+  EXPECT_EQ(d.writeSignal(bus, 0, 95).message,
+            "flow: 95 l/h would be written as 100 l/h (raw 10), outside 12 to 95 l/h");
+  EXPECT_EQ(d.writeSignal(bus, 0, 14).message,
+            "flow: 14 l/h would be written as 10 l/h (raw 1), outside 12 to 95 l/h");
+  EXPECT_EQ(bus.executed(), 0);
+  std::vector<uint16_t> words;
+  EXPECT_EQ(d.encodeWrite(0, 90, &words), "");
+  EXPECT_EQ(words, std::vector<uint16_t>{9});
+  EXPECT_EQ(d.encodeWrite(0, 16, &words), "");  // raw 2 = 20: inside
+  EXPECT_EQ(d.encodeWrite(1, 0.3, &words), "");
+  EXPECT_EQ(words, std::vector<uint16_t>{3});
+}
+
+// Issue 24: a NaN reading is the same reading as the NaN before it (published once).
+TEST(GenericDevice, ANanReadingIsTheSameReadingAsTheLastNan) {
+  EXPECT_TRUE(sameReading(std::nan(""), std::nan("")));
+  EXPECT_TRUE(sameReading(1.5, 1.5));
+  EXPECT_FALSE(sameReading(std::nan(""), 1.5));
+  EXPECT_FALSE(sameReading(1.5, std::nan("")));
+  // As the device decodes it: float32 0x7FC00000 twice.
+  GenericDevice d(generic({sig("power", kI, 0, SignalType::kFloat32)}));
+  ScriptedTransport bus;
+  expectRead(bus, Request::readInputRegisters(5, 0, 2), {0x7FC0, 0});
+  ASSERT_TRUE(d.poll(bus).ok());
+  const double first = d.states()[0].value;
+  expectRead(bus, Request::readInputRegisters(5, 0, 2), {0x7FC0, 0});
+  ASSERT_TRUE(d.poll(bus).ok());
+  EXPECT_TRUE(std::isnan(first));
+  EXPECT_TRUE(sameReading(first, d.states()[0].value));
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+// Issue 24: a merged read refused with exception 03 (Eastron meters refuse over-long reads so)
+// is split as after 02, and the split remembered.
+TEST(GenericDevice, AMergedReadRefusedWithException03IsSplit) {
+  GenericDevice d(
+      generic({sig("a", kI, 0, SignalType::kFloat32), sig("b", kI, 6, SignalType::kFloat32)}));
+  ScriptedTransport bus;
+  expectRefused(bus, Request::readInputRegisters(5, 0, 8), kIllegalDataValue);
+  expectRead(bus, Request::readInputRegisters(5, 0, 2), {0x4366, 0});
+  expectRead(bus, Request::readInputRegisters(5, 6, 2), {0x3FC0, 0});
+  const Result r = d.poll(bus);
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(d.states()[0].value, 230.0);
+  EXPECT_EQ(d.states()[1].value, 1.5);
+  ASSERT_EQ(d.splits().size(), 1u);
+  EXPECT_NE(d.splits()[0].find("refused (exception 03)"), std::string::npos) << d.splits()[0];
+  expectRead(bus, Request::readInputRegisters(5, 0, 2), {0x4366, 0});
+  expectRead(bus, Request::readInputRegisters(5, 6, 2), {0x3FC0, 0});
+  EXPECT_TRUE(d.poll(bus).ok());
+  EXPECT_SCRIPT_DONE(bus);
+}
+
+// Issue 24/6: the fail-safe writes each safe_value and reads it back; a refusal does not stop
+// the others, a silent device does.
+TEST(GenericDevice, SafeValuesAreWrittenAndReadBack) {
+  auto speed = sig("speed", kH, 10, SignalType::kInt16);
+  speed.writable = true;
+  speed.scale = 0.1;
+  speed.safe_value = -2.5;
+  auto run = sig("run", SignalTable::kCoil, 3);
+  run.writable = true;
+  run.safe_value = 0;
+  auto free = sig("free", kH, 11);
+  free.writable = true;
+  GenericDevice d(generic({speed, free, run}));
+  EXPECT_EQ(d.safeSignals(), (std::vector<size_t>{0, 2}));
+  ScriptedTransport bus;
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleRegister(5, 10, 0xFFE7))));  // -25
+  expectRead(bus, Request::readHoldingRegisters(5, 10, 1), {0xFFE7});
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(5, 3, false))));
+  expectRead(bus, Request::readCoils(5, 3, 1), {0});
+  const Result r = d.writeSafeValues(bus);
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_NEAR(d.states()[0].value, -2.5, 1e-9);
+  EXPECT_EQ(d.states()[2].value, 0.0);
+  EXPECT_SCRIPT_DONE(bus);
+
+  // The register refuses the write (exception 04): the coil is still written; the failure
+  // names the signal. The read-back showing another value is a failure too.
+  expectRefused(bus, Request::writeSingleRegister(5, 10, 0xFFE7), kSlaveDeviceFailure);
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(5, 3, false))));
+  expectRead(bus, Request::readCoils(5, 3, 1), {1});
+  const Result refused = d.writeSafeValues(bus);
+  EXPECT_FALSE(refused.ok());
+  EXPECT_EQ(refused.message.rfind("speed: ", 0), 0u) << refused.message;
+  EXPECT_SCRIPT_DONE(bus);
+
+  // Silence (the write, and the read-back that tells whether it was done): the coil is not
+  // tried.
+  bus.expect(toHex(encodeRequest(Request::writeSingleRegister(5, 10, 0xFFE7))));
+  bus.expect(toHex(encodeRequest(Request::readHoldingRegisters(5, 10, 1))));
+  EXPECT_EQ(d.writeSafeValues(bus).error, ErrorKind::kTimeout);
+  EXPECT_SCRIPT_DONE(bus);
 }

@@ -53,8 +53,8 @@ TEST(SimGeneric, TheSameYamlAsTheNodes) {
             "devices[0]/signals[0]/table: missing");
   EXPECT_EQ(parseError("devices: [{type: generic, address: 7, holes: [], signals: [{name: a, "
                        "table: coil, address: 0}], colour: red}]"),
-            "devices[0]/colour: unknown key (expected address, holes, max_gap, signals, "
-            "template, type)");
+            "devices[0]/colour: unknown key (expected address, holes, max_gap, max_read, "
+            "signals, template, type)");
   EXPECT_EQ(parseError("devices: [{type: lc_relay8, address: 7, holes: []}]"),
             "devices[0]/holes: unknown key (expected address, type)");
   EXPECT_EQ(parseError("devices: [{type: generic, address: 7, signals: [{name: a, table: coil, "
@@ -124,4 +124,30 @@ TEST(SimGeneric, BlocksHolesWritesAndInputs) {
   again.loadState(state, SimClock::now());
   EXPECT_EQ(get(again, Table::kHolding, 102), 2);
   EXPECT_EQ(get(again, Table::kInputRegister, 6), 0x3FC0);
+}
+
+// Issue 24: max_read makes the simulated device answer longer reads with exception 03 (as
+// Eastron meters do); the protocol's own limit still holds above it.
+TEST(SimGeneric, MaxReadRefusesLongerReadsWithException03) {
+  SimulatorConfig c = load(R"(
+devices:
+  - type: generic
+    address: 7
+    max_read: 4
+    signals:
+      - {name: a, table: input_register, address: 0, type: float32}
+      - {name: b, table: input_register, address: 6, type: float32}
+      - {name: c, table: coil, address: 0}
+      - {name: d, table: coil, address: 9}
+)");
+  ASSERT_EQ(c.devices.size(), 1u);
+  EXPECT_EQ(c.devices[0].generic.max_read, 4);
+  SimGeneric d(7, {}, c.devices[0].generic);
+  const Request four = Request::readInputRegisters(7, 0, 4);
+  EXPECT_EQ(ask(d, four), toHex(encodeReply(four, {0, 0, 0, 0})));
+  EXPECT_EQ(ask(d, Request::readInputRegisters(7, 0, 8)), exceptionHex(7, 0x04, 0x03));
+  EXPECT_EQ(ask(d, Request::readCoils(7, 0, 10)), exceptionHex(7, 0x01, 0x03));
+  EXPECT_EQ(parseError("devices: [{type: generic, address: 7, max_read: 0, signals: [{name: a, "
+                       "table: coil, address: 0}]}]"),
+            "devices[0]/max_read: 0 is outside 1-2000");
 }

@@ -50,7 +50,7 @@ TEST(SimConfig, TheShippedConfigLoads) {
   ASSERT_TRUE(loadSimulatorConfig(REPO_DIR "/config/simulator.yaml", &c, &error)) << error;
   ASSERT_EQ(c.devices.size(), 3u);
   EXPECT_EQ(c.devices[0].type, "lc_relay8");
-  EXPECT_EQ(c.devices[0].address, 255);
+  EXPECT_EQ(c.devices[0].address, 8);  // not 255: the LD58A08 beside it answers 0xFF too
   EXPECT_EQ(c.factory.baud, 9600);
   EXPECT_EQ(c.factory.parity, 'N');
   EXPECT_FALSE(c.pace);

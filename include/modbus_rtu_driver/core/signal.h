@@ -40,6 +40,9 @@ struct SignalConfig {
   bool writable = false;            // coils and holding registers only
   std::optional<double> min, max;   // allowed written values, in engineering units
   std::optional<double> poll_rate;  // Hz; none = the device's
+  // Fail-safe: what the node writes on shutdown, heartbeat loss and on_start: safe
+  // (engineering units; bits 0 or 1); none = left as it is. Writable signals only.
+  std::optional<double> safe_value;
   // Function code a write uses: 5 or 15 (coils), 6 or 16 (holding registers); 0 = the default.
   int write_function = 0;
 
@@ -54,6 +57,13 @@ struct SignalConfig {
 // Why `s.write_function` cannot write `s` (a message naming the value and what is allowed), or
 // empty when it can. Shared by the YAML check and the device, so a bad one never reaches the bus.
 std::string writeFunctionProblem(const SignalConfig& s);
+
+// Why `value` cannot be written to `s` (without the signal's name: "95 l/h would be written as
+// 100 l/h (raw 10), outside 12 to 95 l/h"), or empty when it can; then `words` holds the
+// registers (or the bit) it becomes. Checks min/max on the value asked and on the value the
+// rounded raw number stands for, then the type's range. Shared by the device's writes and the
+// YAML check of safe_value, so a value the node would refuse is never configured.
+std::string writeValueProblem(const SignalConfig& s, double value, std::vector<uint16_t>* words);
 
 // The raw number in `words` (wordsOf(type) registers in address order; bits as 0/1).
 double decodeRaw(SignalType type, WordOrder order, const uint16_t* words);

@@ -24,6 +24,10 @@ struct SignalState {
   bool known = false;  // it was read (or written) at least once
 };
 
+// Whether a reading is the one already published: equal, or both NaN (a float32 register
+// holding NaN reads NaN on every poll, and NaN != NaN would publish it every time).
+bool sameReading(double a, double b);
+
 class GenericDevice : public Device {
  public:
   struct PollGroup {
@@ -44,17 +48,26 @@ class GenericDevice : public Device {
   const std::vector<SignalState>& states() const { return states_; }
   // Group 0 always exists (it may be empty); one more per distinct signal poll_rate.
   const std::vector<PollGroup>& groups() const { return groups_; }
-  // Reads the group's signals. A span refused with exception 02 is split and both parts read
-  // again at once. Signals whose read failed turn invalid; the Result is the first failure.
+  // Reads the group's signals. A span refused with exception 02 or 03 is split and both parts
+  // read again at once. Signals whose read failed turn invalid; the Result is the first failure.
   Result pollGroup(Transport& bus, size_t group);
 
   // The registers (or the bit) that `value` of `signal` becomes, or a message naming the
-  // signal and the allowed range (min/max, then the type's). Nothing is sent here.
+  // signal and the allowed range (min/max, then the type's, then min/max again for the value
+  // the rounded raw number stands for). Nothing is sent here.
   std::string encodeWrite(size_t signal, double value, std::vector<uint16_t>* words) const;
   // Checks (encodeWrite), writes and confirms; on success the state holds the written value.
   Result writeSignal(Transport& bus, size_t signal, double value);
 
-  // Merged spans split after exception 02, in words (diagnostics).
+  // Fail-safe: the signals with a safe_value (indices), in configuration order.
+  std::vector<size_t> safeSignals() const;
+  // Writes each safe signal's safe_value and reads it back (the value on the device, not the
+  // write's echo), in order. A refusal does not stop the others; a device that does not answer
+  // does (the rest would only wait out their timeouts). The Result is the first failure, its
+  // message naming the signal; the states hold what was read back.
+  Result writeSafeValues(Transport& bus);
+
+  // Merged spans split after exception 02 or 03, in words (diagnostics).
   const std::vector<std::string>& splits() const { return planner_.splits(); }
   size_t spansPerPoll(size_t group) const { return planner_.plan(groups_[group].signals).size(); }
 
@@ -64,6 +77,7 @@ class GenericDevice : public Device {
   // The write of `words` (encodeWrite's) with the signal's write function.
   Request writeRequest(const SignalConfig& s, const std::vector<uint16_t>& words) const;
   void setFromWords(size_t signal, const uint16_t* words);
+  Result writeSafeValue(Transport& bus, size_t signal);
 
   ReadPlanner planner_;
   std::vector<PollGroup> groups_;

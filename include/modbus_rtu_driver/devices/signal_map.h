@@ -2,8 +2,9 @@
 // table that lie close together (at most max_gap unread registers or bits between them) are
 // read in one request, within the protocol's limits (125 registers, 2000 bits). A device that
 // refuses a merged span with exception 02 (illegal data address: an unmapped register in the
-// gap) gets it split in two at its widest gap; the split is remembered, so later plans keep
-// those signals apart. ROS-free.
+// gap) or 03 (illegal data value: a quantity longer than it serves, as Eastron meters answer)
+// gets it split in two at its widest gap; the split is remembered, so later plans keep those
+// signals apart. ROS-free.
 #pragma once
 
 #include <cstdint>
@@ -35,9 +36,11 @@ class ReadPlanner {
 
   // The requests that read `which` (indices into signals()), by table then address.
   std::vector<ReadSpan> plan(const std::vector<size_t>& which) const;
-  // After exception 02 on `span`: splits it in two at its widest gap and remembers the split.
-  // False for a span of one signal (nothing to split: that signal itself is refused).
-  bool split(const ReadSpan& span, ReadSpan* first, ReadSpan* second);
+  // After exception `code` (02 or 03) on `span`: splits it in two at its widest gap and
+  // remembers the split. False for a span of one signal (nothing to split: that signal itself
+  // is refused).
+  bool split(const ReadSpan& span, ReadSpan* first, ReadSpan* second,
+             uint8_t code = kIllegalDataAddress);
   // The splits made so far, in words, for diagnostics.
   const std::vector<std::string>& splits() const { return split_log_; }
   const std::vector<SignalConfig>& signals() const { return signals_; }

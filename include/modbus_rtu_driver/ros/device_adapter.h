@@ -53,19 +53,20 @@ class DeviceAdapter {
 
   // Fail-safe (device_failsafe.cpp). Where events go (the node's latched ~failsafe topic).
   using EventSink = std::function<void(const FailsafeEvent&)>;
-  void setFailsafeSink(EventSink sink) { failsafe_sink_ = std::move(sink); }
+  virtual void setFailsafeSink(EventSink sink) { failsafe_sink_ = std::move(sink); }
   // Puts the channels with a safe state there (only those in `only`, when given), confirmed by
   // reading the outputs back, and reports the event. Runs on the bus thread; the future holds
   // the outcome. Nothing to do: a ready success.
-  std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
-                                const std::vector<uint8_t>& only = {});
+  // Virtual: a generic device writes its signals' safe values instead (generic_adapter.cpp).
+  virtual std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
+                                        const std::vector<uint8_t>& only = {});
   // Bus thread: a write to this device that the node carried for someone else (a share
   // client, a raw write) was confirmed by its reply; the fail-safe takes it as a command.
   void externalWrite();
   // Timer (any thread): command deadlines that passed, this device's heartbeat.
   void checkDeadlines();
   // Whether the device has any safe state, and whether start-up puts it there.
-  bool hasSafeStates() const { return failsafe_.config().hasSafeStates(); }
+  virtual bool hasSafeStates() const { return failsafe_.config().hasSafeStates(); }
   bool safeOnStart() const { return failsafe_.config().on_start_safe && hasSafeStates(); }
   Watchdog* heartbeat() { return heartbeat_.get(); }
   const FailsafeConfig& failsafeConfig() const { return failsafe_.config(); }
@@ -130,7 +131,7 @@ class DeviceAdapter {
   void report(const FailsafeEvent& event);
   // A user's confirmed write ends the fail-safe state shown in /diagnostics.
   void endFailsafeState();
-  void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status);
+  virtual void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   FailsafeTracker failsafe_;
   std::unique_ptr<Watchdog> heartbeat_;

@@ -2,8 +2,10 @@
 // device (core/signal.h). Each table answers from its lowest to its highest signal register (a
 // device's register block, gaps included, 0 until set); elsewhere, and in the configured
 // `holes`, it answers exception 02, so a merged read across a hole is refused as on a device
-// with an unmapped register. Coils and holding registers take writes; inputs are set through
-// the control socket (`set`). Values survive a power cycle (the state file keeps them).
+// with an unmapped register. `max_read` (registers or bits per read) makes it answer longer
+// reads with exception 03, as Eastron meters do. Coils and holding registers take writes;
+// inputs are set through the control socket (`set`). Values survive a power cycle (the state
+// file keeps them).
 #pragma once
 
 #include <map>
@@ -21,10 +23,14 @@ struct SimGenericConfig {
     uint16_t from, to;  // inclusive
   };
   std::vector<Hole> holes;
+  uint16_t max_read = 0;  // registers or bits one read may ask; 0 = the protocol's limits
 };
 
-// Reads `signals`, `template`, `max_gap` and `holes` of a simulator device entry; false with a
-// message naming the key. `base_dir`: where a relative template path starts.
+// The simulator's keys of a generic device beside the node's (holes, max_read).
+extern const std::vector<std::string> kSimGenericKeys;
+
+// Reads `signals`, `template`, `max_gap`, `holes` and `max_read` of a simulator device entry; false
+// with a message naming the key. `base_dir`: where a relative template path starts.
 bool parseSimGeneric(const YAML::Node& entry, const std::string& where, const std::string& base_dir,
                      SimGenericConfig* out, std::string* error);
 
@@ -33,6 +39,7 @@ class SimGeneric : public SimDevice {
   SimGeneric(uint8_t address, SimLineSettings line, SimGenericConfig config);
   const char* type() const override { return kGenericType.name; }
   void powerCycle(SimClock::time_point) override {}
+  uint16_t readLimit(bool bits) const override;
   void saveState(YAML::Node& node) const override;
   void loadState(const YAML::Node& node, SimClock::time_point now) override;
   uint8_t read(Table table, uint16_t address, SimClock::time_point now, uint16_t* value) override;

@@ -31,8 +31,10 @@ class SimLd58a08 : public SimDevice {
   SimLd58a08(uint8_t address, SimLineSettings line);
   const char* type() const override { return kLd58a08Type.name; }
   // "Only one module on the bus": it also answers its special registers (0x00FA-0x00FF) at
-  // 0xFF, as the manual shows. Reading it as answering everything at 0xFF would make it
-  // collide with an LC relay board at its factory address 255 on every poll.
+  // 0xFF, as the manual shows, whoever else is at 255: beside an LC board at its factory
+  // address 255 both answer those frames and the replies collide on the line (simulator.h).
+  // The node refuses that configuration. Whether a real board answers every request at 0xFF
+  // is not known; the simulator takes only what the manual shows.
   bool answersTo(uint8_t slave, const Request* request) const override {
     return slave == address_ || (slave == 0xFF && request && !isBitFunction(request->function) &&
                                  request->address >= 0x00FA && request->address <= 0x00FF);

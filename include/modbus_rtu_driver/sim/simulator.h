@@ -6,14 +6,15 @@
 // The line: bytes are cut into frames by the length their header announces; what does not form
 // a valid frame is dropped when the line has been silent for t3.5 (at least 4 ms: a pty delivers
 // in bursts). A device hears a frame only at its own baud and parity (what the client set on the
-// pty); frames for nobody, and frames with a bad CRC, get silence. A device at the exact address
-// answers before one that answers 0xFF for itself (LD58A08). Broadcasts (address 0) reach every
-// device and nobody answers, except the LC board's address commands at 0: every LC board takes
-// them and answers, and two or more replies collide into garbled bytes (collideReplies), as on a
-// real bus. Other devices see the LC address command as a broadcast write to their register 0
-// (LD58A08: channel 0's period; PDU: its over-voltage limit, refused below 180 V). With `pace`, the
-// reply starts t3.5 after the request's wire time and its bytes are written at the line's character
-// rate.
+// pty); frames for nobody, and frames with a bad CRC, get silence. Every device that takes a
+// frame answers it: an LD58A08 taking a frame at 0xFF (for itself) beside an LC board at its
+// factory address 255 means two replies at once, which collide (collideReplies). Broadcasts
+// (address 0) reach every device and nobody answers, except the LC board's address commands at 0:
+// every LC board takes them and answers, and two or more replies collide into garbled bytes
+// (collideReplies), as on a real bus. Other devices see the LC address command as a broadcast write
+// to their register 0 (LD58A08: channel 0's period; PDU: its over-voltage limit, refused below 180
+// V). With `pace`, the reply starts t3.5 after the request's wire time and its bytes are written at
+// the line's character rate.
 #pragma once
 
 #include <atomic>
@@ -110,6 +111,10 @@ class Simulator {
   void processFrame(const Bytes& frame, SimClock::time_point now);
   void broadcast(const std::optional<Request>& request, const std::vector<SimDevice*>& hearing,
                  SimClock::time_point now, SimClock::time_point request_end);
+  // A frame that several devices take (see above): each does it, their replies collide.
+  void collide(const std::optional<Request>& request, uint8_t slave, uint8_t function,
+               const std::vector<SimDevice*>& targets, SimClock::time_point now,
+               SimClock::time_point request_end);
   void send(SimDevice& device, Bytes reply, double delay, SimClock::time_point request_end);
   void flushOutgoing(SimClock::time_point now);
   bool chance(int percent);  // the drop faults; a fixed seed, so a run can be repeated
