@@ -126,7 +126,9 @@ class DocCommandsTest(unittest.TestCase):
                     proc.stop()
                 else:
                     wait_until(lambda: all(c in proc.output() for c in expect["contains"])
-                               or not proc.running(), 60, what)
+                               or not proc.running(), 60,
+                               "%s to show %s (output: %r)"
+                               % (what, expect["contains"], proc.output()[-400:]))
                     if expect["kind"] == "stream":
                         self.assertTrue(proc.running(), "%s ended:\n%s" % (what, proc.output()))
                         proc.stop()
@@ -222,10 +224,10 @@ class DocCommandsTest(unittest.TestCase):
                  ok('"values"')),
                 # The board set to 7 above goes back to 255 first, where this example finds it.
                 ("rosrun modbus_rtu_driver modbus_rtu_commission --port /dev/ttyUSB0 watch --address 255",
-                 dict(streams("0 0 0 0 0 0 0 0"), before=lambda: self.commission(
+                 dict(streams("discrete-inputs 7: 0"), before=lambda: self.commission(
                      link, "--yes", "set-address", "--type", "lc_relay8", "255"))),
                 ("rosrun modbus_rtu_driver modbus_rtu_commission --port /dev/ttyUSB0 get-limits",
-                 ok("over_voltage")),
+                 ok("limits: over-voltage")),
                 ("rosrun modbus_rtu_driver modbus_rtu_commission --port /dev/ttyUSB0 set-limits",
                  ok()),
             ], subst)

@@ -72,9 +72,10 @@ class LaunchFilesTest(unittest.TestCase):
         configs = bus_configs()
         self.assertGreaterEqual(len(configs), 7)
         used_sims = set()
+        failed = []  # every example tried, each failure named (rosunit drops subTest's)
         for path in configs:
             name = os.path.basename(path)[:-len(".yaml")]
-            with self.subTest(config=name):
+            try:
                 config, devices = up.bus_devices(path)
                 link = os.path.join(self.dir, name + "_tty")
                 if config.get("role") == "slave":
@@ -84,6 +85,9 @@ class LaunchFilesTest(unittest.TestCase):
                 used_sims.add(os.path.basename(sim_config))
                 self.bring_up(name, ["bus.launch", "config:=" + path, "port:=" + link],
                               "/modbus_bus", devices, os.path.dirname(path), sim_config, link)
+            except AssertionError as e:
+                failed.append("config/%s.yaml: %s" % (name, e))
+        self.assertEqual(failed, [], "\n\n".join(failed))
         # The simulator's own examples were brought up, each with the bus it simulates.
         sims = {f for f in os.listdir(os.path.join(up.REPO, "config"))
                 if f.startswith("simulator") and f.endswith(".yaml")}
@@ -132,14 +136,14 @@ class LaunchFilesTest(unittest.TestCase):
         link = os.path.join(self.dir, "demo_tty")
         config, devices = up.bus_devices(os.path.join(up.REPO, "config", "demo.yaml"))
         # link:= keeps this run off /tmp/modbus_rtu_demo, where a user's demo may be running.
-        self.bring_up("demo", ["demo.launch", "link:=" + link], "/modbus_bus", devices,
+        self.bring_up("demo_launch", ["demo.launch", "link:=" + link], "/modbus_bus", devices,
                       os.path.join(up.REPO, "config"))
 
     def test_robot_example_launch(self):
         link = os.path.join(self.dir, "robot_tty")
         example = os.path.join(up.REPO, "config", "bus_example.yaml")
         config, devices = up.bus_devices(example)
-        self.bring_up("robot", ["robot_example.launch", "port:=" + link], "/my_robot/io_bus",
+        self.bring_up("robot_example_launch", ["robot_example.launch", "port:=" + link], "/my_robot/io_bus",
                       devices, os.path.join(up.REPO, "config"),
                       up.simulator_config_for(example, self.dir), link)
 

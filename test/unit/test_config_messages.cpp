@@ -19,7 +19,10 @@ std::string parseError(const std::string& yaml) {
   return error;
 }
 
-const char* kRelays = "devices: {r: {type: lc_relay8, address: 1";
+// A bus with one relay board: `device` adds to its settings, `bus` to the bus's.
+std::string relays(const std::string& device, const std::string& bus = "") {
+  return "{devices: {r: {type: lc_relay8, address: 1" + device + "}}" + bus + "}";
+}
 
 }  // namespace
 
@@ -35,29 +38,29 @@ TEST(NumberText, AsPeopleWriteThem) {
 }
 
 TEST(ConfigMessages, SecondsAsPeopleWriteThem) {
-  EXPECT_EQ(parseError(std::string(kRelays) + "}}, heartbeat: {topic: hb, timeout: 0.01}"),
+  EXPECT_EQ(parseError(relays("", ", heartbeat: {topic: hb, timeout: 0.01}")),
             "heartbeat/timeout: 0.01 s is outside 0.05-3600 s");
-  EXPECT_EQ(parseError(std::string(kRelays) + "}}, keep_alive: 0.05"),
+  EXPECT_EQ(parseError(relays("", ", keep_alive: 0.05")),
             "keep_alive: 0.05 s is outside 0.1-3600 s");
-  EXPECT_EQ(parseError(std::string(kRelays) + "}}, shutdown_timeout: 61"),
+  EXPECT_EQ(parseError(relays("", ", shutdown_timeout: 61")),
             "shutdown_timeout: 61 s is outside 0-60 s");
-  EXPECT_EQ(parseError(std::string(kRelays) + "}}, diagnostic_period: 100"),
+  EXPECT_EQ(parseError(relays("", ", diagnostic_period: 100")),
             "diagnostic_period: 100 s is outside 0.1-60 s");
-  EXPECT_EQ(parseError(std::string(kRelays) + ", safe_state: off, command_timeout: 0.01}}"),
-            "devices/r/command_timeout/out0: 0.01 s is outside 0.05-3600 s (0 = none)");
+  EXPECT_EQ(parseError(relays(", safe_state: off, command_timeout: 0.01")),
+            "devices/r/command_timeout: 0.01 s is outside 0.05-3600 s (0 = none)");
 }
 
 TEST(ConfigMessages, NanIsNan) {
-  EXPECT_EQ(parseError(std::string(kRelays) + ", poll_rate: .nan}}"),
+  EXPECT_EQ(parseError(relays(", poll_rate: .nan")),
             "devices/r/poll_rate: nan Hz is outside 0-1000 Hz (0 = never poll)");
-  EXPECT_EQ(parseError(std::string(kRelays) + ", reply_delay: .nan}}"),
+  EXPECT_EQ(parseError(relays(", reply_delay: .nan")),
             "devices/r/reply_delay: nan s is outside 0-1 s");
-  EXPECT_EQ(parseError(std::string(kRelays) + "}}, keep_alive: .nan"),
+  EXPECT_EQ(parseError(relays("", ", keep_alive: .nan")),
             "keep_alive: nan s is outside 0.1-3600 s");
 }
 
 TEST(ConfigMessages, AnUnknownKeyListsTheKeysOfThatDeviceTypeOnly) {
-  EXPECT_EQ(parseError(std::string(kRelays) + ", safe_stat: off}}"),
+  EXPECT_EQ(parseError(relays(", safe_stat: off")),
             "devices/r/safe_stat: unknown key (known keys of lc_relay8: address, command_timeout, "
             "heartbeat, inputs, on_restart, on_start, outputs, poll_rate, reply_delay, "
             "safe_state, type)");

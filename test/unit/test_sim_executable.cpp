@@ -142,7 +142,7 @@ TEST(SimExecutable, ReadyLineFramesSighupAndACleanExit) {
     std::this_thread::sleep_for(20ms);
     info = control(socket, "info");
   }
-  EXPECT_EQ(info, "#0:ld58a08:1:19200:N #1:lc_relay8:255:9600:N\n");
+  EXPECT_EQ(info, "ok #0:ld58a08:1:19200:N #1:lc_relay8:255:9600:N\n");
 
   ASSERT_EQ(kill(sim.pid, SIGTERM), 0);
   EXPECT_EQ(sim.wait(5000), 0);
