@@ -1,8 +1,12 @@
 #!/usr/bin/python3
 """Plots a bag recorded by bus.launch / demo.launch (record:=true) to a PNG: PDU power, voltage,
-current and temperature over time, and every device's outputs as step lines.
+current and temperature; generic devices' signals, one panel per unit; every device's outputs
+in a panel of its own, one labelled row per channel; and the fail-safe's actions (~failsafe)
+as marks on the time axis of every panel.
 
-    scripts/plot_bag.py my.bag -o power.png [--node /modbus_bus]
+    scripts/plot_bag.py my.bag -o robot.png [--node /my_robot/io_bus]
+
+The bus nodes are found by their topics' message types (any namespace); --node keeps one.
 """
 import argparse
 import collections
@@ -15,54 +19,140 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import rosbag  # noqa: E402
 
+# Message type -> what it is, and where the device name sits in its topic.
+DEVICE_TOPICS = {
+    "modbus_rtu_driver/PduTelemetry": "telemetry",
+    "modbus_rtu_driver/DigitalStates": "outputs",  # inputs too; told apart by the topic's leaf
+    "modbus_rtu_driver/SignalValues": "signals",
+}
+FAILSAFE_TYPE = "modbus_rtu_driver/FailsafeEvent"
+TELEMETRY_ROWS = [("power", "W"), ("voltage", "V"), ("current", "A"), ("temperature", "°C")]
 
-def load(bag_path, node):
-    telemetry = collections.defaultdict(list)  # device -> [(t, msg)]
-    outputs = collections.defaultdict(list)
+
+class BagData:
+    def __init__(self):
+        self.telemetry = collections.defaultdict(list)  # (node, device) -> [(t, msg)]
+        self.outputs = collections.defaultdict(list)
+        self.signals = collections.defaultdict(list)
+        self.failsafe = []  # (t, node, msg)
+
+    def nodes(self):
+        keys = list(self.telemetry) + list(self.outputs) + list(self.signals)
+        return sorted({n for n, _ in keys} | {n for _, n, _ in self.failsafe})
+
+    def empty(self):
+        return not (self.telemetry or self.outputs or self.signals or self.failsafe)
+
+
+def stamp_of(msg, t):
+    stamp = getattr(getattr(msg, "header", None), "stamp", None)
+    return stamp.to_sec() if stamp and stamp.to_sec() > 0 else t.to_sec()
+
+
+def load(bag_path, only_node=None):
+    data = BagData()
     with rosbag.Bag(bag_path) as bag:
-        for topic, msg, t in bag.read_messages():
-            if not topic.startswith(node + "/"):
+        types = {topic: info.msg_type for topic, info in bag.get_type_and_topic_info().topics.items()}
+        wanted = []
+        for topic, msg_type in types.items():
+            if msg_type == FAILSAFE_TYPE and topic.endswith("/failsafe"):
+                wanted.append(topic)
+            elif msg_type in DEVICE_TOPICS and topic.count("/") >= 3:
+                wanted.append(topic)  # /NODE.../DEVICE/LEAF
+        for topic, msg, t in bag.read_messages(topics=wanted):
+            if types[topic] == FAILSAFE_TYPE:
+                node = topic[:-len("/failsafe")]
+                if only_node in (None, node):
+                    data.failsafe.append((stamp_of(msg, t), node, msg))
                 continue
-            device, _, leaf = topic[len(node) + 1:].rpartition("/")
-            stamp = msg.header.stamp.to_sec() if hasattr(msg, "header") and msg.header.stamp else t.to_sec()
-            if leaf == "telemetry":
-                telemetry[device].append((stamp, msg))
-            elif leaf == "outputs":
-                outputs[device].append((stamp, msg))
-    return telemetry, outputs
+            rest, leaf = topic.rsplit("/", 1)
+            node, device = rest.rsplit("/", 1)
+            if only_node not in (None, node):
+                continue
+            kind = DEVICE_TOPICS[types[topic]]
+            if kind == "outputs" and leaf != "outputs":
+                continue  # the LC board's inputs: not plotted
+            getattr(data, kind)[(node, device)].append((stamp_of(msg, t), msg))
+    return data
 
 
-def plot(telemetry, outputs, out_path, title):
-    rows = [("power", "W"), ("voltage", "V"), ("current", "A"), ("temperature", "°C")]
-    n = len(rows) + (1 if outputs else 0)
-    fig, axes = plt.subplots(n, 1, sharex=True, figsize=(10, 2.2 * n), squeeze=False)
+def label(node, device, several_nodes):
+    return f"{node}/{device}" if several_nodes else device
+
+
+def panels(data):
+    """[(height in inches, draw(ax, t0, several_nodes))] in the order shown."""
+    out = []
+    if data.telemetry:
+        for i, (field, unit) in enumerate(TELEMETRY_ROWS):
+            def draw(ax, t0, several, field=field, unit=unit, first=i == 0):
+                for (node, device), samples in sorted(data.telemetry.items()):
+                    ax.plot([s - t0 for s, _ in samples], [getattr(m, field) for _, m in samples],
+                            label=label(node, device, several))
+                ax.set_ylabel(f"{field} [{unit}]")
+                if first:
+                    ax.legend(loc="upper right", fontsize=8)
+            out.append((1.6, draw))
+    by_unit = collections.defaultdict(list)  # unit -> [(label parts, times, values)]
+    for (node, device), samples in sorted(data.signals.items()):
+        names = samples[-1][1].names
+        units = list(getattr(samples[-1][1], "units", []) or [""] * len(names))
+        for i, name in enumerate(names):
+            ts = [s for s, m in samples if i < len(m.values) and (i >= len(m.valid) or m.valid[i])]
+            vs = [m.values[i] for _, m in samples if i < len(m.values) and (i >= len(m.valid) or m.valid[i])]
+            if ts:
+                by_unit[units[i] if i < len(units) else ""].append(((node, device, name), ts, vs))
+    for unit, lines in sorted(by_unit.items()):
+        def draw(ax, t0, several, unit=unit, lines=lines):
+            for (node, device, name), ts, vs in lines:
+                ax.plot([t - t0 for t in ts], vs, label=f"{label(node, device, several)}/{name}",
+                        drawstyle="steps-post" if not unit else "default")
+            ax.set_ylabel(f"[{unit}]" if unit else "(no unit)")
+            ax.legend(loc="upper right", fontsize=8)
+        out.append((1.6, draw))
+    for (node, device), samples in sorted(data.outputs.items()):
+        names = list(samples[-1][1].names) or [f"out{i}" for i in range(len(samples[-1][1].states))]
+
+        def draw(ax, t0, several, node=node, device=device, samples=samples, names=names):
+            ts = [s - t0 for s, _ in samples]
+            for ch in range(len(names)):
+                ys = [ch + (0.7 if m.states[ch] else 0.0) if ch < len(m.states) else float("nan")
+                      for _, m in samples]
+                ax.step(ts, ys, where="post", linewidth=1.5)
+                ax.fill_between(ts, ch, ys, step="post", alpha=0.25)
+            ax.set_yticks([ch + 0.35 for ch in range(len(names))])
+            ax.set_yticklabels(names, fontsize=8)
+            ax.set_ylim(-0.2, len(names))
+            ax.set_ylabel(label(node, device, several), rotation=0, ha="right", va="center")
+        out.append((0.35 + 0.22 * len(names), draw))
+    return out
+
+
+def plot(data, out_path, title):
+    rows = panels(data)
+    if not rows:  # only fail-safe events: an empty time axis with their marks
+        rows = [(1.0, lambda ax, t0, several: ax.set_yticks([]))]
+    heights = [h for h, _ in rows]
+    fig, axes = plt.subplots(len(rows), 1, sharex=True, squeeze=False,
+                             figsize=(11, sum(heights) + 1.2),
+                             gridspec_kw={"height_ratios": heights})
     axes = [a[0] for a in axes]
-    t0 = min([s[0][0] for s in list(telemetry.values()) + list(outputs.values()) if s], default=0.0)
-    for ax, (field, unit) in zip(axes, rows):
-        for device, samples in telemetry.items():
-            ax.plot([s - t0 for s, _ in samples], [getattr(m, field) for _, m in samples], label=device)
-        ax.set_ylabel(f"{field} [{unit}]")
+    times = [s for series in (data.telemetry, data.outputs, data.signals)
+             for samples in series.values() for s, _ in samples] + [t for t, _, _ in data.failsafe]
+    t0 = min(times, default=0.0)
+    several = len(data.nodes()) > 1
+    for ax, (_, draw) in zip(axes, rows):
+        draw(ax, t0, several)
         ax.grid(True, alpha=0.3)
-    if telemetry:
-        axes[0].legend(loc="upper right")
-    if outputs:
-        ax = axes[-1]
-        level = 0
-        ticks, labels = [], []
-        for device, samples in sorted(outputs.items()):
-            names = samples[-1][1].names or [f"out{i}" for i in range(len(samples[-1][1].states))]
-            for ch, name in enumerate(names):
-                ts = [s - t0 for s, _ in samples]
-                ys = [level + (0.8 if m.states[ch] else 0.0) for _, m in samples if ch < len(m.states)]
-                ax.step(ts[:len(ys)], ys, where="post")
-                ticks.append(level + 0.4)
-                labels.append(f"{device}/{name}")
-                level += 1
-        ax.set_yticks(ticks)
-        ax.set_yticklabels(labels, fontsize=7)
-        ax.set_ylabel("outputs")
+        for t, _, _ in data.failsafe:
+            ax.axvline(t - t0, color="red", linestyle="--", linewidth=1)
+    for t, node, msg in data.failsafe:  # what happened, above the top panel
+        axes[0].annotate(f"fail-safe: {label(node, msg.device, several)} {msg.trigger}",
+                         xy=(t - t0, 1.0), xycoords=("data", "axes fraction"),
+                         xytext=(2, 2), textcoords="offset points", rotation=20,
+                         fontsize=7, color="red", va="bottom")
     axes[-1].set_xlabel("time [s]")
-    fig.suptitle(title)
+    fig.suptitle(title, y=0.995)
     fig.tight_layout()
     fig.savefig(out_path, dpi=100)
 
@@ -71,15 +161,20 @@ def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("bag")
     p.add_argument("-o", "--output", default="telemetry.png")
-    p.add_argument("--node", default="/modbus_bus", help="the bus node's namespace")
+    p.add_argument("--node", help="only this bus node (e.g. /my_robot/io_bus); default: every one in the bag")
     args = p.parse_args()
-    telemetry, outputs = load(args.bag, args.node.rstrip("/"))
-    if not telemetry and not outputs:
-        print(f"{args.bag}: no telemetry or outputs under {args.node}/", file=sys.stderr)
+    data = load(args.bag, args.node.rstrip("/") if args.node else None)
+    if data.empty():
+        where = f" under {args.node}/" if args.node else ""
+        print(f"{args.bag}: no bus node's telemetry, outputs, signals or fail-safe events{where}",
+              file=sys.stderr)
         return 1
-    plot(telemetry, outputs, args.output, os.path.basename(args.bag))
-    print(f"wrote {args.output}: {sum(map(len, telemetry.values()))} telemetry samples, "
-          f"{sum(map(len, outputs.values()))} output messages")
+    plot(data, args.output, os.path.basename(args.bag))
+    print(f"wrote {args.output}: bus node(s) {', '.join(data.nodes())}; "
+          f"{sum(map(len, data.telemetry.values()))} telemetry samples, "
+          f"{sum(map(len, data.outputs.values()))} output messages, "
+          f"{sum(map(len, data.signals.values()))} signal messages, "
+          f"{len(data.failsafe)} fail-safe events")
     return 0
 
 

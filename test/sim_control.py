@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """Client of modbus_rtu_simulator's control socket (Python 3 standard library only).
 
-    python3 test/sim_control.py SOCKET get '#0' coil 0 8       -> 0 0 1 0 0 0 0 0
-    python3 test/sim_control.py SOCKET set 255 input 1 1
-    python3 test/sim_control.py SOCKET power_cycle
+    python3 test/sim_control.py SOCKET get '#0' coil 0 8       -> ok 0 0 1 0 0 0 0 0
+    python3 test/sim_control.py SOCKET set 255 input 1 1       -> ok
+    python3 test/sim_control.py SOCKET power_cycle 255         -> ok
 
 The socket is the simulator's --control path (default: the link path + ".ctl"). One command per
-line, one reply line each: "ok ..." or "error <message>". The command line prints what follows
-"ok" (exit 0) or the error on stderr (exit 1).
+line, one reply line each: "ok ..." or "error <message>". The command line prints the answer as
+the simulator sent it: "ok ..." on stdout (exit 0), or the command and the error on stderr
+(exit 1).
 
 Devices: "#<index>" in config order, or the current address (decimal or 0x hex).
 Tables: coil, input (discrete inputs), holding, ireg (input registers).
@@ -24,7 +25,7 @@ Commands:
     late DEV N MS                    the next N replies are sent MS milliseconds late
     drop DEV PERCENT request|reply   lose that share of requests (nothing done) or replies
     stats DEV                        changes N dropped_requests N dropped_replies N
-    power_cycle                      every device off and on
+    power_cycle [DEV]                every device (or only DEV) off and on
     info                             #INDEX:TYPE:ADDRESS:BAUD:PARITY per device
     frames                           frames received, replies sent, byte runs dropped
     gateway                          port P connections N accepted N dropped N (--rtu-tcp)
@@ -70,8 +71,9 @@ class SimControl:
             raise ValueError("set needs at least one value")
         self.command("set %s %s %d %s" % (device, table, address, " ".join(str(v) for v in values)))
 
-    def power_cycle(self):
-        self.command("power_cycle")
+    def power_cycle(self, device=None):
+        """Every device off and on, or only `device` (its own supply)."""
+        self.command("power_cycle" + ("" if device is None else " %s" % device))
 
     def silence(self, device, on=True):
         self.command("silence %s %d" % (device, 1 if on else 0))
@@ -118,7 +120,7 @@ def main(argv):
         print(__doc__)
         return 2
     try:
-        print(" ".join(SimControl(argv[1]).command(" ".join(argv[2:]))))
+        print(" ".join(["ok"] + SimControl(argv[1]).command(" ".join(argv[2:]))))
     except SimError as e:
         print(e, file=sys.stderr)
         return 1

@@ -1,10 +1,12 @@
 #include "modbus_rtu_driver/config/bus_config.h"
 
+#include <algorithm>
 #include <map>
 #include <set>
 
 #include "modbus_rtu_driver/core/config_yaml.h"
 #include "modbus_rtu_driver/core/device_types.h"
+#include "modbus_rtu_driver/core/number_text.h"
 #include "modbus_rtu_driver/core/slave_config.h"
 #include "modbus_rtu_driver/devices/registry.h"
 
@@ -71,7 +73,7 @@ void parseHeartbeat(const YAML::Node& n, const std::string& key, std::string* to
   if (!n["timeout"]) fail(key + "/timeout", "missing (s without a message before the safe state)");
   *timeout = getNumber(n["timeout"], key + "/timeout");
   if (!(*timeout >= 0.05 && *timeout <= 3600))
-    fail(key + "/timeout", std::to_string(*timeout) + " s is outside 0.05-3600 s");
+    fail(key + "/timeout", numberText(*timeout) + " s is outside 0.05-3600 s");
 }
 
 void parseFailsafe(const YAML::Node& n, const std::string& where,
@@ -87,14 +89,14 @@ void parseFailsafe(const YAML::Node& n, const std::string& where,
         });
   }
   if (n["command_timeout"]) {
-    out->command_timeout = perChannel<double>(
-        n["command_timeout"], where + "command_timeout", names, 0.0,
-        [](const YAML::Node& v, const std::string& key) {
-          const double s = getNumber(v, key);
-          if (!(s == 0 || (s >= 0.05 && s <= 3600)))
-            fail(key, std::to_string(s) + " s is outside 0.05-3600 s (0 = none)");
-          return s;
-        });
+    out->command_timeout =
+        perChannel<double>(n["command_timeout"], where + "command_timeout", names, 0.0,
+                           [](const YAML::Node& v, const std::string& key) {
+                             const double s = getNumber(v, key);
+                             if (!(s == 0 || (s >= 0.05 && s <= 3600)))
+                               fail(key, numberText(s) + " s is outside 0.05-3600 s (0 = none)");
+                             return s;
+                           });
     for (size_t i = 0; i < names.size(); ++i) {
       if (out->command_timeout[i] > 0 && out->safeStateOf(i) == SafeState::kHold)
         fail(where + "command_timeout/" + names[i],
@@ -176,6 +178,30 @@ void checkGenericFailsafe(const YAML::Node& n, const std::string& where,
            "no signal has a safe_value, so it would do nothing (give writable signals one)");
 }
 
+// An unknown key names the keys of the device's own type only (a relay board's typo does not
+// list the generic type's signal keys). Keys of another type get their own message below.
+void checkDeviceKeys(const YAML::Node& n, const std::string& where) {
+  std::string type;
+  if (n["type"] && n["type"].IsScalar()) type = n["type"].Scalar();
+  const bool generic = type == "generic";
+  const std::vector<std::string> types = knownDeviceTypes();
+  const bool known_type = std::find(types.begin(), types.end(), type) != types.end();
+  std::string list;
+  for (const auto& k : kDeviceKeys) {
+    const bool signal_key =
+        std::find(kSignalMapKeys.begin(), kSignalMapKeys.end(), k) != kSignalMapKeys.end();
+    const bool common = k == "type" || k == "address" || k == "poll_rate" || k == "reply_delay";
+    if (known_type && !common && signal_key != generic) continue;
+    list += (list.empty() ? "" : ", ") + k;
+  }
+  for (const auto& kv : n) {
+    const std::string key = kv.first.as<std::string>();
+    if (!kDeviceKeys.count(key))
+      fail(where + key,
+           "unknown key (known keys" + (known_type ? " of " + type : "") + ": " + list + ")");
+  }
+}
+
 DeviceConfig parseDevice(const std::string& name, const YAML::Node& n,
                          const std::string& config_dir) {
   const std::string where = "devices/" + name + "/";
@@ -183,7 +209,7 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n,
     fail("devices/" + name,
          "device name is not a valid ROS name (a letter, then letters, digits or '_')");
   if (!n.IsMap()) fail("devices/" + name, show(n) + " is not a map of device settings");
-  checkKeys(n, where, kDeviceKeys);
+  checkDeviceKeys(n, where);
   DeviceConfig d;
   d.name = name;
   if (!n["type"]) {
@@ -251,7 +277,7 @@ void parse(const YAML::Node& root, BusConfig* out) {
   if (root["keep_alive"]) {
     out->keep_alive = getNumber(root["keep_alive"], "keep_alive");
     if (!(out->keep_alive >= 0.1 && out->keep_alive <= 3600))
-      fail("keep_alive", std::to_string(out->keep_alive) + " s is outside 0.1-3600 s");
+      fail("keep_alive", numberText(out->keep_alive) + " s is outside 0.1-3600 s");
   }
   if (root["heartbeat"])
     parseHeartbeat(root["heartbeat"], "heartbeat", &out->heartbeat_topic, &out->heartbeat_timeout);
@@ -259,7 +285,7 @@ void parse(const YAML::Node& root, BusConfig* out) {
     out->shutdown_timeout = getNumber(root["shutdown_timeout"], "shutdown_timeout");
     if (!(out->shutdown_timeout >= 0 && out->shutdown_timeout <= kMaxShutdownTimeout))
       fail("shutdown_timeout",
-           std::to_string(out->shutdown_timeout) +
+           numberText(out->shutdown_timeout) +
                " s is outside 0-10 s (roslaunch sends SIGTERM 15 s after SIGINT, SIGKILL 2 s "
                "later; the bus thread's last transaction needs the rest)");
   }

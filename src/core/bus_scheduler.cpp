@@ -184,6 +184,11 @@ bool BusScheduler::connected() const {
   return connected_;
 }
 
+PortReopens BusScheduler::portReopens() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return reopens_;
+}
+
 std::string BusScheduler::connectionError() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return connection_error_;
@@ -208,6 +213,8 @@ void BusScheduler::record(const std::string& device, const Result& result, Kind 
   if (!noProperAnswer(result.error)) {  // it answered, even if with an exception
     h.answered = true;
     h.consecutive_failures = 0;
+    if (!h.online)  // for the node's "back online after ..."
+      h.last_offline_seconds = std::chrono::duration<double>(now - offline_since_[device]).count();
     h.online = true;
     backoff_.erase(device);
     backoff_until_.erase(device);
@@ -215,6 +222,7 @@ void BusScheduler::record(const std::string& device, const Result& result, Kind 
   }
   ++h.consecutive_failures;
   if (h.consecutive_failures < static_cast<uint32_t>(options_.offline_after)) return;
+  if (h.online) offline_since_[device] = now;
   h.online = false;
   double& b = backoff_[device];
   b = b > 0 ? std::min(options_.backoff_max, b * 2) : options_.backoff_initial;
@@ -259,6 +267,7 @@ void BusScheduler::run() {
   while (running_) {
     auto now = clock_.now();
     if (!transport_.connected()) {
+      if (connected_ && !port_lost_at_) port_lost_at_ = now;  // it dropped while open
       if (now >= next_connect) {
         lock.unlock();
         std::string error;
@@ -270,8 +279,15 @@ void BusScheduler::run() {
         connection_error_ = ok ? "" : error;
         if (ok) {
           reconnect_delay = options_.reconnect_initial;
+          if (port_lost_at_) {  // for the node's "port open again after ..."
+            ++reopens_.count;
+            reopens_.last_outage_seconds =
+                std::chrono::duration<double>(clock_.now() - *port_lost_at_).count();
+            port_lost_at_.reset();
+          }
           continue;
         }
+        if (!port_lost_at_) port_lost_at_ = now;
         next_connect = clock_.now() + seconds(reconnect_delay);
         reconnect_delay = std::min(options_.reconnect_max, reconnect_delay * 2);
       }

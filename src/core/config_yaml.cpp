@@ -2,6 +2,8 @@
 
 #include <cctype>
 
+#include "modbus_rtu_driver/core/number_text.h"
+
 namespace modbus_rtu_driver {
 namespace config {
 
@@ -100,8 +102,7 @@ void parseLink(const YAML::Node& root, LinkConfig* out) {
 double parseDiagnosticPeriod(const YAML::Node& root) {
   if (!root["diagnostic_period"]) return 1.0;
   const double p = getNumber(root["diagnostic_period"], "diagnostic_period");
-  if (!(p >= 0.1 && p <= 60))
-    fail("diagnostic_period", std::to_string(p) + " s is outside 0.1-60 s");
+  if (!(p >= 0.1 && p <= 60)) fail("diagnostic_period", numberText(p) + " s is outside 0.1-60 s");
   return p;
 }
 

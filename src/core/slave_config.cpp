@@ -44,7 +44,9 @@ void parseNames(const YAML::Node& n, const std::string& key, uint16_t size,
 
 void parseSlave(const YAML::Node& root, SlaveConfig* out) {
   if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
-  checkKeys(root, "", with(with(kLinkKeys, {"role", "diagnostic_period"}), kSlaveKeys));
+  // config_file: bus.launch sets it for every role (the master's templates start there).
+  checkKeys(root, "",
+            with(with(kLinkKeys, {"role", "diagnostic_period", "config_file"}), kSlaveKeys));
   parseLink(root, &out->link);
   const std::string role = root["role"] ? get<std::string>(root["role"], "role", "slave") : "";
   if (role != "slave") fail("role", "'" + role + "' is not slave");

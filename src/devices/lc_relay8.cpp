@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "modbus_rtu_driver/core/number_text.h"
+
 namespace modbus_rtu_driver {
 
 Result LcRelay8::poll(Transport& bus) {
@@ -27,10 +29,7 @@ std::string LcRelay8::pulseTenths(uint8_t channel, double duration, uint16_t* te
   const double units = duration * 10.0;
   const double nearest = std::isfinite(units) ? std::round(units) : -1;
   if (nearest < 1 || nearest > 65535 || std::fabs(units - nearest) > 1e-3 + 1e-9 * nearest) {
-    char buf[96];
-    std::snprintf(buf, sizeof buf, "duration: %g s is outside 0.1-6553.5 s in steps of 0.1 s",
-                  duration);
-    return buf;
+    return "duration: " + numberText(duration) + " s is outside 0.1-6553.5 s in steps of 0.1 s";
   }
   if (tenths) *tenths = static_cast<uint16_t>(nearest);
   return {};

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "modbus_rtu_driver/core/number_text.h"
+
 namespace modbus_rtu_driver {
 
 namespace {
@@ -10,9 +12,7 @@ namespace {
 constexpr uint16_t kContinuous = 0xFFFF;
 
 std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
+  return numberText(v);
 }
 
 // Tenths of a second, if `seconds` is a whole number of them (within float noise).

@@ -4,6 +4,7 @@
 #include <set>
 
 #include "modbus_rtu_driver/core/config_yaml.h"
+#include "modbus_rtu_driver/core/number_text.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
@@ -78,14 +79,11 @@ std::string validateDeviceConfig(const DeviceConfig& c) {
     return where + "address: " + std::to_string(c.address) + " is outside 1-" +
            std::to_string(t->max_address) + " for " + c.type;
   if (!(c.poll_rate >= 0.0 && c.poll_rate <= 1000.0)) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%g", c.poll_rate);
-    return where + "poll_rate: " + buf + " Hz is outside 0-1000 Hz (0 = never poll)";
+    return where + "poll_rate: " + numberText(c.poll_rate) +
+           " Hz is outside 0-1000 Hz (0 = never poll)";
   }
   if (!(c.reply_delay >= 0.0 && c.reply_delay <= 1.0)) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%g", c.reply_delay);
-    return where + "reply_delay: " + buf + " s is outside 0-1 s";
+    return where + "reply_delay: " + numberText(c.reply_delay) + " s is outside 0-1 s";
   }
   std::string problem = checkNames(where + "outputs", c.outputs, t->outputs);
   if (problem.empty()) {

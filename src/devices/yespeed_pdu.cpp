@@ -4,6 +4,8 @@
 #include <cstdarg>
 #include <cstdio>
 
+#include "modbus_rtu_driver/core/number_text.h"
+
 namespace modbus_rtu_driver {
 
 namespace {
@@ -86,8 +88,8 @@ std::string YespeedPdu::limitToRegister(size_t which, double value, uint16_t* re
   // float32 (a ROS message) carries about 7 digits: allow that much noise, no more.
   const double noise = 1e-3 + 1e-7 * std::fabs(units);
   if (!finite || nearest < 0 || nearest > 65535 || std::fabs(units - nearest) > noise)
-    return fmt("%s: %g %s is outside 0-%g %s in steps of %g %s", name.c_str(), value, unit, max,
-               unit, step, unit);
+    return fmt("%s: %s %s is outside 0-%g %s in steps of %g %s", name.c_str(),
+               numberText(value).c_str(), unit, max, unit, step, unit);
   const long r = static_cast<long>(nearest);
   std::string broken = ownRule(which, r, name);
   if (!broken.empty()) return broken;

@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "modbus_rtu_driver/core/make_transport.h"
+#include "modbus_rtu_driver/core/number_text.h"
 #include "modbus_rtu_driver/core/realtime.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
@@ -65,7 +66,7 @@ void BusNode::startFailsafe() {
 void BusNode::checkDeadlines() {
   if (bus_heartbeat_ && bus_heartbeat_->expired()) {
     const std::string reason = "no message on " + config_.heartbeat_topic + " within " +
-                               std::to_string(config_.heartbeat_timeout) + " s";
+                               numberText(config_.heartbeat_timeout) + " s";
     for (auto& a : adapters_) a->applySafe("heartbeat", reason);
   }
   for (auto& a : adapters_) a->checkDeadlines();
@@ -270,11 +271,14 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   using diagnostic_msgs::DiagnosticStatus;
   const LinkStats s = link_->stats();
   const uint64_t recent = recentLineErrors(s);
+  logRecoveries();
   if (!bus_->connected()) {
     status.summary(DiagnosticStatus::ERROR, "port not open: " + bus_->connectionError());
     // A wrong port or a second node on it must show in the log, not only in /diagnostics.
     ROS_ERROR_THROTTLE(10.0, "bus %s: port not open: %s (retrying with backoff)",
                        config_.link.port.c_str(), bus_->connectionError().c_str());
+  } else if (logged_all_silent_) {
+    status.summary(DiagnosticStatus::ERROR, silentBusAdvice());
   } else if (recent > 0) {
     status.summary(DiagnosticStatus::WARN, "link up, " + std::to_string(recent) +
                                                " failed attempt(s) in the last " +
@@ -321,6 +325,29 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   status.add("latency last [ms]", s.last_latency * 1e3);
   status.add("latency mean [ms]", s.mean_latency * 1e3);
   status.add("latency max [ms]", s.max_latency * 1e3);
+}
+
+std::string BusNode::silentBusAdvice() const {
+  return "no device answers: check baud (" + std::to_string(config_.link.baud) + "), parity (" +
+         parityName(config_.link.parity) + ") and wiring (A/B swapped, termination, ground)";
+}
+
+// Recoveries are logged as they are seen (diagnostics thread), so a bus that heals itself
+// still leaves a trace; and a bus where nobody answers says what to check, once.
+void BusNode::logRecoveries() {
+  const PortReopens reopens = bus_->portReopens();
+  if (reopens.count != logged_reopens_) {
+    logged_reopens_ = reopens.count;
+    ROS_INFO("bus %s: port open again after %s", config_.link.port.c_str(),
+             secondsText(reopens.last_outage_seconds).c_str());
+  }
+  const bool all_silent = !adapters_.empty() && bus_->connected() &&
+                          std::all_of(adapters_.begin(), adapters_.end(), [this](const auto& a) {
+                            return !bus_->health(a->name()).online;
+                          });
+  if (all_silent && !logged_all_silent_)
+    ROS_WARN("bus %s: %s", config_.link.port.c_str(), silentBusAdvice().c_str());
+  logged_all_silent_ = all_silent;
 }
 
 }  // namespace modbus_rtu_driver

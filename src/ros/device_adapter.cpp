@@ -2,6 +2,8 @@
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
 
+#include "modbus_rtu_driver/core/number_text.h"
+
 namespace modbus_rtu_driver {
 
 DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
@@ -156,7 +158,9 @@ void DeviceAdapter::onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& m
 void DeviceAdapter::logOnlineChange(const DeviceHealth& h) {
   const ros::WallTime now = ros::WallTime::now();
   if (h.online) {
-    if (!logged_online_.value_or(true)) ROS_INFO("%s: back online", device_->name().c_str());
+    if (!logged_online_.value_or(true))
+      ROS_INFO("%s: back online after %s offline", device_->name().c_str(),
+               secondsText(h.last_offline_seconds).c_str());
     logged_online_ = true;
     return;
   }

@@ -4,6 +4,7 @@
 
 #include <cstdio>
 
+#include "modbus_rtu_driver/core/number_text.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 
 namespace modbus_rtu_driver {
@@ -149,7 +150,7 @@ void DeviceAdapter::checkDeadlines() {
   if (heartbeat_ && heartbeat_->expired()) {
     const FailsafeConfig& fs = failsafe_.config();
     applySafe("heartbeat", "no message on " + fs.heartbeat_topic + " within " +
-                               std::to_string(fs.heartbeat_timeout) + " s");
+                               numberText(fs.heartbeat_timeout) + " s");
   }
 }
 

@@ -27,6 +27,7 @@ class GenericAdapter : public DeviceAdapter {
   void advertise() override {
     const auto& signals = generic().signals();
     published_.assign(signals.size(), std::nullopt);
+    warned_.assign(signals.size(), false);
     all_pub_ = nh_.advertise<SignalValues>("signals", 50);
     for (size_t i = 0; i < signals.size(); ++i) {
       const SignalConfig& s = signals[i];
@@ -83,6 +84,7 @@ class GenericAdapter : public DeviceAdapter {
             polled_[g] = true;
             rates_[g].record(std::chrono::steady_clock::now());
             onPoll(r);
+            warnRefusedOnce(g, r);
           });
     }
   }
@@ -263,6 +265,7 @@ class GenericAdapter : public DeviceAdapter {
     for (size_t i = 0; i < signals.size(); ++i) {
       const SignalState& st = states[i];
       all.names.push_back(signals[i].name);
+      all.units.push_back(signals[i].unit);
       all.values.push_back(st.value);
       all.valid.push_back(st.valid);
       if (!st.valid || (published_[i] && sameReading(*published_[i], st.value))) continue;
@@ -290,11 +293,29 @@ class GenericAdapter : public DeviceAdapter {
     unread_ = unread;
   }
 
+  // Bus thread: a signal the device refuses (an exception: it answers, so it is not offline
+  // and nothing else says it) is logged once with the exception, and once when read again.
+  void warnRefusedOnce(size_t g, const Result& r) {
+    const auto& signals = generic().signals();
+    for (size_t i : generic().groups()[g].signals) {
+      const bool valid = generic().states()[i].valid;
+      if (!valid && !warned_[i] && r.error == ErrorKind::kException) {
+        ROS_WARN("%s: signal %s cannot be read: %s", device_->name().c_str(),
+                 signals[i].name.c_str(), r.message.c_str());
+        warned_[i] = true;
+      } else if (valid && warned_[i]) {
+        ROS_INFO("%s: signal %s is read again", device_->name().c_str(), signals[i].name.c_str());
+        warned_[i] = false;
+      }
+    }
+  }
+
   ros::Publisher all_pub_;
   std::vector<ros::Publisher> pubs_;
   std::vector<ros::ServiceServer> services_;
   std::vector<std::optional<double>> published_;  // bus thread only
   std::vector<bool> polled_;                      // by poll group; bus thread only
+  std::vector<bool> warned_;                      // by signal: refused and logged; bus thread
   // By poll group: recorded on the bus thread, read by diagnostics (each locks itself).
   std::vector<RateMeter> rates_ = std::vector<RateMeter>(generic().groups().size());
   EventSink failsafe_sink_;

@@ -1,5 +1,6 @@
 // LC relay board: timed flash-close / flash-open (its inputs are published by the base).
 #include "modbus_rtu_driver/Pulse.h"
+#include "modbus_rtu_driver/core/number_text.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
 
@@ -39,7 +40,7 @@ class LcRelay8Adapter : public DeviceAdapter {
     res.success = r.ok();
     res.message =
         answer(r, std::string(state ? "flash-close " : "flash-open ") +
-                      device_->outputNames()[channel] + " for " + std::to_string(duration) + " s");
+                      device_->outputNames()[channel] + " for " + numberText(duration) + " s");
     return true;
   }
 

@@ -16,7 +16,8 @@
 //                         nothing) or of the replies (the device acts, the reply is lost)
 //   stats DEV          -> ok changes N dropped_requests N dropped_replies N   (changes: writes
 //                         that changed the device's state or started a PWM run or a flash)
-//   power_cycle        every device off and on (pending settings apply, outputs off)
+//   power_cycle [DEV]  every device (or only DEV) off and on (pending settings apply, outputs
+//                         off)
 //   info               -> ok #0:TYPE:ADDRESS:BAUD:PARITY #1:...   (one item per device)
 //   frames             -> ok RECEIVED ANSWERED DROPPED   (valid frames in, replies out, runs of
 //                         bytes dropped: bad CRC or noise)
@@ -121,7 +122,14 @@ std::string Simulator::doCommand(const std::string& line) {
   std::string verb, name;
   in >> verb;
   if (verb == "power_cycle") {
-    powerCycle(SimClock::now());
+    if (!(in >> name)) {
+      powerCycle(SimClock::now());
+      return "ok";
+    }
+    SimDevice* d = find(name);  // one board's own supply: the others and the line run on
+    if (!d) return "error no device '" + name + "' (#index or address; see info)";
+    d->powerCycle(SimClock::now());
+    saveState();
     return "ok";
   }
   if (verb == "gateway" || verb == "gateway_drop") {
@@ -148,7 +156,7 @@ std::string Simulator::doCommand(const std::string& line) {
   }
   if (verb == "help")
     return "ok get set silence fail corrupt truncate wrong_address noise late drop stats "
-           "power_cycle info frames gateway gateway_drop help; " +
+           "power_cycle [DEV] info frames gateway gateway_drop help; " +
            std::string(kUsage);
   static const char* kDeviceVerbs[] = {"get",     "set",      "silence",       "fail",
                                        "corrupt", "truncate", "wrong_address", "noise",

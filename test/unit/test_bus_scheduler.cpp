@@ -313,6 +313,51 @@ TEST_F(BusSchedulerTest, ReconnectsAfterThePortGoesAway) {
   EXPECT_EQ(bus.connects.load(), 5);
 }
 
+// The node logs "port open again after ..." and "back online after ...": the scheduler keeps
+// how long each outage lasted, on its clock.
+TEST_F(BusSchedulerTest, APortOpenAgainSaysAfterHowLong) {
+  BusScheduler::Options o;
+  o.reconnect_initial = 0.05;
+  o.reconnect_max = 0.1;
+  BusScheduler& s = make(o);
+  s.addPoll("a", 50.0, read(1), nullptr);
+  s.start();
+  ASSERT_TRUE(runUntil(100ms));
+  EXPECT_EQ(s.portReopens().count, 0u) << "the first open is no reopening";
+  bus.up = false;  // the poll at 100 ms fails: the port is lost then
+  ASSERT_TRUE(runUntil(400ms));
+  bus.up = true;  // reopened by the try at 450 ms
+  ASSERT_TRUE(runUntil(800ms));
+  EXPECT_TRUE(s.connected());
+  EXPECT_EQ(s.portReopens().count, 1u);
+  EXPECT_NEAR(s.portReopens().last_outage_seconds, 0.35, 1e-9);
+  s.stop();
+}
+
+TEST_F(BusSchedulerTest, ADeviceBackOnlineSaysAfterHowLong) {
+  bus.dead = {2};
+  BusScheduler::Options o;
+  o.offline_after = 2;
+  o.backoff_initial = 0.2;
+  o.backoff_max = 0.4;
+  BusScheduler& s = make(o);
+  s.addPoll("dead", 20.0, read(2), nullptr);
+  s.start();
+  ASSERT_TRUE(runUntil(1500ms));
+  EXPECT_FALSE(s.health("dead").online);  // since its second timeout ended
+  {
+    std::lock_guard<std::mutex> lock(bus.m);
+    bus.dead.clear();
+  }
+  ASSERT_TRUE(runUntil(2300ms));
+  EXPECT_TRUE(s.health("dead").online);
+  const std::vector<long> starts = startsOf(2);
+  const long offline_at = starts.at(1) + 20;  // the second timeout's end
+  const long back_at =  // the first probe after the device woke, and its 2 ms of latency
+      *std::find_if(starts.begin(), starts.end(), [](long t) { return t >= 1500; }) + 2;
+  EXPECT_NEAR(s.health("dead").last_offline_seconds, (back_at - offline_at) / 1000.0, 1e-9);
+}
+
 TEST_F(BusSchedulerTest, StopFailsWhatIsStillQueued) {
   BusScheduler& s = make();
   bus.release();

@@ -118,9 +118,11 @@ TEST(SimExecutable, ReadyLineFramesSighupAndACleanExit) {
   ASSERT_TRUE(exists(socket));
 
   // The Python client's command line.
-  EXPECT_EQ(control(socket, "info"), "#0:ld58a08:1:9600:N #1:lc_relay8:255:9600:N\n");
-  EXPECT_EQ(control(socket, "set 255 input 2 1"), "\n");
-  EXPECT_EQ(control(socket, "get '#1' input 0 3"), "0 0 1\n");
+  // The simulator's answer as it came (docs/simulator.md), "ok" included: a set says it worked.
+  EXPECT_EQ(control(socket, "info"), "ok #0:ld58a08:1:9600:N #1:lc_relay8:255:9600:N\n");
+  EXPECT_EQ(control(socket, "set 255 input 2 1"), "ok\n");
+  EXPECT_EQ(control(socket, "get '#1' input 0 3"), "ok 0 0 1\n");
+  EXPECT_EQ(control(socket, "power_cycle 255"), "ok\n");
   const auto [error, status] = shell("python3 " REPO_DIR "/test/sim_control.py " + socket + " x");
   EXPECT_EQ(status, 1);
   EXPECT_EQ(error, "x -> error unknown command 'x' (try help)\n");
@@ -140,7 +142,7 @@ TEST(SimExecutable, ReadyLineFramesSighupAndACleanExit) {
     std::this_thread::sleep_for(20ms);
     info = control(socket, "info");
   }
-  EXPECT_EQ(info, "#0:ld58a08:1:19200:N #1:lc_relay8:255:9600:N\n");
+  EXPECT_EQ(info, "ok #0:ld58a08:1:19200:N #1:lc_relay8:255:9600:N\n");
 
   ASSERT_EQ(kill(sim.pid, SIGTERM), 0);
   EXPECT_EQ(sim.wait(5000), 0);

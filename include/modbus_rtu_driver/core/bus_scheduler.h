@@ -12,6 +12,7 @@
 #include <future>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -32,6 +33,13 @@ struct DeviceHealth {
   std::string last_error;                     // empty when none yet
   double achieved_poll_rate = 0;              // Hz over the last seconds
   bool rate_overrun = false;                  // the bus could not keep the configured rate
+  double last_offline_seconds = 0;            // how long its last offline spell lasted
+};
+
+// The port's losses: how often it opened again after failing or dropping, and after how long.
+struct PortReopens {
+  uint64_t count = 0;
+  double last_outage_seconds = 0;
 };
 
 class BusScheduler {
@@ -93,6 +101,7 @@ class BusScheduler {
   DeviceHealth health(const std::string& device) const;
   bool connected() const;
   std::string connectionError() const;
+  PortReopens portReopens() const;
 
  private:
   struct Poll {
@@ -157,6 +166,9 @@ class BusScheduler {
   std::string shared_closed_reason_;
   bool connected_ = false;
   std::string connection_error_;
+  std::optional<Clock::time_point> port_lost_at_;  // set while the port is lost (or never opened)
+  PortReopens reopens_;
+  std::map<std::string, Clock::time_point> offline_since_;
   std::thread thread_;
 };
 

@@ -54,6 +54,10 @@ class BusNode {
   // transaction it is in before the process exits without it (docs/failsafe.md).
   static constexpr std::chrono::seconds kBusStopGrace{2};
   std::deque<std::pair<ros::WallTime, uint64_t>> error_totals_;  // (when, line errors so far)
+  void logRecoveries();
+  std::string silentBusAdvice() const;
+  uint64_t logged_reopens_ = 0;     // port reopens already logged (diagnostics thread)
+  bool logged_all_silent_ = false;  // "no device answers" logged and not yet over
 
   ros::NodeHandle nh_;
   BusConfig config_;

@@ -1,0 +1,131 @@
+#!/usr/bin/env python3
+"""A robot's bag: bus.launch with record:=true under a robot's namespace (three output boards
+and a generic sensor), a fail-safe action during the recording; the bag holds ~failsafe and the
+signals, and scripts/plot_bag.py draws it without being told the node.
+MODBUS_RTU_KEEP_PLOTS=DIR keeps the PNG and the bag (docs/robot_telemetry.png comes from it)."""
+import glob
+import os
+import shutil
+import subprocess
+import unittest
+
+import rosbag
+import rosgraph
+import rospy
+import rostest
+import yaml
+
+from std_msgs.msg import Bool
+from std_srvs.srv import SetBool
+
+from modbus_rtu_driver.msg import FailsafeEvent
+from modbus_rtu_driver.srv import SetPwm
+
+import user_paths as up
+from helpers import wait_until
+from sim_control import SimControl
+
+
+class RobotBagTest(unittest.TestCase):
+    """record:=true on a bus under a robot's namespace with three output boards and a generic
+    sensor: the bag holds ~failsafe and the signals, and scripts/plot_bag.py draws it without
+    being told the node."""
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_robot_bag")
+        cls.dir = up.scratch_dir("modbus_rtu_robot_bag_")
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.dir, ignore_errors=True)
+
+    def test_record_and_plot_a_namespaced_bus_with_a_generic_device(self):
+        templates = os.path.join(up.REPO, "config", "templates")
+        devices = {
+            "relays": {"type": "lc_relay8", "address": 255, "poll_rate": 5.0,
+                       "outputs": ["pump", "valve", "lamp", "fan", "heater", "door_lock",
+                                   "siren", "beacon"],
+                       "safe_state": {"pump": "off"}, "command_timeout": {"pump": 1.0}},
+            "pwm_board": {"type": "ld58a08", "address": 4, "poll_rate": 5.0},
+            "pdu": {"type": "yespeed_pdu", "address": 2, "poll_rate": 2.0,
+                    "outputs": ["socket%d" % i for i in range(1, 9)]},
+            "climate": {"type": "generic", "address": 1, "poll_rate": 2.0,
+                        "template": os.path.join(templates, "xy_md02.yaml")},
+        }
+        config = os.path.join(self.dir, "robot_bus.yaml")
+        with open(config, "w") as f:
+            yaml.safe_dump({"port": "/dev/null", "baud": 9600, "devices": devices}, f)
+        link = os.path.join(self.dir, "tty")
+        sim_process = up.start_simulator(up.simulator_config_for(config, self.dir), link,
+                                         self.dir)
+        sim = SimControl(link + ".ctl")
+        sim.set(1, "ireg", 1, 215, 480)  # 21.5 C, 48.0 %RH
+        launch_file = os.path.join(self.dir, "robot.launch")
+        with open(launch_file, "w") as f:
+            f.write("""<launch><group ns="robot">
+  <include file="$(find modbus_rtu_driver)/launch/bus.launch">
+    <arg name="name" value="io_bus"/> <arg name="config" value="%s"/> <arg name="port" value="%s"/>
+    <arg name="record" value="true"/> <arg name="bag" value="%s/robot"/>
+    <arg name="required" value="false"/>
+  </include></group></launch>""" % (config, link, self.dir))
+        launch = up.Process(["roslaunch", launch_file], self.dir, "roslaunch")
+        ns = "/robot/io_bus"
+        events = []
+        try:
+            for name, device in devices.items():
+                up.check_device_answers(ns, name, device, os.path.dirname(config), launch)
+            master = rosgraph.Master("/test_robot_bag")
+
+            def recording(topic):
+                subscribers = dict(master.getSystemState()[1]).get(topic, [])
+                return "/robot/io_bus_record" in subscribers
+            for topic in ("outputs", "failsafe"):
+                full = ns + ("/relays/outputs" if topic == "outputs" else "/failsafe")
+                wait_until(lambda: recording(full), 30, "rosbag recording " + full)
+            wait_until(lambda: recording(ns + "/climate/signals"), 30, "rosbag recording signals")
+            sub = rospy.Subscriber(ns + "/failsafe", FailsafeEvent, events.append)
+            # Some life on the robot: relays, sockets, a PWM burst, the room warming.
+            for service in ("relays/lamp/set", "pdu/socket2/set", "relays/siren/set"):
+                self.assertTrue(up.call("%s/%s" % (ns, service), SetBool, lambda: None,
+                                        True).success)
+            res = up.call(ns + "/pwm_board/set_pwm", SetPwm, lambda: None, 0, 1.0, 0.5, 3, 0,
+                          0, 0.0)
+            self.assertTrue(res.success, res.message)
+            sim.set(1, "ireg", 1, 230)
+            # The pump on by its command topic, then silence: the dead man puts it off.
+            pump = rospy.Publisher(ns + "/relays/pump/command", Bool, queue_size=1)
+            wait_until(lambda: pump.get_num_connections() > 0, 10, "the pump's command topic")
+            pump.publish(Bool(True))
+            wait_until(lambda: any(e.trigger == "command_timeout" for e in events), 20,
+                       "the command_timeout fail-safe event")
+            self.assertTrue(up.call(ns + "/relays/siren/set", SetBool, lambda: None,
+                                    False).success)
+            sub.unregister()
+        finally:
+            launch.stop()
+            sim_process.stop()
+        bags = glob.glob(os.path.join(self.dir, "robot_*.bag"))
+        self.assertEqual(len(bags), 1, os.listdir(self.dir))
+        with rosbag.Bag(bags[0]) as bag:
+            topics = set(bag.get_type_and_topic_info().topics)
+        for topic in ("/robot/io_bus/failsafe", "/robot/io_bus/climate/signals",
+                      "/robot/io_bus/pdu/telemetry", "/robot/io_bus/relays/outputs"):
+            self.assertIn(topic, topics)
+        png = os.path.join(self.dir, "robot.png")
+        out = subprocess.run(["/usr/bin/python3", os.path.join(up.REPO, "scripts", "plot_bag.py"),
+                              bags[0], "-o", png], capture_output=True, text=True, timeout=120)
+        self.assertEqual(out.returncode, 0, out.stdout + out.stderr)
+        self.assertIn("bus node(s) /robot/io_bus;", out.stdout)
+        self.assertNotIn(" 0 signal messages", out.stdout)
+        self.assertNotIn(" 0 fail-safe events", out.stdout)
+        with open(png, "rb") as f:
+            self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
+        keep = os.environ.get("MODBUS_RTU_KEEP_PLOTS")  # for the docs' picture
+        if keep:
+            shutil.copy(png, os.path.join(keep, "robot_telemetry.png"))
+            shutil.copy(bags[0], os.path.join(keep, "robot.bag"))
+
+
+if __name__ == "__main__":
+    rostest.rosrun("modbus_rtu_driver", "robot_bag", RobotBagTest)

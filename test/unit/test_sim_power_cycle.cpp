@@ -1,0 +1,56 @@
+// The simulator's power_cycle of one device by address (or #index): that board restarts
+// (pending settings apply, outputs off), the others keep their state.
+#include <gtest/gtest.h>
+
+#include <memory>
+
+#include "modbus_rtu_driver/sim/simulator.h"
+#include "test_sim_helpers.h"
+
+using namespace modbus_rtu_driver;
+using namespace modbus_rtu_driver::simtest;
+
+namespace {
+
+std::unique_ptr<Simulator> started(const ScratchDir& dir, std::vector<SimulatorConfig::Entry> d) {
+  SimulatorConfig config;
+  config.devices = std::move(d);
+  SimulatorOptions options;
+  options.link = dir / "tty";
+  options.state_file = dir / "state.yaml";
+  auto sim = std::make_unique<Simulator>(config, options);
+  std::string error;
+  EXPECT_TRUE(sim->start(&error)) << error;
+  return sim;
+}
+
+}  // namespace
+
+TEST(SimPowerCycleOne, OnlyTheNamedDeviceRestarts) {
+  ScratchDir dir;
+  auto sim = started(dir, {{"lc_relay8", 255}, {"ld58a08", 1}, {"yespeed_pdu", 2}});
+  ASSERT_EQ(sim->command("set 255 coil 0 1 1"), "ok");
+  ASSERT_EQ(sim->command("set 1 coil 5 1"), "ok");
+  ASSERT_EQ(sim->command("set 255 holding 1001 4"), "ok");  // 19200 once powered again
+  ASSERT_EQ(sim->command("set 1 holding 254 2"), "ok");     // 4800 once powered again
+  ASSERT_EQ(sim->command("set 2 coil 0 1"), "ok");
+
+  ASSERT_EQ(sim->command("power_cycle 1"), "ok");
+  EXPECT_EQ(sim->command("info"),
+            "ok #0:lc_relay8:255:9600:N #1:ld58a08:1:4800:N #2:yespeed_pdu:2:9600:N");
+  EXPECT_EQ(sim->command("get 1 coil 5"), "ok 0") << "the cycled board's outputs went off";
+  EXPECT_EQ(sim->command("get 255 coil 0 2"), "ok 1 1") << "the others kept theirs";
+  EXPECT_EQ(sim->command("get 2 coil 0"), "ok 1");
+
+  ASSERT_EQ(sim->command("power_cycle #2"), "ok");  // by config index
+  EXPECT_EQ(sim->command("get 2 coil 0"), "ok 0");
+  EXPECT_EQ(sim->command("get 255 coil 0 2"), "ok 1 1");
+}
+
+TEST(SimPowerCycleOne, AnUnknownDeviceIsAnErrorAndNothingRestarts) {
+  ScratchDir dir;
+  auto sim = started(dir, {{"lc_relay8", 255}});
+  ASSERT_EQ(sim->command("set 255 coil 0 1"), "ok");
+  EXPECT_EQ(sim->command("power_cycle 9"), "error no device '9' (#index or address; see info)");
+  EXPECT_EQ(sim->command("get 255 coil 0"), "ok 1");
+}
