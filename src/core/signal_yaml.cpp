@@ -22,7 +22,7 @@ const std::vector<std::string> kSignalKeys = {
 namespace {
 
 // Names a device already uses for its own topics.
-const std::set<std::string> kReservedNames = {"signals", "outputs", "set_outputs"};
+const std::set<std::string> kReservedNames = {"signals", "outputs", "set_outputs", "failsafe"};
 
 std::string number(double v) {
   std::ostringstream s;

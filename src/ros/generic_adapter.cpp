@@ -29,6 +29,9 @@ class GenericAdapter : public DeviceAdapter {
     published_.assign(signals.size(), std::nullopt);
     warned_.assign(signals.size(), false);
     all_pub_ = nh_.advertise<SignalValues>("signals", 50);
+    // Latched: this device's newest fail-safe event, for a late subscriber (as the node's
+    // ~failsafe, which holds only the newest event of all devices).
+    if (hasSafeStates()) event_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 1, true);
     for (size_t i = 0; i < signals.size(); ++i) {
       const SignalConfig& s = signals[i];
       const bool bit = s.type == SignalType::kBool;
@@ -253,6 +256,7 @@ class GenericAdapter : public DeviceAdapter {
       ROS_WARN("%s: fail-safe %s", device_->name().c_str(), text.c_str());
     else
       ROS_ERROR("%s: fail-safe %s", device_->name().c_str(), text.c_str());
+    if (event_pub_) publishLater(event_pub_, e);
     if (failsafe_sink_) failsafe_sink_(e);
   }
 
@@ -319,6 +323,7 @@ class GenericAdapter : public DeviceAdapter {
   // By poll group: recorded on the bus thread, read by diagnostics (each locks itself).
   std::vector<RateMeter> rates_ = std::vector<RateMeter>(generic().groups().size());
   EventSink failsafe_sink_;
+  ros::Publisher event_pub_;   // D/failsafe; none before advertise() (on_start: safe)
   bool safe_pending_ = false;  // bus thread only
   std::mutex failsafe_mutex_;  // the three below
   uint64_t failsafe_events_ = 0;

@@ -146,6 +146,10 @@ class GenericFailsafeTest(unittest.TestCase):
             e = self.event("heartbeat", since)
             self.assertTrue(e.confirmed, e.message)
             self.assertIn("/robot/drive_alive", e.reason)
+            # The device's own latched topic keeps it for a late subscriber.
+            late = helpers.Latest(NS + "drive/failsafe", FailsafeEvent)
+            self.assertEqual(late.wait(10, lambda m: m.trigger == "heartbeat",
+                                       "the heartbeat event").values, e.values)
             # /diagnostics: WARN, and only the fail-safe lines a generic device has.
             def warned():
                 d = self.diag()

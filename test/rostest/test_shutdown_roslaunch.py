@@ -21,9 +21,8 @@ LAMPS, PWM = "255", "1"
 
 
 def consecutive_failures(msg, device):
-    for status in msg.status:
-        if status.name.endswith(device) or ("/" + device) in status.name or \
-                status.name.endswith(": " + device):
+    for status in msg.status:  # "stopbus: device lamps"
+        if status.name.endswith("device " + device):
             for kv in status.values:
                 if kv.key == "consecutive failures":
                     return int(kv.value)
