@@ -24,6 +24,7 @@ import re
 import shutil
 import subprocess
 import sys
+import sysconfig
 import xml.etree.ElementTree as ET
 
 REPO = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
@@ -57,7 +58,7 @@ ROSDEP_TO_DEBIAN = {
     "python3-catkin-lint": ["catkin-lint"],
     "clang-format": ["clang-format"],
     "clang-tidy": ["clang-tidy"],
-    "clang": ["clang", "libclang-rt-14-dev"],
+    "clang": ["clang", "libclang-rt-dev"],
     "xxd": ["xxd"],
     "mbpoll": ["mbpoll"],
     "linux-perf": ["linux-perf"],
@@ -221,10 +222,54 @@ def base_packages():
     return closure(essential + ["apt"])
 
 
-def read_list(without):
+def release_codename():
+    """This machine's codename, as debian_packages.txt's except:/only: words name it."""
+    if os.environ.get("MODBUS_RTU_RELEASE"):
+        return os.environ["MODBUS_RTU_RELEASE"]
+    try:
+        with open("/etc/os-release", encoding="utf-8") as f:
+            for line in f:
+                if line.startswith("VERSION_CODENAME="):
+                    return line.split("=", 1)[1].strip().strip('"')
+    except OSError:
+        pass
+    return "unknown"
+
+
+def is_stdlib(name):
+    """Part of Python itself. sys.stdlib_module_names is Python 3.10+; before it (Debian 11's
+    3.9, Ubuntu 20.04's 3.8) a module is Python's own when it is built in or lives in the
+    standard library's directory, outside dist-packages."""
+    if hasattr(sys, "stdlib_module_names"):
+        return name in sys.stdlib_module_names
+    if name in sys.builtin_module_names:
+        return True
+    spec = importlib.util.find_spec(name)
+    origin = getattr(spec, "origin", None) or ""
+    stdlib = sysconfig.get_paths()["stdlib"]
+    return origin.startswith(stdlib) and "-packages" not in origin
+
+
+def read_list(without, release=None):
+    """The list's names (as scripts/common.sh's list_packages reads it): for `release` only those
+    installed there; release=None: every name, whatever release it is for."""
+    pkgs = []
     with open(os.path.join(REPO, "scripts", "debian_packages.txt"), encoding="utf-8") as f:
-        pkgs = [re.sub(r"#.*", "", l).strip() for l in f]
-    return [p for p in pkgs if p and p not in without]
+        for line in f:
+            words = re.sub(r"#.*", "", line).split()
+            if not words or words[0] in without:
+                continue
+            keep = True
+            for w in words[1:]:
+                if w.startswith("except:") and release is not None:
+                    keep = keep and release not in w[len("except:"):].split(",")
+                elif w.startswith("only:") and release is not None:
+                    keep = keep and release in w[len("only:"):].split(",")
+                elif w != "debian-ros" and not w.startswith(("except:", "only:")):
+                    raise SystemExit(f"scripts/debian_packages.txt: unknown word '{w}' after {words[0]}")
+            if keep:
+                pkgs.append(words[0])
+    return pkgs
 
 
 def package_xml_problems(listed):
@@ -263,7 +308,7 @@ def main():
     if args.expect_missing:
         return expect_failure(args, {p for p in args.expect_missing.split(",") if p})
     without = {p for p in args.without.split(",") if p}
-    listed = read_list(without)
+    listed = read_list(without, release_codename())
     allowed = closure(listed) | base_packages()
 
     uses = []  # (what, owning package or None, who uses it)
@@ -271,7 +316,7 @@ def main():
     own_modules = {os.path.splitext(os.path.basename(p))[0] for p in repo_files("**/*.py")}
     own_modules.add("modbus_rtu_driver")
     for name, files in sorted(modules.items()):
-        if name in sys.stdlib_module_names or name in own_modules:
+        if is_stdlib(name) or name in own_modules:
             continue
         spec = importlib.util.find_spec(name)
         origin = spec and (spec.origin if spec.origin not in (None, "namespace") else
@@ -291,7 +336,10 @@ def main():
         uses.append((f"header {h}", h, {"the build"}))
 
     owner = owners({p for _, p, _ in uses if p})
-    problems = package_xml_problems(read_list(set()))
+    # package.xml against every name of the list, whatever release it is for, less those only
+    # one release's scripts need (g++-9: bullseye's stand-in for Ubuntu 20.04's compiler).
+    everywhere = set(read_list(set(), "every-release"))
+    problems = package_xml_problems([p for p in read_list(set()) if p in everywhere])
     missing = {}
     for what, path, files in uses:
         pkg = owner.get(path) if path else None
