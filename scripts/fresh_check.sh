@@ -46,9 +46,11 @@ trap cleanup_root EXIT
 new_root() {
   cleanup_root
   ROOT=$(mktemp -d /tmp/modbus_rtu_root.XXXXXX)
-  $SUDO mmdebstrap --variant=minbase --quiet "$SUITE" "$ROOT" \
-    "deb $MIRROR $SUITE main" "deb $MIRROR $SUITE-updates main" \
-    "deb ${MIRROR%/debian}/debian-security $SUITE-security main"
+  local sources=("deb $MIRROR $SUITE main" "deb $MIRROR $SUITE-updates main")
+  # bullseye's security updates (LTS) are listed by the mirror reached here but their files are
+  # not served (404): its root goes without them.
+  [ "$SUITE" = bullseye ] || sources+=("deb ${MIRROR%/debian}/debian-security $SUITE-security main")
+  $SUDO mmdebstrap --variant=minbase --quiet "$SUITE" "$ROOT" "${sources[@]}"
   # A bare root has no name resolution for localhost or this host; roslaunch needs both.
   printf '127.0.0.1 localhost\n127.0.1.1 %s\n::1 localhost ip6-localhost\n' "$(hostname)" |
     $SUDO tee "$ROOT/etc/hosts" >/dev/null
