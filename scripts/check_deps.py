@@ -24,6 +24,7 @@ import re
 import shutil
 import subprocess
 import sys
+import sysconfig
 import xml.etree.ElementTree as ET
 
 REPO = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
@@ -46,21 +47,18 @@ ROSDEP_TO_DEBIAN = {
     "rosbash": ["rosbash"],
     "rostest": ["python3-rostest", "librostest-dev"],
     "rosunit": ["python3-rostest"],
-    "gtest": ["libgtest-dev", "googletest"],
+    "gtest": ["libgtest-dev"],
     "libmodbus-dev": ["libmodbus-dev"],
     "yaml-cpp": ["libyaml-cpp-dev"],
     "cli11": ["libcli11-dev"],
     "nlohmann-json-dev": ["nlohmann-json3-dev"],
     "python3-yaml": ["python3-yaml"],
     "python3-matplotlib": ["python3-matplotlib"],
-    "python3-pymodbus": ["python3-pymodbus", "python3-serial-asyncio"],
+    "python3-pymodbus": ["python3-pymodbus"],
     "python3-catkin-lint": ["catkin-lint"],
     "clang-format": ["clang-format"],
     "clang-tidy": ["clang-tidy"],
-    "clang": ["clang", "libclang-rt-14-dev"],
-    "xxd": ["xxd"],
-    "mbpoll": ["mbpoll"],
-    "linux-perf": ["linux-perf"],
+    "clang": ["clang"],
 }
 SHELL_SKIP = {
     "if", "then", "else", "elif", "fi", "for", "while", "until", "do", "done", "case", "esac",
@@ -221,18 +219,66 @@ def base_packages():
     return closure(essential + ["apt"])
 
 
-def read_list(without):
+def release_codename():
+    """This machine's codename, as debian_packages.txt's except:/only: words name it."""
+    if os.environ.get("MODBUS_RTU_RELEASE"):
+        return os.environ["MODBUS_RTU_RELEASE"]
+    try:
+        with open("/etc/os-release", encoding="utf-8") as f:
+            for line in f:
+                if line.startswith("VERSION_CODENAME="):
+                    return line.split("=", 1)[1].strip().strip('"')
+    except OSError:
+        pass
+    return "unknown"
+
+
+def is_stdlib(name):
+    """Part of Python itself. sys.stdlib_module_names is Python 3.10+; before it (Debian 11's
+    3.9, Ubuntu 20.04's 3.8) a module is Python's own when it is built in or lives in the
+    standard library's directory, outside dist-packages."""
+    if hasattr(sys, "stdlib_module_names"):
+        return name in sys.stdlib_module_names
+    if name in sys.builtin_module_names:
+        return True
+    spec = importlib.util.find_spec(name)
+    origin = getattr(spec, "origin", None) or ""
+    stdlib = sysconfig.get_paths()["stdlib"]
+    return origin.startswith(stdlib) and "-packages" not in origin
+
+
+def read_list(without, release=None):
+    """The list's names (as scripts/common.sh's list_packages reads it): for `release` only those
+    installed there; release=None: every name, whatever release it is for."""
+    pkgs = []
     with open(os.path.join(REPO, "scripts", "debian_packages.txt"), encoding="utf-8") as f:
-        pkgs = [re.sub(r"#.*", "", l).strip() for l in f]
-    return [p for p in pkgs if p and p not in without]
+        for line in f:
+            words = re.sub(r"#.*", "", line).split()
+            if not words or words[0] in without:
+                continue
+            keep = True
+            for w in words[1:]:
+                if w.startswith("except:") and release is not None:
+                    keep = keep and release not in w[len("except:"):].split(",")
+                elif w.startswith("only:") and release is not None:
+                    keep = keep and release in w[len("only:"):].split(",")
+                elif w != "debian-ros" and not w.startswith(("except:", "only:")):
+                    raise SystemExit(f"scripts/debian_packages.txt: unknown word '{w}' after {words[0]}")
+            if keep:
+                pkgs.append(words[0])
+    return pkgs
 
 
 def package_xml_problems(listed):
-    root = ET.parse(os.path.join(REPO, "package.xml")).getroot()
+    """package.xml declares the list: a rosdep key for each package, or, for the packages that
+    have no rosdep key, their name on its comment's "no-rosdep-key:" line."""
+    text = open(os.path.join(REPO, "package.xml"), encoding="utf-8").read()
+    root = ET.fromstring(text)
     keys = {el.text.strip() for el in root if el.tag.endswith("depend") and el.text}
     problems = [f"package.xml: '{k}' has no Debian package in check_deps.py's table"
                 for k in sorted(keys - ROSDEP_TO_DEBIAN.keys())]
-    declared = {d for k in keys for d in ROSDEP_TO_DEBIAN.get(k, [])}
+    no_key = set(next(iter(re.findall(r"no-rosdep-key:([^\n]*)", text)), "").split())
+    declared = {d for k in keys for d in ROSDEP_TO_DEBIAN.get(k, [])} | no_key
     problems += [f"package.xml does not declare '{p}' (scripts/debian_packages.txt has it)"
                  for p in listed if p not in declared]
     problems += [f"package.xml declares '{p}' that scripts/debian_packages.txt does not install"
@@ -263,7 +309,7 @@ def main():
     if args.expect_missing:
         return expect_failure(args, {p for p in args.expect_missing.split(",") if p})
     without = {p for p in args.without.split(",") if p}
-    listed = read_list(without)
+    listed = read_list(without, release_codename())
     allowed = closure(listed) | base_packages()
 
     uses = []  # (what, owning package or None, who uses it)
@@ -271,7 +317,7 @@ def main():
     own_modules = {os.path.splitext(os.path.basename(p))[0] for p in repo_files("**/*.py")}
     own_modules.add("modbus_rtu_driver")
     for name, files in sorted(modules.items()):
-        if name in sys.stdlib_module_names or name in own_modules:
+        if is_stdlib(name) or name in own_modules:
             continue
         spec = importlib.util.find_spec(name)
         origin = spec and (spec.origin if spec.origin not in (None, "namespace") else
@@ -291,7 +337,10 @@ def main():
         uses.append((f"header {h}", h, {"the build"}))
 
     owner = owners({p for _, p, _ in uses if p})
-    problems = package_xml_problems(read_list(set()))
+    # package.xml against every name of the list, whatever release it is for, less those only
+    # one release's scripts need (g++-9: bullseye's stand-in for Ubuntu 20.04's compiler).
+    everywhere = set(read_list(set(), "every-release"))
+    problems = package_xml_problems([p for p in read_list(set()) if p in everywhere])
     missing = {}
     for what, path, files in uses:
         pkg = owner.get(path) if path else None

@@ -1,18 +1,26 @@
 #!/usr/bin/env bash
 # The fresh-machine proof (not part of the test command: it takes 20-30 minutes). For each of
-# the README's two commands it builds a new bare Debian 12 root with mmdebstrap (minbase: the
+# the README's two commands it builds a new bare Debian root with mmdebstrap (minbase: the
 # Essential packages and apt), clones the committed repository into it alone (nothing beside it),
 # and runs the command there as root:
 #   demo: scripts/demo.sh --duration 20   passes when it printed live PDU telemetry;
 #   test: scripts/test.sh                 passes when it ended "N passed, 0 failed".
-# Usage: scripts/fresh_check.sh [demo|test|both] (default both). Needs root (or sudo). Logs and
-# the summary go to $FRESH_OUT (default /tmp/modbus_rtu_fresh). Only committed work is checked.
+# Usage: scripts/fresh_check.sh [demo|test|both] [bookworm|trixie|bullseye] (defaults: both,
+# bookworm). bullseye (Debian 11: ros_comm 1.15.9, Noetic's) stands for Ubuntu 20.04 + Noetic,
+# whose archive is out of reach here: it builds with CXX=g++-9 (9.3.0, focal's compiler). Needs
+# root (or sudo). Logs and the summary go to $FRESH_OUT (default /tmp/modbus_rtu_fresh). Only
+# committed work is checked.
 set -euo pipefail
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 REPO=$(cd "$(dirname "$0")/.." && pwd)
 WHAT=${1:-both}
 OUT=${FRESH_OUT:-/tmp/modbus_rtu_fresh}
-SUITE=bookworm
+SUITE=${2:-bookworm}
+case $SUITE in
+  bookworm | trixie) COMPILER="" ;;
+  bullseye) COMPILER="CC=gcc-9 CXX=g++-9" ;;
+  *) echo "fresh_check.sh: release '$SUITE' is not bookworm, trixie or bullseye" >&2; exit 2 ;;
+esac
 MIRROR=${FRESH_MIRROR:-http://deb.debian.org/debian}
 SUDO=""
 [ "$(id -u)" = 0 ] || SUDO=sudo
@@ -38,9 +46,11 @@ trap cleanup_root EXIT
 new_root() {
   cleanup_root
   ROOT=$(mktemp -d /tmp/modbus_rtu_root.XXXXXX)
-  $SUDO mmdebstrap --variant=minbase --quiet "$SUITE" "$ROOT" \
-    "deb $MIRROR $SUITE main" "deb $MIRROR $SUITE-updates main" \
-    "deb ${MIRROR%/debian}/debian-security $SUITE-security main"
+  local sources=("deb $MIRROR $SUITE main" "deb $MIRROR $SUITE-updates main")
+  # bullseye's security updates (LTS) are listed by the mirror reached here but their files are
+  # not served (404): its root goes without them.
+  [ "$SUITE" = bullseye ] || sources+=("deb ${MIRROR%/debian}/debian-security $SUITE-security main")
+  $SUDO mmdebstrap --variant=minbase --quiet "$SUITE" "$ROOT" "${sources[@]}"
   # A bare root has no name resolution for localhost or this host; roslaunch needs both.
   printf '127.0.0.1 localhost\n127.0.1.1 %s\n::1 localhost ip6-localhost\n' "$(hostname)" |
     $SUDO tee "$ROOT/etc/hosts" >/dev/null
@@ -50,18 +60,26 @@ new_root() {
 }
 
 # Runs a command in the root as a user's login shell would: root, HOME=/root, Debian's PATH.
-in_root() {
-  $SUDO chroot "$ROOT" /usr/bin/env -i HOME=/root TERM=dumb \
-    PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
+# in_root_offline: the same in a network namespace of its own (loopback only), so that the
+# root's rosmasters and test ports cannot meet those of anything else running on this machine
+# (a chroot shares the host's network); the installs happen before it, with the network.
+in_root_offline() {
+  $SUDO unshare -n /bin/bash -c 'ip link set lo up && exec chroot "$@"' _ "$ROOT" "${ROOT_ENV[@]}" \
     /bin/bash -c "cd /root/modbus_rtu_driver && $1"
 }
+in_root() {
+  $SUDO chroot "$ROOT" "${ROOT_ENV[@]}" /bin/bash -c "cd /root/modbus_rtu_driver && $1"
+}
+# shellcheck disable=SC2206
+ROOT_ENV=(/usr/bin/env -i HOME=/root TERM=dumb
+  PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin $COMPILER)
 
 status=0
 summary=()
 if [ "$WHAT" = demo ] || [ "$WHAT" = both ]; then
   new_root
   start=$(date +%s)
-  in_root "scripts/demo.sh --duration 20" >"$OUT/demo.log" 2>&1 || true
+  { in_root "scripts/build.sh" && in_root_offline "scripts/demo.sh --duration 20"; } >"$OUT/demo.log" 2>&1 || true
   secs=$(($(date +%s) - start))
   # Live telemetry: rostopic echo printed several PDU messages after the demo's own calls.
   n=$(grep -c '^power: ' "$OUT/demo.log" || true)
@@ -75,7 +93,7 @@ fi
 if [ "$WHAT" = test ] || [ "$WHAT" = both ]; then
   new_root
   start=$(date +%s)
-  in_root "scripts/test.sh" >"$OUT/test.log" 2>&1 || true
+  { in_root "scripts/build.sh" && in_root_offline "scripts/test.sh"; } >"$OUT/test.log" 2>&1 || true
   secs=$(($(date +%s) - start))
   last=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$OUT/test.log" | tail -1 || true)
   if [[ "$last" =~ ^[1-9][0-9]*\ passed,\ 0\ failed ]]; then
@@ -85,5 +103,9 @@ if [ "$WHAT" = test ] || [ "$WHAT" = both ]; then
     tail -40 "$OUT/test.log"
   fi
 fi
+# What was checked: the release, its compiler, ROS and the libraries that differ most.
+versions=$(in_root "dpkg-query -W -f='\${Package} \${Version}\n' ros-core-dev libcli11-dev \
+  libmodbus-dev python3-pymodbus clang-format python3 2>/dev/null; \${CXX:-c++} --version | head -1" 2>&1 || true)
+summary=("release: $SUITE${COMPILER:+ ($COMPILER)}" "${summary[@]}" "versions: $(echo "$versions" | paste -sd';' -)")
 printf '%s\n' "${summary[@]}" | tee "$OUT/summary.txt"
 exit $status

@@ -16,6 +16,12 @@ DEPS_RESULTS=$WS/build/test_results/dependencies
 /usr/bin/python3 "$REPO/scripts/check_deps.py" "$WS" "$DEPS_RESULTS" || true
 /usr/bin/python3 "$REPO/scripts/check_deps.py" "$WS" "$DEPS_RESULTS" --name check_fails_on_old_list \
   --expect-missing python3-std-srvs,python3-diagnostic-msgs,rosbash,clang-format || true
+# package.xml's keys resolve with rosdep on Ubuntu 20.04-24.04 and Debian 12-13 (a snapshot of
+# rosdistro in test/data), and the check fails on keys that do not; the install step's choice of
+# ROS and of each release's packages, in a stand-in environment.
+/usr/bin/python3 "$REPO/scripts/check_rosdep_keys.py" "$DEPS_RESULTS" || true
+/usr/bin/python3 "$REPO/scripts/check_rosdep_keys.py" "$DEPS_RESULTS" --self-test >/dev/null || true
+"$REPO/scripts/check_ros_choice.sh" "$DEPS_RESULTS" >/dev/null || true
 # The sanitizer and fuzz builds run at the lowest CPU priority while the tests below run: the
 # tests mostly wait on the line, and this halves the wall time of the whole command.
 (nice -n 19 "$REPO/scripts/sanitized_tests.sh" --build-only

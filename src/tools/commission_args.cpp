@@ -231,7 +231,7 @@ struct Cli {
           ->type_name(YespeedPdu::kLimitUnits[i]);
 
     CLI::App* read = app.add_subcommand("read", "one request: COUNT values from START");
-    addTable(read)->add_option("count", w.table_count, "how many (default 1)")->type_name("COUNT");
+    addTableCount(addTable(read));
     CLI::App* write = app.add_subcommand(
         "write", "FC05/FC06 for one value, FC15/FC16 for more (--multiple: always)");
     addTable(write)
@@ -241,7 +241,7 @@ struct Cli {
     write->add_flag("--multiple", "FC15/FC16 even for one value");
     CLI::App* watch =
         app.add_subcommand("watch", "polls; prints a line only when something changed");
-    addTable(watch)->add_option("count", w.table_count, "how many (default 1)")->type_name("COUNT");
+    addTableCount(addTable(watch));
     watch->add_option("--interval", w.interval, "s between polls (default 0.5)")
         ->type_name("S")
         ->check(secondsRange(0.01, 3600));
@@ -266,6 +266,13 @@ struct Cli {
   }
   void addLimitsType(CLI::App* command) {
     command->add_option("--type", w.type, "yespeed_pdu (the only one)")->type_name("T");
+  }
+  // The positional COUNT is named "table-count", not "count": watch also has the option
+  // --count (polls), and CLI11 2.4 (Debian 13) refuses a positional whose name equals another
+  // option's long name (OptionAlreadyAdded at start), where CLI11 2.1 (Debian 12) let it pass.
+  static constexpr const char* kTableCount = "table-count";
+  void addTableCount(CLI::App* command) {
+    command->add_option(kTableCount, w.table_count, "how many (default 1)")->type_name("COUNT");
   }
   CLI::App* addTable(CLI::App* command) {
     addAddress(command);
@@ -480,7 +487,7 @@ void parseTable(const Parsed& p, CommissionCommand& c) {
     c.multiple = p.has("--multiple");
   } else {
     const int max = bits ? kMaxReadBits : kMaxReadRegisters;
-    if (p.has("count")) c.count = intIn("count", w.table_count, 1, max);
+    if (p.has(Cli::kTableCount)) c.count = intIn("count", w.table_count, 1, max);
   }
   if (c.start + c.count > 65536)
     bad("start: " + std::to_string(c.start) + " + " + std::to_string(c.count) + " passes 65535");

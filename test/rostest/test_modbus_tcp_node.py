@@ -11,7 +11,10 @@ import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from pymodbus.datastore import (ModbusSequentialDataBlock, ModbusServerContext,
                                 ModbusSlaveContext)
-from pymodbus.server import StartTcpServer
+try:
+    from pymodbus.server import StartTcpServer
+except ImportError:  # pymodbus 2 (Debian 11's 2.1, Ubuntu 20.04's): the same server, elsewhere
+    from pymodbus.server.sync import StartTcpServer
 from std_srvs.srv import SetBool
 
 from modbus_rtu_driver.msg import DigitalStates
