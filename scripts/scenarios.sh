@@ -36,15 +36,17 @@ LOGDIR=$(mktemp -d /tmp/scenarios.XXXXXX)
 run() {  # run SEED SECONDS -> the run's output in $LOGDIR/SEED.log, summary line on stdout
   local s=$1 secs=$2 limit=$(($2 + 600))
   [ "$shrink" = true ] && limit=$((limit + 3600))
-  rostest --text modbus_rtu_driver scenarios.test seed:="$s" seconds:="$secs" steps:="$steps" \
-    shrink:="$shrink" known_defects:="$known" time_limit:="$limit" \
-    dir:="$LOGDIR/run$s" >"$LOGDIR/$s.log" 2>&1 || true
-  grep -E '^SCENARIOS seed [0-9]+:' "$LOGDIR/$s.log" || echo "SCENARIOS seed $s: no summary (see $LOGDIR/$s.log)"
+  SCENARIOS_LOG="$LOGDIR/$s.log" rostest modbus_rtu_driver scenarios.test seed:="$s" \
+    seconds:="$secs" steps:="$steps" shrink:="$shrink" known_defects:="$known" \
+    time_limit:="$limit" dir:="$LOGDIR/run$s" >"$LOGDIR/$s.rostest.log" 2>&1 || true
+  grep -E '^SCENARIOS seed [0-9]+:' "$LOGDIR/$s.log" 2>/dev/null ||
+    echo "SCENARIOS seed $s: no summary (see $LOGDIR/$s.rostest.log)"
 }
 
 if [ "$seed" != 0 ]; then
   run "$seed" 600
-  sed -n '/Falsifying example/,/^SCENARIOS seed [0-9]*:/p; /reproduce_failure/p' "$LOGDIR/$seed.log"
+  # The last example (on a failure: its replay, with Hypothesis's listing of the steps).
+  tac "$LOGDIR/$seed.log" | sed '/\] example [0-9]*:/q' | tac
   echo "log: $LOGDIR/$seed.log"
   exit 0
 fi

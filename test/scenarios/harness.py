@@ -94,10 +94,26 @@ class Harness:
         self.log = tempfile.TemporaryFile(mode="w+")
         self.node = subprocess.Popen(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus",
                                       "__name:=" + NODE], stdout=self.log, stderr=subprocess.STDOUT)
-        rospy.wait_for_service(NS + DEV + "/pump/set", timeout=30)
+        try:
+            wait_until(lambda: self.node.poll() is not None or self._advertised(), 30,
+                       "the node to advertise its services")
+        except Timeout:
+            pass
+        if self.node.poll() is not None or not self._advertised():
+            self.log.seek(0)
+            raise AssertionError("the node did not start (exit %s):\n%s"
+                                 % (self.node.poll(), self.log.read()[-3000:]))
         # The command topics are connected before a step publishes on them.
         for name, pub in self.commands.items():
             wait_until(lambda: pub.get_num_connections() > 0, 15, name + "/command subscribed")
+
+    @staticmethod
+    def _advertised():
+        try:
+            rospy.wait_for_service(NS + DEV + "/pump/set", timeout=0.2)
+            return True
+        except rospy.ROSException:
+            return False
 
     def stop_node(self, sig=signal.SIGINT, before=None):
         """Stops the node; returns its exit code. `before` runs just before the signal."""

@@ -34,11 +34,15 @@ class Run:
     deadline = 0.0
     steps = 0
     examples = 0
+    failures = []  # every invariant failure, also one a replay did not repeat (Flaky)
     log = print
 
 
 def fail(invariant, text):
-    raise InvariantFailed("%s: %s" % (invariant, text))
+    message = "%s: %s" % (invariant, text)
+    Run.failures.append("example %d, step %d: %s" % (Run.examples, Run.steps, message))
+    Run.log("  INVARIANT FAILED " + message)
+    raise InvariantFailed(message)
 
 
 class Scenario(RuleBasedStateMachine):

@@ -151,6 +151,8 @@ class Model:
             values, why = {SAFE[i]}, "I3 (restore keeps a channel a trigger holds safe)"
         elif not c.settled:
             values, why = set(BOTH), "unknown (pulsed channel: not compared by the node)"
+        elif c.by_failsafe:
+            values, why = set(c.restore), "I3 (restore writes the state the fail-safe confirmed)"
         else:
             values, why = set(c.restore), "I1 (restore writes the last confirmed state)"
             if c.commanded_in_loss and i in SAFE:
@@ -205,5 +207,8 @@ class Model:
         self.node_running = True
         for i, c in enumerate(self.ch):
             if i not in SAFE:
-                c.restore, c.by_failsafe, c.held, c.settled = set(c.values), False, False, True
+                # Read at start, never commanded: docs/failsafe.md has restore write "the last
+                # states users commanded", issue 24 "the last state the node confirmed". Either
+                # way (restored, or left at the power-on state) is accepted until that is settled.
+                c.restore, c.by_failsafe, c.held, c.settled = set(c.values) | {0}, False, False, True
         self.failsafe(sorted(SAFE), "on_start: safe", hold=False)

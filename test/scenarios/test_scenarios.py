@@ -41,6 +41,16 @@ def known_defects(param):
     return tuple(names)
 
 
+def log(text):
+    """Progress lines: the test's stdout (kept in the JUnit result) and $SCENARIOS_LOG, where
+    scripts/scenarios.sh reads them while rostest runs."""
+    print(text, flush=True)
+    path = os.environ.get("SCENARIOS_LOG")
+    if path:
+        with open(path, "a") as f:
+            f.write(str(text) + "\n")
+
+
 class ScenarioTest(unittest.TestCase):
     def test_random_scenarios(self):
         rospy.init_node("test_scenarios")
@@ -53,9 +63,9 @@ class ScenarioTest(unittest.TestCase):
                                               rospy.get_param("~port"),
                                               os.path.join(HERE, "bus.yaml"))
         machine.Run.deadline = time.time() + seconds
-        machine.Run.log = lambda text: print(text, flush=True)
-        print("SCENARIOS seed %d, budget %.0f s, %d steps per example, known defects: %s"
-              % (run_seed, seconds, steps, ", ".join(machine.Run.known) or "none"), flush=True)
+        machine.Run.log = log
+        log("SCENARIOS seed %d, budget %.0f s, %d steps per example, known defects: %s"
+              % (run_seed, seconds, steps, ", ".join(machine.Run.known) or "none"))
         phases = [Phase.explicit, Phase.generate] + ([Phase.shrink] if shrink else [])
         # Examples take 20-60 s; the budget ends the run (later examples are invalid and
         # cheap), this only bounds it.
@@ -69,7 +79,7 @@ class ScenarioTest(unittest.TestCase):
 
         def report(text):
             reported.append(str(text))
-            print(text, flush=True)
+            log(text)
 
         try:
             with with_reporter(report):
@@ -79,13 +89,13 @@ class ScenarioTest(unittest.TestCase):
         finally:
             if machine.Run.harness.node is not None:
                 machine.Run.harness.stop_node()
-        print("SCENARIOS seed %d: %d examples, %d steps in %.0f s, %s"
+        log("SCENARIOS seed %d: %d examples, %d steps in %.0f s, %s"
               % (run_seed, machine.Run.examples, machine.Run.steps, time.time() - started,
-                 "FAILED: %s" % failure if failure else "no invariant failed"), flush=True)
+                 "FAILED: %s" % failure if failure else "no invariant failed"))
         if failure is not None:
-            self.fail("seed %d (replay: scripts/scenarios.sh --seed %d): %s: %s\n%s"
+            self.fail("seed %d (replay: scripts/scenarios.sh --seed %d): %s: %s\n%s\n%s"
                       % (run_seed, run_seed, type(failure).__name__, failure,
-                         "\n".join(reported)))
+                         "\n".join(machine.Run.failures), "\n".join(reported)))
 
 
 if __name__ == "__main__":
