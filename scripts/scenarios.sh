@@ -5,6 +5,7 @@
 #                                          each), then prints steps run, failures and their seeds
 #   scripts/scenarios.sh --seed N          replays seed N (stops at its first failure)
 # Options: --strict (check the known defects of test/scenarios/known_defects.txt too),
+#   --known A,B (only these known defects relaxed, instead of the file's list),
 #   --shrink (shrink a failure to its shortest sequence: slow), --steps N (per example, 12).
 # Runs in its own network namespace (rostest's master port, the share's port picked at run time).
 # Needs the workspace built (scripts/build.sh).
@@ -26,9 +27,11 @@ while (($#)); do
     --minutes) minutes=$2; shift 2 ;;
     --seed) seed=$2; shift 2 ;;
     --strict) known=none; shift ;;
+    --known) known=$2; shift 2 ;;
     --shrink) shrink=true; shift ;;
     --steps) steps=$2; shift 2 ;;
-    *) echo "usage: $0 [--minutes N | --seed N] [--strict] [--shrink] [--steps N]" >&2; exit 2 ;;
+    *) echo "usage: $0 [--minutes N | --seed N] [--strict | --known A,B] [--shrink] [--steps N]" >&2
+      exit 2 ;;
   esac
 done
 
