@@ -70,6 +70,7 @@ class Harness:
         self.commands = {n: rospy.Publisher(NS + DEV + "/" + n + "/command", Bool, queue_size=10)
                          for n in NAMES}
         self.alive = rospy.Publisher(self.config["heartbeat"]["topic"], String, queue_size=1)
+        self.beats = 0
         self.beating = threading.Event()
         self.beating.set()
         threading.Thread(target=self._beat, daemon=True).start()
@@ -78,6 +79,7 @@ class Harness:
         while not rospy.is_shutdown():
             if self.beating.is_set():
                 self.alive.publish(String("alive"))
+                self.beats += 1
             time.sleep(0.1)
 
     def _on_outputs(self, msg):

@@ -268,10 +268,14 @@ class Scenario(RuleBasedStateMachine):
     @precondition(lambda self: self.m.node_running and not self.h.beating.is_set())
     @rule()
     def heartbeat_back(self):
+        beats = self.h.beats
         self.h.beating.set()
         self.note("heartbeat back")
+        # The node shows no sign of a heartbeat back: a few messages on a connected topic.
+        wait_until(lambda: self.h.beats >= beats + 3 and self.h.alive.get_num_connections() > 0,
+                   5, "heartbeats published to the node")
         if not self.m.silenced:
-            self.h.wait_polls(3)  # a few heartbeats have reached the node by then
+            self.h.wait_polls(3)
         self.m.heartbeat_back()
         self.check("heartbeat back")
 
