@@ -206,7 +206,7 @@ class Scenario(RuleBasedStateMachine):
         self.check("dead man valve")
 
     @precondition(lambda self: self.m.node_running)
-    @rule(ch=CHANNELS, state=st.integers(0, 1), tenths=st.integers(10, 20))
+    @rule(ch=CHANNELS, state=st.integers(0, 1), tenths=st.integers(15, 40))
     def pulse(self, ch, state, tenths):
         sent = time.time()
         res = rospy.ServiceProxy(NS + DEV + "/pulse", Pulse)(ch, bool(state), tenths / 10.0)

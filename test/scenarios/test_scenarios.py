@@ -100,8 +100,10 @@ class ScenarioTest(unittest.TestCase):
               % (run_seed, machine.Run.examples, machine.Run.steps, time.time() - started,
                  "FAILED: %s" % failure if failure else "no invariant failed"))
         if failure is not None:
-            self.fail("seed %d (replay: scripts/scenarios.sh --seed %d): %s: %s\n%s\n%s"
-                      % (run_seed, run_seed, type(failure).__name__, failure,
+            replay = "scripts/scenarios.sh --seed %d --steps %d --known %s" % (
+                run_seed, steps, ",".join(machine.Run.known) or "none")
+            self.fail("seed %d (replay: %s): %s: %s\n%s\n%s"
+                      % (run_seed, replay, type(failure).__name__, failure,
                          "\n".join(machine.Run.failures), "\n".join(reported)))
 
 
