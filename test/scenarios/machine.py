@@ -216,6 +216,14 @@ class Scenario(RuleBasedStateMachine):
         self.m.pulse(ch, state, res.success, sent, answered, tenths / 10.0)
         self.check("pulse %s %d" % (NAMES[ch], state))
 
+    @precondition(lambda self: self.m.node_running)
+    @rule(ch=st.integers(1, 6), state=st.integers(0, 1), tenths=st.integers(20, 40),
+          states=st.lists(st.integers(0, 1), min_size=2, max_size=2))
+    def pulse_then_neighbours(self, ch, state, tenths, states):
+        """A lamp flashing while the outputs beside it are switched in one set_outputs."""
+        self.pulse(ch, state, tenths)
+        self.set_outputs([ch - 1, ch + 1], states + [0])
+
     # --- the share ---------------------------------------------------------------------------
     @precondition(lambda self: self.m.node_running)
     @rule()
