@@ -96,6 +96,8 @@ class ScenarioTest(unittest.TestCase):
         finally:
             if machine.Run.harness.node is not None:
                 machine.Run.harness.stop_node()
+        for note in getattr(failure, "__notes__", []):  # Hypothesis's listing of the steps
+            log(note)
         log("SCENARIOS seed %d: %d examples, %d steps in %.0f s, %s"
               % (run_seed, machine.Run.examples, machine.Run.steps, time.time() - started,
                  "FAILED: %s" % failure if failure else "no invariant failed"))
@@ -104,7 +106,8 @@ class ScenarioTest(unittest.TestCase):
                 run_seed, steps, ",".join(machine.Run.known) or "none")
             self.fail("seed %d (replay: %s): %s: %s\n%s\n%s"
                       % (run_seed, replay, type(failure).__name__, failure,
-                         "\n".join(machine.Run.failures), "\n".join(reported)))
+                         "\n".join(machine.Run.failures),
+                         "\n".join(reported + list(getattr(failure, "__notes__", [])))))
 
 
 if __name__ == "__main__":
