@@ -55,6 +55,8 @@ ROSDEP_TO_DEBIAN = {
     "python3-yaml": ["python3-yaml"],
     "python3-matplotlib": ["python3-matplotlib"],
     "python3-pymodbus": ["python3-pymodbus"],
+    "python3-hypothesis": ["python3-hypothesis"],
+    "iproute2": ["iproute2"],
     "python3-catkin-lint": ["catkin-lint"],
     "clang-format": ["clang-format"],
     "clang-tidy": ["clang-tidy"],

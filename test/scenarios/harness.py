@@ -1,0 +1,153 @@
+"""The real parts of a scenario: the bus node (started and stopped here, as a robot's launch
+would), the simulator's control socket, the node's services, topics, share and diagnostics.
+Every wait is for a condition, bounded by a deadline."""
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+import rosparam
+import rospy
+import yaml
+from diagnostic_msgs.msg import DiagnosticArray
+from std_msgs.msg import Bool, String
+
+from modbus_rtu_driver.msg import DigitalStates, FailsafeEvent
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
+
+from model import NAMES  # noqa: E402
+
+NODE = "scenbus"
+NS = "/" + NODE + "/"
+DEV = "relays"
+BOARD = "255"
+
+
+class Timeout(AssertionError):
+    pass
+
+
+def wait_until(predicate, timeout, what):
+    deadline = time.time() + timeout
+    last = None
+    while time.time() < deadline and not rospy.is_shutdown():
+        last = predicate()
+        if last:
+            return last
+        time.sleep(0.02)
+    raise Timeout("timed out after %.1f s waiting for %s (last: %r)" % (timeout, what, last))
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Harness:
+    def __init__(self, sim_control, port, config_path):
+        self.sim = SimControl(sim_control)
+        wait_until(lambda: os.path.exists(sim_control), 20, "the simulator's control socket")
+        with open(config_path) as f:
+            self.config = yaml.safe_load(f)
+        self.config["port"] = port
+        self.share_port = free_port()
+        self.config["share"]["listen"] = "127.0.0.1:%d" % self.share_port
+        self.node = None
+        self.output = ""
+        self.events = []
+        self.polls = 0
+        self.diag = None  # (time received, relays status)
+        rospy.Subscriber(NS + "failsafe", FailsafeEvent, self.events.append, queue_size=100)
+        rospy.Subscriber(NS + DEV + "/outputs", DigitalStates, self._on_outputs, queue_size=100)
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self._on_diag, queue_size=100)
+        self.commands = {n: rospy.Publisher(NS + DEV + "/" + n + "/command", Bool, queue_size=10)
+                         for n in NAMES}
+        self.alive = rospy.Publisher(self.config["heartbeat"]["topic"], String, queue_size=1)
+        self.beats = 0
+        self.beating = threading.Event()
+        self.beating.set()
+        threading.Thread(target=self._beat, daemon=True).start()
+
+    def _beat(self):
+        while not rospy.is_shutdown():
+            if self.beating.is_set():
+                self.alive.publish(String("alive"))
+                self.beats += 1
+            time.sleep(0.1)
+
+    def _on_outputs(self, msg):
+        self.polls += 1
+
+    def _on_diag(self, msg):
+        for s in msg.status:
+            if s.name.split(": ", 1)[-1].endswith(DEV):
+                self.diag = (msg.header.stamp.to_sec() or time.time(), s)
+
+    # --- the node ----------------------------------------------------------------------------
+    def start_node(self):
+        rosparam.upload_params("/" + NODE, self.config)
+        self.log = tempfile.TemporaryFile(mode="w+")
+        self.node = subprocess.Popen(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus",
+                                      "__name:=" + NODE], stdout=self.log, stderr=subprocess.STDOUT)
+        try:
+            wait_until(lambda: self.node.poll() is not None or self._advertised(), 30,
+                       "the node to advertise its services")
+        except Timeout:
+            pass
+        if self.node.poll() is not None or not self._advertised():
+            self.log.seek(0)
+            raise AssertionError("the node did not start (exit %s):\n%s"
+                                 % (self.node.poll(), self.log.read()[-3000:]))
+        # The command topics are connected before a step publishes on them.
+        for name, pub in self.commands.items():
+            wait_until(lambda: pub.get_num_connections() > 0, 15, name + "/command subscribed")
+
+    @staticmethod
+    def _advertised():
+        try:
+            rospy.wait_for_service(NS + DEV + "/pump/set", timeout=0.2)
+            return True
+        except rospy.ROSException:
+            return False
+
+    def stop_node(self, sig=signal.SIGINT, before=None):
+        """Stops the node; returns its exit code. `before` runs just before the signal."""
+        if self.node is None:
+            return None
+        if before:
+            before()
+        self.node.send_signal(sig)
+        try:
+            code = self.node.wait(30)
+        except subprocess.TimeoutExpired:
+            self.node.kill()
+            code = self.node.wait(5)
+        self.node = None
+        self.log.seek(0)
+        self.output = self.log.read()
+        return code
+
+    # --- the board and the node's answers ----------------------------------------------------
+    def coils(self):
+        return self.sim.get(BOARD, "coil", 0, 8)
+
+    def event(self, trigger, since, timeout):
+        return wait_until(lambda: next((e for e in self.events[since:]
+                                        if e.trigger == trigger and e.device == DEV), None),
+                          timeout, "a %s event of %s on ~failsafe" % (trigger, DEV))
+
+    def wait_polls(self, n, timeout=5.0):
+        target = self.polls + n
+        wait_until(lambda: self.polls >= target, timeout, "%d polls of the node" % n)
+
+    def fresh_diagnostics(self, timeout=5.0):
+        since = time.time()
+        return wait_until(lambda: self.diag[1] if self.diag and self.diag[0] > since else None,
+                          timeout, "a new /diagnostics status of " + DEV)

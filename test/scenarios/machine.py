@@ -1,0 +1,347 @@
+"""The Hypothesis state machine: random sequences of what a robot meets, run on the real node
+and the simulator; after each step the board (the simulator's coils) is checked against the
+model (model.py) and the node's claims against the board."""
+import signal
+import time
+
+import hypothesis.strategies as st
+from hypothesis import assume
+from hypothesis.control import current_build_context
+from hypothesis.stateful import RuleBasedStateMachine, initialize, precondition, rule
+from std_msgs.msg import Bool
+from std_srvs.srv import SetBool
+import rospy
+
+from modbus_rtu_driver.srv import Pulse, SetOutputs
+
+import harness
+from harness import DEV, NS, Timeout, wait_until
+from model import BOTH, DEAD_MAN, NAMES, SAFE, Model
+from share_client import ShareClient, ShareError
+
+CHANNELS = st.integers(0, 7)
+NOT_DEAD_MAN = st.sampled_from([i for i in range(8) if i != DEAD_MAN])
+
+
+class InvariantFailed(AssertionError):
+    pass
+
+
+class Run:
+    """What one run shares between its examples: the harness, the budget, the counters."""
+    harness = None
+    known = ()
+    deadline = 0.0
+    steps = 0
+    examples = 0
+    failures = []  # every invariant failure, also one a replay did not repeat (Flaky)
+    log = print
+
+
+def fail(invariant, text):
+    message = "%s: %s" % (invariant, text)
+    Run.failures.append("example %d, step %d: %s" % (Run.examples, Run.steps, message))
+    Run.log("  INVARIANT FAILED " + message)
+    raise InvariantFailed(message)
+
+
+class Scenario(RuleBasedStateMachine):
+    def __init__(self):
+        super().__init__()
+        self.h = Run.harness
+        self.m = Model(Run.known)
+        self.share = ShareClient(self.h.share_port, int(harness.BOARD))
+        self.started = False
+
+    def note(self, text):
+        Run.log("  [%6.1f] %s" % (time.time() % 1000, text))
+
+    # --- start of an example: a powered-up board with random outputs, the node started -------
+    @initialize(coils=st.lists(st.integers(0, 1), min_size=8, max_size=8))
+    def start(self, coils):
+        # The budget is spent: the examples left are invalid and cost nothing (not in the
+        # final replay of a failure, which must run as it did).
+        if not current_build_context().is_final:
+            assume(time.time() < Run.deadline)
+        Run.examples += 1
+        self.note("example %d: board %s, node starts (on_start: safe)" % (Run.examples, coils))
+        self.h.stop_node()
+        self.h.beating.set()
+        self.h.sim.silence(harness.BOARD, False)
+        self.h.sim.power_cycle()
+        self.h.sim.set(harness.BOARD, "coil", 0, *coils)
+        for i, v in enumerate(coils):
+            self.m.ch[i].values, self.m.ch[i].why = {v}, "the board as the example set it"
+        since = len(self.h.events)
+        self.h.start_node()
+        self.started = True
+        self.m.node_started(time.time())
+        self.expect_event("start", since, confirmed=True)
+        self.check("node start")
+
+    def teardown(self):
+        if self.started:
+            self.h.stop_node()
+            self.h.beating.set()
+            self.h.sim.silence(harness.BOARD, False)
+
+    # --- checks ------------------------------------------------------------------------------
+    def board_mismatch(self):
+        now = time.time()
+        coils = self.h.coils()
+        bad = [(i, coils[i]) for i in range(8) if coils[i] not in self.m.allowed(i, now)]
+        return coils, bad
+
+    def check(self, step):
+        """The board matches the model (bounded wait for the node's writes to land), and still
+        does after two more polls (nothing undoes it)."""
+        Run.steps += 1
+        for phase in ("settle", "stable"):
+            try:
+                wait_until(lambda: not self.board_mismatch()[1], 4.0, "the board to match")
+            except Timeout:
+                coils, bad = self.board_mismatch()
+                now = time.time()
+                text = "; ".join("%s is %d, expected %s by %s" % (
+                    NAMES[i], v, sorted(self.m.allowed(i, now)), self.m.ch[i].why) for i, v in bad)
+                invariant = self.m.ch[bad[0][0]].why.split(" ")[0]
+                fail(invariant, "after %s (%s): board %s: %s" % (step, phase, coils, text))
+            if phase == "settle" and self.m.node_running and not self.m.silenced:
+                self.h.wait_polls(2)
+        self.m.settle_flashes(time.time())
+        if self.m.node_running:
+            self.check_diagnostics(step)
+
+    def check_diagnostics(self, step):
+        """I6: a device status claiming 'outputs in their safe state' must be true on the board."""
+        if self.m.flash_running(time.time()):
+            return
+        if self.m.silenced:
+            return  # nothing to confirm on a silent board; the status says offline
+        status = self.h.fresh_diagnostics()
+        claim = status.message.split("outputs in their safe state", 1)
+        if len(claim) < 2 or "NOT confirmed" in claim[1]:
+            return  # no claim, or one that says it is not confirmed
+        # "outputs in their safe state after heartbeat (...): pump off, lamp on, valve off"
+        named = claim[1].split("): ", 1)[-1].split(";")[0]
+        claimed = {}
+        for item in named.split(", "):
+            words = item.split()
+            if len(words) == 2 and words[0] in NAMES and words[1] in ("on", "off"):
+                claimed[NAMES.index(words[0])] = int(words[1] == "on")
+        coils = self.h.coils()
+        pulse_known = "safe_claim_survives_pulse" in self.m.known
+        wrong = [NAMES[i] for i, s in claimed.items() if coils[i] != s and not self.m.ch[i].relaxed
+                 and not (pulse_known and not self.m.ch[i].settled)]
+        if wrong:
+            fail("I6", "after %s: /diagnostics says %r but %s not safe on the board %s"
+                 % (step, status.message, ", ".join(wrong), coils))
+
+    def expect_event(self, trigger, since, confirmed, timeout=10.0):
+        try:
+            e = self.h.event(trigger, since, timeout)
+        except Timeout as t:
+            fail("I6", str(t))
+        if e.confirmed != confirmed:
+            fail("I6", "%s event confirmed=%s, expected %s: %s" % (trigger, e.confirmed,
+                                                                  confirmed, e.message))
+        return e
+
+    # --- service writes, topics, pulses ------------------------------------------------------
+    @precondition(lambda self: self.m.node_running)
+    @rule(ch=CHANNELS, state=st.integers(0, 1))
+    def set_one(self, ch, state):
+        res = rospy.ServiceProxy(NS + DEV + "/" + NAMES[ch] + "/set", SetBool)(bool(state))
+        self.note("%s/set %d -> %s %s" % (NAMES[ch], state, res.success, res.message))
+        self.m.user_write([ch], [state], res.success, "%s/set %d" % (NAMES[ch], state))
+        self.check("set %s %d" % (NAMES[ch], state))
+
+    @precondition(lambda self: self.m.node_running)
+    @rule(chs=st.lists(CHANNELS, min_size=2, max_size=3, unique=True),
+          states=st.lists(st.integers(0, 1), min_size=3, max_size=3))
+    def set_outputs(self, chs, states):
+        chs, states = sorted(chs), states[:len(chs)]
+        before = self.h.sim.stats(harness.BOARD)["changes"]
+        res = rospy.ServiceProxy(NS + DEV + "/set_outputs", SetOutputs)(chs, [bool(s) for s in states])
+        self.note("set_outputs %s %s -> %s %s" % (chs, states, res.success, res.message))
+        self.m.user_write(chs, states, res.success, "set_outputs %s %s" % (chs, states))
+        self.check("set_outputs %s %s" % (chs, states))
+        changes = self.h.sim.stats(harness.BOARD)["changes"] - before
+        if changes > len(chs) and not self.m.flash_running(time.time()):
+            fail("I5", "set_outputs of %d channels made %d changes on the board" % (len(chs), changes))
+
+    @precondition(lambda self: self.m.node_running and not self.m.silenced)
+    @rule(ch=NOT_DEAD_MAN, state=st.integers(0, 1))
+    def command(self, ch, state):
+        # No answer tells when a topic command is done: a pulse still running on the channel
+        # could end after the board showed the command. Let it end first.
+        flash = self.m.ch[ch].flash
+        if flash is not None:
+            wait_until(lambda: time.time() > flash.done_after, 10, "the pulse on the channel to end")
+            self.m.settle_flashes(time.time())
+        self.h.commands[NAMES[ch]].publish(Bool(bool(state)))
+        self.note("%s/command %d" % (NAMES[ch], state))
+        try:  # fire and forget: done when the board shows it
+            wait_until(lambda: self.h.coils()[ch] == state, 5.0, "%s/command on the board" % NAMES[ch])
+            ok = True
+        except Timeout:
+            ok = False
+        self.m.user_write([ch], [state], True, "%s/command %d" % (NAMES[ch], state))
+        if not ok:
+            fail("I1", "%s/command %d never reached the board" % (NAMES[ch], state))
+        self.check("command %s %d" % (NAMES[ch], state))
+
+    @precondition(lambda self: self.m.node_running and not self.m.silenced)
+    @rule()
+    def dead_man(self):
+        """The valve turned on by its command topic and left: off after command_timeout."""
+        since = len(self.h.events)
+        self.h.commands[NAMES[DEAD_MAN]].publish(Bool(True))
+        self.note("valve/command 1, then nothing (command_timeout 1.0 s)")
+        e = self.expect_event("command_timeout", since, confirmed=True)
+        if list(e.channels) != [NAMES[DEAD_MAN]] or list(e.states) != [False]:
+            fail("I6", "command_timeout event wrote %s %s, expected valve off" % (e.channels, e.states))
+        self.m.user_write([DEAD_MAN], [1], True, "valve/command 1")
+        self.m.failsafe([DEAD_MAN], "I3 (command timeout: valve safe until commanded again)")
+        self.check("dead man valve")
+
+    @precondition(lambda self: self.m.node_running)
+    @rule(ch=CHANNELS, state=st.integers(0, 1), tenths=st.integers(15, 40))
+    def pulse(self, ch, state, tenths):
+        sent = time.time()
+        res = rospy.ServiceProxy(NS + DEV + "/pulse", Pulse)(ch, bool(state), tenths / 10.0)
+        answered = time.time()
+        self.note("pulse %s %d %.1f s -> %s %s" % (NAMES[ch], state, tenths / 10.0, res.success,
+                                                   res.message))
+        self.m.pulse(ch, state, res.success, sent, answered, tenths / 10.0)
+        self.check("pulse %s %d" % (NAMES[ch], state))
+
+    @precondition(lambda self: self.m.node_running)
+    @rule(ch=st.integers(1, 6), state=st.integers(0, 1), tenths=st.integers(20, 40),
+          states=st.lists(st.integers(0, 1), min_size=2, max_size=2))
+    def pulse_then_neighbours(self, ch, state, tenths, states):
+        """A lamp flashing while the outputs beside it are switched in one set_outputs."""
+        self.pulse(ch, state, tenths)
+        self.set_outputs([ch - 1, ch + 1], states + [0])
+
+    # --- the share ---------------------------------------------------------------------------
+    @precondition(lambda self: self.m.node_running)
+    @rule()
+    def share_read(self):
+        try:
+            coils = self.share.read_coils(0, 8)
+        except ShareError as e:
+            self.note("share FC01 -> %s" % e)
+            if not self.m.silenced:
+                fail("I6", "share FC01 of an answering board failed: %s" % e)
+            return
+        now = time.time()
+        self.note("share FC01 -> %s" % coils)
+        self.m.settle_flashes(now)
+        bad = [NAMES[i] for i in range(8) if coils[i] not in self.m.allowed(i, now)
+               and self.m.ch[i].flash is None]
+        if bad:
+            fail("I6", "the share read %s, the model says %s for %s" % (
+                coils, [sorted(self.m.allowed(i, now)) for i in range(8)], bad))
+        self.check("share read")
+
+    @precondition(lambda self: self.m.node_running
+                  and "share_write_seen_as_restart" not in self.m.known)
+    @rule(ch=CHANNELS, state=st.integers(0, 1))
+    def share_write(self, ch, state):
+        try:
+            self.share.write_coil(ch, state)
+            ok, text = True, "ok"
+        except ShareError as e:
+            ok, text = False, str(e)
+        self.note("share FC05 %s %d -> %s" % (NAMES[ch], state, text))
+        self.m.user_write([ch], [state], ok, "share FC05 %s %d" % (NAMES[ch], state))
+        self.check("share write %s %d" % (NAMES[ch], state))
+
+    # --- heartbeat, power, silence, node stop and start --------------------------------------
+    @precondition(lambda self: self.m.node_running and self.h.beating.is_set())
+    @rule()
+    def heartbeat_lost(self):
+        since = len(self.h.events)
+        self.h.beating.clear()
+        self.note("heartbeat stops")
+        e = self.expect_event("heartbeat", since, confirmed=not self.m.silenced, timeout=15.0)
+        wrong = [(c, s) for c, s in zip(e.channels, e.states)
+                 if NAMES.index(c) not in SAFE or SAFE[NAMES.index(c)] != int(s)]
+        if wrong:
+            fail("I6", "heartbeat event wrote %s, not the safe states" % wrong)
+        self.m.heartbeat_lost_event()
+        self.check("heartbeat lost")
+
+    @precondition(lambda self: self.m.node_running and not self.h.beating.is_set())
+    @rule()
+    def heartbeat_back(self):
+        beats = self.h.beats
+        self.h.beating.set()
+        self.note("heartbeat back")
+        # The node shows no sign of a heartbeat back: a few messages on a connected topic.
+        wait_until(lambda: self.h.beats >= beats + 3 and self.h.alive.get_num_connections() > 0,
+                   5, "heartbeats published to the node")
+        if not self.m.silenced:
+            self.h.wait_polls(3)
+        self.m.heartbeat_back()
+        self.check("heartbeat back")
+
+    @precondition(lambda self: self.m.node_running)
+    @rule()
+    def power_cycle(self):
+        since = len(self.h.events)
+        self.h.sim.power_cycle()
+        seen = self.m.power_cycle(time.time())
+        self.note("power cycle (restart to be seen: %s)" % seen)
+        if seen:
+            e = self.expect_event("restart", since, confirmed=True)
+            if e.action != "restore":
+                fail("I6", "restart event with action %r, on_restart is restore" % e.action)
+        self.check("power cycle")
+
+    @precondition(lambda self: self.m.node_running)
+    @rule()
+    def silence_toggle(self):
+        since = len(self.h.events)
+        if not self.m.silenced:
+            self.h.sim.silence(harness.BOARD, True)
+            self.m.silenced = True
+            self.note("board silenced")
+            wait_until(lambda: self.h.diag and self.h.diag[1].message.startswith("offline"), 20,
+                       "/diagnostics to say the board is offline")
+        else:
+            self.h.sim.silence(harness.BOARD, False)
+            self.m.silenced = False
+            self.note("board answers again")
+            self.expect_event("restart", since, confirmed=True, timeout=15.0)
+            self.m.restored()
+        self.check("silence toggled")
+
+    @precondition(lambda self: self.m.node_running and not self.m.silenced)
+    @rule(burst=st.booleans())
+    def restart_node(self, burst):
+        sockets = []
+        before = None
+        if burst and "share_after_stop" not in self.m.known:
+            def before():
+                sockets.extend(self.share.burst_write_coil(0, 1, 5))
+        code = self.h.stop_node(signal.SIGINT, before)
+        for s in sockets:
+            s.close()
+        self.note("node stopped (SIGINT%s), exit %s" % (", after 5 share writes of pump on" if sockets else "", code))
+        if burst and sockets:
+            self.m.ch[0].values = set(BOTH)  # the share writes may have run before the stop
+        self.m.node_stopped(reached=True)
+        if code != 0:
+            fail("I4", "the node exited with %s on SIGINT:\n%s" % (code, self.h.output[-2000:]))
+        self.check("node stop")
+        # Flashes end before the next start (a flash ending under a new node is a restart).
+        wait_until(lambda: not self.m.flash_running(time.time()), 10, "running pulses to end")
+        self.h.beating.set()
+        since = len(self.h.events)
+        self.h.start_node()
+        self.m.node_started(time.time())
+        self.note("node started")
+        self.expect_event("start", since, confirmed=True)
+        self.check("node start")
