@@ -155,7 +155,7 @@ class LaunchFilesTest(unittest.TestCase):
         link = os.path.join(log_dir, "tty")
         sim = up.start_simulator(os.path.join(up.REPO, "config", "simulator.yaml"), link, log_dir)
         base = {"port": "/dev/null", "baud": 9600,
-                "devices": {"relays": {"type": "lc_relay8", "address": 255, "poll_rate": 5.0}}}
+                "devices": {"relays": {"type": "lc_relay8", "address": 8, "poll_rate": 5.0}}}
 
         def write(name, **changes):
             config = yaml.safe_load(yaml.safe_dump(base))

@@ -43,7 +43,7 @@ class RobotBagTest(unittest.TestCase):
     def test_record_and_plot_a_namespaced_bus_with_a_generic_device(self):
         templates = os.path.join(up.REPO, "config", "templates")
         devices = {
-            "relays": {"type": "lc_relay8", "address": 255, "poll_rate": 5.0,
+            "relays": {"type": "lc_relay8", "address": 8, "poll_rate": 5.0,
                        "outputs": ["pump", "valve", "lamp", "fan", "heater", "door_lock",
                                    "siren", "beacon"],
                        "safe_state": {"pump": "off"}, "command_timeout": {"pump": 1.0}},

@@ -17,7 +17,7 @@ from std_srvs.srv import SetBool
 import helpers
 
 NODE = "stopbus"
-LAMPS, PWM = "255", "1"
+LAMPS, PWM = "8", "1"
 
 
 def consecutive_failures(msg, device):
