@@ -42,8 +42,10 @@ TEST(ConfigMessages, SecondsAsPeopleWriteThem) {
             "heartbeat/timeout: 0.01 s is outside 0.05-3600 s");
   EXPECT_EQ(parseError(relays("", ", keep_alive: 0.05")),
             "keep_alive: 0.05 s is outside 0.1-3600 s");
-  EXPECT_EQ(parseError(relays("", ", shutdown_timeout: 61")),
-            "shutdown_timeout: 61 s is outside 0-60 s");
+  EXPECT_EQ(
+      parseError(relays("", ", shutdown_timeout: 10.5")),
+      "shutdown_timeout: 10.5 s is outside 0-10 s (roslaunch sends SIGTERM 15 s after SIGINT, "
+      "SIGKILL 2 s later; the bus thread's last transaction needs the rest)");
   EXPECT_EQ(parseError(relays("", ", diagnostic_period: 100")),
             "diagnostic_period: 100 s is outside 0.1-60 s");
   EXPECT_EQ(parseError(relays(", safe_state: off, command_timeout: 0.01")),
