@@ -98,9 +98,9 @@ void DeviceAdapter::checkRestart() {
   for (size_t i = 0; i < timed.size(); ++i) timed[i] = device_->outputSelfTimed(i);
   std::vector<uint8_t> changed;
   const auto verdict = failsafe_.observePoll(device_->outputs(), timed, was_offline, &changed);
-  // A share client or raw write changed outputs: "in their safe state" is no longer true, unless
-  // a trigger still holds some.
-  if (failsafe_.tookExternalWrite() && !failsafe_.anyHeldSafe()) endFailsafeState();
+  // A share client or raw write changed outputs: "in their safe state" (which names the channels
+  // the safe write set) is no longer true, as after a user's write.
+  if (failsafe_.tookExternalWrite()) endFailsafeState();
   if (failsafe_.safePending()) {
     bus_.submit(device_->name(), [this](Transport& t) {
       return writeAndReport(t, failsafe_.safeTargets(), "restart",
