@@ -11,7 +11,8 @@ cd "$WS"
 catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" tests
 rm -rf "$WS/build/test_results"
 # Everything used (Python modules, executables, headers the compiler read) comes from a package
-# on scripts/debian_packages.txt or its closure; and the check fails on the list of commit 7e1accc's predecessors (before python3-std-srvs, python3-diagnostic-msgs, rosbash and clang-format were listed).
+# on scripts/debian_packages.txt or its closure; and the check fails on an older list that lacked
+# python3-std-srvs, python3-diagnostic-msgs, rosbash and clang-format.
 DEPS_RESULTS=$WS/build/test_results/dependencies
 /usr/bin/python3 "$REPO/scripts/check_deps.py" "$WS" "$DEPS_RESULTS" || true
 /usr/bin/python3 "$REPO/scripts/check_deps.py" "$WS" "$DEPS_RESULTS" --name check_fails_on_old_list \
