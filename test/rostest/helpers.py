@@ -28,16 +28,17 @@ def free_port():
         return s.getsockname()[1]
 
 
-def wait_until(predicate, timeout, what):
-    """Polls predicate() until it is true; fails the calling test with `what` otherwise."""
+def wait_until(predicate, timeout, what, interval=0.05, error=AssertionError):
+    """Polls predicate() every `interval` s until it is true; raises `error` naming `what`
+    otherwise (an AssertionError fails the calling test)."""
     deadline = time.time() + timeout
     last = None
     while time.time() < deadline and not rospy.is_shutdown():
         last = predicate()
         if last:
             return last
-        time.sleep(0.05)
-    raise AssertionError("timed out after %.1f s waiting for %s (last: %r)" % (timeout, what, last))
+        time.sleep(interval)
+    raise error("timed out after %.1f s waiting for %s (last: %r)" % (timeout, what, last))
 
 
 class Latest:

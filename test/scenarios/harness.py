@@ -3,7 +3,6 @@ would), the simulator's control socket, the node's services, topics, share and d
 Every wait is for a condition, bounded by a deadline."""
 import os
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -23,6 +22,10 @@ from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
 
 from model import NAMES  # noqa: E402
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "rostest"))
+import helpers  # noqa: E402  (test/rostest/helpers.py)
+from helpers import free_port  # noqa: E402
+
 NODE = "scenbus"
 NS = "/" + NODE + "/"
 DEV = "relays"
@@ -34,20 +37,9 @@ class Timeout(AssertionError):
 
 
 def wait_until(predicate, timeout, what):
-    deadline = time.time() + timeout
-    last = None
-    while time.time() < deadline and not rospy.is_shutdown():
-        last = predicate()
-        if last:
-            return last
-        time.sleep(0.02)
-    raise Timeout("timed out after %.1f s waiting for %s (last: %r)" % (timeout, what, last))
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    # The rostests' wait, polled faster and raising Timeout, which the machine tells apart from
+    # an invariant's AssertionError.
+    return helpers.wait_until(predicate, timeout, what, interval=0.02, error=Timeout)
 
 
 class Harness:
