@@ -40,6 +40,8 @@ fi
 grep -v '^#' "$REPO/test/data/golden_frames.tsv" | tail -n +2 | cut -f4 | while read -r hex; do
   printf '%s' "$hex" | xxd -r -p >"$OUT/corpus/$(printf '%s' "$hex" | md5sum | cut -c1-12)"
 done || true
+# And with every input that once broke a target (test/fuzz/regressions), so it is run again.
+cp "$REPO"/test/fuzz/regressions/* "$OUT/corpus/"
 overall=0
 for name in fuzz_frames fuzz_slave fuzz_share; do
   status=0

@@ -22,7 +22,19 @@ void check(bool ok) {
 void serve(const Bytes& frame) {
   const auto request = decodeRequest(frame);
   if (!request) return;
-  if (request->validate().empty()) check(encodeRequest(*request) == frame);
+  // A well-formed request encodes back to its own frame, except that the unused bits of an
+  // FC15's last byte (the spec asks for zeros; real devices and libmodbus ignore them) are not
+  // kept: there, decoding the re-encoded frame gives the same request.
+  if (request->validate().empty()) {
+    const Bytes again = encodeRequest(*request);
+    if (request->function == FunctionCode::kWriteMultipleCoils) {
+      const auto reread = decodeRequest(again);
+      check(again.size() == frame.size() && reread && reread->values == request->values &&
+            reread->address == request->address && reread->slave == request->slave);
+    } else {
+      check(again == frame);
+    }
+  }
   // Built here, not through the simulator's registry (simulator_config.cpp): this target links
   // only the devices with a fixed register map (scripts/fuzz.sh).
   const uint8_t address = request->slave ? request->slave : 1;
