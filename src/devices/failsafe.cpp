@@ -1,6 +1,7 @@
 #include "modbus_rtu_driver/devices/failsafe.h"
 
 #include <chrono>
+#include <map>
 
 namespace modbus_rtu_driver {
 
@@ -91,6 +92,23 @@ OutputTargets FailsafeTracker::restoreTargets() const {
       t.channels.push_back(static_cast<uint8_t>(i));
       t.states.push_back(*written_[i]);
     }
+  }
+  return t;
+}
+
+OutputTargets FailsafeTracker::afterPollTargets(Verdict verdict) const {
+  std::map<uint8_t, bool> by_channel;
+  const auto put = [&by_channel](const OutputTargets& t) {
+    for (size_t i = 0; i < t.channels.size(); ++i) by_channel[t.channels[i]] = t.states[i];
+  };
+  if (verdict != Verdict::kNormal && config_.on_restart == OnRestart::kRestore)
+    put(restoreTargets());
+  if ((verdict != Verdict::kNormal && config_.on_restart == OnRestart::kSafe) || safePending())
+    put(safeTargets());
+  OutputTargets t;
+  for (const auto& [channel, state] : by_channel) {
+    t.channels.push_back(channel);
+    t.states.push_back(state);
   }
   return t;
 }

@@ -101,42 +101,39 @@ void DeviceAdapter::checkRestart() {
   // A share client or raw write changed outputs: "in their safe state" (which names the channels
   // the safe write set) is no longer true, as after a user's write.
   if (failsafe_.tookExternalWrite()) endFailsafeState();
-  if (failsafe_.safePending()) {
-    bus_.submit(device_->name(), [this](Transport& t) {
-      return writeAndReport(t, failsafe_.safeTargets(), "restart",
-                            "the device answers again; its safe state was not reached before",
-                            "safe");
-    });
-    return;
-  }
-  if (verdict == FailsafeTracker::Verdict::kNormal) return;
-  {
+  const bool pending = failsafe_.safePending();
+  if (verdict == FailsafeTracker::Verdict::kNormal && !pending) return;
+  std::string reason = "the device answers again; its safe state was not reached before";
+  std::string action = "safe";
+  if (verdict != FailsafeTracker::Verdict::kNormal) {
     std::lock_guard<std::mutex> lock(failsafe_mutex_);
     ++restarts_detected_;
+    reason = verdict == FailsafeTracker::Verdict::kCameBack
+                 ? "answered again after being offline"
+                 : "outputs " + join(device_->outputNames(), changed) +
+                       " changed with no command in between (power cycle?)";
+    const OnRestart policy = failsafe_.config().on_restart;
+    // With on_restart: leave, only the pending safe states are written: say so.
+    action = pending && policy == OnRestart::kLeave ? "safe" : onRestartName(policy);
   }
-  const std::string reason = verdict == FailsafeTracker::Verdict::kCameBack
-                                 ? "answered again after being offline"
-                                 : "outputs " + join(device_->outputNames(), changed) +
-                                       " changed with no command in between (power cycle?)";
-  const OnRestart policy = failsafe_.config().on_restart;
-  const OutputTargets targets = policy == OnRestart::kRestore ? failsafe_.restoreTargets()
-                                : policy == OnRestart::kSafe  ? failsafe_.safeTargets()
-                                                              : OutputTargets{};
+  const OutputTargets targets = failsafe_.afterPollTargets(verdict);
   if (targets.empty()) {
     FailsafeEvent e;
     e.header.stamp = ros::Time::now();
     e.device = device_->name();
     e.trigger = "restart";
     e.reason = reason;
-    e.action = onRestartName(policy);
+    e.action = action;
     e.confirmed = true;
     e.message = "outputs left as they are";
     report(e);
     return;
   }
-  const std::string action = onRestartName(policy);
-  bus_.submit(device_->name(), [this, targets, reason, action](Transport& t) {
-    return writeAndReport(t, targets, "restart", reason, action);
+  bus_.submit(device_->name(), [this, targets, reason, action, pending](Transport& t) {
+    const Result w = writeAndReport(t, targets, "restart", reason, action);
+    // The pending safe states were in this write: done when it is confirmed.
+    if (pending) failsafe_.setSafePending(!w.ok());
+    return w;
   });
 }
 

@@ -19,9 +19,6 @@ BOTH = frozenset((0, 1))
 # Known-defect switches (known_defects.txt): each relaxes the model or the drawing exactly where
 # an open defect of issue 24 makes the node differ from the spec. Removed once it is fixed.
 KNOWN = {
-    "restore_skipped_when_safe_pending": "found 2026-12-02 (seed 354232319): a device that "
-                                         "comes back with a safe write pending gets only the "
-                                         "safe states, not the restore of its other channels",
     "restore_after_failsafe": "issue 24 items 1-2: restore writes the last user states, "
                               "forgetting the fail-safe's",
     "share_write_seen_as_restart": "issue 24 item 3: a share write is undone as a restart",
@@ -171,13 +168,8 @@ class Model:
 
     def restored(self):
         """The device restarted and the node restored it (the board answers)."""
-        pending_any = any(c.pending_safe for c in self.ch)
         for i, c in enumerate(self.ch):
             values, why = self.restore_values(i)
-            if (pending_any and not (c.pending_safe or c.held) and
-                    "restore_skipped_when_safe_pending" in self.known):
-                values, why = set(BOTH), "known defect restore_skipped_when_safe_pending"
-                c.relaxed = True
             self._set(i, values, why)
             if c.pending_safe:
                 c.pending_safe, c.settled = False, True

@@ -270,3 +270,36 @@ TEST(FailsafeTracker, AnExternalWriteIsNotARestart) {
   EXPECT_EQ(t.observePoll({false, false}, {}, false, &changed),
             FailsafeTracker::Verdict::kOutputsChanged);
 }
+
+// Found by the scenario test (seed 354232319): a device that comes back while a safe write is
+// pending gets the restore of its other channels too, the pending safe states over it.
+TEST(FailsafeTracker, AfterPollARestoreIsNotSkippedForAPendingSafeWrite) {
+  FailsafeConfig config;
+  config.safe_state = {SafeState::kOff, SafeState::kHold, SafeState::kOn};
+  config.on_restart = OnRestart::kRestore;
+  FailsafeTracker t(config, 3);
+  t.confirmed({0, 1, 2}, {true, true, false}, FailsafeTracker::Writer::kUser);
+  t.setSafePending(true);  // the safe write found the device offline
+  const OutputTargets r = t.afterPollTargets(FailsafeTracker::Verdict::kCameBack);
+  EXPECT_EQ(r.channels, (std::vector<uint8_t>{0, 1, 2}));
+  EXPECT_EQ(r.states, (std::vector<bool>{false, true, true}));
+  // Still online (the safe write failed for another reason): the safe states only.
+  const OutputTargets s = t.afterPollTargets(FailsafeTracker::Verdict::kNormal);
+  EXPECT_EQ(s.channels, (std::vector<uint8_t>{0, 2}));
+  t.setSafePending(false);
+  EXPECT_TRUE(t.afterPollTargets(FailsafeTracker::Verdict::kNormal).empty());
+}
+
+TEST(FailsafeTracker, AfterPollEachOnRestartPolicy) {
+  const auto after = [](OnRestart policy) {
+    FailsafeConfig config;
+    config.safe_state = {SafeState::kOff, SafeState::kOn};
+    config.on_restart = policy;
+    FailsafeTracker t(config, 2);
+    t.confirmed({0, 1}, {true, false}, FailsafeTracker::Writer::kUser);
+    return t.afterPollTargets(FailsafeTracker::Verdict::kOutputsChanged).states;
+  };
+  EXPECT_EQ(after(OnRestart::kRestore), (std::vector<bool>{true, false}));
+  EXPECT_EQ(after(OnRestart::kSafe), (std::vector<bool>{false, true}));
+  EXPECT_TRUE(after(OnRestart::kLeave).empty());
+}

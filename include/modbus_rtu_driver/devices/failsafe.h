@@ -63,6 +63,10 @@ class FailsafeTracker {
   // a channel a trigger holds safe (holdSafe) gets its safe state instead. Channels never
   // written are left out.
   OutputTargets restoreTargets() const;
+  // What to write after a poll: on a restart (verdict other than kNormal), on_restart's targets;
+  // and a safe write not done yet (safePending) is done now, its states written over a
+  // restore's (the restore of the other channels is not skipped for it).
+  OutputTargets afterPollTargets(Verdict verdict) const;
 
   // Who made a confirmed write: a user's command (service, command topic) is a new command and
   // ends a hold; the fail-safe's own writes and restores do not.
