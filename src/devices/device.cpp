@@ -51,6 +51,20 @@ std::vector<CoilRun> coilRuns(const std::vector<uint8_t>& channels,
   return runs;
 }
 
+OutputTargets Device::outputsWrittenBy(const Request& request) const {
+  OutputTargets set;
+  if (request.function != FunctionCode::kWriteSingleCoil &&
+      request.function != FunctionCode::kWriteMultipleCoils)
+    return set;
+  for (size_t i = 0; i < request.values.size(); ++i) {
+    const size_t coil = request.address + i;
+    if (coil >= outputCount()) break;
+    set.channels.push_back(static_cast<uint8_t>(coil));
+    set.states.push_back(request.values[i] == 1);
+  }
+  return set;
+}
+
 Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                                 const std::vector<bool>& states) {
   const std::string problem = validateChannels(channels, states);

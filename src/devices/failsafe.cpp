@@ -144,9 +144,19 @@ void FailsafeTracker::release(uint8_t channel) {
   if (channel < channels_) held_safe_[channel] = false;
 }
 
-void FailsafeTracker::externalWrite() {
+void FailsafeTracker::externalWrite(const OutputTargets& set) {
   std::lock_guard<std::mutex> lock(mutex_);
   external_write_ = true;
+  for (size_t i = 0; i < set.channels.size() && i < set.states.size(); ++i) {
+    const uint8_t ch = set.channels[i];
+    if (ch >= channels_) continue;
+    // Even when the output was already in that state: the client commanded it.
+    written_[ch] = set.states[i];
+    confirmed_[ch] = set.states[i];
+    settled_[ch] = true;
+    held_safe_[ch] = false;
+    took_external_ = true;
+  }
 }
 
 void FailsafeTracker::observeWrite(const std::vector<bool>& outputs) {

@@ -72,9 +72,10 @@ void BusNode::checkDeadlines() {
   for (auto& a : adapters_) a->checkDeadlines();
 }
 
-void BusNode::externalWrite(uint8_t slave) {
+void BusNode::externalWrite(const Request& request) {
   for (auto& a : adapters_)
-    if (slave == kBroadcastAddress || a->address() == slave) a->externalWrite();
+    if (request.slave == kBroadcastAddress || a->address() == request.slave)
+      a->externalWrite(request);
 }
 
 void BusNode::shutdown() {
@@ -164,7 +165,7 @@ bool BusNode::start() {
   for (const DeviceConfig& dc : config_.devices)
     by_address[static_cast<uint8_t>(dc.address)] = dc.name;
   raw_writes_ = std::make_unique<RawWrites>(nh_, *bus_, config_.allow_raw_writes, by_address,
-                                            [this](uint8_t slave) { externalWrite(slave); });
+                                            [this](const Request& r) { externalWrite(r); });
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>();
   diagnostics_->setHardwareID(config_.link.port);
@@ -196,7 +197,7 @@ bool BusNode::start() {
   }
   if (config_.share.enabled) {
     share_ = std::make_unique<ShareBridge>(*bus_, config_,
-                                           [this](uint8_t slave) { externalWrite(slave); });
+                                           [this](const Request& r) { externalWrite(r); });
     if (!share_->start(&error)) {
       ROS_FATAL("share: %s", error.c_str());
       return false;

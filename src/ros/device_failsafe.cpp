@@ -178,8 +178,8 @@ void DeviceAdapter::report(const FailsafeEvent& e) {
   if (failsafe_sink_) failsafe_sink_(e);
 }
 
-void DeviceAdapter::externalWrite() {
-  failsafe_.externalWrite();
+void DeviceAdapter::externalWrite(const Request& request) {
+  failsafe_.externalWrite(device_->outputsWrittenBy(request));
 }
 
 void DeviceAdapter::endFailsafeState() {

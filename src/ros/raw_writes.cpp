@@ -3,7 +3,8 @@
 namespace modbus_rtu_driver {
 
 RawWrites::RawWrites(ros::NodeHandle& nh, BusScheduler& bus, bool allowed,
-                     std::map<uint8_t, std::string> devices, std::function<void(uint8_t)> wrote)
+                     std::map<uint8_t, std::string> devices,
+                     std::function<void(const Request&)> wrote)
     : bus_(bus), allowed_(allowed), devices_(std::move(devices)), wrote_(std::move(wrote)) {
   registers_srv_ = nh.advertiseService("write_registers", &RawWrites::onRegisters, this);
   coils_srv_ = nh.advertiseService("write_coils", &RawWrites::onCoils, this);
@@ -33,7 +34,7 @@ Result RawWrites::run(const Request& request) {
       .submit(owner,
               [this, request](Transport& t) {
                 Result r = t.execute(request);
-                if (r.ok() && wrote_) wrote_(request.slave);
+                if (r.ok() && wrote_) wrote_(request);
                 return r;
               })
       .get();

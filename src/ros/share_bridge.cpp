@@ -7,7 +7,7 @@
 namespace modbus_rtu_driver {
 
 ShareBridge::ShareBridge(BusScheduler& bus, const BusConfig& config,
-                         std::function<void(uint8_t)> wrote)
+                         std::function<void(const Request&)> wrote)
     : config_(config.share) {
   std::map<uint8_t, std::string> device_at;
   for (const DeviceConfig& d : config.devices) device_at[static_cast<uint8_t>(d.address)] = d.name;

@@ -259,7 +259,7 @@ TEST(FailsafeTracker, AnExternalWriteIsNotARestart) {
   t.observePoll({false, false}, {}, false, &changed);
   t.confirmed({0}, {false}, FailsafeTracker::Writer::kUser);
   t.holdSafe({1});
-  t.externalWrite();
+  t.externalWrite(OutputTargets{});  // a write through registers: seen at the next poll
   EXPECT_EQ(t.observePoll({false, true}, {}, false, &changed), FailsafeTracker::Verdict::kNormal);
   EXPECT_TRUE(changed.empty());
   EXPECT_FALSE(t.anyHeldSafe());  // the client's write is a new command
@@ -269,6 +269,43 @@ TEST(FailsafeTracker, AnExternalWriteIsNotARestart) {
   // Only the next poll: a later change with no write is a restart again.
   EXPECT_EQ(t.observePoll({false, false}, {}, false, &changed),
             FailsafeTracker::Verdict::kOutputsChanged);
+}
+
+// Found by the scenario test (seed 354232319): a share client's FC05 that sets an output to the
+// state it already had changes nothing a poll can see, yet it is a command a restore writes again.
+TEST(FailsafeTracker, AClientsCoilWriteIsRestoredEvenWhenItChangedNothing) {
+  FailsafeConfig config;
+  config.safe_state = {SafeState::kOff, SafeState::kHold};
+  config.on_restart = OnRestart::kRestore;
+  FailsafeTracker t(config, 2);
+  t.observePoll({false, true}, {}, false, nullptr);  // read at start, never commanded
+  EXPECT_TRUE(t.restoreTargets().empty());
+  DeviceConfig board;
+  board.address = 255;
+  const LcRelay8 relays(board);
+  t.externalWrite(relays.outputsWrittenBy(Request::writeSingleCoil(255, 1, true)));
+  EXPECT_TRUE(t.tookExternalWrite());
+  EXPECT_EQ(t.observePoll({false, true}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
+  // The board power-cycles: everything off, and the restore writes the client's command again.
+  EXPECT_EQ(t.observePoll({false, false}, {}, false, nullptr),
+            FailsafeTracker::Verdict::kOutputsChanged);
+  const OutputTargets r = t.afterPollTargets(FailsafeTracker::Verdict::kOutputsChanged);
+  EXPECT_EQ(r.channels, (std::vector<uint8_t>{1}));
+  EXPECT_EQ(r.states, (std::vector<bool>{true}));
+}
+
+TEST(Device, OutputsWrittenByACoilWrite) {
+  DeviceConfig board;
+  board.address = 255;
+  const LcRelay8 relays(board);
+  OutputTargets set =
+      relays.outputsWrittenBy(Request::writeMultipleCoils(255, 6, {true, false, true}));
+  EXPECT_EQ(set.channels, (std::vector<uint8_t>{6, 7}));  // coil 8 is not an output
+  EXPECT_EQ(set.states, (std::vector<bool>{true, false}));
+  EXPECT_TRUE(relays.outputsWrittenBy(Request::writeSingleRegister(255, 2, 1)).empty());
+  set = relays.outputsWrittenBy(Request::writeSingleCoil(255, 0, false));
+  EXPECT_EQ(set.channels, (std::vector<uint8_t>{0}));
+  EXPECT_EQ(set.states, (std::vector<bool>{false}));
 }
 
 // Found by the scenario test (seed 354232319): a device that comes back while a safe write is

@@ -57,7 +57,7 @@ class ShareGateway {
   // Called on the bus thread with the slave address when a client's write got its normal reply
   // (the device confirmed it; unit 0: sent), before any later job runs: the node's fail-safe
   // takes it as a command, not as a device restart. Before start().
-  void onWriteConfirmed(std::function<void(uint8_t)> wrote) { wrote_ = std::move(wrote); }
+  void onWriteConfirmed(std::function<void(const Request&)> wrote) { wrote_ = std::move(wrote); }
   int queued() const { return in_flight_.load(); }
 
  private:
@@ -66,7 +66,7 @@ class ShareGateway {
   BusScheduler& bus_;
   ShareConfig config_;
   std::function<std::string(uint8_t)> device_of_;
-  std::function<void(uint8_t)> wrote_;
+  std::function<void(const Request&)> wrote_;
   std::unique_ptr<ModbusTcpServer> server_;
   std::atomic<int> in_flight_{0};
 };

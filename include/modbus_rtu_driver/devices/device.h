@@ -76,6 +76,11 @@ class Device {
     return validateChannels(channels, states);
   }
 
+  // The outputs a client's confirmed write (a share client's, a raw write) set: FC05/FC15 on
+  // the coils 0..outputCount()-1, which are the outputs of every fixed-function type. What other
+  // writes do (a flash or PWM through registers) shows at the next poll.
+  OutputTargets outputsWrittenBy(const Request& request) const;
+
   // Last confirmed states (from a poll or a confirmed write); empty until known.
   const std::vector<bool>& outputs() const { return outputs_; }
   const std::vector<bool>& inputs() const { return inputs_; }

@@ -81,9 +81,10 @@ class FailsafeTracker {
   // A user's timed command (a pulse, a PWM run) on `channel` was confirmed: it ends the hold.
   void release(uint8_t channel);
   // Bus thread: a write the node carried for someone else (a share client, a raw write) was
-  // confirmed by the device's reply. The next poll takes the outputs it reads as written by a
-  // user (no restart is seen in them).
-  void externalWrite();
+  // confirmed by the device's reply. `set`: the outputs it set (a restore writes them again;
+  // they end a hold as a user's command does). The next poll takes any other change it reads
+  // as written by a user too (a flash through registers), not as a restart.
+  void externalWrite(const OutputTargets& set);
   // Whether the last poll took such a write's changes as commanded (asked once).
   bool tookExternalWrite();
   // Bus thread, after any write job (confirmed or not): the device's snapshot, read back where a

@@ -40,7 +40,7 @@ class BusNode {
   void startFailsafe();
   void checkDeadlines();
   // Bus thread: a share client's or raw write to `slave` (0: every device) was confirmed.
-  void externalWrite(uint8_t slave);
+  void externalWrite(const Request& request);
   uint64_t recentLineErrors(const LinkStats& stats);
   // realtime_priority and lock_memory: asked for here, their outcome shown in the diagnostics.
   BusScheduler::Options schedulingOptions();

@@ -62,7 +62,7 @@ class DeviceAdapter {
                                         const std::vector<uint8_t>& only = {});
   // Bus thread: a write to this device that the node carried for someone else (a share
   // client, a raw write) was confirmed by its reply; the fail-safe takes it as a command.
-  void externalWrite();
+  void externalWrite(const Request& request);
   // Timer (any thread): command deadlines that passed, this device's heartbeat.
   void checkDeadlines();
   // Whether the device has any safe state, and whether start-up puts it there.

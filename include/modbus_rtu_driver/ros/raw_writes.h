@@ -21,7 +21,7 @@ class RawWrites {
   // `devices`: address -> device name of the configured devices (their health applies).
   // `wrote(slave)`: on the bus thread, a raw write to `slave` was confirmed.
   RawWrites(ros::NodeHandle& nh, BusScheduler& bus, bool allowed,
-            std::map<uint8_t, std::string> devices, std::function<void(uint8_t)> wrote);
+            std::map<uint8_t, std::string> devices, std::function<void(const Request&)> wrote);
 
  private:
   bool onRegisters(WriteRegisters::Request& req, WriteRegisters::Response& res);
@@ -33,7 +33,7 @@ class RawWrites {
   BusScheduler& bus_;
   bool allowed_;
   std::map<uint8_t, std::string> devices_;
-  std::function<void(uint8_t)> wrote_;
+  std::function<void(const Request&)> wrote_;
   ros::ServiceServer registers_srv_, coils_srv_;
 };
 

@@ -16,7 +16,8 @@ namespace modbus_rtu_driver {
 class ShareBridge {
  public:
   // `wrote(slave)`: on the bus thread, a client's write to `slave` was confirmed.
-  ShareBridge(BusScheduler& bus, const BusConfig& config, std::function<void(uint8_t)> wrote);
+  ShareBridge(BusScheduler& bus, const BusConfig& config,
+              std::function<void(const Request&)> wrote);
   // Listens; false with the reason (address in use, ...).
   bool start(std::string* error);
   void stop();
