@@ -36,10 +36,19 @@ class Timeout(AssertionError):
     pass
 
 
+# Every error a step raised, in order: when a failing example does not fail again on its replay
+# (Hypothesis's Flaky), the first run's error is known only from here.
+errors = []
+
+
 def wait_until(predicate, timeout, what):
     # The rostests' wait, polled faster and raising Timeout, which the machine tells apart from
     # an invariant's AssertionError.
-    return helpers.wait_until(predicate, timeout, what, interval=0.02, error=Timeout)
+    try:
+        return helpers.wait_until(predicate, timeout, what, interval=0.02, error=Timeout)
+    except Timeout as e:
+        errors.append("timeout: %s" % e)
+        raise
 
 
 class Harness:
@@ -95,8 +104,9 @@ class Harness:
             pass
         if self.node.poll() is not None or not self._advertised():
             self.log.seek(0)
-            raise AssertionError("the node did not start (exit %s):\n%s"
-                                 % (self.node.poll(), self.log.read()[-3000:]))
+            errors.append("the node did not start (exit %s):\n%s"
+                          % (self.node.poll(), self.log.read()[-3000:]))
+            raise AssertionError(errors[-1])
         # The command topics are connected before a step publishes on them.
         for name, pub in self.commands.items():
             wait_until(lambda: pub.get_num_connections() > 0, 15, name + "/command subscribed")

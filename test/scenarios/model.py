@@ -54,7 +54,8 @@ class Channel:
         self.values = set(BOTH)   # allowed board values now
         self.flash = None         # a running pulse (overrides values while it runs)
         self.why = "unknown"      # the invariant the expectation comes from
-        self.settled = True       # false after a pulse until a plain write (failsafe.md)
+        self.settled = True       # false after a pulse until a plain write (failsafe.md);
+                                  # None: a restore may have written it
         self.restore = set(BOTH)  # what a restore may write (the last state confirmed)
         self.by_failsafe = False  # that state was written by a fail-safe trigger
         self.held = False         # a trigger holds it safe until commanded again
@@ -170,6 +171,8 @@ class Model:
         """The device restarted and the node restored it (the board answers)."""
         for i, c in enumerate(self.ch):
             values, why = self.restore_values(i)
+            if not c.settled:
+                c.settled = None  # the restore may have written it (the node compares it again)
             self._set(i, values, why)
             if c.pending_safe:
                 c.pending_safe, c.settled = False, True
@@ -183,9 +186,11 @@ class Model:
                 self._set(i, {0}, "power cycle of a silent device: all off")
             return False
         before = [set(self.allowed(i, now)) for i in range(len(NAMES))]
-        settled = [self.ch[i].settled and self.ch[i].flash is None for i in range(len(NAMES))]
-        sure = any(s and b == {1} for s, b in zip(settled, before))
-        maybe = any(s and 1 in b for s, b in zip(settled, before))
+        # settled None: a restore may have written the channel (then the node compares it) or not.
+        settled = [self.ch[i].settled if self.ch[i].flash is None else False
+                   for i in range(len(NAMES))]
+        sure = any(s is True and b == {1} for s, b in zip(settled, before))
+        maybe = any(s is not False and 1 in b for s, b in zip(settled, before))
         off = [{0} for _ in NAMES]
         for i in range(len(NAMES)):
             self.ch[i].flash = None
@@ -194,6 +199,7 @@ class Model:
             for i, (values, why) in enumerate(restored):
                 if not self.ch[i].settled:
                     values = set(BOTH)
+                    self.ch[i].settled = None  # the restore may have written it, or not
                 self._set(i, values if sure else values | off[i], why)
         else:
             for i in range(len(NAMES)):

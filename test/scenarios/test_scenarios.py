@@ -91,6 +91,9 @@ class ScenarioTest(unittest.TestCase):
             # unless an invariant failed (and a replay did not repeat it).
             if machine.Run.failures or time.time() < machine.Run.deadline:
                 failure = e
+                if harness.errors:  # what the first run raised (a replay did not repeat it)
+                    log("  last error of a step before the replay: %s" % harness.errors[-1])
+                    reported.append("last error of a step: %s" % harness.errors[-1])
         except Exception as e:  # the invariant that failed, reported with the seed below
             failure = e
         finally:
