@@ -240,6 +240,14 @@ class Model:
         if pending:
             self.restored()  # the pending safe writes, with on_restart's restore around them
             return True
+        if seen is False:
+            # Nothing compared was on, but polls that failed as the port went may have put the
+            # device offline: then it "answers again after being offline", a restart too
+            # (docs/failsafe.md), whose restore may write what a pulse left. Either is accepted.
+            for i in range(len(NAMES)):
+                values, why = self.restore_values(i)
+                self._set(i, values | {0}, why + ", or all off (no restart seen)")
+            return None
         return seen
 
     def node_stopped(self, reached):
