@@ -1,5 +1,6 @@
 """The real parts of a scenario: the bus node (started and stopped here, as a robot's launch
-would), the simulator's control socket, the node's services, topics, share and diagnostics.
+would), the simulator (started and stopped here too: stopping it takes its pty away, as an
+unplugged USB adapter), its control socket, the node's services, topics, share and diagnostics.
 Every wait is for a condition, bounded by a deadline."""
 import os
 import signal
@@ -25,6 +26,7 @@ from model import NAMES  # noqa: E402
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "rostest"))
 import helpers  # noqa: E402  (test/rostest/helpers.py)
 from helpers import free_port  # noqa: E402
+import user_paths  # noqa: E402  (test/rostest/user_paths.py: Process)
 
 NODE = "scenbus"
 NS = "/" + NODE + "/"
@@ -52,9 +54,17 @@ def wait_until(predicate, timeout, what):
 
 
 class Harness:
-    def __init__(self, sim_control, port, config_path):
-        self.sim = SimControl(sim_control)
-        wait_until(lambda: os.path.exists(sim_control), 20, "the simulator's control socket")
+    def __init__(self, sim_config, sim_control, port, log_dir, config_path):
+        self.sim_args = ["rosrun", "modbus_rtu_driver", "modbus_rtu_simulator", "--config",
+                         sim_config, "--link", port, "--control", sim_control]
+        self.sim_control = sim_control
+        self.port = port
+        self.log_dir = log_dir
+        os.makedirs(log_dir, exist_ok=True)  # scripts/scenarios.sh names a new one
+        self.sim_process = None
+        self.sim_starts = 0
+        self.sim = None
+        self.start_simulator()
         with open(config_path) as f:
             self.config = yaml.safe_load(f)
         self.config["port"] = port
@@ -65,6 +75,7 @@ class Harness:
         self.events = []
         self.polls = 0
         self.diag = None  # (time received, relays status)
+        self.bus_diag = None  # (time received, the bus's status: "port not open: ...", ...)
         rospy.Subscriber(NS + "failsafe", FailsafeEvent, self.events.append, queue_size=100)
         rospy.Subscriber(NS + DEV + "/outputs", DigitalStates, self._on_outputs, queue_size=100)
         rospy.Subscriber("/diagnostics", DiagnosticArray, self._on_diag, queue_size=100)
@@ -88,8 +99,44 @@ class Harness:
 
     def _on_diag(self, msg):
         for s in msg.status:
-            if s.name.split(": ", 1)[-1].endswith(DEV):
+            name = s.name.split(": ", 1)[-1]
+            if name.endswith(DEV):
                 self.diag = (msg.header.stamp.to_sec() or time.time(), s)
+            elif name == "bus " + self.port:
+                self.bus_diag = (msg.header.stamp.to_sec() or time.time(), s)
+
+    # --- the simulator: its pty is the node's port -------------------------------------------
+    def start_simulator(self):
+        """A new simulator on the same link and control socket: a new board, every output off
+        (no state file), as a board powered up again. Waits for its control socket (the old
+        one is removed when a simulator stops, so this is the new one)."""
+        if self.sim_process is not None and self.sim_process.running():
+            return
+        self.sim_starts += 1
+        self.sim_process = user_paths.Process(self.sim_args, self.log_dir,
+                                              "simulator%d" % self.sim_starts)
+        wait_until(lambda: os.path.exists(self.sim_control) and os.path.exists(self.port)
+                   or not self.sim_process.running(), 20, "the simulator's control socket")
+        if not self.sim_process.running():
+            raise AssertionError("the simulator did not start:\n" + self.sim_process.tail())
+        self.sim = SimControl(self.sim_control)  # a client of the new simulator's socket
+        wait_until(self._sim_answers, 10, "the simulator's control socket to answer")
+
+    def _sim_answers(self):
+        try:
+            self.sim.info()
+            return True
+        except OSError:
+            return False
+
+    def stop_simulator(self):
+        """The port goes away: the simulator stops and its pty and link with it."""
+        if self.sim_process is not None:
+            self.sim_process.stop()
+        self.sim = None
+
+    def simulator_running(self):
+        return self.sim_process is not None and self.sim_process.running()
 
     # --- the node ----------------------------------------------------------------------------
     def start_node(self):
@@ -148,6 +195,19 @@ class Harness:
     def wait_polls(self, n, timeout=5.0):
         target = self.polls + n
         wait_until(lambda: self.polls >= target, timeout, "%d polls of the node" % n)
+
+    def refused_unsent(self):
+        """The device's "writes refused unsent (port not open)" count, in its newest status."""
+        if not self.diag:
+            return 0
+        values = {v.key: v.value for v in self.diag[1].values}
+        return int(values.get("writes refused unsent (port not open)", 0))
+
+    def fresh_bus_status(self, predicate, timeout, what):
+        """A /diagnostics status of the bus newer than now for which `predicate` holds."""
+        since = time.time()
+        return wait_until(lambda: self.bus_diag[1] if self.bus_diag and self.bus_diag[0] > since
+                          and predicate(self.bus_diag[1]) else None, timeout, what)
 
     def fresh_diagnostics(self, timeout=5.0):
         since = time.time()

@@ -1,6 +1,8 @@
 """The Hypothesis state machine: random sequences of what a robot meets, run on the real node
 and the simulator; after each step the board (the simulator's coils) is checked against the
-model (model.py) and the node's claims against the board."""
+model (model.py) and the node's claims against the board. While the port is gone (the
+simulator stopped) there is no board: the steps then check the node's answers, and the board is
+checked again once a new simulator is there."""
 import signal
 import time
 
@@ -21,6 +23,9 @@ from share_client import ShareClient, ShareError
 
 CHANNELS = st.integers(0, 7)
 NOT_DEAD_MAN = st.sampled_from([i for i in range(8) if i != DEAD_MAN])
+# What may meet the node while its port is gone (port_lost_and_back); "heartbeat" toggles it.
+WHILE_PORT_GONE = ["set", "set_outputs", "command", "pulse", "share_write", "share_read",
+                   "heartbeat"]
 
 
 class InvariantFailed(AssertionError):
@@ -66,6 +71,7 @@ class Scenario(RuleBasedStateMachine):
         Run.examples += 1
         self.note("example %d: board %s, node starts (on_start: safe)" % (Run.examples, coils))
         self.h.stop_node()
+        self.h.start_simulator()  # an earlier example may have ended with the port gone
         self.h.beating.set()
         self.h.sim.silence(harness.BOARD, False)
         self.h.sim.power_cycle()
@@ -95,6 +101,7 @@ class Scenario(RuleBasedStateMachine):
     def teardown(self):
         if self.started:
             self.h.stop_node()
+            self.h.start_simulator()
             self.h.beating.set()
             self.h.sim.silence(harness.BOARD, False)
 
@@ -109,28 +116,40 @@ class Scenario(RuleBasedStateMachine):
         """The board matches the model (bounded wait for the node's writes to land), and still
         does after two more polls (nothing undoes it)."""
         Run.steps += 1
+        if self.m.port_gone:
+            return  # no board to compare: the next check after the port is back does
         for phase in ("settle", "stable"):
             try:
                 wait_until(lambda: not self.board_mismatch()[1], 4.0, "the board to match")
             except Timeout:
                 coils, bad = self.board_mismatch()
                 now = time.time()
-                text = "; ".join("%s is %d, expected %s by %s" % (
-                    NAMES[i], v, sorted(self.m.allowed(i, now)), self.m.ch[i].why) for i, v in bad)
-                invariant = self.m.ch[bad[0][0]].why.split(" ")[0]
+                text = "; ".join("%s is %d, expected %s by %s%s" % (
+                    NAMES[i], v, sorted(self.m.allowed(i, now)), self.m.ch[i].why,
+                    self.refused_text(i, v)) for i, v in bad)
+                first = bad[0][0]
+                refused = self.m.ch[first].refused
+                invariant = ("I2" if refused and refused[0] == bad[0][1]
+                             else self.m.ch[first].why.split(" ")[0])
                 fail(invariant, "after %s (%s): board %s: %s" % (step, phase, coils, text))
-            if phase == "settle" and self.m.node_running and not self.m.silenced:
+            if phase == "settle" and self.m.node_running and not self.m.unreachable():
                 self.h.wait_polls(2)
         self.m.settle_flashes(time.time())
         if self.m.node_running:
             self.check_diagnostics(step)
 
+    def refused_text(self, i, value):
+        refused = self.m.ch[i].refused
+        if refused and refused[0] == value:
+            return " (I2: %s answered success:false earlier)" % refused[1]
+        return ""
+
     def check_diagnostics(self, step):
         """I6: a device status claiming 'outputs in their safe state' must be true on the board."""
         if self.m.flash_running(time.time()):
             return
-        if self.m.silenced:
-            return  # nothing to confirm on a silent board; the status says offline
+        if self.m.unreachable():
+            return  # nothing to confirm on a silent board or a lost port; the status says so
         status = self.h.fresh_diagnostics()
         claim = status.message.split("outputs in their safe state", 1)
         if len(claim) < 2 or "NOT confirmed" in claim[1]:
@@ -160,12 +179,19 @@ class Scenario(RuleBasedStateMachine):
                                                                   confirmed, e.message))
         return e
 
+    def refused_while_port_gone(self, what, ok):
+        """docs/failsafe.md, port lost: the node cannot write anything, so no write may answer
+        success while the port is gone (there is no board to confirm it)."""
+        if ok and self.m.port_gone:
+            fail("I1", "%s answered success:true while the port is gone (no board)" % what)
+
     # --- service writes, topics, pulses ------------------------------------------------------
     @precondition(lambda self: self.m.node_running)
     @rule(ch=CHANNELS, state=st.integers(0, 1))
     def set_one(self, ch, state):
         res = rospy.ServiceProxy(NS + DEV + "/" + NAMES[ch] + "/set", SetBool)(bool(state))
         self.note("%s/set %d -> %s %s" % (NAMES[ch], state, res.success, res.message))
+        self.refused_while_port_gone("%s/set %d" % (NAMES[ch], state), res.success)
         self.m.user_write([ch], [state], res.success, "%s/set %d" % (NAMES[ch], state))
         self.check("set %s %d" % (NAMES[ch], state))
 
@@ -174,11 +200,15 @@ class Scenario(RuleBasedStateMachine):
           states=st.lists(st.integers(0, 1), min_size=3, max_size=3))
     def set_outputs(self, chs, states):
         chs, states = sorted(chs), states[:len(chs)]
-        before = self.h.sim.stats(harness.BOARD)["changes"]
+        port_gone = self.m.port_gone
+        before = None if port_gone else self.h.sim.stats(harness.BOARD)["changes"]
         res = rospy.ServiceProxy(NS + DEV + "/set_outputs", SetOutputs)(chs, [bool(s) for s in states])
         self.note("set_outputs %s %s -> %s %s" % (chs, states, res.success, res.message))
+        self.refused_while_port_gone("set_outputs %s %s" % (chs, states), res.success)
         self.m.user_write(chs, states, res.success, "set_outputs %s %s" % (chs, states))
         self.check("set_outputs %s %s" % (chs, states))
+        if port_gone:
+            return
         changes = self.h.sim.stats(harness.BOARD)["changes"] - before
         if changes > len(chs) and not self.m.flash_running(time.time()):
             fail("I5", "set_outputs of %d channels made %d changes on the board" % (len(chs), changes))
@@ -188,6 +218,8 @@ class Scenario(RuleBasedStateMachine):
     def command(self, ch, state):
         # No answer tells when a topic command is done: a pulse still running on the channel
         # could end after the board showed the command. Let it end first.
+        if self.m.port_gone:
+            return self.command_while_port_gone(ch, state)
         flash = self.m.ch[ch].flash
         if flash is not None:
             wait_until(lambda: time.time() > flash.done_after, 10, "the pulse on the channel to end")
@@ -204,7 +236,21 @@ class Scenario(RuleBasedStateMachine):
             fail("I1", "%s/command %d never reached the board" % (NAMES[ch], state))
         self.check("command %s %d" % (NAMES[ch], state))
 
-    @precondition(lambda self: self.m.node_running and not self.m.silenced)
+    def command_while_port_gone(self, ch, state):
+        """A topic command while the port is gone is refused unsent (docs/share.md's `writes
+        refused unsent`): it must never reach the board later (I2)."""
+        before = self.h.refused_unsent()
+        self.h.commands[NAMES[ch]].publish(Bool(bool(state)))
+        self.note("%s/command %d (port gone)" % (NAMES[ch], state))
+        try:
+            wait_until(lambda: self.h.refused_unsent() > before, 10,
+                       "the command refused unsent (/diagnostics of %s)" % DEV)
+        except Timeout as t:
+            fail("I2", "%s/command %d while the port is gone: %s" % (NAMES[ch], state, t))
+        self.m.user_write([ch], [state], False, "%s/command %d" % (NAMES[ch], state))
+        self.check("command %s %d" % (NAMES[ch], state))
+
+    @precondition(lambda self: self.m.node_running and not self.m.unreachable())
     @rule()
     def dead_man(self):
         """The valve turned on by its command topic and left: off after command_timeout."""
@@ -226,6 +272,7 @@ class Scenario(RuleBasedStateMachine):
         answered = time.time()
         self.note("pulse %s %d %.1f s -> %s %s" % (NAMES[ch], state, tenths / 10.0, res.success,
                                                    res.message))
+        self.refused_while_port_gone("pulse %s %d" % (NAMES[ch], state), res.success)
         self.m.pulse(ch, state, res.success, sent, answered, tenths / 10.0)
         self.check("pulse %s %d" % (NAMES[ch], state))
 
@@ -245,11 +292,16 @@ class Scenario(RuleBasedStateMachine):
             coils = self.share.read_coils(0, 8)
         except ShareError as e:
             self.note("share FC01 -> %s" % e)
-            if not self.m.silenced:
+            if not self.m.unreachable():
                 fail("I6", "share FC01 of an answering board failed: %s" % e)
+            if self.m.port_gone and e.code != 0x0A:
+                fail("I6", "share FC01 while the port is gone: %s, docs/share.md says "
+                     "exception 0A (gateway path unavailable)" % e)
             return
         now = time.time()
         self.note("share FC01 -> %s" % coils)
+        if self.m.port_gone:
+            fail("I6", "the share read %s while the port is gone (no board)" % coils)
         self.m.settle_flashes(now)
         bad = [NAMES[i] for i in range(8) if coils[i] not in self.m.allowed(i, now)
                and self.m.ch[i].flash is None]
@@ -268,6 +320,7 @@ class Scenario(RuleBasedStateMachine):
         except ShareError as e:
             ok, text = False, str(e)
         self.note("share FC05 %s %d -> %s" % (NAMES[ch], state, text))
+        self.refused_while_port_gone("share FC05 %s %d" % (NAMES[ch], state), ok)
         self.m.user_write([ch], [state], ok, "share FC05 %s %d" % (NAMES[ch], state))
         self.check("share write %s %d" % (NAMES[ch], state))
 
@@ -278,7 +331,7 @@ class Scenario(RuleBasedStateMachine):
         since = len(self.h.events)
         self.h.beating.clear()
         self.note("heartbeat stops")
-        e = self.expect_event("heartbeat", since, confirmed=not self.m.silenced, timeout=15.0)
+        e = self.expect_event("heartbeat", since, confirmed=not self.m.unreachable(), timeout=15.0)
         wrong = [(c, s) for c, s in zip(e.channels, e.states)
                  if NAMES.index(c) not in SAFE or SAFE[NAMES.index(c)] != int(s)]
         if wrong:
@@ -295,12 +348,12 @@ class Scenario(RuleBasedStateMachine):
         # The node shows no sign of a heartbeat back: a few messages on a connected topic.
         wait_until(lambda: self.h.beats >= beats + 3 and self.h.alive.get_num_connections() > 0,
                    5, "heartbeats published to the node")
-        if not self.m.silenced:
+        if not self.m.unreachable():
             self.h.wait_polls(3)
         self.m.heartbeat_back()
         self.check("heartbeat back")
 
-    @precondition(lambda self: self.m.node_running)
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone)
     @rule()
     def power_cycle(self):
         since = len(self.h.events)
@@ -313,7 +366,7 @@ class Scenario(RuleBasedStateMachine):
                 fail("I6", "restart event with action %r, on_restart is restore" % e.action)
         self.check("power cycle")
 
-    @precondition(lambda self: self.m.node_running)
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone)
     @rule()
     def silence_toggle(self):
         since = len(self.h.events)
@@ -331,7 +384,7 @@ class Scenario(RuleBasedStateMachine):
             self.m.restored()
         self.check("silence toggled")
 
-    @precondition(lambda self: self.m.node_running and not self.m.silenced)
+    @precondition(lambda self: self.m.node_running and not self.m.unreachable())
     @rule(burst=st.booleans())
     def restart_node(self, burst):
         sockets = []
@@ -359,3 +412,84 @@ class Scenario(RuleBasedStateMachine):
         self.expect_event("start", since, confirmed=True)
         self.heartbeat_at_start(since)
         self.check("node start")
+
+    # --- the port: lost (USB adapter pulled) and back ----------------------------------------
+    @precondition(lambda self: self.m.node_running)
+    @rule(data=st.data())
+    def port_lost_and_back(self, data):
+        """The port goes away, up to 4 events meet the node meanwhile (writes, commands,
+        pulses, share requests, the heartbeat lost or back), and it comes back. One rule, so
+        that every loss is followed by a return within the example (two rules drawn uniformly
+        among a dozen left most examples ending with the port gone)."""
+        self.port_lost(data.draw(st.one_of(st.none(), st.tuples(CHANNELS, st.integers(0, 1))),
+                                 label="write at once"))
+        for event in data.draw(st.lists(st.sampled_from(WHILE_PORT_GONE), max_size=4),
+                               label="while the port is gone"):
+            if event == "set":
+                self.set_one(*data.draw(st.tuples(CHANNELS, st.integers(0, 1)), label="set"))
+            elif event == "set_outputs":
+                self.set_outputs(data.draw(st.lists(CHANNELS, min_size=2, max_size=3, unique=True),
+                                           label="channels"),
+                                 data.draw(st.lists(st.integers(0, 1), min_size=3, max_size=3),
+                                           label="states"))
+            elif event == "command":
+                self.command(data.draw(NOT_DEAD_MAN, label="channel"),
+                             data.draw(st.integers(0, 1), label="state"))
+            elif event == "pulse":
+                self.pulse(data.draw(CHANNELS, label="channel"),
+                           data.draw(st.integers(0, 1), label="state"),
+                           data.draw(st.integers(15, 40), label="tenths"))
+            elif event == "share_write":
+                if "share_write_seen_as_restart" in self.m.known:
+                    continue
+                self.share_write(data.draw(CHANNELS, label="channel"),
+                                 data.draw(st.integers(0, 1), label="state"))
+            elif event == "share_read":
+                self.share_read()
+            elif self.h.beating.is_set():
+                self.heartbeat_lost()
+            else:
+                self.heartbeat_back()
+        self.port_back()
+
+    def port_lost(self, write):
+        """The simulator stops: its pty and link go away, as an unplugged USB adapter
+        (test/rostest/test_recoveries.py test_4). The node must say "port not open" on the bus's
+        /diagnostics; a write tried at once must fail and never reach the board later."""
+        self.h.stop_simulator()
+        self.m.port_lost()
+        self.note("port lost (simulator stopped)")
+        try:
+            status = self.h.fresh_bus_status(lambda s: s.message.startswith("port not open"),
+                                             20, "the bus's /diagnostics to say port not open")
+        except Timeout as t:
+            fail("port", "after the port went away: %s; last bus status: %s"
+                 % (t, self.h.bus_diag[1].message if self.h.bus_diag else None))
+        self.note("bus: %s" % status.message)
+        if write is not None:
+            self.set_one(*write)
+        else:
+            self.check("port lost")
+
+    def port_back(self):
+        """A new simulator on the same link and control socket: a new board, every output off.
+        The node reopens the port (docs/failsafe.md: with backoff) and compares the outputs at
+        the next poll: a restart if they changed (or safe writes were pending), restored."""
+        since = len(self.h.events)
+        self.h.start_simulator()
+        seen = self.m.port_back(time.time())
+        self.note("port back (new simulator, board all off; restart to be seen: %s)" % seen)
+        try:
+            self.h.fresh_bus_status(lambda s: not s.message.startswith("port not open"), 40,
+                                    "the bus's /diagnostics to say the port is open again")
+        except Timeout as t:
+            fail("port", "the node did not reopen the port: %s; last bus status: %s"
+                 % (t, self.h.bus_diag[1].message if self.h.bus_diag else None))
+        if seen:
+            e = self.expect_event("restart", since, confirmed=True, timeout=30.0)
+            self.note("restart event: %s" % e.message)
+            if e.action != "restore":
+                fail("I6", "restart event with action %r, on_restart is restore" % e.action)
+        else:
+            self.h.wait_polls(3, timeout=30.0)
+        self.check("port back")

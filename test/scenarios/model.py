@@ -9,6 +9,10 @@ Invariants (issue 24, "Prove it by randomized scenarios"):
   I4 after a node stop, every output with a safe state is in it
   I5 no write touches a channel it was not asked to
   I6 what /diagnostics and ~failsafe claim matches the board
+and docs/failsafe.md's "port lost" row: the node reports the port not open, cannot write
+anything meanwhile (a write answers success:false, I2), and once the port is back compares the
+outputs at the next poll: a restart (on_restart: restore) when they changed, and pending safe
+writes done with a restart event.
 """
 
 NAMES = ["pump", "fan", "lamp", "valve", "out4", "out5", "out6", "out7"]
@@ -62,6 +66,7 @@ class Channel:
         self.pending_safe = False  # a safe write failed: written when the device answers
         self.commanded_in_loss = False
         self.relaxed = False      # a known defect leaves its state open (known_defects.txt)
+        self.refused = None       # the state a write answered success:false asked for (I2)
 
 
 class Model:
@@ -70,7 +75,12 @@ class Model:
         self.ch = [Channel() for _ in NAMES]
         self.heartbeat_lost = False
         self.silenced = False
+        self.port_gone = False  # the simulator stopped: no board, no pty (USB adapter pulled)
         self.node_running = False
+
+    def unreachable(self):
+        """Nothing the node writes reaches the board: it is silent, or the port is gone."""
+        return self.silenced or self.port_gone
 
     # --- what the board may show -------------------------------------------------------------
     def allowed(self, i, now):
@@ -97,11 +107,13 @@ class Model:
     def user_write(self, channels, states, ok, why):
         """A service, topic or share write of `channels`; ok: answered success (or seen done)."""
         if not ok:
-            for i in channels:
+            for i, s in zip(channels, states):
                 self.ch[i].why = "I2 (%s answered success:false: must never reach the board)" % why
+                self.ch[i].refused = (s, why)
             return
         for i, s in zip(channels, states):
             c = self.ch[i]
+            c.refused = None
             self._set(i, {s}, "I1 (%s answered success:true)" % why)
             c.settled, c.restore, c.by_failsafe, c.held, c.pending_safe = True, {s}, False, False, False
             c.commanded_in_loss = self.heartbeat_lost
@@ -120,6 +132,7 @@ class Model:
             self.ch[i].why = "I2 (pulse answered success:false: must never reach the board)"
             return
         c = self.ch[i]
+        c.refused = None
         c.flash = Flash(state, sent, answered, duration)
         c.why = "I5 (pulse answered success:true: it ends by itself unless its channel is written)"
         c.settled, c.restore, c.by_failsafe, c.held, c.pending_safe = False, set(BOTH), False, False, False
@@ -129,14 +142,15 @@ class Model:
         """Safe states written by a trigger (heartbeat, command timeout, start, stop)."""
         for i in channels:
             c = self.ch[i]
-            if self.silenced:
+            c.refused = None
+            if self.unreachable():
                 c.pending_safe = True
                 c.why = "%s (safe write pending: the device is silent)" % why
             else:
                 self._set(i, {SAFE[i]}, why)
                 c.settled = True
             c.restore, c.by_failsafe, c.held, c.commanded_in_loss = {SAFE[i]}, True, hold, False
-        if "span_rewrites_between" in self.known and not self.silenced:
+        if "span_rewrites_between" in self.known and not self.unreachable():
             self._span_may_rewrite(min(channels), max(channels), channels)
 
     def heartbeat_lost_event(self):
@@ -205,6 +219,42 @@ class Model:
             for i in range(len(NAMES)):
                 self._set(i, {0}, "power cycle with nothing on: all off, no restart seen")
         return True if sure else (None if maybe else False)
+
+    def port_lost(self):
+        """The port went away (the simulator stopped with its pty: a USB adapter pulled).
+        docs/failsafe.md: the node cannot write anything; a safe write asked for meanwhile
+        fails and stays pending. The values kept are the board's when it went: what the node
+        saw last, which port_back compares the new board with."""
+        self.port_gone = True
+
+    def port_back(self, now):
+        """The port is back with a new simulator: a new board, every relay off (a power cycle;
+        a silenced board answers again, the silence went with the old simulator).
+        docs/failsafe.md: the node reopens the port and compares the outputs at the next poll,
+        restart handling if they changed (on_restart: restore); a pending safe write is written
+        when the device answers again, then a restart event. A device the node had offline
+        answers again: a restart. Returns as power_cycle: True when a restart must be seen,
+        None when that is uncertain, False when none needs to be."""
+        self.port_gone = False
+        pending = any(c.pending_safe for c in self.ch)
+        if self.silenced:
+            self.power_cycle(now)  # all off, nothing restored yet: the board is silent
+            self.silenced = False
+            self.restored()        # it answers again after being offline: a restart
+            return True
+        seen = self.power_cycle(now)
+        if pending:
+            self.restored()  # the pending safe writes, with on_restart's restore around them
+            return True
+        if seen is False:
+            # Nothing compared was on, but polls that failed as the port went may have put the
+            # device offline: then it "answers again after being offline", a restart too
+            # (docs/failsafe.md), whose restore may write what a pulse left. Either is accepted.
+            for i in range(len(NAMES)):
+                values, why = self.restore_values(i)
+                self._set(i, values | {0}, why + ", or all off (no restart seen)")
+            return None
+        return seen
 
     def node_stopped(self, reached):
         if reached:

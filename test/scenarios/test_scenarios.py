@@ -1,6 +1,12 @@
 #!/usr/bin/env python3
 """Randomized fail-safe scenarios (issue 24) on the real node and the simulator, as a rostest.
 
+The events (machine.py): service writes, command topics, the valve's dead man, pulses, share
+reads and writes, heartbeat lost and back, board power cycles, a silenced board, port loss and
+return (the test stops the simulator: its pty goes away, as an unplugged USB adapter; a new one
+comes back on the same link), node stop and start. The board is checked against model.py
+(written from docs/failsafe.md) after each step; test/scenarios/KNOWN.md lists the invariants.
+
 Parameters (scenarios.test passes them): ~seed (0: draw one and print it), ~seconds (budget:
 examples start until it is spent), ~steps (steps per example), ~shrink (shrink a failure to its
 shortest sequence: slow, every step is real), ~known_defects (comma list, see known_defects.txt;
@@ -60,8 +66,10 @@ class ScenarioTest(unittest.TestCase):
         steps = int(rospy.get_param("~steps", 12))
         shrink = bool(rospy.get_param("~shrink", False))
         machine.Run.known = known_defects(rospy.get_param("~known_defects", ""))
-        machine.Run.harness = harness.Harness(rospy.get_param("~sim_control"),
+        machine.Run.harness = harness.Harness(rospy.get_param("~sim_config"),
+                                              rospy.get_param("~sim_control"),
                                               rospy.get_param("~port"),
+                                              rospy.get_param("~log_dir"),
                                               os.path.join(HERE, "bus.yaml"))
         machine.Run.deadline = time.time() + seconds
         machine.Run.log = log
@@ -99,6 +107,7 @@ class ScenarioTest(unittest.TestCase):
         finally:
             if machine.Run.harness.node is not None:
                 machine.Run.harness.stop_node()
+            machine.Run.harness.stop_simulator()
         for note in getattr(failure, "__notes__", []):  # Hypothesis's listing of the steps
             log(note)
         log("SCENARIOS seed %d: %d examples, %d steps in %.0f s, %s"
