@@ -8,10 +8,4 @@ const DeviceDescriptor* findDeviceType(const std::string& name) {
   return nullptr;
 }
 
-std::vector<std::string> deviceTypeNames() {
-  std::vector<std::string> names;
-  for (const DeviceDescriptor* t : kDeviceTypes) names.emplace_back(t->name);
-  return names;
-}
-
 }  // namespace modbus_rtu_driver

@@ -53,7 +53,7 @@ inline Clock& Clock::steady() {
 }
 
 // Time stands still until advance()/advanceTo(). A thread in waitUntil is "asleep" until its
-// deadline is reached or its condition variable is notified through notifyAll(); sleepers(),
+// deadline is reached or its condition variable is notified through notifyAll();
 // nextDeadline() and awaitSleepers() let a test wait until the bus thread is idle and then move
 // time straight to when it wakes.
 class ManualClock : public Clock {
@@ -112,12 +112,6 @@ class ManualClock : public Clock {
       { std::lock_guard<std::mutex> g(*s.mutex); }  // the sleeper is inside cv.wait now
       s.cv->notify_all();
     }
-  }
-
-  // Threads asleep in waitUntil (their deadline still ahead, not notified since).
-  size_t sleepers() const {
-    std::lock_guard<std::mutex> g(m_);
-    return sleepers_.size();
   }
 
   // The earliest deadline of the sleepers; time_point::max() when none has one.

@@ -47,6 +47,5 @@ inline constexpr const DeviceDescriptor* kDeviceTypes[] = {&kLd58a08Type, &kLcRe
 
 // Null for a name that is not a built-in type.
 const DeviceDescriptor* findDeviceType(const std::string& name);
-std::vector<std::string> deviceTypeNames();
 
 }  // namespace modbus_rtu_driver

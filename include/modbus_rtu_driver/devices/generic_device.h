@@ -69,7 +69,6 @@ class GenericDevice : public Device {
 
   // Merged spans split after exception 02 or 03, in words (diagnostics).
   const std::vector<std::string>& splits() const { return planner_.splits(); }
-  size_t spansPerPoll(size_t group) const { return planner_.plan(groups_[group].signals).size(); }
 
  private:
   // Reads one span; false when the device did not answer (the rest of the poll is skipped).
