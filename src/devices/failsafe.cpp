@@ -116,6 +116,7 @@ OutputTargets FailsafeTracker::afterPollTargets(Verdict verdict) const {
 void FailsafeTracker::confirmed(const std::vector<uint8_t>& channels,
                                 const std::vector<bool>& states, Writer writer) {
   std::lock_guard<std::mutex> lock(mutex_);
+  write_during_poll_ = true;
   for (size_t i = 0; i < channels.size() && i < states.size(); ++i) {
     const uint8_t ch = channels[i];
     if (ch >= channels_) continue;
@@ -144,9 +145,15 @@ void FailsafeTracker::release(uint8_t channel) {
   if (channel < channels_) held_safe_[channel] = false;
 }
 
+void FailsafeTracker::pollStarting() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  write_during_poll_ = false;
+}
+
 void FailsafeTracker::externalWrite(const OutputTargets& set) {
   std::lock_guard<std::mutex> lock(mutex_);
   external_write_ = true;
+  write_during_poll_ = true;
   for (size_t i = 0; i < set.channels.size() && i < set.states.size(); ++i) {
     const uint8_t ch = set.channels[i];
     if (ch >= channels_) continue;
@@ -161,12 +168,14 @@ void FailsafeTracker::externalWrite(const OutputTargets& set) {
 
 void FailsafeTracker::observeWrite(const std::vector<bool>& outputs) {
   std::lock_guard<std::mutex> lock(mutex_);
+  write_during_poll_ = true;
   for (size_t i = 0; i < channels_ && i < outputs.size(); ++i) confirmed_[i] = outputs[i];
 }
 
 void FailsafeTracker::selfTimed(uint8_t channel) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (channel < channels_) settled_[channel] = false;
+  write_during_poll_ = true;
 }
 
 FailsafeTracker::Verdict FailsafeTracker::observePoll(const std::vector<bool>& outputs,
@@ -175,6 +184,11 @@ FailsafeTracker::Verdict FailsafeTracker::observePoll(const std::vector<bool>& o
                                                       std::vector<uint8_t>* changed) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (changed) changed->clear();
+  if (write_during_poll_) {
+    // What it read may predate that write: neither a restart nor the new confirmed states.
+    write_during_poll_ = false;
+    return was_offline ? Verdict::kCameBack : Verdict::kNormal;
+  }
   const bool adopt = external_write_;  // someone else's confirmed write: not a restart
   external_write_ = false;
   bool differs = false;

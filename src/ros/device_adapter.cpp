@@ -49,7 +49,11 @@ void DeviceAdapter::addPolls() {
   auto device = device_;
   bus_.addPoll(
       device_->name(), device_->config().poll_rate,
-      [device](Transport& t) { return device->poll(t); }, [this](const Result& r) { onPoll(r); });
+      [this, device](Transport& t) {
+        failsafe_.pollStarting();
+        return device->poll(t);
+      },
+      [this](const Result& r) { onPoll(r); });
 }
 
 void DeviceAdapter::onPoll(const Result& result) {

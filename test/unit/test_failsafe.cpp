@@ -120,19 +120,24 @@ TEST(FailsafeTracker, APollThatDiffersWithNoCommandIsARestart) {
   FailsafeTracker t(FailsafeConfig{}, 4);
   std::vector<uint8_t> changed;
   // The first poll only learns the states.
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({true, false, true, false}, {}, false, &changed),
             FailsafeTracker::Verdict::kNormal);
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({true, false, true, false}, {}, false, &changed),
             FailsafeTracker::Verdict::kNormal);
   // A confirmed write moves the expectation: no restart.
   t.confirmed({1}, {true}, FailsafeTracker::Writer::kUser);
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({true, true, true, false}, {}, false, &changed),
             FailsafeTracker::Verdict::kNormal);
   // A power cycle turns everything off.
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({false, false, false, false}, {}, false, &changed),
             FailsafeTracker::Verdict::kOutputsChanged);
   EXPECT_EQ(changed, (std::vector<uint8_t>{0, 1, 2}));
   // Back after being offline is a restart whatever the states.
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({false, false, false, false}, {}, true, &changed),
             FailsafeTracker::Verdict::kCameBack);
   // What a restore writes: what users commanded (channel 1 on).
@@ -143,16 +148,21 @@ TEST(FailsafeTracker, APollThatDiffersWithNoCommandIsARestart) {
 
 TEST(FailsafeTracker, ChannelsTheDeviceTimesItselfAreNotCompared) {
   FailsafeTracker t(FailsafeConfig{}, 2);
+  t.pollStarting();  // as the adapter does before every poll
   t.observePoll({false, false}, {}, false, nullptr);
-  t.selfTimed(0);  // an LC flash on channel 0
+  t.selfTimed(0);    // an LC flash on channel 0
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({true, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({false, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
   // A running PWM as the device reports it.
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({false, true}, {false, true}, false, nullptr),
             FailsafeTracker::Verdict::kNormal);
   // A plain write settles channel 0 again: it is compared from then on.
   t.confirmed({0}, {true}, FailsafeTracker::Writer::kUser);
   std::vector<uint8_t> changed;
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({false, true}, {false, true}, false, &changed),
             FailsafeTracker::Verdict::kOutputsChanged);
   EXPECT_EQ(changed, (std::vector<uint8_t>{0}));
@@ -256,10 +266,12 @@ TEST(FailsafeTracker, AnExternalWriteIsNotARestart) {
   config.safe_state = {SafeState::kOff, SafeState::kOff};
   FailsafeTracker t(config, 2);
   std::vector<uint8_t> changed;
+  t.pollStarting();  // as the adapter does before every poll
   t.observePoll({false, false}, {}, false, &changed);
   t.confirmed({0}, {false}, FailsafeTracker::Writer::kUser);
   t.holdSafe({1});
   t.externalWrite(OutputTargets{});  // a write through registers: seen at the next poll
+  t.pollStarting();                  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({false, true}, {}, false, &changed), FailsafeTracker::Verdict::kNormal);
   EXPECT_TRUE(changed.empty());
   EXPECT_FALSE(t.anyHeldSafe());  // the client's write is a new command
@@ -267,6 +279,7 @@ TEST(FailsafeTracker, AnExternalWriteIsNotARestart) {
   EXPECT_EQ(r.channels, (std::vector<uint8_t>{0, 1}));
   EXPECT_EQ(r.states, (std::vector<bool>{false, true}));
   // Only the next poll: a later change with no write is a restart again.
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({false, false}, {}, false, &changed),
             FailsafeTracker::Verdict::kOutputsChanged);
 }
@@ -278,6 +291,7 @@ TEST(FailsafeTracker, AClientsCoilWriteIsRestoredEvenWhenItChangedNothing) {
   config.safe_state = {SafeState::kOff, SafeState::kHold};
   config.on_restart = OnRestart::kRestore;
   FailsafeTracker t(config, 2);
+  t.pollStarting();                                  // as the adapter does before every poll
   t.observePoll({false, true}, {}, false, nullptr);  // read at start, never commanded
   EXPECT_TRUE(t.restoreTargets().empty());
   DeviceConfig board;
@@ -285,8 +299,10 @@ TEST(FailsafeTracker, AClientsCoilWriteIsRestoredEvenWhenItChangedNothing) {
   const LcRelay8 relays(board);
   t.externalWrite(relays.outputsWrittenBy(Request::writeSingleCoil(255, 1, true)));
   EXPECT_TRUE(t.tookExternalWrite());
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({false, true}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
   // The board power-cycles: everything off, and the restore writes the client's command again.
+  t.pollStarting();  // as the adapter does before every poll
   EXPECT_EQ(t.observePoll({false, false}, {}, false, nullptr),
             FailsafeTracker::Verdict::kOutputsChanged);
   const OutputTargets r = t.afterPollTargets(FailsafeTracker::Verdict::kOutputsChanged);
@@ -339,4 +355,32 @@ TEST(FailsafeTracker, AfterPollEachOnRestartPolicy) {
   EXPECT_EQ(after(OnRestart::kRestore), (std::vector<bool>{true, false}));
   EXPECT_EQ(after(OnRestart::kSafe), (std::vector<bool>{false, true}));
   EXPECT_TRUE(after(OnRestart::kLeave).empty());
+}
+
+// Found by the scenario test (seed 1268616613): a share client's write ran between the
+// transactions of a poll (they go ahead of each one), so the coils that poll had read were
+// older than the write. Taken as the client's command, they made the next poll look like a
+// restart, and the restore undid the client's write.
+TEST(FailsafeTracker, APollThatAWriteRanInsideIsNotCompared) {
+  FailsafeConfig config;
+  config.safe_state = {SafeState::kOff, SafeState::kHold};
+  config.on_restart = OnRestart::kRestore;
+  FailsafeTracker t(config, 2);
+  t.pollStarting();
+  t.observePoll({false, true}, {}, false, nullptr);
+  OutputTargets set;
+  set.channels = {1};
+  set.states = {false};
+  t.pollStarting();
+  t.externalWrite(set);  // between the poll's coil read and its end
+  EXPECT_EQ(t.observePoll({false, true}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
+  t.pollStarting();
+  EXPECT_EQ(t.observePoll({false, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
+  EXPECT_EQ(t.restoreTargets().states, (std::vector<bool>{false}));
+  // A user's write inside a poll: the same.
+  t.pollStarting();
+  t.confirmed({0}, {true}, FailsafeTracker::Writer::kUser);
+  EXPECT_EQ(t.observePoll({false, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
+  t.pollStarting();
+  EXPECT_EQ(t.observePoll({true, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
 }

@@ -94,6 +94,11 @@ class FailsafeTracker {
   // are not compared on it until a plain write settles it again.
   void selfTimed(uint8_t channel);
 
+  // Bus thread, as a poll job starts. Writes and shared requests run between a poll's
+  // transactions (BusScheduler::PollTransport), so the outputs it read may predate one of them:
+  // such a poll is not compared (no restart is seen in it); the next one is.
+  void pollStarting();
+
   // Bus thread, after a successful poll. `self_timed[i]`: the device reports channel i as
   // timed by itself right now. `was_offline`: the device had been offline before this poll.
   // kCameBack / kOutputsChanged (with `changed` filled) mean it restarted; the new states are
@@ -122,8 +127,9 @@ class FailsafeTracker {
   std::vector<bool> settled_;                   // compared on polls
   std::vector<std::optional<Clock::time_point>> command_deadline_;
   bool safe_pending_ = false;
-  bool external_write_ = false;  // adopt the next poll's outputs as written
-  bool took_external_ = false;   // the last poll did
+  bool external_write_ = false;     // adopt the next poll's outputs as written
+  bool took_external_ = false;      // the last poll did
+  bool write_during_poll_ = false;  // a write ran between the running poll's transactions
 };
 
 }  // namespace modbus_rtu_driver
