@@ -69,7 +69,7 @@ TEST(SimConfig, BadConfigsAreRefusedNamingTheKey) {
   EXPECT_EQ(configError("baud: 9600\n"), "devices: missing or not a list of {type, address}");
   EXPECT_EQ(
       configError("devices: [{type: plc, address: 1}]"),
-      "devices[0]/type: 'plc' is not a simulated type (ld58a08, lc_relay8, yespeed_pdu, generic)");
+      "devices[0]/type: 'plc' is not a simulated type (generic, lc_relay8, ld58a08, yespeed_pdu)");
   EXPECT_EQ(
       configError("devices: [{type: lc_relay8, address: 255}, {type: ld58a08, address: 249}]"),
       "devices[1]/address: 249 is outside 1-248 for ld58a08");
