@@ -29,8 +29,22 @@ bool parseParity(const std::string& t, Parity* out) {
 }
 
 bool isStandardBaud(int b) {
-  static const int kRates[] = {1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200};
-  return std::find(std::begin(kRates), std::end(kRates), b) != std::end(kRates);
+  return std::find(std::begin(kStandardBauds), std::end(kStandardBauds), b) !=
+         std::end(kStandardBauds);
+}
+
+std::string standardBaudList() {
+  std::string list;
+  for (int b : kStandardBauds) list += (list.empty() ? "" : ", ") + std::to_string(b);
+  return list;
+}
+
+char parityLetter(Parity parity) {
+  return parity == Parity::kEven ? 'E' : parity == Parity::kOdd ? 'O' : 'N';
+}
+
+Parity parityOfLetter(char letter) {
+  return letter == 'E' ? Parity::kEven : letter == 'O' ? Parity::kOdd : Parity::kNone;
 }
 
 const char* portKindName(PortKind kind) {
@@ -90,8 +104,7 @@ std::string validateLinkConfig(const LinkConfig& c) {
   if (!(c.network_allowance >= 0.0 && c.network_allowance <= 10.0))
     return "network_allowance: " + std::to_string(c.network_allowance) + " s is outside 0-10 s";
   if (!isStandardBaud(c.baud))
-    return "baud: " + std::to_string(c.baud) +
-           " is not one of 1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200";
+    return "baud: " + std::to_string(c.baud) + " is not one of " + standardBaudList();
   if (c.data_bits != 7 && c.data_bits != 8)
     return "data_bits: " + std::to_string(c.data_bits) + " is not 7 or 8";
   if (c.stop_bits != 1 && c.stop_bits != 2)

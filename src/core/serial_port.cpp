@@ -13,9 +13,8 @@
 namespace modbus_rtu_driver {
 
 modbus_t* openSerialPort(const LinkConfig& link, std::string* error) {
-  const char parity = link.parity == Parity::kEven ? 'E' : link.parity == Parity::kOdd ? 'O' : 'N';
-  modbus_t* ctx =
-      modbus_new_rtu(link.port.c_str(), link.baud, parity, link.data_bits, link.stop_bits);
+  modbus_t* ctx = modbus_new_rtu(link.port.c_str(), link.baud, parityLetter(link.parity),
+                                 link.data_bits, link.stop_bits);
   if (!ctx) {
     if (error) *error = "cannot use " + link.port + ": " + modbus_strerror(errno);
     return nullptr;

@@ -4,8 +4,11 @@
 // Exit code 0 when every step passed. roslaunch's __name:= style arguments are ignored.
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <string>
+#include <vector>
 
+#include "modbus_rtu_driver/core/link_config.h"
 #include "modbus_rtu_driver/sim/command_line.h"
 #include "modbus_rtu_driver/sim/dm500_master.h"
 
@@ -26,7 +29,8 @@ int main(int argc, char** argv) {
       ->type_name("FILE");
   app.add_option("--baud", baud, "line speed (default 9600)")
       ->type_name("B")
-      ->check(CLI::IsMember({1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200}));
+      ->check(
+          CLI::IsMember(std::vector<int>(std::begin(kStandardBauds), std::end(kStandardBauds))));
   app.add_option("--timeout", timeout, "wait for each reply in s (default 0.5)")
       ->type_name("S")
       ->check(CLI::Range(0.001, 60.0));

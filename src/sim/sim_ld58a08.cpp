@@ -14,7 +14,8 @@ namespace {
 
 constexpr uint16_t kContinuous = 0xFFFF;
 constexpr int64_t kTenth = 100'000'000;  // 0.1 s in ns: the unit of periods and output times
-const int kBauds[] = {1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200};
+// Baud codes 0-7: the standard rates in order (its manual).
+const auto& kBauds = kStandardBauds;
 
 bool isPwmRegister(uint32_t r) {
   return r < 0x80 && (r & 0x0F) <= 2;

@@ -9,7 +9,6 @@
 #include <cerrno>
 #include <cstdio>
 
-
 namespace modbus_rtu_driver {
 
 namespace {

@@ -134,7 +134,7 @@ bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::st
       *error = "parity: '" + text + "' is not none, even or odd";
       return false;
     }
-    c.factory.parity = p == Parity::kEven ? 'E' : p == Parity::kOdd ? 'O' : 'N';
+    c.factory.parity = parityLetter(p);
   }
   if (root["pace"] && !scalar(root["pace"], "pace", "true or false", &c.pace, error)) return false;
   if (!root["devices"] || !root["devices"].IsSequence()) {

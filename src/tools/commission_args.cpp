@@ -26,8 +26,6 @@ struct BadArgument {
   throw BadArgument{message};
 }
 
-const char kAllBauds[] = "1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200";
-
 // Decimal, or hexadecimal with 0x; the whole text must be the number.
 bool toLong(const std::string& text, long* out) {
   const bool hex = text.size() > 2 && text[0] == '0' && (text[1] == 'x' || text[1] == 'X');
@@ -102,7 +100,8 @@ const CLI::Validator kBaud(
       if (!problem.empty()) return problem;
       long v = 0;
       toLong(text, &v);
-      if (!isStandardBaud(static_cast<int>(v))) return "'" + text + "' is not one of " + kAllBauds;
+      if (!isStandardBaud(static_cast<int>(v)))
+        return "'" + text + "' is not one of " + standardBaudList();
       return "";
     },
     "1200-115200");
@@ -116,10 +115,10 @@ const CLI::Validator kParity(
 
 const CLI::Validator kBaudList(
     [](std::string& text) -> std::string {
-      for (const std::string& b : splitList(text == "all" ? kAllBauds : text)) {
+      for (const std::string& b : splitList(text == "all" ? standardBaudList() : text)) {
         long v = 0;
         if (!toLong(b, &v) || !isStandardBaud(static_cast<int>(v)))
-          return "'" + b + "' is not one of " + kAllBauds + " (or all)";
+          return "'" + b + "' is not one of " + standardBaudList() + " (or all)";
       }
       return "";
     },
@@ -329,7 +328,7 @@ void parseScan(const Parsed& p, CommissionCommand& c) {
   }
   // Each item was checked by kBaudList / kParityList.
   const std::string bauds = p.has("--bauds") ? w.bauds : std::to_string(c.link.baud);
-  for (const std::string& b : splitList(bauds == "all" ? kAllBauds : bauds)) {
+  for (const std::string& b : splitList(bauds == "all" ? standardBaudList() : bauds)) {
     long v = 0;
     toLong(b, &v);
     c.bauds.push_back(static_cast<int>(v));
@@ -355,7 +354,7 @@ int baudCode(const std::string& text, bool lc) {
       if (baudOfCode(code) == v) return code;
   }
   bad("baud: '" + text + "' is neither a code " + std::to_string(lo) + "-" + std::to_string(hi) +
-      " nor one of " + (lc ? "4800, 9600, 19200" : kAllBauds) + " (" +
+      " nor one of " + (lc ? "4800, 9600, 19200" : standardBaudList()) + " (" +
       (lc ? kLcRelay8Type.name : kLd58a08Type.name) + ")");
 }
 

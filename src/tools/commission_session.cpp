@@ -10,13 +10,11 @@
 namespace modbus_rtu_driver {
 
 int baudOfCode(int code) {
-  static const int kBauds[] = {1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200};
-  return code >= 0 && code < 8 ? kBauds[code] : 0;
+  return code >= 0 && code < 8 ? kStandardBauds[code] : 0;
 }
 
 std::string lineName(int baud, Parity parity) {
-  const char p = parity == Parity::kEven ? 'E' : parity == Parity::kOdd ? 'O' : 'N';
-  return std::to_string(baud) + " 8" + p + "1";
+  return std::to_string(baud) + " 8" + parityLetter(parity) + "1";
 }
 
 bool Session::confirm(const std::string& question) {

@@ -51,7 +51,15 @@ std::string validateLinkConfig(const LinkConfig& config);
 
 const char* parityName(Parity parity);  // "none", "even", "odd"
 bool parseParity(const std::string& text, Parity* out);
+// 'N', 'E', 'O': libmodbus's spelling, and the simulator's line settings'.
+char parityLetter(Parity parity);
+Parity parityOfLetter(char letter);  // anything but 'E' or 'O' is none
+
+// The standard rates, slowest first: every check, message and option takes them from here (the
+// LD58A08's baud codes 0-7 are these, in order).
+inline constexpr int kStandardBauds[] = {1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200};
 bool isStandardBaud(int baud);
+std::string standardBaudList();  // "1200, 2400, ..., 115200"
 
 // The wire timing every side of a line keeps (the link, the slave role, the simulator), from
 // the baud and the bits per character (start + data + parity + stop):
