@@ -17,7 +17,10 @@
 #   core (framing, the link, the bus thread, slave role; ROS-free)
 #   <- devices (one class per device type, fail-safe policy) <- config (the bus node's YAML)
 #   <- ros (adapters, node).   sim and tools sit on core (tools also on devices).
+# The repository's root, without "cmake/..": the include path then reads as before (catkin_lint
+# reads the set(), the build the normalised path).
 set(MODBUS_RTU_DIR ${CMAKE_CURRENT_LIST_DIR}/..)
+get_filename_component(MODBUS_RTU_DIR ${MODBUS_RTU_DIR} ABSOLUTE)
 
 function(layer target)
   if(NOT MODBUS_RTU_ALLOW_UNDEFINED)
