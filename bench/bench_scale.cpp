@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/bus_scheduler.h"
-#include "modbus_rtu_driver/core/device_types.h"
+#include "modbus_rtu_driver/core/device_types/yespeed_pdu.h"
 #include "modbus_rtu_driver/core/rtu_link.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/sim/simulator.h"

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "bench_common.h"
-#include "modbus_rtu_driver/core/device_types.h"
+#include "modbus_rtu_driver/core/device_types/yespeed_pdu.h"
 #include "modbus_rtu_driver/core/rtu_link.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 

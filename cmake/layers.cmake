@@ -32,7 +32,6 @@ endfunction()
 add_library(modbus_rtu_core ${MODBUS_RTU_LIBRARY_TYPE}
   ${MODBUS_RTU_DIR}/src/core/bus_scheduler.cpp
   ${MODBUS_RTU_DIR}/src/core/config_yaml.cpp
-  ${MODBUS_RTU_DIR}/src/core/device_types.cpp
   ${MODBUS_RTU_DIR}/src/core/fd_io.cpp
   ${MODBUS_RTU_DIR}/src/core/frame.cpp
   ${MODBUS_RTU_DIR}/src/core/link.cpp

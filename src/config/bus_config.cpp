@@ -5,7 +5,6 @@
 #include <set>
 
 #include "modbus_rtu_driver/core/config_yaml.h"
-#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/core/number_text.h"
 #include "modbus_rtu_driver/core/slave_config.h"
 #include "modbus_rtu_driver/devices/registry.h"
@@ -239,24 +238,29 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n,
   return d;
 }
 
-// An LD58A08 answers at 0xFF besides its own address ("whoever you are", its manual): an LC
-// board at its factory address 255 on the same bus would answer the same frames, and the two
-// replies garble on the line. Refused, with the way out.
-void checkAddress255(const std::vector<DeviceConfig>& devices) {
-  std::string lc, ld;
-  for (const DeviceConfig& d : devices) {
-    if (d.type == kLcRelay8Type.name && d.address == 0xFF && lc.empty()) lc = d.name;
-    if (d.type == kLd58a08Type.name) ld += (ld.empty() ? "'" : ", '") + d.name + "'";
+// A type that answers at a second address besides its own (DeviceDescriptor::also_answers: an
+// LD58A08 also answers 0xFF): a device at that address on the same bus (an LC board at its
+// factory address 255) answers the same frames, and the two replies garble on the line.
+// Refused, with the way out.
+void checkSecondAddresses(const std::vector<DeviceConfig>& devices) {
+  for (const DeviceConfig& moved : devices) {
+    std::string others;  // 'a', 'b': the devices that also answer at moved's address
+    std::string other_type;
+    for (const DeviceConfig& d : devices) {
+      const auto* type = deviceClasses().find(d.type);
+      if (&d == &moved || !type || type->type->also_answers != moved.address) continue;
+      others += (others.empty() ? "'" : ", '") + d.name + "'";
+      other_type = d.type;
+    }
+    if (others.empty()) continue;
+    const std::string address = std::to_string(moved.address);
+    fail("devices/" + moved.name + "/address",
+         address + " collides with the " + other_type + " " + others + " on this bus: a " +
+             other_type + " also answers at " + address +
+             ", so both would answer and their replies garble. Move '" + moved.name + "' off " +
+             address + " (modbus_rtu_commission set-address --type " + moved.type +
+             " N, the device alone on the bus) and set devices/" + moved.name + "/address to N");
   }
-  if (lc.empty() || ld.empty()) return;
-  fail("devices/" + lc + "/address",
-       "255 collides with the LD58A08 " + ld +
-           " on this bus: an LD58A08 also answers at 0xFF, so both boards would answer and "
-           "their replies garble. Move the LC board '" +
-           lc +
-           "' off 255 (modbus_rtu_commission set-address --type lc_relay8 N, board alone "
-           "on the bus) and set devices/" +
-           lc + "/address to N");
 }
 
 void parse(const YAML::Node& root, BusConfig* out) {
@@ -322,7 +326,7 @@ void parse(const YAML::Node& root, BusConfig* out) {
            std::to_string(d.address) + " is already used by device '" + it->second + "'");
     out->devices.push_back(std::move(d));
   }
-  checkAddress255(out->devices);
+  checkSecondAddresses(out->devices);
 }
 
 }  // namespace

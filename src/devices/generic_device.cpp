@@ -3,7 +3,13 @@
 #include <cmath>
 #include <sstream>
 
+#include "modbus_rtu_driver/devices/registry.h"
+
 namespace modbus_rtu_driver {
+
+// `type: generic` in the bus YAML builds this class (devices/registry.h).
+[[maybe_unused]] const bool kGenericDeviceRegistered =
+    deviceClasses().add(kGenericType, makeDevice<GenericDevice>);
 
 namespace {
 

@@ -4,8 +4,13 @@
 #include <cstdio>
 
 #include "modbus_rtu_driver/core/number_text.h"
+#include "modbus_rtu_driver/devices/registry.h"
 
 namespace modbus_rtu_driver {
+
+// `type: lc_relay8` in the bus YAML builds this class (devices/registry.h).
+[[maybe_unused]] const bool kLcRelay8Registered =
+    deviceClasses().add(kLcRelay8Type, makeDevice<LcRelay8>);
 
 Result LcRelay8::poll(Transport& bus) {
   Result relays = bus.execute(Request::readCoils(address(), 0, kChannels));

@@ -4,8 +4,13 @@
 #include <cstdio>
 
 #include "modbus_rtu_driver/core/number_text.h"
+#include "modbus_rtu_driver/devices/registry.h"
 
 namespace modbus_rtu_driver {
+
+// `type: ld58a08` in the bus YAML builds this class (devices/registry.h).
+[[maybe_unused]] const bool kLd58a08Registered =
+    deviceClasses().add(kLd58a08Type, makeDevice<Ld58a08>);
 
 namespace {
 

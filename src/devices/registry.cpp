@@ -5,38 +5,10 @@
 
 #include "modbus_rtu_driver/core/config_yaml.h"
 #include "modbus_rtu_driver/core/number_text.h"
-#include "modbus_rtu_driver/devices/generic_device.h"
-#include "modbus_rtu_driver/devices/lc_relay8.h"
-#include "modbus_rtu_driver/devices/ld58a08.h"
-#include "modbus_rtu_driver/devices/yespeed_pdu.h"
 
 namespace modbus_rtu_driver {
 
 namespace {
-
-struct DeviceType {
-  const DeviceDescriptor* type;  // name, address range, channel counts
-  std::unique_ptr<Device> (*make)(const DeviceConfig&);
-};
-
-template <typename T>
-std::unique_ptr<Device> make(const DeviceConfig& c) {
-  return std::make_unique<T>(c);
-}
-
-// One line per device type.
-const DeviceType kTypes[] = {
-    {&kLd58a08Type, make<Ld58a08>},
-    {&kLcRelay8Type, make<LcRelay8>},
-    {&kYespeedPduType, make<YespeedPdu>},
-    {&kGenericType, make<GenericDevice>},
-};
-
-const DeviceType* find(const std::string& name) {
-  for (const auto& t : kTypes)
-    if (name == t.type->name) return &t;
-  return nullptr;
-}
 
 std::string checkNames(const std::string& key, const std::vector<std::string>& names,
                        size_t expected) {
@@ -55,24 +27,26 @@ std::string checkNames(const std::string& key, const std::vector<std::string>& n
 
 }  // namespace
 
+TypeRegistry<DeviceFactory>& deviceClasses() {
+  static TypeRegistry<DeviceFactory> registry;  // built at its first use, by the first type added
+  return registry;
+}
+
 std::vector<std::string> outputNamesOf(const DeviceConfig& config) {
-  const DeviceType* t = find(config.type);
+  const auto* t = deviceClasses().find(config.type);
   return t ? withDefaults(config.outputs, t->type->outputs, "out") : std::vector<std::string>{};
 }
 
 std::vector<std::string> knownDeviceTypes() {
-  std::vector<std::string> names;
-  for (const auto& t : kTypes) names.emplace_back(t.type->name);
-  return names;
+  return deviceClasses().names();
 }
 
 std::string validateDeviceConfig(const DeviceConfig& c) {
   const std::string where = "devices/" + c.name + "/";
-  const DeviceType* found = find(c.type);
+  const auto* found = deviceClasses().find(c.type);
   if (!found) {
-    std::string list;
-    for (const auto& n : knownDeviceTypes()) list += (list.empty() ? "" : ", ") + n;
-    return where + "type: '" + c.type + "' is not a known device type (" + list + ")";
+    return where + "type: '" + c.type + "' is not a known device type (" +
+           deviceClasses().nameList() + ")";
   }
   const DeviceDescriptor* t = found->type;
   if (c.address < 1 || c.address > t->max_address)
@@ -96,7 +70,7 @@ std::string validateDeviceConfig(const DeviceConfig& c) {
 }
 
 std::unique_ptr<Device> createDevice(const DeviceConfig& config) {
-  const DeviceType* t = find(config.type);
+  const auto* t = deviceClasses().find(config.type);
   return t ? t->make(config) : nullptr;
 }
 

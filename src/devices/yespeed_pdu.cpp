@@ -5,8 +5,13 @@
 #include <cstdio>
 
 #include "modbus_rtu_driver/core/number_text.h"
+#include "modbus_rtu_driver/devices/registry.h"
 
 namespace modbus_rtu_driver {
+
+// `type: yespeed_pdu` in the bus YAML builds this class (devices/registry.h).
+[[maybe_unused]] const bool kYespeedPduRegistered =
+    deviceClasses().add(kYespeedPduType, makeDevice<YespeedPdu>);
 
 namespace {
 

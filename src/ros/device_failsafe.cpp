@@ -40,13 +40,13 @@ std::future<Result> DeviceAdapter::applySafe(const std::string& trigger, const s
   // again, even if this write does not get through.
   if (trigger == "heartbeat" || trigger == "command_timeout") failsafe_.holdSafe(targets.channels);
   return bus_.submit(device_->name(), [this, targets, trigger, reason](Transport& t) {
-    return writeAndReport(t, targets, trigger, reason, "safe");
+    return writeAndReport(t, targets, trigger, reason, "safe", true);
   });
 }
 
 Result DeviceAdapter::writeAndReport(Transport& t, const OutputTargets& targets,
                                      const std::string& trigger, const std::string& reason,
-                                     const std::string& action) {
+                                     const std::string& action, bool holds_safe_states) {
   const auto names = device_->outputNames();
   FailsafeEvent e;
   e.header.stamp = ros::Time::now();
@@ -84,7 +84,7 @@ Result DeviceAdapter::writeAndReport(Transport& t, const OutputTargets& targets,
     if (action == "restore" && !failsafe_.anyHeldSafe()) endFailsafeState();
   }
   // A safe state not reached is tried again when the device answers again.
-  if (action == "safe") failsafe_.setSafePending(!w.ok());
+  if (holds_safe_states) failsafe_.setSafePending(!w.ok());
   e.confirmed = w.ok();
   e.message = w.ok() ? "confirmed by reading the outputs back" : w.message;
   report(e);
@@ -129,11 +129,10 @@ void DeviceAdapter::checkRestart() {
     report(e);
     return;
   }
-  bus_.submit(device_->name(), [this, targets, reason, action, pending](Transport& t) {
-    const Result w = writeAndReport(t, targets, "restart", reason, action);
-    // The pending safe states were in this write: done when it is confirmed.
-    if (pending) failsafe_.setSafePending(!w.ok());
-    return w;
+  // The pending safe states are in this write (afterPollTargets), as are on_restart: safe's.
+  const bool holds_safe_states = pending || action == "safe";
+  bus_.submit(device_->name(), [this, targets, reason, action, holds_safe_states](Transport& t) {
+    return writeAndReport(t, targets, "restart", reason, action, holds_safe_states);
   });
 }
 

@@ -336,9 +336,8 @@ class GenericAdapter : public DeviceAdapter {
 
 }  // namespace
 
-std::unique_ptr<DeviceAdapter> makeGenericAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
-                                                  const ros::NodeHandle& nh) {
-  return std::make_unique<GenericAdapter>(std::move(device), bus, nh);
-}
+// `type: generic` devices get this adapter (ros/adapter_registry.h).
+[[maybe_unused]] const bool kGenericAdapterRegistered =
+    adapterClasses().add(kGenericType, makeAdapter<GenericAdapter>);
 
 }  // namespace modbus_rtu_driver

@@ -49,9 +49,8 @@ class LcRelay8Adapter : public DeviceAdapter {
 
 }  // namespace
 
-std::unique_ptr<DeviceAdapter> makeLcRelay8Adapter(std::shared_ptr<Device> device,
-                                                   BusScheduler& bus, const ros::NodeHandle& nh) {
-  return std::make_unique<LcRelay8Adapter>(std::move(device), bus, nh);
-}
+// `type: lc_relay8` devices get this adapter (ros/adapter_registry.h).
+[[maybe_unused]] const bool kLcRelay8AdapterRegistered =
+    adapterClasses().add(kLcRelay8Type, makeAdapter<LcRelay8Adapter>);
 
 }  // namespace modbus_rtu_driver

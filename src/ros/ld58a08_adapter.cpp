@@ -105,9 +105,8 @@ class Ld58a08Adapter : public DeviceAdapter {
 
 }  // namespace
 
-std::unique_ptr<DeviceAdapter> makeLd58a08Adapter(std::shared_ptr<Device> device, BusScheduler& bus,
-                                                  const ros::NodeHandle& nh) {
-  return std::make_unique<Ld58a08Adapter>(std::move(device), bus, nh);
-}
+// `type: ld58a08` devices get this adapter (ros/adapter_registry.h).
+[[maybe_unused]] const bool kLd58a08AdapterRegistered =
+    adapterClasses().add(kLd58a08Type, makeAdapter<Ld58a08Adapter>);
 
 }  // namespace modbus_rtu_driver

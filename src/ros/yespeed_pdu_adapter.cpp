@@ -102,9 +102,8 @@ class YespeedPduAdapter : public DeviceAdapter {
 
 }  // namespace
 
-std::unique_ptr<DeviceAdapter> makeYespeedPduAdapter(std::shared_ptr<Device> device,
-                                                     BusScheduler& bus, const ros::NodeHandle& nh) {
-  return std::make_unique<YespeedPduAdapter>(std::move(device), bus, nh);
-}
+// `type: yespeed_pdu` devices get this adapter (ros/adapter_registry.h).
+[[maybe_unused]] const bool kYespeedPduAdapterRegistered =
+    adapterClasses().add(kYespeedPduType, makeAdapter<YespeedPduAdapter>);
 
 }  // namespace modbus_rtu_driver

@@ -5,8 +5,17 @@
 #include <algorithm>
 
 #include "modbus_rtu_driver/core/config_yaml.h"
+#include "modbus_rtu_driver/sim/simulator.h"
 
 namespace modbus_rtu_driver {
+
+// `type: generic` in the simulator's file builds this class from the entry's signals
+// (sim/simulator.h).
+[[maybe_unused]] const bool kSimGenericRegistered = simDeviceClasses().add(
+    kGenericType,
+    [](const SimulatorConfig::Entry& entry, SimLineSettings line) -> std::unique_ptr<SimDevice> {
+      return std::make_unique<SimGeneric>(static_cast<uint8_t>(entry.address), line, entry.generic);
+    });
 
 namespace {
 

@@ -2,7 +2,13 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "modbus_rtu_driver/sim/simulator.h"
+
 namespace modbus_rtu_driver {
+
+// `type: lc_relay8` in the simulator's file builds this class (sim/simulator.h).
+[[maybe_unused]] const bool kSimLcRelay8Registered =
+    simDeviceClasses().add(kLcRelay8Type, makeSimDeviceOf<SimLcRelay8>);
 
 namespace {
 
@@ -29,8 +35,8 @@ bool SimLcRelay8::isAddressCommand(const Request& r) {
           r.function == FunctionCode::kWriteMultipleRegisters);
 }
 
-std::optional<Bytes> SimLcRelay8::handleAtZero(const Request& r) {
-  if (!isAddressCommand(r)) return std::nullopt;
+std::optional<Bytes> SimLcRelay8::handleBroadcast(const Request& r, SimClock::time_point now) {
+  if (!isAddressCommand(r)) return SimDevice::handleBroadcast(r, now);
   if (r.function == FunctionCode::kReadHoldingRegisters) return encodeReply(r, {address_});
   if (r.values[0] < 1 || r.values[0] > 255)
     return encodeException(0, static_cast<uint8_t>(r.function), kIllegalDataValue);

@@ -2,7 +2,13 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "modbus_rtu_driver/sim/simulator.h"
+
 namespace modbus_rtu_driver {
+
+// `type: ld58a08` in the simulator's file builds this class (sim/simulator.h).
+[[maybe_unused]] const bool kSimLd58a08Registered =
+    simDeviceClasses().add(kLd58a08Type, makeSimDeviceOf<SimLd58a08>);
 
 namespace {
 

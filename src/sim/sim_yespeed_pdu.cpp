@@ -4,7 +4,13 @@
 
 #include <cmath>
 
+#include "modbus_rtu_driver/sim/simulator.h"
+
 namespace modbus_rtu_driver {
+
+// `type: yespeed_pdu` in the simulator's file builds this class (sim/simulator.h).
+[[maybe_unused]] const bool kSimYespeedPduRegistered =
+    simDeviceClasses().add(kYespeedPduType, makeSimDeviceOf<SimYespeedPdu>);
 
 namespace {
 

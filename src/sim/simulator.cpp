@@ -9,7 +9,6 @@
 #include <cerrno>
 #include <cstdio>
 
-#include "modbus_rtu_driver/sim/sim_lc_relay8.h"
 
 namespace modbus_rtu_driver {
 
@@ -180,26 +179,20 @@ void Simulator::processFrame(const Bytes& frame, SimClock::time_point now) {
 }
 
 // Address 0 reaches every device that hears the line, as on a wire. Each applies it as its
-// manual says: a write is applied and not answered. The LC board's address commands are the
-// exception: every LC board takes them and answers, so with more than one board the replies
-// collide (collideReplies).
+// manual says (SimDevice::handleBroadcast): a write is applied and not answered, except where a
+// manual says otherwise (the LC board answers its address commands); with more than one answer
+// the replies collide (collideReplies).
 void Simulator::broadcast(const std::optional<Request>& request,
                           const std::vector<SimDevice*>& hearing, SimClock::time_point now,
                           SimClock::time_point request_end) {
   if (!request) return;  // nobody answers a broadcast; an undecodable one changes nothing
-  const bool lc_address_command = SimLcRelay8::isAddressCommand(*request);
   std::vector<Bytes> replies;
   SimDevice* first_answer = nullptr;
   for (SimDevice* d : hearing) {
     if (d->failing) continue;
-    auto* lc = dynamic_cast<SimLcRelay8*>(d);
-    if (lc && lc_address_command) {
-      if (auto reply = lc->handleAtZero(*request)) {
-        replies.push_back(std::move(*reply));
-        if (!first_answer) first_answer = lc;
-      }
-    } else {
-      d->handle(*request, now);  // applied (or refused) silently
+    if (auto reply = d->handleBroadcast(*request, now)) {
+      replies.push_back(std::move(*reply));
+      if (!first_answer) first_answer = d;
     }
   }
   if (!isReadFunction(request->function)) saveState();

@@ -9,46 +9,11 @@
 #include <sstream>
 
 #include "modbus_rtu_driver/core/link_config.h"
-#include "modbus_rtu_driver/sim/sim_generic.h"
-#include "modbus_rtu_driver/sim/sim_lc_relay8.h"
-#include "modbus_rtu_driver/sim/sim_ld58a08.h"
-#include "modbus_rtu_driver/sim/sim_yespeed_pdu.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
 namespace modbus_rtu_driver {
 
 namespace {
-
-struct SimType {
-  const DeviceDescriptor* type;
-  std::unique_ptr<SimDevice> (*make)(const SimulatorConfig::Entry& entry, SimLineSettings line);
-};
-
-template <typename T>
-std::unique_ptr<SimDevice> make(const SimulatorConfig::Entry& entry, SimLineSettings line) {
-  return std::make_unique<T>(static_cast<uint8_t>(entry.address), line);
-}
-
-// A generic device is built from its signals.
-template <>
-std::unique_ptr<SimDevice> make<SimGeneric>(const SimulatorConfig::Entry& entry,
-                                            SimLineSettings line) {
-  return std::make_unique<SimGeneric>(static_cast<uint8_t>(entry.address), line, entry.generic);
-}
-
-// One line per simulated device type.
-const SimType kSimTypes[] = {
-    {&kLd58a08Type, make<SimLd58a08>},
-    {&kLcRelay8Type, make<SimLcRelay8>},
-    {&kYespeedPduType, make<SimYespeedPdu>},
-    {&kGenericType, make<SimGeneric>},
-};
-
-const SimType* findSimType(const std::string& name) {
-  for (const auto& t : kSimTypes)
-    if (name == t.type->name) return &t;
-  return nullptr;
-}
 
 // A scalar of type T at `key`, or a message naming the key and what was there.
 template <typename T>
@@ -120,21 +85,24 @@ bool parseDevice(const YAML::Node& d, const std::string& where, const std::strin
 
 }  // namespace
 
+TypeRegistry<SimDeviceFactory>& simDeviceClasses() {
+  static TypeRegistry<SimDeviceFactory> registry;  // built at its first use, by the first type
+  return registry;
+}
+
 std::unique_ptr<SimDevice> makeSimDevice(const SimulatorConfig::Entry& entry,
                                          SimLineSettings line) {
-  const SimType* t = findSimType(entry.type);
+  const auto* t = simDeviceClasses().find(entry.type);
   return t ? t->make(entry, line) : nullptr;
 }
 
 const DeviceDescriptor* simDeviceType(const std::string& type) {
-  const SimType* t = findSimType(type);
+  const auto* t = simDeviceClasses().find(type);
   return t ? t->type : nullptr;
 }
 
 std::string simDeviceTypeNames() {
-  std::string list;
-  for (const auto& t : kSimTypes) list += (list.empty() ? "" : ", ") + std::string(t.type->name);
-  return list;
+  return simDeviceClasses().nameList();
 }
 
 bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::string* error,

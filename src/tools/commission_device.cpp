@@ -5,7 +5,6 @@
 #include <functional>
 #include <sstream>
 
-#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"

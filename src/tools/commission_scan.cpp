@@ -2,10 +2,10 @@
 #include <ostream>
 #include <set>
 
-#include "modbus_rtu_driver/core/device_types.h"
 #include "modbus_rtu_driver/core/make_transport.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/devices/yespeed_pdu.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
 
 namespace modbus_rtu_driver {

@@ -4,12 +4,12 @@
 #include <cstdint>
 #include <cstdlib>
 #include <memory>
+#include <optional>
+#include <vector>
 
 #include "modbus_rtu_driver/core/frame.h"
 #include "modbus_rtu_driver/core/request_framer.h"
-#include "modbus_rtu_driver/sim/sim_lc_relay8.h"
-#include "modbus_rtu_driver/sim/sim_ld58a08.h"
-#include "modbus_rtu_driver/sim/sim_yespeed_pdu.h"
+#include "modbus_rtu_driver/sim/simulator.h"
 
 using namespace modbus_rtu_driver;
 
@@ -35,16 +35,18 @@ void serve(const Bytes& frame) {
       check(again == frame);
     }
   }
-  // Built here, not through the simulator's registry (simulator_config.cpp): this target links
-  // only the devices with a fixed register map (scripts/fuzz.sh).
+  // Every simulated type the simulator registered (sim/simulator.h), a generic one without
+  // signals included: a new type is fuzzed without an edit here.
   const uint8_t address = request->slave ? request->slave : 1;
-  std::unique_ptr<SimDevice> devices[] = {
-      std::make_unique<SimLd58a08>(address, SimLineSettings{}),
-      std::make_unique<SimLcRelay8>(address, SimLineSettings{}),
-      std::make_unique<SimYespeedPdu>(address, SimLineSettings{})};
+  std::vector<std::unique_ptr<SimDevice>> devices;
+  for (const DeviceDescriptor* type : simDeviceClasses().types())
+    devices.push_back(makeSimDevice({type->name, address}, SimLineSettings{}));
   for (auto& device : devices) {
-    if (!device->answersTo(request->slave, &*request) && request->slave != 0) continue;
-    const auto reply = device->handle(*request, SimClock::now());
+    std::optional<Bytes> reply;
+    if (request->slave == kBroadcastAddress)
+      reply = device->handleBroadcast(*request, SimClock::now());
+    else if (device->answersTo(request->slave, &*request))
+      reply = device->handle(*request, SimClock::now());
     if (!reply) continue;
     check(hasValidCrc(*reply));
     const Result r = decodeReply(*request, *reply);

@@ -219,9 +219,11 @@ TEST(BusConfig, ShareKeysWithDefaultsAndRanges) {
 // board at 255 without an LD58A08, or elsewhere beside one, is fine.
 TEST(BusConfig, AnLcBoardAt255BesideAnLd58a08IsRefused) {
   const std::string error = errorOf(replaced("address: 254 ", "address: 255 "));
-  EXPECT_EQ(error.rfind("devices/relays/address: 255 collides with the LD58A08 'pwm_board'", 0), 0u)
+  EXPECT_EQ(error.rfind("devices/relays/address: 255 collides with the ld58a08 'pwm_board'", 0), 0u)
       << error;
-  EXPECT_NE(error.find("Move the LC board 'relays' off 255"), std::string::npos) << error;
+  EXPECT_NE(error.find("Move 'relays' off 255 (modbus_rtu_commission set-address --type lc_relay8"),
+            std::string::npos)
+      << error;
   EXPECT_NE(error.find("set devices/relays/address"), std::string::npos) << error;
   EXPECT_EQ(errorOf("devices: {r: {type: lc_relay8, address: 255}, p: {type: yespeed_pdu, "
                     "address: 2}}"),
@@ -230,6 +232,6 @@ TEST(BusConfig, AnLcBoardAt255BesideAnLd58a08IsRefused) {
   // Whatever the order in the file.
   EXPECT_NE(errorOf("devices: {a: {type: ld58a08, address: 1}, b: {type: ld58a08, address: 2}, "
                     "r: {type: lc_relay8, address: 255}}")
-                .find("devices/r/address: 255 collides with the LD58A08 'a', 'b'"),
+                .find("devices/r/address: 255 collides with the ld58a08 'a', 'b'"),
             std::string::npos);
 }

@@ -35,9 +35,9 @@ inline std::string ask(SimDevice& d, const std::string& frame_hex,
   const auto request = decodeRequest(hex(frame_hex));
   if (!request) return "undecodable";
   std::optional<Bytes> reply;
-  if (request->slave == kBroadcastAddress && SimLcRelay8::isAddressCommand(*request)) {
-    if (auto* lc = dynamic_cast<SimLcRelay8*>(&d)) reply = lc->handleAtZero(*request);
-  } else if (request->slave == kBroadcastAddress || d.answersTo(request->slave, &*request)) {
+  if (request->slave == kBroadcastAddress) {
+    reply = d.handleBroadcast(*request, now);
+  } else if (d.answersTo(request->slave, &*request)) {
     reply = d.handle(*request, now);
   }
   return reply ? toHex(*reply) : "";

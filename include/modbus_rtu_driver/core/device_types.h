@@ -1,13 +1,12 @@
-// What every layer knows of each built-in device type, written once: its name in the YAML, its
-// address range, channel counts and factory settings. The device registry (devices/), the ROS
-// adapter registry (ros/), the simulator (sim/) and the commissioning tool (tools/) each pair
-// these descriptors with their own class for the type; the simulator stays independent of the
-// driver's device classes, so the descriptors live here in the core, as plain data.
+// What every layer knows of a device type, written once: its name in the YAML, its address range,
+// channel counts and factory settings. Each type's descriptor is in a header of its own
+// (core/device_types/<type>.h); the driver's devices (devices/), their ROS adapters (ros/) and the
+// simulated devices (sim/) each register their class for it (core/type_registry.h). The simulator
+// stays independent of the driver's device classes, so the descriptors live here in the core, as
+// plain data.
 #pragma once
 
 #include <cstddef>
-#include <string>
-#include <vector>
 
 namespace modbus_rtu_driver {
 
@@ -24,28 +23,9 @@ struct DeviceDescriptor {
   size_t inputs;     // digital input channels
   FactorySettings factory;
   const char* manual;  // where the register map comes from
+  // An address it answers besides its own, 0 for none (an LD58A08 also answers 0xFF, "whoever
+  // you are"): another device there on the same bus garbles every reply.
+  int also_answers = 0;
 };
-
-// Digital outputs with PWM. Addresses 0x01-0xF8 (its manual).
-inline constexpr DeviceDescriptor kLd58a08Type{
-    "ld58a08", 248, 8, 0, {1, 9600, 'N'}, "docs/devices/ld58a08.md"};
-// 8 relays, 8 optocoupler inputs. Factory address 255 (not a broadcast on this board).
-inline constexpr DeviceDescriptor kLcRelay8Type{
-    "lc_relay8", 255, 8, 8, {255, 9600, 'N'}, "docs/devices/lc_relay8.md"};
-// Power distribution unit: 8 relays, telemetry. The standard's 1-247.
-inline constexpr DeviceDescriptor kYespeedPduType{
-    "yespeed_pdu", 247, 8, 0, {1, 9600, 'N'}, "docs/devices/yespeed_pdu.md"};
-
-// Any device described by its signals in the YAML (core/signal.h): no channels of its own, no
-// factory settings (its manual's), the standard's 1-247.
-inline constexpr DeviceDescriptor kGenericType{
-    "generic", 247, 0, 0, {0, 0, 'N'}, "docs/ros_api.md (generic devices)"};
-
-// Every type, in the order the docs list them.
-inline constexpr const DeviceDescriptor* kDeviceTypes[] = {&kLd58a08Type, &kLcRelay8Type,
-                                                           &kYespeedPduType, &kGenericType};
-
-// Null for a name that is not a built-in type.
-const DeviceDescriptor* findDeviceType(const std::string& name);
 
 }  // namespace modbus_rtu_driver

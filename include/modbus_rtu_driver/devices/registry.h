@@ -1,16 +1,26 @@
-// The device types the driver knows: each built-in descriptor (core/device_types.h) paired with
-// its class. Adding a type: its descriptor, its class files and one line in registry.cpp (and
-// one line in each of the ROS adapter and simulator registries; docs/adding_a_device_type.md).
+// The device types the driver knows: each type's class adds itself from its own source file
+// (deviceClasses().add(...), core/type_registry.h), so a new type edits no table here
+// (docs/adding_a_device_type.md).
 #pragma once
 
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "modbus_rtu_driver/core/type_registry.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace modbus_rtu_driver {
 
+using DeviceFactory = std::unique_ptr<Device> (*)(const DeviceConfig&);
+TypeRegistry<DeviceFactory>& deviceClasses();
+// The factory of a class built from its config alone.
+template <typename T>
+std::unique_ptr<Device> makeDevice(const DeviceConfig& config) {
+  return std::make_unique<T>(config);
+}
+
+// The registered type names, alphabetical.
 std::vector<std::string> knownDeviceTypes();
 // Checks a device config (address range for the type, names, poll rate); empty when valid.
 // The bus configuration runs it once, as it parses each device (config/bus_config.h).

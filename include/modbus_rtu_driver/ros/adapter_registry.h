@@ -1,23 +1,23 @@
-// Device type -> ROS adapter. A new device type adds its adapter file and one line here.
+// Device type -> ROS adapter. Each adapter adds itself from its own source file
+// (adapterClasses().add(...), core/type_registry.h); a new type edits nothing here.
 #pragma once
 
 #include <memory>
 
+#include "modbus_rtu_driver/core/type_registry.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 
 namespace modbus_rtu_driver {
 
 using AdapterFactory = std::unique_ptr<DeviceAdapter> (*)(std::shared_ptr<Device>, BusScheduler&,
                                                           const ros::NodeHandle&);
-
-std::unique_ptr<DeviceAdapter> makeLd58a08Adapter(std::shared_ptr<Device>, BusScheduler&,
-                                                  const ros::NodeHandle&);
-std::unique_ptr<DeviceAdapter> makeLcRelay8Adapter(std::shared_ptr<Device>, BusScheduler&,
-                                                   const ros::NodeHandle&);
-std::unique_ptr<DeviceAdapter> makeYespeedPduAdapter(std::shared_ptr<Device>, BusScheduler&,
-                                                     const ros::NodeHandle&);
-std::unique_ptr<DeviceAdapter> makeGenericAdapter(std::shared_ptr<Device>, BusScheduler&,
-                                                  const ros::NodeHandle&);
+TypeRegistry<AdapterFactory>& adapterClasses();
+// The factory of an adapter built from the device, the bus and the device's node handle.
+template <typename T>
+std::unique_ptr<DeviceAdapter> makeAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
+                                           const ros::NodeHandle& node) {
+  return std::make_unique<T>(std::move(device), bus, node);
+}
 
 // Null for a type without an adapter.
 std::unique_ptr<DeviceAdapter> createAdapter(std::shared_ptr<Device> device, BusScheduler& bus,

@@ -125,9 +125,12 @@ class DeviceAdapter {
   void logOnlineChange(const DeviceHealth& health);
   // Bus thread, after a good poll: restart detection and on_restart.
   void checkRestart();
-  // Bus thread: writes `targets`, reads back, reports (trigger, reason, action).
+  // Bus thread: writes `targets`, reads back, reports (trigger, reason, action). With
+  // `holds_safe_states` (the write carries safe states), the safe states stay pending, to be
+  // tried again when the device answers again, until such a write is confirmed.
   Result writeAndReport(Transport& t, const OutputTargets& targets, const std::string& trigger,
-                        const std::string& reason, const std::string& action);
+                        const std::string& reason, const std::string& action,
+                        bool holds_safe_states);
   void report(const FailsafeEvent& event);
   // A user's confirmed write ends the fail-safe state shown in /diagnostics.
   void endFailsafeState();

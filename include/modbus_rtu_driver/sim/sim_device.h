@@ -80,6 +80,13 @@ class SimDevice {
   }
   // The reply (or exception) to a request for this device, or nothing (silence: broadcasts).
   std::optional<Bytes> handle(const Request& request, SimClock::time_point now);
+  // A broadcast (slave 0) this device hears. The standard's rule: applied, never answered. A
+  // device whose manual answers some broadcasts (the LC board's address commands) overrides it
+  // and returns its reply; the line collides the replies of several such devices.
+  virtual std::optional<Bytes> handleBroadcast(const Request& request, SimClock::time_point now) {
+    handle(request, now);
+    return std::nullopt;
+  }
   // An exception reply for a request whose function this device does not know.
   Bytes unknownFunction(uint8_t slave, uint8_t function) const;
   // The longest read it serves (registers, or bits for `bits`); longer reads get exception 03,

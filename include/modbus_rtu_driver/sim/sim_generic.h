@@ -11,6 +11,7 @@
 #include <map>
 #include <vector>
 
+#include "modbus_rtu_driver/core/device_types/generic.h"
 #include "modbus_rtu_driver/core/signal.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 

@@ -13,7 +13,7 @@
 
 #include <array>
 
-#include "modbus_rtu_driver/core/device_types.h"
+#include "modbus_rtu_driver/core/device_types/lc_relay8.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 
 namespace modbus_rtu_driver {
@@ -23,9 +23,10 @@ class SimLcRelay8 : public SimDevice {
   SimLcRelay8(uint8_t address, SimLineSettings line);
   const char* type() const override { return kLcRelay8Type.name; }
   // The board's commands at slave 0: read the address (FC03 register 0, count 1) and set it
-  // (FC16 register 0, one value). Only an LC board handles these; it answers them.
+  // (FC16 register 0, one value). Only an LC board handles these; it answers them. Other
+  // broadcasts it applies silently, as every device does.
   static bool isAddressCommand(const Request& request);
-  std::optional<Bytes> handleAtZero(const Request& request);
+  std::optional<Bytes> handleBroadcast(const Request& request, SimClock::time_point now) override;
   void tick(SimClock::time_point now) override;
   void powerCycle(SimClock::time_point now) override;
   void saveState(YAML::Node& node) const override;

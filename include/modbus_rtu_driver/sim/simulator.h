@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/request_framer.h"
+#include "modbus_rtu_driver/core/type_registry.h"
 #include "modbus_rtu_driver/sim/pty_link.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 #include "modbus_rtu_driver/sim/sim_gateway.h"
@@ -44,12 +45,23 @@ struct SimulatorConfig {
   std::vector<Entry> devices;
 };
 
-// The registry of simulated types (simulator_config.cpp). Builds the device an entry describes,
-// listening at `line` (the factory settings); null for a type not simulated.
+// The simulated types: each simulated device adds itself from its own source file
+// (simDeviceClasses().add(...), core/type_registry.h).
+using SimDeviceFactory = std::unique_ptr<SimDevice> (*)(const SimulatorConfig::Entry& entry,
+                                                        SimLineSettings line);
+TypeRegistry<SimDeviceFactory>& simDeviceClasses();
+// The factory of a simulated device built from its address and line settings alone.
+template <typename T>
+std::unique_ptr<SimDevice> makeSimDeviceOf(const SimulatorConfig::Entry& entry,
+                                           SimLineSettings line) {
+  return std::make_unique<T>(static_cast<uint8_t>(entry.address), line);
+}
+// Builds the device an entry describes, listening at `line` (the factory settings); null for a
+// type not simulated.
 std::unique_ptr<SimDevice> makeSimDevice(const SimulatorConfig::Entry& entry, SimLineSettings line);
 // The descriptor of a simulated type (its address range); null for a type not simulated.
 const DeviceDescriptor* simDeviceType(const std::string& type);
-std::string simDeviceTypeNames();  // "ld58a08, lc_relay8, yespeed_pdu, generic"
+std::string simDeviceTypeNames();  // "generic, lc_relay8, ld58a08, yespeed_pdu"
 
 // False with a message naming the key when the YAML does not fit.
 bool loadSimulatorConfig(const std::string& path, SimulatorConfig* out, std::string* error);
