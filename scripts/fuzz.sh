@@ -14,26 +14,24 @@ SECONDS_TO_RUN=${1:-20}
 RESULTS=${2:-}
 OUT="$("$REPO/scripts/workspace.sh")/fuzz"
 mkdir -p "$OUT/corpus"
-# Three targets: frames through the framer, decoder and simulated devices; the slave role's
-# request handling (framer + libmodbus's modbus_reply on a real pty); and a Modbus TCP client's
-# bytes at the share (ShareGateway on a loopback socket over a BusScheduler, test/unit's
-# in-memory bus).
-CORE=(src/core/frame.cpp src/core/types.cpp src/core/request_framer.cpp)
-build() {  # a target that does not build is run as missing below, and fails
-  local name=$1
-  shift
-  rm -f "$OUT/$name"
-  (cd "$REPO" && clang++ -std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined \
-    -fno-sanitize-recover=all -Iinclude -Itest/unit -I/usr/include/modbus "test/fuzz/$name.cpp" "${CORE[@]}" "$@" \
-    -lmodbus -lyaml-cpp -o "$OUT/$name") || echo "$name: build failed"
-}
+# Three targets (test/fuzz/; what each feeds: test/sanitizers/CMakeLists.txt), built by the
+# instrumented CMake build with -DMODBUS_RTU_FUZZ=ON against the layer libraries of
+# cmake/layers.cmake, the same sources as every other build.
+BUILD="$OUT/build"
+TARGETS=(fuzz_frames fuzz_slave fuzz_share)
 if [ $MODE != run ]; then
-  build fuzz_frames src/sim/sim_device.cpp src/sim/sim_ld58a08.cpp src/sim/sim_lc_relay8.cpp \
-    src/sim/sim_yespeed_pdu.cpp src/core/link_config.cpp
-  build fuzz_slave src/core/slave_server.cpp src/core/serial_port.cpp src/core/fd_io.cpp \
-    src/core/slave_config.cpp src/core/config_yaml.cpp src/core/link_config.cpp
-  build fuzz_share src/core/share_gateway.cpp src/core/modbus_tcp_server.cpp \
-    src/core/bus_scheduler.cpp src/core/mbap.cpp src/core/rate_meter.cpp -lpthread
+  mkdir -p "$BUILD"
+  rm -f "${TARGETS[@]/#/$OUT/}"
+  # Each target on its own: one that does not build is run as missing below, and fails.
+  if cmake -S "$REPO/test/sanitizers" -B "$BUILD" -DCMAKE_CXX_COMPILER=clang++ -DMODBUS_RTU_FUZZ=ON \
+    -DCMAKE_RUNTIME_OUTPUT_DIRECTORY="$OUT" >"$BUILD/configure.log" 2>&1; then
+    for name in "${TARGETS[@]}"; do
+      cmake --build "$BUILD" --target "$name" -j"$(nproc)" >"$BUILD/$name.build.log" 2>&1 ||
+        { tail -20 "$BUILD/$name.build.log"; echo "$name: build failed"; }
+    done
+  else
+    tail -20 "$BUILD/configure.log"; echo "fuzz build: configure failed"
+  fi
 fi
 [ $MODE = build ] && exit 0
 # Seed with the manuals' frames.
@@ -43,7 +41,7 @@ done || true
 # And with every input that once broke a target (test/fuzz/regressions), so it is run again.
 cp "$REPO"/test/fuzz/regressions/* "$OUT/corpus/"
 overall=0
-for name in fuzz_frames fuzz_slave fuzz_share; do
+for name in "${TARGETS[@]}"; do
   status=0
   mkdir -p "$OUT/corpus-$name"
   if [ -x "$OUT/$name" ]; then
