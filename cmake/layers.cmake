@@ -1,6 +1,7 @@
 # The ROS-free layer libraries and every library's source list, written once. Included by the
 # catkin build (CMakeLists.txt) and by the instrumented builds (test/sanitizers/CMakeLists.txt:
-# ASan + UBSan with gcc, or libFuzzer with clang), so a source file added here is in all of them.
+# ASan + UBSan with gcc, or libFuzzer with clang), so a source file in a layer's folder is in
+# all of them.
 #
 # The includer has found libmodbus (LIBMODBUS_*), yaml-cpp, Threads, nlohmann_json and CLI11, and
 # may set:
@@ -22,6 +23,16 @@
 set(MODBUS_RTU_DIR ${CMAKE_CURRENT_LIST_DIR}/..)
 get_filename_component(MODBUS_RTU_DIR ${MODBUS_RTU_DIR} ABSOLUTE)
 
+# A layer's sources: every .cpp in its folder, the executables' *_main.cpp aside. A new file (a
+# device type's class, adapter or simulated device, which registers itself) needs no line here;
+# CONFIGURE_DEPENDS makes the build re-run CMake when a file comes or goes.
+function(layer_sources out folder)
+  file(GLOB sources CONFIGURE_DEPENDS ${MODBUS_RTU_DIR}/src/${folder}/*.cpp)
+  list(FILTER sources EXCLUDE REGEX "_main\\.cpp$")
+  list(SORT sources)
+  set(${out} ${sources} PARENT_SCOPE)
+endfunction()
+
 function(layer target)
   if(NOT MODBUS_RTU_ALLOW_UNDEFINED)
     target_link_options(${target} PRIVATE -Wl,--no-undefined)
@@ -29,86 +40,33 @@ function(layer target)
 endfunction()
 
 # Core: framing, the RTU link (libmodbus plus our own reader), the bus thread, the slave role.
-add_library(modbus_rtu_core ${MODBUS_RTU_LIBRARY_TYPE}
-  ${MODBUS_RTU_DIR}/src/core/bus_scheduler.cpp
-  ${MODBUS_RTU_DIR}/src/core/config_yaml.cpp
-  ${MODBUS_RTU_DIR}/src/core/fd_io.cpp
-  ${MODBUS_RTU_DIR}/src/core/frame.cpp
-  ${MODBUS_RTU_DIR}/src/core/link.cpp
-  ${MODBUS_RTU_DIR}/src/core/link_config.cpp
-  ${MODBUS_RTU_DIR}/src/core/link_line.cpp
-  ${MODBUS_RTU_DIR}/src/core/make_transport.cpp
-  ${MODBUS_RTU_DIR}/src/core/mbap.cpp
-  ${MODBUS_RTU_DIR}/src/core/modbus_tcp_link.cpp
-  ${MODBUS_RTU_DIR}/src/core/modbus_tcp_server.cpp
-  ${MODBUS_RTU_DIR}/src/core/rate_meter.cpp
-  ${MODBUS_RTU_DIR}/src/core/realtime.cpp
-  ${MODBUS_RTU_DIR}/src/core/request_framer.cpp
-  ${MODBUS_RTU_DIR}/src/core/rtu_link.cpp
-  ${MODBUS_RTU_DIR}/src/core/serial_port.cpp
-  ${MODBUS_RTU_DIR}/src/core/share_gateway.cpp
-  ${MODBUS_RTU_DIR}/src/core/signal.cpp
-  ${MODBUS_RTU_DIR}/src/core/signal_yaml.cpp
-  ${MODBUS_RTU_DIR}/src/core/slave_config.cpp
-  ${MODBUS_RTU_DIR}/src/core/slave_server.cpp
-  ${MODBUS_RTU_DIR}/src/core/tcp_link.cpp
-  ${MODBUS_RTU_DIR}/src/core/task_queue.cpp
-  ${MODBUS_RTU_DIR}/src/core/tcp_socket.cpp
-  ${MODBUS_RTU_DIR}/src/core/types.cpp
-)
+layer_sources(core_sources core)
+add_library(modbus_rtu_core ${MODBUS_RTU_LIBRARY_TYPE} ${core_sources})
 target_include_directories(modbus_rtu_core PUBLIC ${MODBUS_RTU_DIR}/include ${LIBMODBUS_INCLUDE_DIRS})
 target_link_libraries(modbus_rtu_core PUBLIC ${LIBMODBUS_LIBRARIES} yaml-cpp Threads::Threads)
 layer(modbus_rtu_core)
 
-# Devices: one class per type, one registry line each; merged writes; the fail-safe policy.
-add_library(modbus_rtu_devices ${MODBUS_RTU_LIBRARY_TYPE}
-  ${MODBUS_RTU_DIR}/src/devices/device.cpp
-  ${MODBUS_RTU_DIR}/src/devices/failsafe.cpp
-  ${MODBUS_RTU_DIR}/src/devices/generic_device.cpp
-  ${MODBUS_RTU_DIR}/src/devices/lc_relay8.cpp
-  ${MODBUS_RTU_DIR}/src/devices/ld58a08.cpp
-  ${MODBUS_RTU_DIR}/src/devices/output_batch.cpp
-  ${MODBUS_RTU_DIR}/src/devices/registry.cpp
-  ${MODBUS_RTU_DIR}/src/devices/signal_map.cpp
-  ${MODBUS_RTU_DIR}/src/devices/yespeed_pdu.cpp
-)
+# Devices: one class per type (each registers itself); merged writes; the fail-safe policy.
+layer_sources(devices_sources devices)
+add_library(modbus_rtu_devices ${MODBUS_RTU_LIBRARY_TYPE} ${devices_sources})
 target_link_libraries(modbus_rtu_devices PUBLIC modbus_rtu_core)
 layer(modbus_rtu_devices)
 
 # The bus node's configuration: link, devices (checked against their type), fail-safe keys.
-add_library(modbus_rtu_config ${MODBUS_RTU_LIBRARY_TYPE} ${MODBUS_RTU_DIR}/src/config/bus_config.cpp)
+layer_sources(config_sources config)
+add_library(modbus_rtu_config ${MODBUS_RTU_LIBRARY_TYPE} ${config_sources})
 target_link_libraries(modbus_rtu_config PUBLIC modbus_rtu_devices)
 layer(modbus_rtu_config)
 
 # Simulator (ROS-free): simulated devices, the line on a pty, fault injection, control socket.
-add_library(modbus_rtu_sim ${MODBUS_RTU_LIBRARY_TYPE}
-  ${MODBUS_RTU_DIR}/src/sim/dm500_garbage.cpp
-  ${MODBUS_RTU_DIR}/src/sim/dm500_master.cpp
-  ${MODBUS_RTU_DIR}/src/sim/pty_link.cpp
-  ${MODBUS_RTU_DIR}/src/sim/sim_device.cpp
-  ${MODBUS_RTU_DIR}/src/sim/sim_gateway.cpp
-  ${MODBUS_RTU_DIR}/src/sim/sim_generic.cpp
-  ${MODBUS_RTU_DIR}/src/sim/sim_lc_relay8.cpp
-  ${MODBUS_RTU_DIR}/src/sim/sim_ld58a08.cpp
-  ${MODBUS_RTU_DIR}/src/sim/sim_yespeed_pdu.cpp
-  ${MODBUS_RTU_DIR}/src/sim/simulator.cpp
-  ${MODBUS_RTU_DIR}/src/sim/simulator_config.cpp
-  ${MODBUS_RTU_DIR}/src/sim/simulator_control.cpp
-  ${MODBUS_RTU_DIR}/src/sim/simulator_tcp.cpp
-)
+layer_sources(sim_sources sim)
+add_library(modbus_rtu_sim ${MODBUS_RTU_LIBRARY_TYPE} ${sim_sources})
 target_link_libraries(modbus_rtu_sim PUBLIC modbus_rtu_core yaml-cpp Threads::Threads)
 layer(modbus_rtu_sim)
 
 # Commissioning tool (ROS-free): a library the unit tests use (its main is the includer's).
-add_library(modbus_rtu_commission_lib ${MODBUS_RTU_LIBRARY_TYPE}
-  ${MODBUS_RTU_DIR}/src/tools/commission_args.cpp
-  ${MODBUS_RTU_DIR}/src/tools/commission_device.cpp
-  ${MODBUS_RTU_DIR}/src/tools/commission_output.cpp
-  ${MODBUS_RTU_DIR}/src/tools/commission_scan.cpp
-  ${MODBUS_RTU_DIR}/src/tools/commission_session.cpp
-  ${MODBUS_RTU_DIR}/src/tools/commission_table.cpp
-  ${MODBUS_RTU_DIR}/src/tools/commission_usage.cpp
-)
+layer_sources(tools_sources tools)
+add_library(modbus_rtu_commission_lib ${MODBUS_RTU_LIBRARY_TYPE} ${tools_sources})
 target_link_libraries(modbus_rtu_commission_lib PUBLIC modbus_rtu_devices nlohmann_json::nlohmann_json
   PRIVATE CLI11::CLI11)
 layer(modbus_rtu_commission_lib)
@@ -116,18 +74,4 @@ layer(modbus_rtu_commission_lib)
 # The ROS layer's sources (adapters, one small class per device type, and the node). Only a list:
 # each build makes the library with its own ROS (catkin's targets, or pkg-config's in the
 # sanitizer build) on modbus_rtu_config.
-set(MODBUS_RTU_ROS_SOURCES
-  ${MODBUS_RTU_DIR}/src/ros/adapter_registry.cpp
-  ${MODBUS_RTU_DIR}/src/ros/bus_node.cpp
-  ${MODBUS_RTU_DIR}/src/ros/device_adapter.cpp
-  ${MODBUS_RTU_DIR}/src/ros/device_failsafe.cpp
-  ${MODBUS_RTU_DIR}/src/ros/digital_states_publisher.cpp
-  ${MODBUS_RTU_DIR}/src/ros/generic_adapter.cpp
-  ${MODBUS_RTU_DIR}/src/ros/lc_relay8_adapter.cpp
-  ${MODBUS_RTU_DIR}/src/ros/ld58a08_adapter.cpp
-  ${MODBUS_RTU_DIR}/src/ros/raw_writes.cpp
-  ${MODBUS_RTU_DIR}/src/ros/share_bridge.cpp
-  ${MODBUS_RTU_DIR}/src/ros/slave_node.cpp
-  ${MODBUS_RTU_DIR}/src/ros/yaml_params.cpp
-  ${MODBUS_RTU_DIR}/src/ros/yespeed_pdu_adapter.cpp
-)
+layer_sources(MODBUS_RTU_ROS_SOURCES ros)

@@ -49,7 +49,15 @@ void serve(const Bytes& frame) {
       reply = device->handle(*request, SimClock::now());
     if (!reply) continue;
     check(hasValidCrc(*reply));
-    const Result r = decodeReply(*request, *reply);
+    // An answered broadcast is the LC board's address command, which the driver asks as
+    // LcRelay8::readAddressAtZero / setAddressAtZero do: of the one device at 0, its FC16 reply
+    // echoing the whole request.
+    Request asked = *request;
+    if (request->slave == kBroadcastAddress) {
+      asked.single_device_at_zero = true;
+      asked.reply_echoes_request = request->function == FunctionCode::kWriteMultipleRegisters;
+    }
+    const Result r = decodeReply(asked, *reply);
     check(r.ok() || r.error == ErrorKind::kException);
   }
 }
