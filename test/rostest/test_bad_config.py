@@ -59,7 +59,7 @@ CASES = [
     # Issue 24/8: an LD58A08 answers at 0xFF too: the LC board at its factory 255 must move.
     (with_change(["devices", "pwm_board"], {"type": "ld58a08", "address": 1}),
      ["devices/relays/address", "255 collides with the ld58a08 'pwm_board'",
-      "Move the LC board 'relays' off 255"]),
+      "Move 'relays' off 255"]),
     # Issue 24/6: fail-safe keys that would do nothing on a generic device.
     (with_change(["devices", "meter"], {"type": "generic", "address": 3, "safe_state": "off",
                                         "signals": [{"name": "a", "table": "coil",
