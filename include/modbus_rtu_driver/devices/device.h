@@ -17,7 +17,7 @@ namespace modbus_rtu_driver {
 
 struct DeviceConfig {
   std::string name;                  // ROS namespace of the device under the node
-  std::string type;                  // ld58a08 | lc_relay8 | yespeed_pdu | generic
+  std::string type;                  // a registered type's name (devices/registry.h)
   int address = 1;                   // 1-255
   double poll_rate = 1.0;            // Hz, 0 = never poll
   std::vector<std::string> outputs;  // channel names; empty = out0..outN-1

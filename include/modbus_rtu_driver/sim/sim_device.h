@@ -1,7 +1,7 @@
 // A simulated slave: the register map and behaviour of one device type, driven by decoded
-// requests and by time. ROS-free; one subclass per device type (sim_ld58a08.h, sim_lc_relay8.h,
-// sim_yespeed_pdu.h, sim_generic.h), built through the registry in simulator.h (makeSimDevice). The
-// line (simulator.h) decides which device hears a frame.
+// requests and by time. ROS-free; one subclass per device type (sim/sim_<type>.h), which
+// registers itself with the simulator (simDeviceClasses() in simulator.h). The line (simulator.h)
+// decides which device hears a frame.
 #pragma once
 
 #include <chrono>
