@@ -11,9 +11,9 @@
 #include <thread>
 #include <vector>
 
-#include "modbus_rtu_driver/core/bus_scheduler.h"
-#include "modbus_rtu_driver/core/device_types/yespeed_pdu.h"
-#include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/core/config/device_types/yespeed_pdu.h"
+#include "modbus_rtu_driver/core/link/rtu_link.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 

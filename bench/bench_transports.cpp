@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "bench_common.h"
-#include "modbus_rtu_driver/core/make_transport.h"
+#include "modbus_rtu_driver/core/link/make_transport.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
 namespace modbus_rtu_driver {

@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "bench_common.h"
-#include "modbus_rtu_driver/core/device_types/yespeed_pdu.h"
-#include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/core/config/device_types/yespeed_pdu.h"
+#include "modbus_rtu_driver/core/link/rtu_link.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
 using namespace modbus_rtu_driver;

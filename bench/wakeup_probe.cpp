@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/realtime.h"
+#include "modbus_rtu_driver/core/bus/realtime.h"
 
 namespace {
 

@@ -15,7 +15,7 @@
 #
 # The layers, each a library linked only on the ones below it; --no-undefined makes a call that
 # goes the wrong way a link error, and scripts/check_conventions.sh checks the includes:
-#   core (framing, the link, the bus thread, slave role; ROS-free)
+#   core (ROS-free; five libraries, one per folder of src/core: see below)
 #   <- devices (one class per device type, fail-safe policy) <- config (the bus node's YAML)
 #   <- ros (adapters, node).   sim and tools sit on core (tools also on devices).
 # The repository's root, without "cmake/..": the include path then reads as before (catkin_lint
@@ -39,12 +39,29 @@ function(layer target)
   endif()
 endfunction()
 
-# Core: framing, the RTU link (libmodbus plus our own reader), the bus thread, the slave role.
-layer_sources(core_sources core)
-add_library(modbus_rtu_core ${MODBUS_RTU_LIBRARY_TYPE} ${core_sources})
-target_include_directories(modbus_rtu_core PUBLIC ${MODBUS_RTU_DIR}/include ${LIBMODBUS_INCLUDE_DIRS})
-target_link_libraries(modbus_rtu_core PUBLIC ${LIBMODBUS_LIBRARIES} yaml-cpp Threads::Threads)
-layer(modbus_rtu_core)
+# Core, one library per job, each linked only on the ones before it (the same one-way rule):
+#   modbus (framing: ADU, CRC, MBAP, request framer) <- config (link, slave role and signal
+#   settings and their YAML; the device type descriptors and their registry) <- link (serial and
+#   TCP links, our own reply reader) <- bus (the bus thread, its queue, rates, real-time) <-
+#   server (the slave role, the Modbus TCP server, the share gateway).
+# modbus_rtu_core is all five, for the layers above.
+set(MODBUS_RTU_CORE_JOBS modbus config link bus server)
+set(below "")
+foreach(job ${MODBUS_RTU_CORE_JOBS})
+  layer_sources(job_sources core/${job})
+  add_library(modbus_rtu_core_${job} ${MODBUS_RTU_LIBRARY_TYPE} ${job_sources})
+  target_include_directories(modbus_rtu_core_${job} PUBLIC ${MODBUS_RTU_DIR}/include)
+  target_link_libraries(modbus_rtu_core_${job} PUBLIC ${below})
+  layer(modbus_rtu_core_${job})
+  set(below modbus_rtu_core_${job})
+endforeach()
+# libmodbus opens the serial port and sends (link); yaml-cpp parses the settings (config).
+target_include_directories(modbus_rtu_core_link PUBLIC ${LIBMODBUS_INCLUDE_DIRS})
+target_link_libraries(modbus_rtu_core_link PUBLIC ${LIBMODBUS_LIBRARIES})
+target_link_libraries(modbus_rtu_core_config PUBLIC yaml-cpp)
+target_link_libraries(modbus_rtu_core_bus PUBLIC Threads::Threads)
+add_library(modbus_rtu_core INTERFACE)
+target_link_libraries(modbus_rtu_core INTERFACE ${below})
 
 # Devices: one class per type (each registers itself); merged writes; the fail-safe policy.
 layer_sources(devices_sources devices)

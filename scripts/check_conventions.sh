@@ -25,6 +25,11 @@ forbid() {  # layer directory, pattern of includes it must not have
   [ -z "$hits" ] || layering+="$1 reaches up: $hits; "
 }
 forbid core 'ros/|modbus_rtu_driver/(devices|config|ros|sim|tools)/|modbus_rtu_driver/[A-Z]'
+# Inside core, the jobs go one way too: modbus <- config <- link <- bus <- server.
+forbid core/modbus 'modbus_rtu_driver/core/(config|link|bus|server)/'
+forbid core/config 'modbus_rtu_driver/core/(link|bus|server)/'
+forbid core/link 'modbus_rtu_driver/core/(bus|server)/'
+forbid core/bus 'modbus_rtu_driver/core/server/'
 forbid devices 'ros/|modbus_rtu_driver/(config|ros|sim|tools)/|modbus_rtu_driver/[A-Z]'
 forbid config 'ros/|modbus_rtu_driver/(ros|sim|tools)/|modbus_rtu_driver/[A-Z]'
 forbid sim 'ros/|modbus_rtu_driver/(devices|config|ros|tools)/|modbus_rtu_driver/[A-Z]'

@@ -4,9 +4,9 @@
 #include <map>
 #include <set>
 
-#include "modbus_rtu_driver/core/config_yaml.h"
-#include "modbus_rtu_driver/core/number_text.h"
-#include "modbus_rtu_driver/core/slave_config.h"
+#include "modbus_rtu_driver/core/config/config_yaml.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
+#include "modbus_rtu_driver/core/config/slave_config.h"
 #include "modbus_rtu_driver/devices/registry.h"
 
 namespace modbus_rtu_driver {
@@ -15,7 +15,7 @@ namespace {
 
 using namespace config;
 
-// The last three are the generic type's (core/signal.h: kSignalMapKeys).
+// The last three are the generic type's (core/config/signal.h: kSignalMapKeys).
 const std::set<std::string> kDeviceKeys = {
     "type",        "address",    "poll_rate",  "outputs",  "inputs",
     "reply_delay", "safe_state", "on_restart", "on_start", "command_timeout",

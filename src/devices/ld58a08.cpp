@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "modbus_rtu_driver/core/number_text.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/devices/registry.h"
 
 namespace modbus_rtu_driver {

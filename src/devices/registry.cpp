@@ -3,8 +3,8 @@
 #include <cstdio>
 #include <set>
 
-#include "modbus_rtu_driver/core/config_yaml.h"
-#include "modbus_rtu_driver/core/number_text.h"
+#include "modbus_rtu_driver/core/config/config_yaml.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
 
 namespace modbus_rtu_driver {
 

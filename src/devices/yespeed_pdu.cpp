@@ -4,7 +4,7 @@
 #include <cstdarg>
 #include <cstdio>
 
-#include "modbus_rtu_driver/core/number_text.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/devices/registry.h"
 
 namespace modbus_rtu_driver {

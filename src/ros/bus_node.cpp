@@ -10,9 +10,9 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "modbus_rtu_driver/core/make_transport.h"
-#include "modbus_rtu_driver/core/number_text.h"
-#include "modbus_rtu_driver/core/realtime.h"
+#include "modbus_rtu_driver/core/bus/realtime.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
+#include "modbus_rtu_driver/core/link/make_transport.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
 #include "modbus_rtu_driver/ros/publish_shared.h"

@@ -2,7 +2,7 @@
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
 
-#include "modbus_rtu_driver/core/number_text.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
 
 namespace modbus_rtu_driver {
 

@@ -4,7 +4,7 @@
 
 #include <cstdio>
 
-#include "modbus_rtu_driver/core/number_text.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 
 namespace modbus_rtu_driver {

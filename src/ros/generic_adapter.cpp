@@ -12,7 +12,7 @@
 
 #include "modbus_rtu_driver/SetValue.h"
 #include "modbus_rtu_driver/SignalValues.h"
-#include "modbus_rtu_driver/core/rate_meter.h"
+#include "modbus_rtu_driver/core/bus/rate_meter.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
 

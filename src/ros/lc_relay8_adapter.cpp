@@ -1,6 +1,6 @@
 // LC relay board: timed flash-close / flash-open (its inputs are published by the base).
 #include "modbus_rtu_driver/Pulse.h"
-#include "modbus_rtu_driver/core/number_text.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
 

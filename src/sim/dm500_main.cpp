@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/link_config.h"
+#include "modbus_rtu_driver/core/config/link_config.h"
 #include "modbus_rtu_driver/sim/command_line.h"
 #include "modbus_rtu_driver/sim/dm500_master.h"
 

@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "modbus_rtu_driver/core/config_yaml.h"
+#include "modbus_rtu_driver/core/config/config_yaml.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
 namespace modbus_rtu_driver {

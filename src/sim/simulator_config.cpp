@@ -8,7 +8,7 @@
 #include <set>
 #include <sstream>
 
-#include "modbus_rtu_driver/core/link_config.h"
+#include "modbus_rtu_driver/core/config/link_config.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
 namespace modbus_rtu_driver {
@@ -55,7 +55,7 @@ bool parseDevice(const YAML::Node& d, const std::string& where, const std::strin
   }
   const bool generic = d["type"] && d["type"].IsScalar() && d["type"].Scalar() == "generic";
   std::set<std::string> keys = {"type", "address"};
-  if (generic) {  // the node's keys (core/signal.h), and the simulator's own (sim_generic.h)
+  if (generic) {  // the node's keys (core/config/signal.h), and the simulator's own (sim_generic.h)
     keys.insert(kSignalMapKeys.begin(), kSignalMapKeys.end());
     keys.insert(kSimGenericKeys.begin(), kSimGenericKeys.end());
   }

@@ -9,8 +9,8 @@
 #include <map>
 #include <sstream>
 
-#include "modbus_rtu_driver/core/device_types/lc_relay8.h"
-#include "modbus_rtu_driver/core/device_types/ld58a08.h"
+#include "modbus_rtu_driver/core/config/device_types/lc_relay8.h"
+#include "modbus_rtu_driver/core/config/device_types/ld58a08.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"
 #include "modbus_rtu_driver/tools/commission.h"
 #include "modbus_rtu_driver/tools/commission_session.h"

@@ -2,7 +2,7 @@
 #include <ostream>
 #include <set>
 
-#include "modbus_rtu_driver/core/make_transport.h"
+#include "modbus_rtu_driver/core/link/make_transport.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"

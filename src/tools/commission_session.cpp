@@ -5,7 +5,7 @@
 #include <memory>
 #include <ostream>
 
-#include "modbus_rtu_driver/core/make_transport.h"
+#include "modbus_rtu_driver/core/link/make_transport.h"
 
 namespace modbus_rtu_driver {
 

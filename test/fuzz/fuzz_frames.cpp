@@ -7,8 +7,8 @@
 #include <optional>
 #include <vector>
 
-#include "modbus_rtu_driver/core/frame.h"
-#include "modbus_rtu_driver/core/request_framer.h"
+#include "modbus_rtu_driver/core/modbus/frame.h"
+#include "modbus_rtu_driver/core/modbus/request_framer.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
 using namespace modbus_rtu_driver;

@@ -9,8 +9,8 @@
 #include <cstdlib>
 #include <memory>
 
-#include "modbus_rtu_driver/core/frame.h"
-#include "modbus_rtu_driver/core/slave_server.h"
+#include "modbus_rtu_driver/core/modbus/frame.h"
+#include "modbus_rtu_driver/core/server/slave_server.h"
 
 using namespace modbus_rtu_driver;
 

@@ -6,8 +6,8 @@
 #include <deque>
 #include <string>
 
-#include "modbus_rtu_driver/core/frame.h"
-#include "modbus_rtu_driver/core/transport.h"
+#include "modbus_rtu_driver/core/link/transport.h"
+#include "modbus_rtu_driver/core/modbus/frame.h"
 
 namespace modbus_rtu_driver {
 

@@ -16,9 +16,9 @@
 #include <mutex>
 #include <vector>
 
-#include "modbus_rtu_driver/core/bus_scheduler.h"
-#include "modbus_rtu_driver/core/mbap.h"
-#include "modbus_rtu_driver/core/share_gateway.h"
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/core/modbus/mbap.h"
+#include "modbus_rtu_driver/core/server/share_gateway.h"
 
 namespace modbus_rtu_driver {
 

@@ -16,9 +16,9 @@
 #include <thread>
 #include <vector>
 
-#include "modbus_rtu_driver/core/fd_io.h"
-#include "modbus_rtu_driver/core/link_config.h"
-#include "modbus_rtu_driver/core/mbap.h"
+#include "modbus_rtu_driver/core/config/link_config.h"
+#include "modbus_rtu_driver/core/link/fd_io.h"
+#include "modbus_rtu_driver/core/modbus/mbap.h"
 
 namespace modbus_rtu_driver {
 

@@ -7,8 +7,8 @@
 #include <sstream>
 
 #include "modbus_rtu_driver/config/bus_config.h"
-#include "modbus_rtu_driver/core/config_yaml.h"
-#include "modbus_rtu_driver/core/slave_config.h"
+#include "modbus_rtu_driver/core/config/config_yaml.h"
+#include "modbus_rtu_driver/core/config/slave_config.h"
 
 using namespace modbus_rtu_driver;
 

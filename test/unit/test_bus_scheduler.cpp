@@ -12,9 +12,9 @@
 #include <set>
 #include <thread>
 
-#include "modbus_rtu_driver/core/bus_scheduler.h"
-#include "modbus_rtu_driver/core/clock.h"
-#include "modbus_rtu_driver/core/rate_meter.h"
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/core/bus/clock.h"
+#include "modbus_rtu_driver/core/bus/rate_meter.h"
 #include "wait_for.h"
 
 using namespace modbus_rtu_driver;

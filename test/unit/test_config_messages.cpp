@@ -5,8 +5,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include "modbus_rtu_driver/config/bus_config.h"
-#include "modbus_rtu_driver/core/number_text.h"
-#include "modbus_rtu_driver/core/slave_config.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
+#include "modbus_rtu_driver/core/config/slave_config.h"
 
 using namespace modbus_rtu_driver;
 

@@ -624,7 +624,7 @@ TEST(LcRelay8, FlashTimeIsCheckedOnTheTenthsWritten) {
 }
 
 TEST(Registry, TypesAddressesAndNames) {
-  // Each type's own file registered it (core/type_registry.h); listed alphabetically. A new
+  // Each type's own file registered it (core/config/type_registry.h); listed alphabetically. A new
   // type joins the list without an edit here.
   const std::vector<std::string> names = knownDeviceTypes();
   EXPECT_TRUE(std::is_sorted(names.begin(), names.end()));

@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/core/link/rtu_link.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 #include "wait_for.h"

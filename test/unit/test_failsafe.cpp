@@ -5,7 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "modbus_rtu_driver/config/bus_config.h"
-#include "modbus_rtu_driver/core/watchdog.h"
+#include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "scripted_transport.h"

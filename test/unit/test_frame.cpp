@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "golden_frames.h"
-#include "modbus_rtu_driver/core/frame.h"
+#include "modbus_rtu_driver/core/modbus/frame.h"
 
 using namespace modbus_rtu_driver;
 

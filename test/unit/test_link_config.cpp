@@ -1,7 +1,7 @@
 // Line timing derived from the serial settings.
 #include <gtest/gtest.h>
 
-#include "modbus_rtu_driver/core/link_config.h"
+#include "modbus_rtu_driver/core/config/link_config.h"
 
 using namespace modbus_rtu_driver;
 

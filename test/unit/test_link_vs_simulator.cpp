@@ -5,7 +5,7 @@
 
 #include <algorithm>
 
-#include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/core/link/rtu_link.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/devices/registry.h"

@@ -1,7 +1,7 @@
 // MBAP framing: the conversion to and from RTU ADUs, byte exact, and the header checks.
 #include <gtest/gtest.h>
 
-#include "modbus_rtu_driver/core/mbap.h"
+#include "modbus_rtu_driver/core/modbus/mbap.h"
 
 namespace modbus_rtu_driver {
 namespace {

@@ -4,7 +4,7 @@
 #include <atomic>
 #include <chrono>
 
-#include "modbus_rtu_driver/core/bus_scheduler.h"
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/output_batch.h"
 #include "scripted_transport.h"

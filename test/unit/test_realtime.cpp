@@ -6,8 +6,8 @@
 
 #include <thread>
 
-#include "modbus_rtu_driver/core/bus_scheduler.h"
-#include "modbus_rtu_driver/core/realtime.h"
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/core/bus/realtime.h"
 
 namespace modbus_rtu_driver {
 namespace {

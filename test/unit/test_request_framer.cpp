@@ -1,7 +1,7 @@
 // Cutting a master's byte stream into request frames.
 #include <gtest/gtest.h>
 
-#include "modbus_rtu_driver/core/request_framer.h"
+#include "modbus_rtu_driver/core/modbus/request_framer.h"
 
 using namespace modbus_rtu_driver;
 

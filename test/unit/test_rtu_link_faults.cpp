@@ -10,7 +10,7 @@
 #include <future>
 #include <thread>
 
-#include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/core/link/rtu_link.h"
 #include "pty_pair.h"
 #include "wait_for.h"
 

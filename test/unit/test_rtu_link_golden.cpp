@@ -5,7 +5,7 @@
 #include <future>
 
 #include "golden_frames.h"
-#include "modbus_rtu_driver/core/rtu_link.h"
+#include "modbus_rtu_driver/core/link/rtu_link.h"
 #include "pty_pair.h"
 
 using namespace modbus_rtu_driver;

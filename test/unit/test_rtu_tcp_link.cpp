@@ -3,8 +3,8 @@
 // replies, a dropped connection and the reconnect.
 #include <gtest/gtest.h>
 
-#include "modbus_rtu_driver/core/make_transport.h"
-#include "modbus_rtu_driver/core/tcp_link.h"
+#include "modbus_rtu_driver/core/link/make_transport.h"
+#include "modbus_rtu_driver/core/link/tcp_link.h"
 #include "tcp_test_server.h"
 #include "wait_for.h"
 

@@ -1,4 +1,4 @@
-// Signals of generic devices (core/signal.h): decoding and encoding of every type and word
+// Signals of generic devices (core/config/signal.h): decoding and encoding of every type and word
 // order, the YAML rules (errors name the key) and templates.
 #include <gtest/gtest.h>
 #include <stdlib.h>
@@ -9,8 +9,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "modbus_rtu_driver/core/config_yaml.h"
-#include "modbus_rtu_driver/core/signal.h"
+#include "modbus_rtu_driver/core/config/config_yaml.h"
+#include "modbus_rtu_driver/core/config/signal.h"
 
 using namespace modbus_rtu_driver;
 

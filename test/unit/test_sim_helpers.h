@@ -13,7 +13,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "modbus_rtu_driver/core/frame.h"
+#include "modbus_rtu_driver/core/modbus/frame.h"
 #include "modbus_rtu_driver/sim/sim_lc_relay8.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 #include "wait_for.h"

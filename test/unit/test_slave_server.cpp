@@ -6,7 +6,7 @@
 #include <mutex>
 #include <thread>
 
-#include "modbus_rtu_driver/core/slave_server.h"
+#include "modbus_rtu_driver/core/server/slave_server.h"
 #include "pty_pair.h"
 #include "wait_for.h"
 

@@ -9,7 +9,7 @@
 #include <thread>
 #include <vector>
 
-#include "modbus_rtu_driver/core/task_queue.h"
+#include "modbus_rtu_driver/core/bus/task_queue.h"
 #include "wait_for.h"
 
 using namespace modbus_rtu_driver;

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/link_config.h"
-#include "modbus_rtu_driver/core/share_gateway.h"
+#include "modbus_rtu_driver/core/config/link_config.h"
+#include "modbus_rtu_driver/core/server/share_gateway.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace YAML {
@@ -43,7 +43,7 @@ struct BusConfig {
   int realtime_priority = 0;
   bool lock_memory = false;
   // A file the node writes every frame to, with when it was sent or read and the bus thread's
-  // CPU time (formatWireEvent, core/link.h); empty = none.
+  // CPU time (formatWireEvent, core/link/link.h); empty = none.
   std::string wire_log;
   // `share`: Modbus TCP clients reach the bus through the node (docs/share.md); off unless set.
   ShareConfig share;

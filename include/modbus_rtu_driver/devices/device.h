@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/signal.h"
-#include "modbus_rtu_driver/core/transport.h"
-#include "modbus_rtu_driver/core/types.h"
+#include "modbus_rtu_driver/core/config/signal.h"
+#include "modbus_rtu_driver/core/link/transport.h"
+#include "modbus_rtu_driver/core/modbus/types.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
 
 namespace modbus_rtu_driver {

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/clock.h"
+#include "modbus_rtu_driver/core/bus/clock.h"
 
 namespace modbus_rtu_driver {
 

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/device_types/generic.h"
+#include "modbus_rtu_driver/core/config/device_types/generic.h"
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/devices/signal_map.h"
 

@@ -4,7 +4,7 @@
 // Factory address 255. Manual: seeds/001.
 #pragma once
 
-#include "modbus_rtu_driver/core/device_types/lc_relay8.h"
+#include "modbus_rtu_driver/core/config/device_types/lc_relay8.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace modbus_rtu_driver {

@@ -1,5 +1,5 @@
 // The device types the driver knows: each type's class adds itself from its own source file
-// (deviceClasses().add(...), core/type_registry.h), so a new type edits no table here
+// (deviceClasses().add(...), core/config/type_registry.h), so a new type edits no table here
 // (docs/adding_a_device_type.md).
 #pragma once
 
@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/type_registry.h"
+#include "modbus_rtu_driver/core/config/type_registry.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace modbus_rtu_driver {

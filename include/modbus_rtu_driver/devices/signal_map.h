@@ -13,8 +13,8 @@
 #include <utility>
 #include <vector>
 
-#include "modbus_rtu_driver/core/signal.h"
-#include "modbus_rtu_driver/core/types.h"
+#include "modbus_rtu_driver/core/config/signal.h"
+#include "modbus_rtu_driver/core/modbus/types.h"
 
 namespace modbus_rtu_driver {
 

@@ -6,7 +6,7 @@
 #include <array>
 #include <optional>
 
-#include "modbus_rtu_driver/core/device_types/yespeed_pdu.h"
+#include "modbus_rtu_driver/core/config/device_types/yespeed_pdu.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace modbus_rtu_driver {

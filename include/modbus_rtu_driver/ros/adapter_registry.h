@@ -1,10 +1,10 @@
 // Device type -> ROS adapter. Each adapter adds itself from its own source file
-// (adapterClasses().add(...), core/type_registry.h); a new type edits nothing here.
+// (adapterClasses().add(...), core/config/type_registry.h); a new type edits nothing here.
 #pragma once
 
 #include <memory>
 
-#include "modbus_rtu_driver/core/type_registry.h"
+#include "modbus_rtu_driver/core/config/type_registry.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 
 namespace modbus_rtu_driver {

@@ -19,9 +19,9 @@
 
 #include "modbus_rtu_driver/FailsafeEvent.h"
 #include "modbus_rtu_driver/SetOutputs.h"
-#include "modbus_rtu_driver/core/bus_scheduler.h"
-#include "modbus_rtu_driver/core/task_queue.h"
-#include "modbus_rtu_driver/core/watchdog.h"
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/core/bus/task_queue.h"
+#include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/devices/output_batch.h"

@@ -12,7 +12,7 @@
 
 #include "modbus_rtu_driver/WriteCoils.h"
 #include "modbus_rtu_driver/WriteRegisters.h"
-#include "modbus_rtu_driver/core/bus_scheduler.h"
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
 
 namespace modbus_rtu_driver {
 

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "modbus_rtu_driver/config/bus_config.h"
-#include "modbus_rtu_driver/core/share_gateway.h"
+#include "modbus_rtu_driver/core/server/share_gateway.h"
 
 namespace modbus_rtu_driver {
 

@@ -11,7 +11,7 @@
 
 #include "modbus_rtu_driver/SetBits.h"
 #include "modbus_rtu_driver/SetRegisters.h"
-#include "modbus_rtu_driver/core/slave_server.h"
+#include "modbus_rtu_driver/core/server/slave_server.h"
 
 namespace modbus_rtu_driver {
 

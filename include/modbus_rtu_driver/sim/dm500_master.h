@@ -18,7 +18,7 @@
 
 #include <string>
 
-#include "modbus_rtu_driver/core/frame.h"
+#include "modbus_rtu_driver/core/modbus/frame.h"
 #include "modbus_rtu_driver/sim/pty_link.h"
 
 namespace modbus_rtu_driver {

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/device_types.h"
-#include "modbus_rtu_driver/core/frame.h"
-#include "modbus_rtu_driver/core/link_config.h"
-#include "modbus_rtu_driver/core/types.h"
+#include "modbus_rtu_driver/core/config/device_types.h"
+#include "modbus_rtu_driver/core/config/link_config.h"
+#include "modbus_rtu_driver/core/modbus/frame.h"
+#include "modbus_rtu_driver/core/modbus/types.h"
 
 namespace YAML {
 class Node;
@@ -34,7 +34,7 @@ struct SimLineSettings {
   int data_bits = 8;  // the line's; every simulated device uses 8
   int stop_bits = 1;  // the line's; a receiver accepts 1 or 2
 };
-// The line's timing, by the same rules as the driver's link (core/link_config.h).
+// The line's timing, by the same rules as the driver's link (core/config/link_config.h).
 int simBitsPerCharacter(const SimLineSettings& line);  // start, data, parity, stop
 double simCharacterTime(const SimLineSettings& line);
 double simFrameGap(const SimLineSettings& line);

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/frame.h"
+#include "modbus_rtu_driver/core/modbus/frame.h"
 
 namespace modbus_rtu_driver {
 

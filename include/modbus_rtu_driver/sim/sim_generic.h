@@ -1,6 +1,6 @@
 // Simulated generic device: built from the same signal description as the bus node's generic
-// device (core/signal.h). Each table answers from its lowest to its highest signal register (a
-// device's register block, gaps included, 0 until set); elsewhere, and in the configured
+// device (core/config/signal.h). Each table answers from its lowest to its highest signal register
+// (a device's register block, gaps included, 0 until set); elsewhere, and in the configured
 // `holes`, it answers exception 02, so a merged read across a hole is refused as on a device
 // with an unmapped register. `max_read` (registers or bits per read) makes it answer longer
 // reads with exception 03, as Eastron meters do. Coils and holding registers take writes;
@@ -11,8 +11,8 @@
 #include <map>
 #include <vector>
 
-#include "modbus_rtu_driver/core/device_types/generic.h"
-#include "modbus_rtu_driver/core/signal.h"
+#include "modbus_rtu_driver/core/config/device_types/generic.h"
+#include "modbus_rtu_driver/core/config/signal.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 
 namespace modbus_rtu_driver {

@@ -13,7 +13,7 @@
 
 #include <array>
 
-#include "modbus_rtu_driver/core/device_types/lc_relay8.h"
+#include "modbus_rtu_driver/core/config/device_types/lc_relay8.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 
 namespace modbus_rtu_driver {

@@ -21,7 +21,7 @@
 
 #include <array>
 
-#include "modbus_rtu_driver/core/device_types/ld58a08.h"
+#include "modbus_rtu_driver/core/config/device_types/ld58a08.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 
 namespace modbus_rtu_driver {

@@ -13,7 +13,7 @@
 #include <array>
 #include <random>
 
-#include "modbus_rtu_driver/core/device_types/yespeed_pdu.h"
+#include "modbus_rtu_driver/core/config/device_types/yespeed_pdu.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 
 namespace modbus_rtu_driver {

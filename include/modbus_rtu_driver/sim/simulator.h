@@ -25,8 +25,8 @@
 #include <thread>
 #include <vector>
 
-#include "modbus_rtu_driver/core/request_framer.h"
-#include "modbus_rtu_driver/core/type_registry.h"
+#include "modbus_rtu_driver/core/config/type_registry.h"
+#include "modbus_rtu_driver/core/modbus/request_framer.h"
 #include "modbus_rtu_driver/sim/pty_link.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 #include "modbus_rtu_driver/sim/sim_gateway.h"
@@ -46,7 +46,7 @@ struct SimulatorConfig {
 };
 
 // The simulated types: each simulated device adds itself from its own source file
-// (simDeviceClasses().add(...), core/type_registry.h).
+// (simDeviceClasses().add(...), core/config/type_registry.h).
 using SimDeviceFactory = std::unique_ptr<SimDevice> (*)(const SimulatorConfig::Entry& entry,
                                                         SimLineSettings line);
 TypeRegistry<SimDeviceFactory>& simDeviceClasses();

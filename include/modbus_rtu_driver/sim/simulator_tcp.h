@@ -9,9 +9,9 @@
 #include <memory>
 #include <string>
 
-#include "modbus_rtu_driver/core/bus_scheduler.h"
-#include "modbus_rtu_driver/core/rtu_link.h"
-#include "modbus_rtu_driver/core/share_gateway.h"
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/core/link/rtu_link.h"
+#include "modbus_rtu_driver/core/server/share_gateway.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
 namespace modbus_rtu_driver {

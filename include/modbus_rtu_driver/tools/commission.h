@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/link_config.h"
+#include "modbus_rtu_driver/core/config/link_config.h"
 
 namespace modbus_rtu_driver {
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/types.h"
+#include "modbus_rtu_driver/core/modbus/types.h"
 
 namespace modbus_rtu_driver {
 

@@ -6,7 +6,7 @@
 #include <iosfwd>
 #include <string>
 
-#include "modbus_rtu_driver/core/transport.h"
+#include "modbus_rtu_driver/core/link/transport.h"
 #include "modbus_rtu_driver/tools/commission.h"
 #include "modbus_rtu_driver/tools/commission_output.h"
 

@@ -1,0 +1,175 @@
+// The bus thread. It alone calls the Transport (and so libmodbus); everyone else hands it jobs.
+// Three priorities: writes (submit) first, then shared requests (submitShared: Modbus TCP
+// clients of the node's share), then polls; polls run at their device's rate, earliest due
+// first, and a device that stops answering is polled with backoff so it cannot stall the others.
+// Time comes from a Clock (the real steady clock unless one is given; tests use a ManualClock).
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <future>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "modbus_rtu_driver/core/bus/clock.h"
+#include "modbus_rtu_driver/core/bus/rate_meter.h"
+#include "modbus_rtu_driver/core/link/transport.h"
+
+namespace modbus_rtu_driver {
+
+struct DeviceHealth {
+  bool online = true;     // false after `offline_after` failed transactions in a row
+  bool answered = false;  // it has answered at least once (online in /diagnostics only then)
+  uint32_t consecutive_failures = 0;
+  uint64_t polls_ok = 0, polls_failed = 0, writes_ok = 0, writes_failed = 0;
+  uint64_t writes_refused = 0;  // failed unsent: the port was not open or the bus stopped
+  uint64_t shared_ok = 0, shared_failed = 0;  // requests of Modbus TCP clients (submitShared)
+  std::string last_error;                     // empty when none yet
+  double achieved_poll_rate = 0;              // Hz over the last seconds
+  bool rate_overrun = false;                  // the bus could not keep the configured rate
+  double last_offline_seconds = 0;            // how long its last offline spell lasted
+};
+
+// The port's losses: how often it opened again after failing or dropping, and after how long.
+struct PortReopens {
+  uint64_t count = 0;
+  double last_outage_seconds = 0;
+};
+
+class BusScheduler {
+ public:
+  using Job = std::function<Result(Transport&)>;
+  using ResultCallback = std::function<void(const Result&)>;
+
+  struct Options {
+    int offline_after = 3;           // failed transactions in a row before a device is offline
+    double backoff_initial = 0.5;    // s between probes of an offline device, doubling
+    double backoff_max = 5.0;        // s
+    double reconnect_initial = 0.5;  // s between attempts to reopen the port, doubling
+    double reconnect_max = 5.0;      // s
+    // Runs first on the bus thread (the node raises the thread's priority there).
+    std::function<void()> on_thread_start;
+  };
+
+  explicit BusScheduler(Transport& transport);
+  BusScheduler(Transport& transport, Options options);
+  // Reads the time from and sleeps on `clock` (the real steady clock otherwise); it must outlive
+  // the scheduler.
+  BusScheduler(Transport& transport, Options options, Clock& clock);
+  ~BusScheduler();  // stops the thread; pending jobs fail with "bus stopped"
+
+  void start();
+  void stop();
+  // stop(), but waits for the job in progress (a transaction to a silent device may take
+  // response_timeout x (retries + 1)) only until `deadline` (real time). False when the thread
+  // is still in that job: it keeps running, so the scheduler must not be destroyed (the node
+  // then ends the process).
+  bool stopBy(std::chrono::steady_clock::time_point deadline);
+
+  // Registers a device so its health is tracked.
+  void addDevice(const std::string& device);
+  // Periodic poll of `device` at `rate_hz` (0 = never). `on_result` runs on the bus thread right
+  // after each poll with its outcome. May be called while the bus runs (the node starts polling
+  // only once the start-up safe states are written).
+  void addPoll(const std::string& device, double rate_hz, Job poll, ResultCallback on_result);
+
+  // Runs `job` on the bus thread ahead of every poll. The future holds the real outcome. When
+  // the device is offline the job still runs once (a write is how a user probes too), but the
+  // transport's retries are what they are: the answer comes after one attempt cycle.
+  // Every submitted job runs exactly once: while the port is not open (or once the bus stops)
+  // it runs against a transport that refuses every request, so a job that took requests from a
+  // shared queue (merged writes, command topics) fails them all and keeps nothing for later.
+  std::future<Result> submit(const std::string& device, Job job);
+  // Runs `job` on the bus thread after every queued write and ahead of every poll (a shared
+  // request from a Modbus TCP client), with submit's guarantees: it runs exactly once, against
+  // the refusing transport while the port is not open or once the bus stops. `done` gets the
+  // outcome exactly once: on the bus thread, or on the caller's when the bus is not running.
+  // An empty `device` (a slave address no configured device has) keeps no health.
+  void submitShared(const std::string& device, Job job, ResultCallback done);
+  // Stops taking shared requests: those queued now and every later one fail unsent with
+  // `reason` (kNotConnected), the one on the bus right now finishes. The node calls it before
+  // its safe writes at shutdown, so no client's request runs after them. openShared() undoes it.
+  void closeShared(const std::string& reason);
+  void openShared();
+
+  DeviceHealth health(const std::string& device) const;
+  bool connected() const;
+  std::string connectionError() const;
+  PortReopens portReopens() const;
+
+ private:
+  struct Poll {
+    std::string device;
+    Clock::duration period{};
+    Clock::time_point due{};
+    Clock::time_point last_run{};  // when it was last polled
+    Job job;
+    ResultCallback on_result;
+  };
+  struct Pending {
+    std::string device;
+    Job job;
+    std::promise<Result> promise;
+    ResultCallback done;  // set instead of the promise for shared requests
+    bool shared = false;
+    void finish(Result r);
+  };
+
+  // What poll jobs see: the transport, with queued writes run before each transaction.
+  struct PollTransport : Transport {
+    explicit PollTransport(BusScheduler& scheduler) : owner(scheduler) {}
+    Result execute(const Request& request) override;
+    bool connect(std::string* error) override { return owner.transport_.connect(error); }
+    bool connected() const override { return owner.transport_.connected(); }
+    void disconnect() override { owner.transport_.disconnect(); }
+    BusScheduler& owner;
+  };
+
+  // What jobs see while the port is not open: every request fails with `reason`, unsent.
+  struct ClosedTransport : Transport {
+    Result execute(const Request& request) override;
+    bool connected() const override { return false; }
+    std::string reason;
+  };
+
+  void run();
+  // Runs the oldest write, else the oldest shared request; `lock` held on entry and on return.
+  bool runOneQueued(std::unique_lock<std::mutex>& lock);
+  // Runs every queued job against a ClosedTransport saying `reason`; `lock` held on entry/exit.
+  void refuseQueued(std::unique_lock<std::mutex>& lock, const std::string& reason);
+  enum class Kind { kPoll, kWrite, kShared };
+  void record(const std::string& device, const Result& result, Kind kind);
+
+  Transport& transport_;
+  Options options_;
+  Clock& clock_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<Pending> writes_;
+  std::deque<Pending> shared_;
+  std::deque<Poll> polls_;  // a deque: adding a poll keeps the one running valid
+  std::map<std::string, DeviceHealth> health_;
+  std::map<std::string, Clock::time_point> backoff_until_;
+  std::map<std::string, double> backoff_;
+  std::map<std::string, RateMeter> poll_rates_;
+  PollTransport poll_transport_;
+  bool running_ = false;
+  bool finished_ = false;                // run() has returned
+  std::condition_variable finished_cv_;  // real time, not clock_: stopBy's bound is wall time
+  bool shared_closed_ = false;
+  std::string shared_closed_reason_;
+  bool connected_ = false;
+  std::string connection_error_;
+  std::optional<Clock::time_point> port_lost_at_;  // set while the port is lost (or never opened)
+  PortReopens reopens_;
+  std::map<std::string, Clock::time_point> offline_since_;
+  std::thread thread_;
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,65 @@
+// Reading configuration from YAML, key by key: the pieces every configuration parser shares
+// (the bus node's, the slave role's). A rule that fails throws ConfigError naming the key, the
+// value and what is allowed; parseWith turns the first one into the parser's error message.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <set>
+#include <string>
+
+#include "modbus_rtu_driver/core/config/link_config.h"
+
+namespace modbus_rtu_driver {
+namespace config {
+
+struct ConfigError {
+  std::string message;
+};
+
+[[noreturn]] void fail(const std::string& key, const std::string& what);
+// How a value looks in an error message: 'text', a list, a map, nothing.
+std::string show(const YAML::Node& n);
+
+template <typename T>
+T get(const YAML::Node& n, const std::string& key, const char* expected) {
+  try {
+    return n.as<T>();
+  } catch (const YAML::Exception&) {
+    fail(key, show(n) + " is not " + expected);
+  }
+}
+
+double getNumber(const YAML::Node& n, const std::string& key);
+int getInt(const YAML::Node& n, const std::string& key);  // decimal, or hex as 0x...
+// Fails on the first key of `map` that is not in `known`, listing the known ones.
+void checkKeys(const YAML::Node& map, const std::string& where, const std::set<std::string>& known);
+std::set<std::string> with(std::set<std::string> keys, const std::set<std::string>& more);
+
+// The serial line's keys, shared by both roles.
+extern const std::set<std::string> kLinkKeys;
+void parseLink(const YAML::Node& root, LinkConfig* out);
+double parseDiagnosticPeriod(const YAML::Node& root);
+
+// Runs a parser; its first error becomes the message.
+template <typename Config>
+inline bool parseWith(void (*parser)(const YAML::Node&, Config*), const YAML::Node& root,
+                      Config* out, std::string* error) {
+  *out = Config{};
+  try {
+    parser(root, out);
+    return true;
+  } catch (const ConfigError& e) {
+    if (error) *error = e.message;
+  } catch (const YAML::Exception& e) {
+    if (error) *error = std::string("configuration: ") + e.what();
+  }
+  return false;
+}
+
+}  // namespace config
+
+// True when `name` is a valid ROS graph name segment: a letter, then letters, digits, '_'.
+bool isValidRosName(const std::string& name);
+
+}  // namespace modbus_rtu_driver

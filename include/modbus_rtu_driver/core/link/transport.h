@@ -1,0 +1,30 @@
+// The one thing device code talks to: run a Modbus transaction, get the outcome.
+// Implemented by the links (core/link/link.h: serial RtuLink, ModbusTcpLink, RtuOverTcpLink) and by
+// the unit tests' ScriptedTransport.
+// Only the bus thread (BusScheduler) calls these.
+#pragma once
+
+#include <string>
+
+#include "modbus_rtu_driver/core/modbus/types.h"
+
+namespace modbus_rtu_driver {
+
+class Transport {
+ public:
+  virtual ~Transport() = default;
+  // Runs one request (with the link's retries). Broadcasts return success once sent.
+  virtual Result execute(const Request& request) = 0;
+  // (Re)opens the port. False with a message when it cannot.
+  virtual bool connect(std::string* error) {
+    (void)error;
+    return true;
+  }
+  virtual bool connected() const { return true; }
+  virtual void disconnect() {}
+  // Waits until the line may carry the next frame (the silence after the last one), so the
+  // scheduler can pick what goes next as late as possible.
+  virtual void awaitLineFree() {}
+};
+
+}  // namespace modbus_rtu_driver

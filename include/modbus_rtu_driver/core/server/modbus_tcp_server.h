@@ -1,0 +1,139 @@
+// A Modbus TCP server on one thread (a poll loop over its sockets): the listening socket, the
+// allow list and the client bound applied at accept, per-client MBAP framing (core/modbus/mbap.h),
+// requests decoded and validated (frame.h, Request::validate) before a handler sees them, and
+// replies sent whenever the handler gives them, from any thread, so the loop never waits for a
+// bus. ROS-free: the node's share and the simulator's TCP side use it.
+//
+// What the server answers itself: a function it does not know -> exception 01; a start address
+// plus quantity past 65535 -> 02 (the application protocol's order: quantity first, then the
+// address range); a PDU that does not fit its function or a request Request::validate()
+// refuses otherwise -> 03 (01 for a read at unit 0, which nobody could answer). A header that
+// is not Modbus (protocol id not 0, length outside 2-254) closes that client: its byte stream
+// cannot be resynchronised.
+//
+// Connections: TCP keep-alive on every accepted socket (a peer that vanished is found within
+// about a minute); a client with no request waiting for its answer that sends nothing for
+// `idle_timeout` s (silent, or stopped halfway through a frame) is closed, freeing its slot. A
+// client that half-closes (shutdown(SHUT_WR)) after its requests still gets their answers; the
+// connection is closed once they are sent.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "modbus_rtu_driver/core/modbus/frame.h"
+
+namespace modbus_rtu_driver {
+
+struct TcpServerOptions {
+  std::string host = "127.0.0.1";  // IPv4 address to listen on (0.0.0.0: every interface)
+  uint16_t port = 1502;            // 0: any free port (tests; see ModbusTcpServer::port())
+  // Clients allowed to connect: IPv4 addresses or CIDR blocks ("10.0.0.0/8", "0.0.0.0/0" for
+  // everyone). Others are closed at accept.
+  std::vector<std::string> allow{"127.0.0.1"};
+  int max_clients = 4;  // connections at once; a further one is closed at accept
+  // s a client with no answer pending may stay silent before it is closed; 0 = never.
+  double idle_timeout = 60.0;
+};
+
+// Keep-alive on an accepted socket: first probe after 30 s of silence, then every 10 s, the
+// connection dropped after 3 unanswered probes.
+constexpr int kKeepAliveIdle = 30, kKeepAliveInterval = 10, kKeepAliveCount = 3;
+
+// "127.0.0.1:1502" -> host and port (1-65535). False with a message.
+bool parseListenAddress(const std::string& text, std::string* host, uint16_t* port,
+                        std::string* error);
+// An allow-list entry: "a.b.c.d" or "a.b.c.d/n" (n 0-32). False with a message.
+bool parseAllowEntry(const std::string& entry, uint32_t* network, uint32_t* mask,
+                     std::string* error);
+
+class ModbusTcpServer {
+ public:
+  using ClientId = uint64_t;
+  // One valid request from a client.
+  struct Incoming {
+    ClientId client = 0;
+    uint16_t transaction = 0;
+    Request request;
+    std::string peer;  // the client's address, "127.0.0.1"
+  };
+  // Runs on the server's thread; must not block. Answers with reply() now or later (any thread).
+  using Handler = std::function<void(const Incoming&)>;
+
+  struct PeerCounts {  // per client address, over all its connections
+    uint64_t connections = 0;
+    uint64_t requests = 0;  // complete frames received
+    uint64_t exceptions = 0;
+  };
+  struct Stats {
+    uint64_t accepted = 0, refused_not_allowed = 0, refused_too_many = 0;
+    uint64_t malformed = 0;    // clients closed for a header that is not Modbus TCP
+    uint64_t idle_closed = 0;  // clients closed after idle_timeout with nothing pending
+    uint64_t half_closed = 0;  // clients that sent FIN with answers still to come
+    size_t connected = 0;
+    std::map<std::string, PeerCounts> peers;
+  };
+
+  ModbusTcpServer(TcpServerOptions options, Handler handler);
+  ~ModbusTcpServer();
+  ModbusTcpServer(const ModbusTcpServer&) = delete;
+  ModbusTcpServer& operator=(const ModbusTcpServer&) = delete;
+
+  // Checks the options, binds, listens and starts the thread. False with a message.
+  bool start(std::string* error);
+  void stop();  // closes every socket; later replies are dropped
+  uint16_t port() const { return bound_port_; }
+
+  // Sends the answer to `in`: an RTU ADU (encodeReply / encodeException; its CRC is dropped)
+  // carried with the request's transaction id. Any thread; dropped when the client has gone.
+  void reply(const Incoming& in, const Bytes& rtu_adu);
+  void replyException(const Incoming& in, uint8_t code);
+  // Closes every client connection (a gateway reboot); the server keeps listening.
+  void dropClients();
+  Stats stats() const;
+
+ private:
+  struct Client {
+    int fd = -1;
+    std::string peer;
+    Bytes input, output;
+    std::chrono::steady_clock::time_point last_activity;  // last bytes in, or last answer out
+    int unanswered = 0;        // requests taken whose answer has not been given yet
+    bool read_closed = false;  // the client sent FIN: answer what it asked, then close
+  };
+  struct AllowRule {
+    uint32_t network, mask;
+  };
+
+  void run();
+  void acceptClient();
+  void receive(ClientId id);
+  void handleFrame(ClientId id, const Bytes& adu);
+  void flush(ClientId id);
+  void closeClient(ClientId id);  // mutex_ held
+  // Closes idle clients and half-closed ones with nothing left to send; returns the poll
+  // timeout (ms, -1 = none) until the next idle deadline. mutex_ held.
+  int closeFinished(std::chrono::steady_clock::time_point now);
+  void wake() const;
+
+  TcpServerOptions options_;
+  Handler handler_;
+  std::vector<AllowRule> allow_;
+  int listen_fd_ = -1, wake_fd_ = -1;
+  uint16_t bound_port_ = 0;
+  std::atomic<bool> running_{false}, drop_requested_{false};
+  std::thread thread_;
+  mutable std::mutex mutex_;  // clients_ and stats_ (the loop and reply() share them)
+  std::map<ClientId, Client> clients_;
+  ClientId next_id_ = 1;
+  Stats stats_;
+};
+
+}  // namespace modbus_rtu_driver

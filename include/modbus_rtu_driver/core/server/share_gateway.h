@@ -1,0 +1,74 @@
+// Sharing a bus: Modbus TCP clients (mbpoll, a commissioning tool, an HMI) reach the devices of
+// a bus that a BusScheduler owns. Each valid request is queued on the bus after the writes of
+// ROS and ahead of the polls (BusScheduler::submitShared) and answered when it has run, with
+// the client's transaction id and the slave address as unit id. What a client may see:
+//   01 a write while read_only (also a read at unit 0, a function the server does not know);
+//   06 the share's queue is full (max_queue requests waiting for the bus, all clients together);
+//   0A the port is not open (or the bus is stopping; requests still queued when the share stops
+//   are refused this way, unsent, as their connections close); 0B the device did not answer
+//   properly (timeout, CRC, garbled reply) after the link's retries; any other code is the device's
+//   own.
+// Unit 0 is a broadcast: nobody answers on the bus, so a write is answered with its normal
+// reply once it was sent (sent, not confirmed by any device), and the bus then stays quiet for
+// `broadcast_turnaround` s (the serial line spec's turnaround delay, 100-200 ms: the devices are
+// still carrying the broadcast out, and LC boards even answer address 0) before its next
+// request; the client's answer comes after that delay.
+// ROS-free: the node's share and the simulator's TCP side both use it.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/core/server/modbus_tcp_server.h"
+
+namespace modbus_rtu_driver {
+
+struct ShareConfig {
+  bool enabled = false;
+  TcpServerOptions server;            // listen, allow, max_clients
+  bool read_only = false;             // write functions (05, 06, 15, 16) answered with exception 01
+  int max_queue = 16;                 // requests waiting for or on the bus, all clients together
+  double broadcast_turnaround = 0.1;  // s of silence on the bus after a broadcast, 0-1
+};
+constexpr double kMaxBroadcastTurnaround = 1.0;  // s
+
+// The gateway exception for a failed transaction, or the device's own exception code.
+uint8_t shareExceptionFor(const Result& result);
+// What the client gets for `request` once it ran with `result`: an RTU ADU (reply or exception).
+Bytes shareReplyFor(const Request& request, const Result& result);
+
+class ShareGateway {
+ public:
+  // `device_of(slave)` names the configured device at that address ("" when none): its health
+  // counts the shared requests. The bus must stop before the gateway goes (pending answers
+  // call back into it).
+  ShareGateway(BusScheduler& bus, ShareConfig config,
+               std::function<std::string(uint8_t)> device_of = nullptr);
+  ~ShareGateway();
+  bool start(std::string* error);
+  // Closes the server and refuses every request still queued on the bus (unsent): none runs
+  // after this returns, except the one on the bus right now.
+  void stop();
+  ModbusTcpServer& server() { return *server_; }
+  // Called on the bus thread with the slave address when a client's write got its normal reply
+  // (the device confirmed it; unit 0: sent), before any later job runs: the node's fail-safe
+  // takes it as a command, not as a device restart. Before start().
+  void onWriteConfirmed(std::function<void(const Request&)> wrote) { wrote_ = std::move(wrote); }
+  int queued() const { return in_flight_.load(); }
+
+ private:
+  void handle(const ModbusTcpServer::Incoming& in);
+
+  BusScheduler& bus_;
+  ShareConfig config_;
+  std::function<std::string(uint8_t)> device_of_;
+  std::function<void(const Request&)> wrote_;
+  std::unique_ptr<ModbusTcpServer> server_;
+  std::atomic<int> in_flight_{0};
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,352 @@
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+
+#include <pthread.h>
+
+#include <algorithm>
+
+namespace modbus_rtu_driver {
+
+namespace {
+Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+
+}  // namespace
+
+BusScheduler::BusScheduler(Transport& transport) : BusScheduler(transport, Options{}) {}
+
+BusScheduler::BusScheduler(Transport& transport, Options options)
+    : BusScheduler(transport, std::move(options), Clock::steady()) {}
+
+BusScheduler::BusScheduler(Transport& transport, Options options, Clock& clock)
+    : transport_(transport), options_(std::move(options)), clock_(clock), poll_transport_(*this) {}
+
+BusScheduler::~BusScheduler() {
+  stop();
+}
+
+void BusScheduler::start() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (running_) return;
+  running_ = true;
+  finished_ = false;
+  thread_ = std::thread(&BusScheduler::run, this);
+}
+
+void BusScheduler::stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    running_ = false;
+  }
+  clock_.notifyAll(wake_);
+  if (thread_.joinable()) thread_.join();
+  std::unique_lock<std::mutex> lock(mutex_);
+  refuseQueued(lock, "bus stopped");
+}
+
+bool BusScheduler::stopBy(std::chrono::steady_clock::time_point deadline) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    running_ = false;
+  }
+  clock_.notifyAll(wake_);
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (thread_.joinable() && !finished_cv_.wait_until(lock, deadline, [&] { return finished_; }))
+      return false;
+  }
+  stop();
+  return true;
+}
+
+Result BusScheduler::ClosedTransport::execute(const Request& /*request*/) {
+  return Result::failure(ErrorKind::kNotConnected, reason);
+}
+
+void BusScheduler::Pending::finish(Result r) {
+  if (done)
+    done(r);
+  else
+    promise.set_value(std::move(r));
+}
+
+void BusScheduler::refuseQueued(std::unique_lock<std::mutex>& lock, const std::string& reason) {
+  ClosedTransport closed;
+  closed.reason = reason;
+  // Writes first; both queues again after each job, as more may come while the lock is free.
+  while (!writes_.empty() || !shared_.empty()) {
+    std::deque<Pending>& queue = writes_.empty() ? shared_ : writes_;
+    Pending p = std::move(queue.front());
+    queue.pop_front();
+    lock.unlock();
+    Result r = p.job(closed);
+    lock.lock();
+    if (!r.ok() && !p.device.empty()) ++health_[p.device].writes_refused;
+    lock.unlock();  // `done` may take its caller's locks
+    p.finish(std::move(r));
+    lock.lock();
+  }
+}
+
+void BusScheduler::addDevice(const std::string& device) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  health_[device];
+}
+
+void BusScheduler::addPoll(const std::string& device, double rate_hz, Job poll,
+                           ResultCallback on_result) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    health_[device];
+    if (!(rate_hz > 0)) return;  // 0 = never poll
+    Poll p;
+    p.device = device;
+    p.period = seconds(1.0 / rate_hz);
+    p.due = clock_.now();
+    p.job = std::move(poll);
+    p.on_result = std::move(on_result);
+    polls_.push_back(std::move(p));
+  }
+  clock_.notifyAll(wake_);  // the bus thread may be waiting with nothing to poll
+}
+
+std::future<Result> BusScheduler::submit(const std::string& device, Job job) {
+  Pending p;
+  p.device = device;
+  p.job = std::move(job);
+  std::future<Result> f = p.promise.get_future();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (running_) {
+      writes_.push_back(std::move(p));
+    } else {
+      p.promise.set_value(Result::failure(ErrorKind::kIo, "bus stopped"));
+    }
+  }
+  clock_.notifyAll(wake_);
+  return f;
+}
+
+void BusScheduler::submitShared(const std::string& device, Job job, ResultCallback done) {
+  Result refused = Result::failure(ErrorKind::kIo, "bus stopped");
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (shared_closed_) refused = Result::failure(ErrorKind::kNotConnected, shared_closed_reason_);
+    if (running_ && !shared_closed_) {
+      Pending p;
+      p.device = device;
+      p.job = std::move(job);
+      p.done = std::move(done);
+      p.shared = true;
+      shared_.push_back(std::move(p));
+      done = nullptr;
+    }
+  }
+  // Called outside the lock: the callback may submit again.
+  if (done) {
+    done(refused);
+    return;
+  }
+  clock_.notifyAll(wake_);
+}
+
+void BusScheduler::closeShared(const std::string& reason) {
+  std::deque<Pending> refused;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    shared_closed_ = true;
+    shared_closed_reason_ = reason;
+    refused.swap(shared_);
+  }
+  // Outside the lock: `done` may take its caller's locks. Each job still runs exactly once,
+  // against a transport that sends nothing.
+  ClosedTransport closed;
+  closed.reason = reason;
+  for (Pending& p : refused) {
+    Result r = p.job(closed);
+    p.finish(std::move(r));
+  }
+}
+
+void BusScheduler::openShared() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  shared_closed_ = false;
+}
+
+DeviceHealth BusScheduler::health(const std::string& device) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = health_.find(device);
+  return it == health_.end() ? DeviceHealth{} : it->second;
+}
+
+bool BusScheduler::connected() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return connected_;
+}
+
+PortReopens BusScheduler::portReopens() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return reopens_;
+}
+
+std::string BusScheduler::connectionError() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return connection_error_;
+}
+
+void BusScheduler::record(const std::string& device, const Result& result, Kind kind) {
+  if (result.error == ErrorKind::kInvalidArgument) return;  // never reached the bus
+  if (device.empty()) return;                               // a shared request to nobody known
+  const auto now = clock_.now();
+  DeviceHealth& h = health_[device];
+  if (kind == Kind::kShared) {
+    (result.ok() ? h.shared_ok : h.shared_failed)++;
+  } else if (kind == Kind::kPoll) {
+    (result.ok() ? h.polls_ok : h.polls_failed)++;
+    RateMeter& polls = poll_rates_[device];
+    polls.record(now);
+    h.achieved_poll_rate = polls.rate();
+  } else {
+    (result.ok() ? h.writes_ok : h.writes_failed)++;
+  }
+  if (!result.ok()) h.last_error = result.message;
+  if (!noProperAnswer(result.error)) {  // it answered, even if with an exception
+    h.answered = true;
+    h.consecutive_failures = 0;
+    if (!h.online)  // for the node's "back online after ..."
+      h.last_offline_seconds = std::chrono::duration<double>(now - offline_since_[device]).count();
+    h.online = true;
+    backoff_.erase(device);
+    backoff_until_.erase(device);
+    return;
+  }
+  ++h.consecutive_failures;
+  if (h.consecutive_failures < static_cast<uint32_t>(options_.offline_after)) return;
+  if (h.online) offline_since_[device] = now;
+  h.online = false;
+  double& b = backoff_[device];
+  b = b > 0 ? std::min(options_.backoff_max, b * 2) : options_.backoff_initial;
+  backoff_until_[device] = now + seconds(b);
+}
+
+bool BusScheduler::runOneQueued(std::unique_lock<std::mutex>& lock) {
+  std::deque<Pending>& queue = writes_.empty() ? shared_ : writes_;
+  if (queue.empty()) return false;
+  Pending p = std::move(queue.front());
+  queue.pop_front();
+  lock.unlock();
+  Result r = p.job(transport_);
+  lock.lock();
+  record(p.device, r, p.shared ? Kind::kShared : Kind::kWrite);
+  if (r.error == ErrorKind::kIo) transport_.disconnect();
+  lock.unlock();  // `done` may take its caller's locks
+  p.finish(std::move(r));
+  lock.lock();
+  return true;
+}
+
+// A poll of several transactions lets queued writes and shared requests go first before each of
+// them, so they wait for at most one transaction, not a whole poll.
+Result BusScheduler::PollTransport::execute(const Request& request) {
+  owner.transport_.awaitLineFree();  // a write that comes during the gap still goes first
+  {
+    std::unique_lock<std::mutex> lock(owner.mutex_);
+    while (owner.transport_.connected() && owner.runOneQueued(lock)) {
+    }
+  }
+  return owner.transport_.execute(request);
+}
+
+void BusScheduler::run() {
+  // Named, so top -H, perf and the benchmark tell the bus thread's CPU from ROS's threads.
+  pthread_setname_np(pthread_self(), "modbus_bus");
+  if (options_.on_thread_start) options_.on_thread_start();
+  double reconnect_delay = options_.reconnect_initial;
+  auto next_connect = clock_.now();
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (running_) {
+    auto now = clock_.now();
+    if (!transport_.connected()) {
+      if (connected_ && !port_lost_at_) port_lost_at_ = now;  // it dropped while open
+      if (now >= next_connect) {
+        lock.unlock();
+        std::string error;
+        const bool ok = transport_.connect(&error);
+        lock.lock();
+        // Never retry faster than the initial delay, even if a transport misreports itself.
+        next_connect = clock_.now() + seconds(options_.reconnect_initial);
+        connected_ = ok;
+        connection_error_ = ok ? "" : error;
+        if (ok) {
+          reconnect_delay = options_.reconnect_initial;
+          if (port_lost_at_) {  // for the node's "port open again after ..."
+            ++reopens_.count;
+            reopens_.last_outage_seconds =
+                std::chrono::duration<double>(clock_.now() - *port_lost_at_).count();
+            port_lost_at_.reset();
+          }
+          continue;
+        }
+        if (!port_lost_at_) port_lost_at_ = now;
+        next_connect = clock_.now() + seconds(reconnect_delay);
+        reconnect_delay = std::min(options_.reconnect_max, reconnect_delay * 2);
+      }
+      // Nobody waits for a bus that is not there: queued writes fail now, and what they took
+      // from shared queues fails with them (never sent later).
+      refuseQueued(lock, "port not open: " + connection_error_);
+      if (!running_) break;  // the lock was free while jobs ran: stop() may have come then
+      clock_.waitUntil(lock, wake_, next_connect);
+      continue;
+    }
+    connected_ = true;
+
+    if (runOneQueued(lock)) continue;  // writes, then shared requests, go ahead of polls
+
+    // The poll due first; an offline device waits out its backoff.
+    Poll* next = nullptr;
+    Clock::time_point when{};
+    for (Poll& p : polls_) {
+      // A late device claims at most one period of priority: it catches up after a stall
+      // without starving the others, and a rate the bus cannot carry only takes what is left.
+      auto t = std::max(p.due, now - p.period);
+      auto b = backoff_until_.find(p.device);
+      if (b != backoff_until_.end() && health_[p.device].online == false)
+        t = std::max(t, b->second);
+      // Ties (devices late on a bus that cannot carry their rates) go to the one served least
+      // recently, so an overloaded bus is shared in turn rather than by list order or by who
+      // was reset last.
+      if (!next || t < when || (t == when && p.last_run < next->last_run)) {
+        next = &p;
+        when = t;
+      }
+    }
+    if (!next) {
+      clock_.waitUntil(lock, wake_, Clock::time_point::max());
+      continue;
+    }
+    if (when > now) {
+      clock_.waitUntil(lock, wake_, when);
+      continue;
+    }
+    lock.unlock();
+    Result r = next->job(poll_transport_);
+    if (next->on_result) next->on_result(r);
+    lock.lock();
+    record(next->device, r, Kind::kPoll);
+    if (r.error == ErrorKind::kIo) transport_.disconnect();
+    // Keep the schedule, so a poll delayed by a slow transaction (an offline device's probe)
+    // is caught up and the average rate holds. Lagging more than 1 s means the bus cannot carry
+    // the rate: say so; past 3 s give up catching up.
+    now = clock_.now();
+    next->last_run = now;
+    next->due += next->period;
+    DeviceHealth& h = health_[next->device];
+    const auto lag = now - next->due;
+    h.rate_overrun = h.online && lag > std::chrono::seconds(1);
+    if (lag > std::chrono::seconds(3)) next->due = now;
+  }
+  finished_ = true;
+  finished_cv_.notify_all();
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,171 @@
+#include "modbus_rtu_driver/core/config/link_config.h"
+
+#include <algorithm>
+
+namespace modbus_rtu_driver {
+
+const char* parityName(Parity p) {
+  switch (p) {
+    case Parity::kNone:
+      return "none";
+    case Parity::kEven:
+      return "even";
+    case Parity::kOdd:
+      return "odd";
+  }
+  return "?";
+}
+
+bool parseParity(const std::string& t, Parity* out) {
+  if (t == "none" || t == "N")
+    *out = Parity::kNone;
+  else if (t == "even" || t == "E")
+    *out = Parity::kEven;
+  else if (t == "odd" || t == "O")
+    *out = Parity::kOdd;
+  else
+    return false;
+  return true;
+}
+
+bool isStandardBaud(int b) {
+  return std::find(std::begin(kStandardBauds), std::end(kStandardBauds), b) !=
+         std::end(kStandardBauds);
+}
+
+std::string standardBaudList() {
+  std::string list;
+  for (int b : kStandardBauds) list += (list.empty() ? "" : ", ") + std::to_string(b);
+  return list;
+}
+
+char parityLetter(Parity parity) {
+  return parity == Parity::kEven ? 'E' : parity == Parity::kOdd ? 'O' : 'N';
+}
+
+Parity parityOfLetter(char letter) {
+  return letter == 'E' ? Parity::kEven : letter == 'O' ? Parity::kOdd : Parity::kNone;
+}
+
+const char* portKindName(PortKind kind) {
+  switch (kind) {
+    case PortKind::kSerial:
+      return "serial RTU";
+    case PortKind::kModbusTcp:
+      return "Modbus TCP";
+    case PortKind::kRtuOverTcp:
+      return "RTU over TCP";
+  }
+  return "?";
+}
+
+bool parsePortAddress(const std::string& port, PortAddress* out, std::string* error) {
+  static const std::pair<const char*, PortKind> kSchemes[] = {
+      {"tcp://", PortKind::kModbusTcp}, {"rtu+tcp://", PortKind::kRtuOverTcp}};
+  *out = PortAddress{};
+  std::string rest;
+  for (const auto& [scheme, kind] : kSchemes) {
+    if (port.rfind(scheme, 0) != 0) continue;
+    out->kind = kind;
+    rest = port.substr(std::string(scheme).size());
+  }
+  if (out->kind == PortKind::kSerial) {
+    if (port.find("://") == std::string::npos) return true;
+    if (error) *error = "port: '" + port + "' is not a device path, tcp:// or rtu+tcp://";
+    return false;
+  }
+  const std::string form = "port: '" + port + "' is not ";
+  const std::string expected = port.substr(0, port.find("://") + 3) + "HOST:PORT (port 1-65535)";
+  const size_t colon = rest.rfind(':');
+  std::string host = colon == std::string::npos ? "" : rest.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']')
+    host = host.substr(1, host.size() - 2);  // [::1]
+  const std::string number = colon == std::string::npos ? "" : rest.substr(colon + 1);
+  const bool digits = !number.empty() && number.size() <= 5 &&
+                      number.find_first_not_of("0123456789") == std::string::npos;
+  const int tcp_port = digits ? std::stoi(number) : 0;
+  if (host.empty() || host.find_first_of("/[] ") != std::string::npos || tcp_port < 1 ||
+      tcp_port > 65535) {
+    if (error) *error = form + expected;
+    return false;
+  }
+  out->host = host;
+  out->tcp_port = tcp_port;
+  return true;
+}
+
+std::string validateLinkConfig(const LinkConfig& c) {
+  if (c.port.empty())
+    return "port: must name a serial device such as /dev/ttyUSB0, tcp://HOST:PORT or "
+           "rtu+tcp://HOST:PORT";
+  PortAddress address;
+  std::string port_error;
+  if (!parsePortAddress(c.port, &address, &port_error)) return port_error;
+  if (!(c.network_allowance >= 0.0 && c.network_allowance <= 10.0))
+    return "network_allowance: " + std::to_string(c.network_allowance) + " s is outside 0-10 s";
+  if (!isStandardBaud(c.baud))
+    return "baud: " + std::to_string(c.baud) + " is not one of " + standardBaudList();
+  if (c.data_bits != 7 && c.data_bits != 8)
+    return "data_bits: " + std::to_string(c.data_bits) + " is not 7 or 8";
+  if (c.stop_bits != 1 && c.stop_bits != 2)
+    return "stop_bits: " + std::to_string(c.stop_bits) + " is not 1 or 2";
+  if (!(c.response_timeout == 0.0 || (c.response_timeout >= 0.001 && c.response_timeout <= 10.0)))
+    return "response_timeout: " + std::to_string(c.response_timeout) +
+           " s is outside 0.001-10 s (0 = sized from the baud)";
+  if (!(c.late_reply_guard >= 0.0 && c.late_reply_guard <= 1.0))
+    return "late_reply_guard: " + std::to_string(c.late_reply_guard) + " s is outside 0-1 s";
+  if (!(c.byte_timeout >= 0.0 && c.byte_timeout <= 1.0))
+    return "byte_timeout: " + std::to_string(c.byte_timeout) + " s is outside 0-1 s (0 = auto)";
+  if (c.retries < 0 || c.retries > 10)
+    return "retries: " + std::to_string(c.retries) + " is outside 0-10";
+  if (!(c.min_gap >= 0.0 && c.min_gap <= 1.0))
+    return "min_gap: " + std::to_string(c.min_gap) + " s is outside 0-1 s (0 = t3.5)";
+  return {};
+}
+
+int bitsPerCharacter(const LinkConfig& c) {
+  return 1 + c.data_bits + (c.parity == Parity::kNone ? 0 : 1) + c.stop_bits;
+}
+
+double characterTime(int baud, int bits_per_character) {
+  return static_cast<double>(bits_per_character) / (baud > 0 ? baud : 9600);
+}
+
+double frameGap(int baud, int bits_per_character) {
+  return baud > 19200 ? 0.00175 : 3.5 * characterTime(baud, bits_per_character);
+}
+
+double characterTime(const LinkConfig& c) {
+  return characterTime(c.baud, bitsPerCharacter(c));
+}
+
+double frameGap(const LinkConfig& c) {
+  return frameGap(c.baud, bitsPerCharacter(c));
+}
+
+double effectiveByteTimeout(const LinkConfig& c) {
+  if (c.byte_timeout > 0) return c.byte_timeout;
+  // 1.5 characters is the spec's limit, but USB adapters deliver in chunks; 5 ms of slack.
+  return 1.5 * characterTime(c) + 0.005;
+}
+
+double effectiveMinGap(const LinkConfig& c) {
+  return c.min_gap > 0 ? c.min_gap : frameGap(c);
+}
+
+double effectiveResponseTimeout(const LinkConfig& c, size_t request_bytes) {
+  if (c.response_timeout > 0) return c.response_timeout;
+  // The write returns before the request is on the wire: its own time counts.
+  return static_cast<double>(request_bytes) * characterTime(c) + frameGap(c) + kTurnaroundAllowance;
+}
+
+double gatewayResponseTimeout(const LinkConfig& c, size_t request_bytes, size_t reply_bytes) {
+  return effectiveResponseTimeout(c, request_bytes) +
+         static_cast<double>(reply_bytes) * characterTime(c) + c.network_allowance;
+}
+
+double gatewayByteTimeout(const LinkConfig& c) {
+  return effectiveByteTimeout(c) + c.network_allowance;
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,215 @@
+// The part of every link that does not depend on the medium: retries, statistics, failures.
+#include "modbus_rtu_driver/core/link/link.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+
+namespace modbus_rtu_driver {
+
+namespace {
+using Steady = std::chrono::steady_clock;
+}  // namespace
+
+std::string formatWireEvent(const WireEvent& e) {
+  const auto seconds = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(t.time_since_epoch()).count();
+  };
+  char times[64], cpu[80];
+  std::snprintf(times, sizeof times, " %.6f %.6f ", seconds(e.first), seconds(e.last));
+  std::snprintf(cpu, sizeof cpu, e.outgoing ? " cpu=%.6f late=%.6f guard=%.6f" : " cpu=%.6f", e.cpu,
+                e.gap_late, e.guard_wait);
+  return (e.outgoing ? "tx" : "rx") + std::string(times) + toHex(e.frame) + cpu;
+}
+
+void Link::noteWire(bool outgoing, std::chrono::steady_clock::time_point first,
+                    std::chrono::steady_clock::time_point last, const Bytes& frame, double cpu) {
+  if (!wire_observer_) return;
+  WireEvent e{outgoing, first, last, frame, cpu, 0};
+  if (outgoing) {
+    e.gap_late = std::chrono::duration<double>(gap_late_).count();
+    e.guard_wait = std::chrono::duration<double>(guard_wait_).count();
+    gap_late_ = guard_wait_ = {};
+  }
+  wire_observer_(e);
+}
+
+double Link::wireCpuSeconds() const {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9 -
+         std::chrono::duration<double>(spun_).count();
+}
+
+LinkStats Link::stats() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return stats_;
+}
+
+void Link::noteConnected() {
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    if (ever_connected_) ++stats_.reconnects;
+  }
+  ever_connected_ = true;
+  unsettled_.clear();  // a new connection carries nothing from the old one
+  last_activity_ = Steady::now();
+}
+
+Result Link::execute(const Request& request) {
+  const std::string problem = request.validate();
+  if (!problem.empty())
+    return Result::failure(ErrorKind::kInvalidArgument, request.describe() + ": " + problem);
+  if (!connected())
+    return Result::failure(ErrorKind::kNotConnected, "port " + config_.port + " is not open");
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.requests;
+  }
+  if (!request.expectsReply()) return runBroadcast(request);
+  const auto start = Steady::now();
+  Result r;
+  for (int attempt_no = 0;; ++attempt_no) {
+    r = runAttempt(request);
+    // Only a lost answer is retried, and only when doing it twice does no harm; a dropped
+    // connection (kIo) is not: the request may have gone out, and the caller reads back.
+    if (r.ok() || !answerLost(r.error) || !request.repeatable || attempt_no >= config_.retries ||
+        !connected())
+      break;
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.retries;
+  }
+  account(r, std::chrono::duration<double>(Steady::now() - start).count());
+  return r;
+}
+
+Result Link::runAttempt(const Request& request) {
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.attempts;
+  }
+  Result r = attempt(request);
+  // The silence after a reply runs from its last byte as read, not from after its decoding.
+  last_activity_ = heard_at_.value_or(Steady::now());
+  heard_at_.reset();
+  countAttempt(r);
+  // A failure (not an answer) may be followed by a late reply. A success keeps an earlier
+  // entry: after a retry, the first attempt's reply may be the one taken, the second's late.
+  if (!r.ok() && r.error != ErrorKind::kException)
+    unsettled_[request.slave] = {last_activity_, encodeRequest(request)};
+  if (r.error == ErrorKind::kIo) disconnect();
+  return r;
+}
+
+Result Link::runBroadcast(const Request& request) {
+  Result r = sendBroadcast(request);
+  last_activity_ = Steady::now();
+  if (!r.ok()) {  // not sent: not an attempt
+    countAttempt(r);
+    account(r, 0);
+    if (r.error == ErrorKind::kIo) disconnect();
+    return r;
+  }
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  ++stats_.attempts;
+  ++stats_.broadcasts;
+  ++stats_.ok;
+  return Result::success(request.values);
+}
+
+double Link::responseTimeout(const Request& request) const {
+  return effectiveResponseTimeout(config_, 1 + encodeRequestPdu(request).size() + 2) +
+         reply_delay_[request.slave];
+}
+
+Result Link::readFailure(const Request& request, ReadStatus status, const Bytes& partial, int error,
+                         const std::string& medium) const {
+  const std::string what = request.describe() + ": ";
+  switch (status) {
+    case ReadStatus::kTimeout:
+      return Result::failure(ErrorKind::kTimeout, partial.empty()
+                                                      ? what + "no reply"
+                                                      : what + "truncated reply " + toHex(partial));
+    case ReadStatus::kClosed:
+      // Sent, so it may have been carried out: a kIo is not retried, and the caller reads back.
+      return Result::failure(ErrorKind::kIo, what + medium +
+                                                 " closed the connection before the reply (the "
+                                                 "request may have been carried out)");
+    case ReadStatus::kBadHeader:
+      return Result::failure(ErrorKind::kMalformed, what + "not a reply: " + toHex(partial));
+    default:
+      return Result::failure(ErrorKind::kIo, what + medium + ": " + std::strerror(error));
+  }
+}
+
+ReadStatus Link::readObserved(int fd, double first, double between,
+                              const std::function<long(const Bytes&)>& length_of, size_t shortest,
+                              size_t max_length, Bytes* out, int* error) {
+  ReadTimes times;
+  const ReadStatus status =
+      readFrame(fd, first, between, length_of, shortest, max_length, out, error, &times);
+  if (status == ReadStatus::kComplete) heard_at_ = times.last;
+  if (!out->empty() && observingWire())
+    noteWire(false, times.first, times.last, *out, wireCpuSeconds());
+  return status;
+}
+
+Result Link::readRtuReply(int fd, const Request& request, double byte_timeout,
+                          const std::string& medium) {
+  Bytes reply;
+  int error = 0;
+  const ReadStatus status = readObserved(
+      fd, responseTimeout(request), byte_timeout,
+      [&](const Bytes& b) { return static_cast<long>(replyLengthFromHeader(request, b)); },
+      kShortestReply, kMaxAduLength, &reply, &error);
+  if (status == ReadStatus::kComplete) return decodeReply(request, reply);
+  return readFailure(request, status, reply, error, medium);
+}
+
+void Link::account(const Result& r, double latency) {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  if (r.ok()) {
+    ++stats_.ok;
+    stats_.last_latency = latency;
+    stats_.mean_latency += (latency - stats_.mean_latency) / static_cast<double>(stats_.ok);
+    stats_.max_latency = std::max(stats_.max_latency, latency);
+  } else {
+    ++stats_.failed;
+  }
+}
+
+// Every failed attempt by kind, also those a retry made good: a flaky line shows in "crc
+// errors" before it costs a transaction.
+void Link::countAttempt(const Result& r) {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  switch (r.error) {
+    case ErrorKind::kNone:
+      break;
+    case ErrorKind::kTimeout:
+      ++stats_.timeouts;
+      break;
+    case ErrorKind::kCrc:
+      ++stats_.crc_errors;
+      break;
+    case ErrorKind::kWrongAddress:
+      ++stats_.wrong_address;
+      break;
+    case ErrorKind::kException:
+      ++stats_.exceptions;
+      break;
+    case ErrorKind::kMalformed:
+      ++stats_.malformed;
+      break;
+    default:
+      ++stats_.io_errors;
+      break;
+  }
+}
+
+void Link::addStaleBytes(uint64_t n) {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  stats_.stale_bytes += n;
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,22 @@
+#include "modbus_rtu_driver/core/link/make_transport.h"
+
+#include "modbus_rtu_driver/core/link/rtu_link.h"
+#include "modbus_rtu_driver/core/link/tcp_link.h"
+
+namespace modbus_rtu_driver {
+
+std::unique_ptr<Link> makeTransport(const LinkConfig& config) {
+  PortAddress address;
+  parsePortAddress(config.port, &address, nullptr);
+  switch (address.kind) {
+    case PortKind::kModbusTcp:
+      return std::make_unique<ModbusTcpLink>(config);
+    case PortKind::kRtuOverTcp:
+      return std::make_unique<RtuOverTcpLink>(config);
+    case PortKind::kSerial:
+      break;
+  }
+  return std::make_unique<RtuLink>(config);
+}
+
+}  // namespace modbus_rtu_driver

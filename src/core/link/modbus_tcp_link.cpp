@@ -1,0 +1,58 @@
+// The Modbus TCP transport: RTU requests carried as MBAP frames (core/modbus/mbap.h).
+#include <chrono>
+
+#include "modbus_rtu_driver/core/link/tcp_link.h"
+#include "modbus_rtu_driver/core/link/tcp_socket.h"
+#include "modbus_rtu_driver/core/modbus/mbap.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+using Steady = std::chrono::steady_clock;
+}  // namespace
+
+// A connection the gateway closed while the bus was idle fails the request unsent (a late reply
+// still waiting is read and dropped by its transaction id below).
+Result ModbusTcpLink::attempt(const Request& request) {
+  if (closedByPeer(fd_)) return closedUnsent(request);
+  const uint16_t transaction = ++next_transaction_;
+  Result sent = send(request, rtuToMbap(transaction, encodeRequest(request)));
+  if (!sent.ok()) return sent;
+  const auto deadline =
+      Steady::now() + std::chrono::duration_cast<Steady::duration>(
+                          std::chrono::duration<double>(responseTimeout(request)));
+  std::string header_error;
+  const auto length_of = [&](const Bytes& b) {
+    return static_cast<long>(mbapLengthFromHeader(b, &header_error));
+  };
+  for (;;) {
+    const double left = std::chrono::duration<double>(deadline - Steady::now()).count();
+    Bytes reply;
+    int error = 0;
+    const ReadStatus status =
+        readObserved(fd_, left, gatewayByteTimeout(config_), length_of, kMbapHeaderLength + 1,
+                     kMaxMbapAduLength, &reply, &error);
+    if (status == ReadStatus::kComplete && mbapTransaction(reply) != transaction) {
+      addStaleBytes(reply.size());  // the late reply to an earlier request
+      continue;
+    }
+    if (status == ReadStatus::kComplete) return decodeReply(request, mbapToRtu(reply));
+    Result r = readFailure(request, status, reply, error, medium());
+    // Part of a frame read, or a header that is not MBAP: the stream is out of step and only a
+    // new connection puts it back (the link reports the answer lost, then reconnects).
+    if (!reply.empty() && r.error != ErrorKind::kIo) {
+      if (!header_error.empty()) r.message += " (" + header_error + ")";
+      r.message += "; reconnecting to resynchronise";
+      disconnect();
+    }
+    return r;
+  }
+}
+
+// Unit id 0: the gateway broadcasts on its line and nobody answers.
+Result ModbusTcpLink::sendBroadcast(const Request& request) {
+  if (closedByPeer(fd_)) return closedUnsent(request);
+  return send(request, rtuToMbap(++next_transaction_, encodeRequest(request)));
+}
+
+}  // namespace modbus_rtu_driver

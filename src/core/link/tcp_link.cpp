@@ -1,0 +1,85 @@
+// The connection the TCP transports share, and the RTU-over-TCP transport.
+#include "modbus_rtu_driver/core/link/tcp_link.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+
+#include "modbus_rtu_driver/core/link/tcp_socket.h"
+
+namespace modbus_rtu_driver {
+
+TcpLink::TcpLink(LinkConfig config) : Link(std::move(config)) {
+  parsePortAddress(config_.port, &address_, nullptr);
+}
+
+TcpLink::~TcpLink() {
+  disconnect();
+}
+
+bool TcpLink::connect(std::string* error) {
+  disconnect();
+  fd_ = connectTcp(address_.host, address_.tcp_port, error);
+  if (fd_ < 0) return false;
+  noteConnected();
+  return true;
+}
+
+void TcpLink::disconnect() {
+  if (fd_ < 0) return;
+  close(fd_);
+  fd_ = -1;
+}
+
+std::string TcpLink::medium() const {
+  return "gateway " + address_.host + ":" + std::to_string(address_.tcp_port);
+}
+
+double TcpLink::responseTimeout(const Request& request) const {
+  return gatewayResponseTimeout(config_, encodeRequest(request).size(),
+                                expectedReplyLength(request)) +
+         reply_delay_[request.slave];
+}
+
+Result TcpLink::closedUnsent(const Request& request) const {
+  return Result::failure(ErrorKind::kIo,
+                         request.describe() + ": not sent, " + medium() + " closed the connection");
+}
+
+Result TcpLink::send(const Request& request, const Bytes& frame) {
+  const auto start = std::chrono::steady_clock::now();
+  const double cpu = observingWire() ? wireCpuSeconds() : 0;
+  if (sendAll(fd_, frame)) {
+    noteWire(true, start, std::chrono::steady_clock::now(), frame, cpu);
+    return Result::success();
+  }
+  return Result::failure(
+      ErrorKind::kIo, request.describe() + ": not sent, " + medium() + ": " + std::strerror(errno));
+}
+
+// The late-reply guard and the gap, as on a serial port; then what is waiting (a late reply,
+// the gateway's noise) belongs to nobody.
+bool RtuOverTcpLink::prepareLine(const Request& request) {
+  settleLine(fd_, request);
+  keepGap();
+  const long stale = discardWaiting(fd_);
+  if (stale < 0) return false;
+  addStaleBytes(static_cast<uint64_t>(stale));
+  return true;
+}
+
+Result RtuOverTcpLink::attempt(const Request& request) {
+  if (!prepareLine(request)) return closedUnsent(request);
+  Result sent = send(request, encodeRequest(request));
+  if (!sent.ok()) return sent;
+  return readRtuReply(fd_, request, gatewayByteTimeout(config_), medium());
+}
+
+Result RtuOverTcpLink::sendBroadcast(const Request& request) {
+  if (!prepareLine(request)) return closedUnsent(request);
+  return send(request, encodeRequest(request));
+}
+
+}  // namespace modbus_rtu_driver
