@@ -25,6 +25,14 @@ std::string refusal(std::vector<std::string> args, bool with_port = true) {
   return parseCommission(args, &c, &error) ? "" : error;
 }
 
+// The whole --help text, as `modbus_rtu_commission --help` prints it.
+std::string commissionUsage() {
+  CommissionCommand c;
+  std::string error;
+  EXPECT_TRUE(parseCommission({"--help"}, &c, &error)) << error;
+  return c.help;
+}
+
 }  // namespace
 
 TEST(CommissionArgs, ScanDefaultsCoverEveryAddressAtTheGivenLine) {
