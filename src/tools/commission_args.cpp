@@ -517,10 +517,14 @@ void parseLink(const Parsed& p, CommissionCommand& c) {
   if (p.top.count("--baud")) c.link.baud = p.w.baud;
   if (p.top.count("--parity")) c.link.parity = static_cast<Parity>(p.w.parity);
   c.link.retries = 0;
-  // Scans try many silent addresses: wait little. Other commands wait out an LD58A08's return
-  // delay (up to 1000 ms) too.
+  // Scans try many silent addresses: wait little. Other commands wait out the longest return
+  // delay a registered type can be set to (an LD58A08's 1000 ms) too.
+  int longest_delay_ms = 0;
+  for (const CommissioningType& t : typesWith(BoardFeature::kReturnDelay))
+    longest_delay_ms = std::max(longest_delay_ms, t.commissioning->returnDelayStepMs() *
+                                                      t.commissioning->returnDelayMaxUnits());
   const double wire = 30.0 * bitsPerCharacter(c.link) / c.link.baud;
-  c.link.response_timeout = (c.command == "scan" ? 0.05 : 1.05) + wire;
+  c.link.response_timeout = 0.05 + (c.command == "scan" ? 0 : longest_delay_ms / 1000.0) + wire;
   if (p.top.count("--timeout")) c.link.response_timeout = p.w.timeout;
 }
 

@@ -53,7 +53,7 @@ Identity identifyDevice(Transport& bus, uint8_t address) {
   if (presence.error == ErrorKind::kWrongAddress)
     id.note =
         "a reply from another address arrived late: some device answers slower than "
-        "--timeout (an LD58A08 with a return delay?)";
+        "--timeout (a board with a return delay?)";
   if (!answered(presence)) return id;
   // Probes answered neither with data nor with a refusal: late replies or noise, which leave
   // the type open.

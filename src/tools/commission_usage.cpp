@@ -119,6 +119,9 @@ std::string typesHelp() {
     if (f.address) h << ", factory address " << f.address;
     if (f.baud)
       h << ", " << std::to_string(f.baud) << " 8" << parityLetter(parityOf(f.parity)) << "1";
+    if (t.commissioning->has(BoardFeature::kReturnDelay))
+      h << ", return delay up to "
+        << t.commissioning->returnDelayStepMs() * t.commissioning->returnDelayMaxUnits() << " ms";
     h << " (" << t.type->manual << ")\n";
   }
   return h.str();
@@ -158,9 +161,9 @@ Numbers may be decimal or 0x-hex. Changes to how a device answers (address, baud
 return delay, factory reset) and the PDU's limits ask for confirmation on stdin unless --yes;
 without a "y" (or at end of input) nothing is changed.
 Baud and parity take effect after the device is powered off and on.
---timeout: wait for a reply, default 0.05 s + 30 characters for scans and 1 s more for other
-commands (an LD58A08 may wait up to 1000 ms before answering; scan such a board with a
---timeout above its return delay).
+--timeout: wait for a reply, default 0.05 s + 30 characters for scans, and for other
+commands more by the longest return delay below (a board with a return delay waits that long
+before answering; scan such a board with a --timeout above its return delay).
 
 exit codes: 0 ok, 2 bad arguments, 3 not found / no answer, 4 refused by the device (Modbus
 exception), 5 other bus error (CRC, I/O, port), 6 not confirmed by the user

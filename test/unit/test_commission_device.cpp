@@ -406,8 +406,8 @@ TEST(CommissionTypes, ProbeOrderAndFactorySettingsComeFromTheRegistry) {
   CommissionCommand c;
   std::string error;
   ASSERT_TRUE(parseCommission({"--help"}, &c, &error));
-  for (const char* line : {"ld58a08: addresses 1-248, factory address 1, 9600 8N1 "
-                           "(docs/devices/ld58a08.md)",
+  for (const char* line : {"ld58a08: addresses 1-248, factory address 1, 9600 8N1, return delay "
+                           "up to 1000 ms (docs/devices/ld58a08.md)",
                            "lc_relay8: addresses 1-255, factory address 255, 9600 8N1 "
                            "(docs/devices/lc_relay8.md)",
                            "ld58a08 boards also answer some requests at 255:\n      move "
