@@ -125,6 +125,18 @@ CLI::Validator intRange(long lo, long hi) {
       std::to_string(lo) + "-" + std::to_string(hi));
 }
 
+// An integer whose range depends on another value (COUNT: on the table), checked after parsing.
+CLI::Validator anInteger(const std::string& range) {
+  return CLI::Validator(
+      [range](std::string& text) -> std::string {
+        long v = 0;
+        if (!toLong(text, &v)) return "'" + text + "' is not a number (" + range + ")";
+        text = std::to_string(v);
+        return "";
+      },
+      "N");
+}
+
 CLI::Validator secondsRange(double lo, double hi) {
   const CLI::Range range(lo, hi);
   return CLI::Validator(
@@ -484,7 +496,8 @@ struct Cli {
   void addTableCount(CLI::App* command) {
     command->add_option(kTableCount, w.table_count, "how many (default 1)")
         ->type_name("COUNT")
-        ->transform(intRange(1, kMaxReadBits));
+        ->transform(anInteger("1-" + std::to_string(kMaxReadBits) + " values of a bit table, 1-" +
+                              std::to_string(kMaxReadRegisters) + " registers"));
   }
   CLI::App* addTable(CLI::App* command) {
     addAddress(command);

@@ -289,3 +289,23 @@ TEST(CommissionArgs, TheFullScanDurationInTheHelpFollowsTheTimeouts) {
   EXPECT_NE(commissionUsage().find("6120 x 0.081 s = 8.3 min of timeouts + 0.8 min of gaps"),
             std::string::npos);
 }
+
+// Each option is converted by CLI11 after its check: hex and the parity letters too, and
+// "010" is ten with every CLI11 version (2.1 would read it as octal).
+TEST(CommissionArgs, OptionsAreConvertedOnceTheirCheckPassed) {
+  CommissionCommand c =
+      parsed({"--parity", "E", "--baud", "0x4B00", "scan", "--from", "0x10", "--to", "016"});
+  EXPECT_EQ(c.link.parity, Parity::kEven);
+  EXPECT_EQ(c.link.baud, 19200);
+  EXPECT_EQ(c.addresses, std::vector<int>{16});
+  EXPECT_EQ(c.parities, std::vector<Parity>{Parity::kEven});
+  EXPECT_EQ(parsed({"--timeout", "0.25", "info", "--address", "0xF8"}).address, 248);
+  EXPECT_DOUBLE_EQ(parsed({"--timeout", "0.25", "info", "--address", "7"}).link.response_timeout,
+                   0.25);
+  EXPECT_EQ(refusal({"info", "--address", "0x100"}), "--address: '0x100' is outside 1-255");
+  EXPECT_EQ(refusal({"--parity", "X", "scan"}), "--parity: 'X' is not none, even or odd");
+  EXPECT_EQ(refusal({"read", "--address", "1", "holding", "0", "0"}),
+            "count: '0' is outside 1-125");
+  EXPECT_EQ(refusal({"read", "--address", "1", "coils", "0", "many"}),
+            "count: 'many' is not a number (1-2000 values of a bit table, 1-125 registers)");
+}
