@@ -34,7 +34,7 @@ class LcRelay8Commissioning : public Commissioning {
 
   Result report(Transport& bus, uint8_t address, InfoReport* out) const override {
     uint16_t code = 0;
-    const Result r = boardAt(address).readBaudCode(bus, &code);
+    Result r = boardAt(address).readBaudCode(bus, &code);
     if (!r.ok()) return r;
     out->human = "\n  baud rate: " + baudCodeText(code);
     out->fields = {{"baud_code", int{code}}, {"baud", baudOfCode(code)}};
@@ -49,7 +49,7 @@ class LcRelay8Commissioning : public Commissioning {
   std::string addressPath() const override { return "through address 0"; }
   bool addressReadableAt() const override { return false; }
   Result readAddress(Transport& bus, int, uint16_t* value) const override {
-    const Result r = LcRelay8::readAddressAtZero(bus);
+    Result r = LcRelay8::readAddressAtZero(bus);
     if (r.ok()) *value = r.values[0];
     return r;
   }

@@ -54,7 +54,7 @@ class Ld58a08Commissioning : public Commissioning {
   Result report(Transport& bus, uint8_t address, InfoReport* out) const override {
     Ld58a08 board(at(address));
     Ld58a08Settings st;
-    const Result r = board.readSettings(bus, &st);
+    Result r = board.readSettings(bus, &st);
     if (!r.ok()) return r;
     out->human = "\n  stored baud rate: " + baudCodeText(st.baud_code) +
                  "\n  stored parity: " + parityCodeText(st.parity) +
@@ -80,7 +80,7 @@ class Ld58a08Commissioning : public Commissioning {
   }
   Result answersAt(Transport& bus, int address) const override {
     uint16_t there = 0;
-    const Result r = readAddress(bus, address, &there);
+    Result r = readAddress(bus, address, &there);
     if (r.ok() && there != address)
       return Result::failure(ErrorKind::kMalformed,
                              "it reports address " + std::to_string(there) + " there");

@@ -98,7 +98,7 @@ std::string orList(const std::vector<std::string>& items) {
 // CLI11's checks of one option's value on its own; CLI11 puts the option's name in front. The
 // check is CLI11's (CLI::Range, CLI::IsMember); the refusal is in this tool's words.
 using Message = std::function<std::string(const std::string&)>;
-CLI::Validator refusing(CLI::Validator check, Message message) {
+CLI::Validator refusing(const CLI::Validator& check, const Message& message) {
   const std::string description = check.get_description();
   return CLI::Validator(
       [check, message](std::string& text) {
@@ -204,7 +204,7 @@ const CLI::Validator kParityList(
     [](std::string& text) -> std::string {
       const CLI::Validator name = parityWords(" (or all)");
       for (std::string p : splitList(text == "all" ? "none,even,odd" : text)) {
-        const std::string problem = name(p);
+        std::string problem = name(p);
         if (!problem.empty()) return problem;
       }
       return "";
@@ -253,7 +253,8 @@ std::vector<CommissioningType> typesWith(BoardFeature feature) {
 
 std::vector<std::string> namesOf(const std::vector<CommissioningType>& types) {
   std::vector<std::string> names;
-  for (const auto& t : types) names.push_back(t.type->name);
+  names.reserve(types.size());
+  for (const auto& t : types) names.emplace_back(t.type->name);
   return names;
 }
 
