@@ -401,7 +401,7 @@ TEST_F(CommissionOnScript, ANewTypesSettingsNeedNoEditOfTheTool) {
 // 0xFF for its own address), the LC board's loose check last.
 TEST(CommissionTypes, ProbeOrderAndFactorySettingsComeFromTheRegistry) {
   std::vector<std::string> names;
-  for (const CommissioningType& t : commissioningTypes()) names.push_back(t.type->name);
+  for (const CommissioningType& t : commissioningTypes()) names.emplace_back(t.type->name);
   EXPECT_EQ(names, (std::vector<std::string>{"relay_test", "ld58a08", "yespeed_pdu", "lc_relay8"}));
   CommissionCommand c;
   std::string error;
