@@ -277,7 +277,7 @@ CLI::Validator typeFor(const std::string& command, BoardFeature feature) {
                  " has no such setting";
         return "";
       },
-      names);
+      "");  // the option's help names them already
 }
 
 // The codes a type's baud setting takes, as rates: "4800, 9600, 19200", or "1200-115200" for
