@@ -169,16 +169,19 @@ const std::map<std::string, int> kParityNames = {
     {"even", static_cast<int>(Parity::kEven)}, {"E", static_cast<int>(Parity::kEven)},
     {"odd", static_cast<int>(Parity::kOdd)},   {"O", static_cast<int>(Parity::kOdd)}};
 
+// One of kParityNames' names (not their numbers, which CLI::CheckedTransformer would also take).
 CLI::Validator parityWords(const std::string& suffix = "") {
-  return refusing(CLI::CheckedTransformer(kParityNames),
+  std::vector<std::string> names;
+  names.reserve(kParityNames.size());
+  for (const auto& kv : kParityNames) names.emplace_back(kv.first);
+  return refusing(CLI::IsMember(names),
                   [suffix](const std::string& text) {
                     return "'" + text + "' is not none, even or odd" + suffix;
                   })
       .description("none|even|odd");
 }
 
-// CheckedTransformer above rewrites the name as its number; refusing() checks a copy, so the
-// transform is done again here for CLI11 to convert.
+// The name, checked, as its Parity's number for CLI11 to convert.
 CLI::Validator parityOption() {
   const CLI::Validator check = parityWords();
   return CLI::Validator(

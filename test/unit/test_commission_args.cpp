@@ -304,6 +304,9 @@ TEST(CommissionArgs, OptionsAreConvertedOnceTheirCheckPassed) {
                    0.25);
   EXPECT_EQ(refusal({"info", "--address", "0x100"}), "--address: '0x100' is outside 1-255");
   EXPECT_EQ(refusal({"--parity", "X", "scan"}), "--parity: 'X' is not none, even or odd");
+  EXPECT_EQ(refusal({"--parity", "1", "scan"}), "--parity: '1' is not none, even or odd");
+  EXPECT_EQ(refusal({"scan", "--parities", "even,2"}),
+            "--parities: '2' is not none, even or odd (or all)");
   EXPECT_EQ(refusal({"read", "--address", "1", "holding", "0", "0"}),
             "count: '0' is outside 1-125");
   EXPECT_EQ(refusal({"read", "--address", "1", "coils", "0", "many"}),
