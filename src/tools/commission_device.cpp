@@ -159,7 +159,7 @@ class DeviceCommands {
       return kExitOk;
     }
     uint16_t address = 0;
-    const int at = type_->addressReadableAt() ? c_.address : kBlind;
+    const int at = type_->addressReadableAt() && c_.address >= 0 ? c_.address : kBlind;
     const Result r = type_->readAddress(s_.bus, at, &address);
     const std::string how = at == kBlind ? " " + type_->addressPath() : "";
     if (!r.ok()) {
@@ -195,7 +195,7 @@ class DeviceCommands {
   // Reads the current address first: at --address where the board has an address register
   // there, else through its path (checked against --address when one was given).
   int setAddress() {
-    const int at = type_->addressReadableAt() ? c_.address : kBlind;
+    const int at = type_->addressReadableAt() && c_.address >= 0 ? c_.address : kBlind;
     const bool blind = at == kBlind;
     const std::string path = blind ? " " + type_->addressPath() : "";
     uint16_t current = 0;

@@ -57,6 +57,18 @@ TEST_F(CommissionOnScript, LcBoardAddressThroughZeroWithTheManualsFrames) {
   EXPECT_EQ(out_.str(), "lc_relay8 address changed from 7 to 255; it answers at 255\n");
 }
 
+// The LC board has no address register at its own address: get-address there asks whether it
+// answers (its baud code read, as the manual prints it).
+TEST_F(CommissionOnScript, LcBoardAtAnAddressOnlyAnswersOrNot) {
+  bus_.expect("FF 03 03 E8 00 01 11 A4", golden("FF 03 03 E8 00 01 11 A4"));
+  EXPECT_EQ(run({"get-address", "--type", "lc_relay8", "--address", "255"}), kExitOk);
+  EXPECT_EQ(out_.str(), "lc_relay8 answers at address 255\n");
+  bus_.expect("FF 03 03 E8 00 01 11 A4");  // silence
+  EXPECT_EQ(run({"get-address", "--type", "lc_relay8", "--address", "255"}), kExitNotFound);
+  EXPECT_NE(err_.str().find("asking the lc_relay8 at address 255"), std::string::npos)
+      << err_.str();
+}
+
 TEST_F(CommissionOnScript, LcBoardAddressChangeStopsWhenAnotherBoardAnswers) {
   R at_zero = R::readHoldingRegisters(0, 0, 1);
   at_zero.single_device_at_zero = true;
