@@ -64,6 +64,18 @@ Result Commissioning::readSetting(Transport&, int, BoardFeature, uint16_t*) cons
 Result Commissioning::writeSetting(Transport&, int, BoardFeature, uint16_t) const {
   return unsupported();
 }
+std::string Commissioning::limitToRegister(size_t, double, uint16_t*, const std::string&) const {
+  return "not a setting of this device type";
+}
+std::string Commissioning::checkLimits(const std::vector<uint16_t>&) const {
+  return "not a setting of this device type";
+}
+Result Commissioning::readLimits(Transport&, int, std::vector<uint16_t>*) const {
+  return unsupported();
+}
+Result Commissioning::writeLimits(Transport&, int, const std::vector<uint16_t>&) const {
+  return unsupported();
+}
 Result Commissioning::factoryReset(Transport&, int) const {
   return unsupported();
 }

@@ -68,7 +68,7 @@ class Ld58a08Commissioning : public Commissioning {
     return r;
   }
 
-  bool has(BoardFeature) const override { return true; }
+  bool has(BoardFeature feature) const override { return feature != BoardFeature::kLimits; }
   std::string title() const override { return "the LD58A08"; }
 
   std::string addressPath() const override { return "through 0xFF"; }

@@ -1,6 +1,7 @@
 // The Yespeed PDU in modbus_rtu_commission (devices/commissioning.h): told apart by its five
-// input registers, `info` shows its readings and limits. It has no address or line settings
-// the manual documents (seeds/002); its limits have commands of their own (get/set-limits).
+// input registers, `info` shows its readings and limits, and its limits (holding registers
+// 0-2) are read and changed with the manual's rules (seeds/002). It has no address or line
+// settings the manual documents.
 #include <sstream>
 
 #include "modbus_rtu_driver/devices/commissioning.h"
@@ -9,6 +10,19 @@
 namespace modbus_rtu_driver {
 
 namespace {
+
+YespeedPdu pduAt(int address) {
+  DeviceConfig d;
+  d.name = d.type = kYespeedPduType.name;
+  d.address = address;
+  return YespeedPdu(d);
+}
+
+PduLimitRegisters asRegisters(const std::vector<uint16_t>& regs) {
+  PduLimitRegisters out{};
+  for (size_t i = 0; i < out.size() && i < regs.size(); ++i) out[i] = regs[i];
+  return out;
+}
 
 class YespeedPduCommissioning : public Commissioning {
  public:
@@ -24,10 +38,7 @@ class YespeedPduCommissioning : public Commissioning {
   }
 
   Result report(Transport& bus, uint8_t address, InfoReport* out) const override {
-    DeviceConfig d;
-    d.name = d.type = kYespeedPduType.name;
-    d.address = address;
-    YespeedPdu pdu(d);
+    YespeedPdu pdu = pduAt(address);
     Result r = pdu.readTelemetry(bus);
     if (r.ok()) r = pdu.readLimits(bus);
     if (!r.ok()) return r;
@@ -47,8 +58,38 @@ class YespeedPduCommissioning : public Commissioning {
     return r;
   }
 
-  bool has(BoardFeature) const override { return false; }
+  bool has(BoardFeature feature) const override { return feature == BoardFeature::kLimits; }
   std::string title() const override { return "the PDU"; }
+
+  std::vector<LimitSpec> limitList() const override {
+    return {{YespeedPdu::kLimitNames[0], YespeedPdu::kLimitUnits[0], 1},
+            {YespeedPdu::kLimitNames[1], YespeedPdu::kLimitUnits[1], 1},
+            {YespeedPdu::kLimitNames[2], YespeedPdu::kLimitUnits[2], 2}};
+  }
+  std::string limitRules() const override {
+    return "over-voltage above 180.0 V and above under-voltage, under-voltage below 280.0 V,\n"
+           "      over-current above 5.00 A and below 20.00 A";
+  }
+  std::string limitToRegister(size_t which, double value, uint16_t* reg,
+                              const std::string& option) const override {
+    return YespeedPdu::limitToRegister(which, value, reg, option);
+  }
+  std::string checkLimits(const std::vector<uint16_t>& regs) const override {
+    if (regs.size() != 3) return "limits: 3 values needed";
+    return YespeedPdu::checkLimitRegisters(asRegisters(regs));
+  }
+  Result readLimits(Transport& bus, int address, std::vector<uint16_t>* regs) const override {
+    YespeedPdu pdu = pduAt(address);
+    Result r = pdu.readLimits(bus);
+    if (r.ok()) regs->assign(pdu.limitRegisters().begin(), pdu.limitRegisters().end());
+    return r;
+  }
+  Result writeLimits(Transport& bus, int address,
+                     const std::vector<uint16_t>& regs) const override {
+    if (regs.size() != 3)
+      return Result::failure(ErrorKind::kInvalidArgument, "limits: 3 values needed");
+    return pduAt(address).writeLimitRegisters(bus, asRegisters(regs));
+  }
 };
 
 const YespeedPduCommissioning kCommissioning;

@@ -4,7 +4,7 @@
 // converts each to its type and runs the checks that need nothing else (CLI::Range,
 // CLI::IsMember, in this tool's words); the checks that depend on the command or on another
 // option (the board type's ranges, from its class in devices/commissioning.h; --to after
-// --from; the PDU's limits) follow, on the converted values.
+// --from; a type's limits) follow, on the converted values.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
@@ -13,7 +13,6 @@
 #include <sstream>
 
 #include "modbus_rtu_driver/devices/commissioning.h"
-#include "modbus_rtu_driver/devices/yespeed_pdu.h"
 #include "modbus_rtu_driver/tools/commission.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
 
@@ -332,6 +331,7 @@ std::string rangeHelp(const SettingCommand& s) {
     case BoardFeature::kPowerDownSave:
       return "on or off";
     case BoardFeature::kFactoryReset:
+    case BoardFeature::kLimits:
       break;
   }
   return text;
@@ -349,13 +349,23 @@ struct Words {
   std::string addresses, bauds, parities;
   double interval = 0;
   int count = 0;
-  std::array<std::string, 3> limits;
+  std::map<std::string, std::string> limits;  // by option: "--over-voltage" -> "260"
   std::string value, table;
   int start = 0, table_count = 0;
   std::vector<int> values;
 };
 
-const char* const kLimitOptions[3] = {"--over-voltage", "--under-voltage", "--over-current"};
+// "over_voltage" -> "--over-voltage"
+std::string limitOption(const std::string& name) {
+  std::string option = "--" + name;
+  std::replace(option.begin(), option.end(), '_', '-');
+  return option;
+}
+
+// "0.1" for one decimal
+std::string stepText(int decimals) {
+  return decimals <= 0 ? "1" : "0." + std::string(static_cast<size_t>(decimals - 1), '0') + "1";
+}
 
 // The command line: options before the command are the link's; every command has its own.
 // Global options may also follow the command (fallthrough). Unknown words are kept as extras
@@ -436,15 +446,26 @@ struct Cli {
                      [](const std::string& text) { return "'" + text + "' is not on or off"; }));
     }
 
-    addLimitsType(
-        addAddress(app.add_subcommand("get-limits", "the PDU's limits (yespeed_pdu)"), "1-247"));
-    CLI::App* set_limits = app.add_subcommand(
-        "set-limits", "change the PDU's limits; those not given stay (yespeed_pdu)");
-    addLimitsType(addAddress(set_limits, "1-247"));
-    const char* limit_help[3] = {"V, in 0.1 V", "V, in 0.1 V", "A, in 0.01 A"};
-    for (size_t i = 0; i < 3; ++i)
-      set_limits->add_option(kLimitOptions[i], w.limits[i], limit_help[i])
-          ->type_name(YespeedPdu::kLimitUnits[i]);
+    // The limits commands, for the registered types that have limits; one option per limit
+    // name any of them has.
+    const std::vector<CommissioningType> limited = typesWith(BoardFeature::kLimits);
+    if (!limited.empty()) {
+      const std::string names = " (" + orList(namesOf(limited)) + ")";
+      CLI::App* get_limits = app.add_subcommand("get-limits", "the protection limits" + names);
+      CLI::App* set_limits = app.add_subcommand(
+          "set-limits", "change the protection limits; those not given stay" + names);
+      for (CLI::App* command : {get_limits, set_limits}) addLimitsType(command);
+      for (const CommissioningType& t : limited)
+        for (const LimitSpec& limit : t.commissioning->limitList()) {
+          const std::string option = limitOption(limit.name);
+          if (set_limits->get_option_no_throw(option)) continue;
+          set_limits
+              ->add_option(
+                  option, w.limits[option],
+                  std::string(limit.unit) + ", in " + stepText(limit.decimals) + " " + limit.unit)
+              ->type_name(limit.unit);
+        }
+    }
 
     CLI::App* read = app.add_subcommand("read", "one request: COUNT values from START");
     addTableCount(addTable(read));
@@ -491,7 +512,7 @@ struct Cli {
     addAddress(command, ranges);
   }
   void addLimitsType(CLI::App* command) {
-    command->add_option("--type", w.type, "yespeed_pdu (the only one)")->type_name("T");
+    addTyped(command, SettingCommand{"", nullptr, BoardFeature::kLimits, "", "", ""});
   }
   // The positional COUNT is named "table-count", not "count": watch also has the option
   // --count (polls), and CLI11 2.4 (Debian 13) refuses a positional whose name equals another
@@ -648,61 +669,81 @@ void parseDevice(const Parsed& p, CommissionCommand& c) {
       c.new_value = v == "on" || v == "1";
       break;
     case BoardFeature::kFactoryReset:
+    case BoardFeature::kLimits:
       break;
   }
 }
 
-// The PDU's field names as the tool's options: "over_voltage: ..." -> "--over-voltage: ...".
-std::string asOptions(std::string message) {
-  for (const char* field : YespeedPdu::kLimitNames) {
-    std::string option = std::string("--") + field;
-    std::replace(option.begin(), option.end(), '_', '-');
+// A type's limit names as the tool's options: "over_voltage: ..." -> "--over-voltage: ...".
+std::string asOptions(std::string message, const std::vector<LimitSpec>& limits) {
+  for (const LimitSpec& limit : limits) {
+    const std::string field = limit.name, option = limitOption(field);
     for (size_t at = message.find(field); at != std::string::npos;
          at = message.find(field, at + option.size())) {
       if (at >= 2 && message.compare(at - 2, 2, "--") == 0) continue;
-      message.replace(at, std::string(field).size(), option);
+      message.replace(at, field.size(), option);
     }
   }
   return message;
 }
 
-// get-limits / set-limits (Yespeed PDU). Each limit given is converted to the register value
-// that would be written and checked there (the manual's rules, on integers); with all three the
-// rule between them too. With fewer, the others are the PDU's own, and the rules are checked
-// on the merged set once they are read.
+// get-limits / set-limits. Each limit given is converted to the register value that would be
+// written and checked there (the manual's rules, on integers); with all of them the rules
+// between them too. With fewer, the others are the device's own, and the rules are checked on
+// the merged set once they are read.
 void parseLimits(const Parsed& p, CommissionCommand& c) {
-  c.type = kYespeedPduType.name;
-  if (p.has("--type") && p.w.type != c.type)
-    bad("--type: " + c.command + " is a " + c.type + " command; '" + p.w.type + "' has no limits");
-  const int max_address = kYespeedPduType.max_address;
+  const std::vector<CommissioningType> types = typesWith(BoardFeature::kLimits);
+  if (p.has("--type")) {
+    c.type = p.w.type;  // checked by typeFor
+  } else if (types.size() == 1) {
+    c.type = types.front().type->name;
+  } else {
+    bad("--type: missing (" + orList(namesOf(types)) + ")");
+  }
+  const auto it = std::find_if(types.begin(), types.end(),
+                               [&c](const auto& t) { return c.type == t.type->name; });
+  if (it == types.end()) bad("--type: '" + c.type + "' is not " + orList(namesOf(types)));
+  const Commissioning& type = *it->commissioning;
+  const int max_address = it->type->max_address;
   if (!p.has("--address")) bad("--address: missing (1-" + std::to_string(max_address) + ")");
   c.address = p.w.address;
   checkIn("--address", c.address, 1, max_address);
   if (c.command == "get-limits") return;
-  bool all = true;
-  for (size_t i = 0; i < 3; ++i) {
-    const std::string option = kLimitOptions[i];
+  const std::vector<LimitSpec> limits = type.limitList();
+  c.limits.assign(limits.size(), -1);
+  bool all = true, any = false;
+  std::string given_list;
+  for (size_t i = 0; i < limits.size(); ++i) {
+    const std::string option = limitOption(limits[i].name);
+    given_list += (i ? ", " : "") + option + " " + limits[i].unit;
     if (!p.has(option)) {
       all = false;
       continue;
     }
-    const std::string& text = p.w.limits[i];
+    any = true;
+    const std::string& text = p.w.limits.at(option);
     double v = 0;
     if (!toDouble(text, &v))
-      bad(option + ": '" + text + "' is not a number (" + YespeedPdu::kLimitUnits[i] + ")");
+      bad(option + ": '" + text + "' is not a number (" + limits[i].unit + ")");
     uint16_t reg = 0;
-    const std::string problem = YespeedPdu::limitToRegister(i, v, &reg, option);
+    const std::string problem = type.limitToRegister(i, v, &reg, option);
     if (!problem.empty()) bad(problem);
     c.limits[i] = reg;
   }
-  if (c.limits[0] < 0 && c.limits[1] < 0 && c.limits[2] < 0)
-    bad("set-limits: give at least one of --over-voltage V, --under-voltage V, --over-current A "
-        "(the others stay as the PDU holds them)");
+  // An option of another type's limits.
+  for (const auto& [option, text] : p.w.limits)
+    if (p.has(option) &&
+        std::none_of(limits.begin(), limits.end(), [&option = option](const LimitSpec& l) {
+          return limitOption(l.name) == option;
+        }))
+      bad(option + ": not a limit of " + c.type + " (see --help)");
+  if (!any)
+    bad("set-limits: give at least one of " + given_list + " (the others stay as " + type.title() +
+        " holds them)");
   if (all) {
-    const std::string problem = YespeedPdu::checkLimitRegisters(
-        {static_cast<uint16_t>(c.limits[0]), static_cast<uint16_t>(c.limits[1]),
-         static_cast<uint16_t>(c.limits[2])});
-    if (!problem.empty()) bad(asOptions(problem));
+    const std::vector<uint16_t> regs(c.limits.begin(), c.limits.end());
+    const std::string problem = type.checkLimits(regs);
+    if (!problem.empty()) bad(asOptions(problem, limits));
   }
 }
 

@@ -1,13 +1,14 @@
 // The device settings of modbus_rtu_commission: address, baud, parity, return delay, power-down
 // save, factory reset, info. Each change reads the current value first (harmless), asks before
 // anything that changes how the device answers, and says when the change takes effect.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <sstream>
 #include <variant>
 
 #include "modbus_rtu_driver/devices/commissioning.h"
-#include "modbus_rtu_driver/devices/yespeed_pdu.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
 
 namespace modbus_rtu_driver {
@@ -15,13 +16,6 @@ namespace modbus_rtu_driver {
 namespace {
 
 const char kPowerCycle[] = "It takes effect after the device is powered off and on";
-
-DeviceConfig deviceAt(const std::string& type, int address) {
-  DeviceConfig d;
-  d.name = d.type = type;
-  d.address = address;
-  return d;
-}
 
 // "address 1, 9600 baud, no parity" from the type's descriptor.
 std::string factoryText(const FactorySettings& f) {
@@ -54,9 +48,9 @@ class DeviceCommands {
   int run() {
     const std::string& cmd = c_.command;
     if (cmd == "info") return info();
+    if (!type_) return s_.out.fail(kExitBadArguments, "--type: '" + c_.type + "' is not known");
     if (cmd == "get-limits") return getLimits();
     if (cmd == "set-limits") return setLimits();
-    if (!type_) return s_.out.fail(kExitBadArguments, "--type: '" + c_.type + "' is not known");
     if (cmd == "get-address") return getAddress();
     if (cmd == "set-address") return setAddress();
     if (cmd == "factory-reset") return factoryReset();
@@ -245,48 +239,51 @@ class DeviceCommands {
     return kExitOk;
   }
 
-  static std::string limitsHuman(const PduLimitRegisters& l) {
-    const PduLimitValues v = YespeedPdu::limitValues(l);
-    char buf[128];
-    std::snprintf(buf, sizeof buf, "over-voltage %.1f V, under-voltage %.1f V, over-current %.2f A",
-                  v.over_voltage, v.under_voltage, v.over_current);
-    return buf;
+  // "over-voltage 250.0 V, under-voltage 200.0 V, over-current 16.00 A"
+  std::string limitsHuman(const std::vector<uint16_t>& regs) const {
+    const std::vector<LimitSpec> limits = type_->limitList();
+    std::string text;
+    for (size_t i = 0; i < limits.size() && i < regs.size(); ++i) {
+      std::string name = limits[i].name;
+      std::replace(name.begin(), name.end(), '_', '-');
+      char value[32];
+      std::snprintf(value, sizeof value, "%.*f", limits[i].decimals,
+                    regs[i] / std::pow(10.0, limits[i].decimals));
+      text += (i ? ", " : "") + name + " " + value + " " + limits[i].unit;
+    }
+    return text;
   }
-  static Json limitsJson(const PduLimitRegisters& l) {
-    const PduLimitValues v = YespeedPdu::limitValues(l);
-    return Json()
-        .add("over_voltage", v.over_voltage)
-        .add("under_voltage", v.under_voltage)
-        .add("over_current", v.over_current)
-        .add("registers", std::vector<uint16_t>(l.begin(), l.end()));
+  Json limitsJson(const std::vector<uint16_t>& regs) const {
+    const std::vector<LimitSpec> limits = type_->limitList();
+    Json json;
+    for (size_t i = 0; i < limits.size() && i < regs.size(); ++i)
+      json.add(limits[i].name, regs[i] / std::pow(10.0, limits[i].decimals));
+    return json.add("registers", regs);
   }
 
   int getLimits() {
-    YespeedPdu pdu(deviceAt(kYespeedPduType.name, c_.address));
-    const Result r = pdu.readLimits(s_.bus);
+    std::vector<uint16_t> regs;
+    const Result r = type_->readLimits(s_.bus, c_.address, &regs);
     if (!r.ok()) return s_.out.fail(r, "reading the limits of the " + device());
-    s_.out.result(device() + ", limits: " + limitsHuman(pdu.limitRegisters()),
-                  fields().merge(limitsJson(pdu.limitRegisters())));
+    s_.out.result(device() + ", limits: " + limitsHuman(regs), fields().merge(limitsJson(regs)));
     return kExitOk;
   }
 
   // Reads the limits first; the ones not given stay. The rules are checked on the merged
-  // register values before anything is written, then the PDU's read back must show them.
+  // register values before anything is written, then the device's read back must show them.
   int setLimits() {
-    YespeedPdu pdu(deviceAt(kYespeedPduType.name, c_.address));
-    Result r = pdu.readLimits(s_.bus);
+    std::vector<uint16_t> before;
+    Result r = type_->readLimits(s_.bus, c_.address, &before);
     if (!r.ok()) return s_.out.fail(r, "reading the limits of the " + device());
-    const PduLimitRegisters before = pdu.limitRegisters();
-    PduLimitChange change;
-    for (size_t i = 0; i < 3; ++i)
-      if (c_.limits[i] >= 0) change[i] = static_cast<uint16_t>(c_.limits[i]);
-    const PduLimitRegisters to = YespeedPdu::mergeLimits(before, change);
-    const std::string problem = YespeedPdu::checkLimitRegisters(to);
+    std::vector<uint16_t> to = before;
+    for (size_t i = 0; i < to.size() && i < c_.limits.size(); ++i)
+      if (c_.limits[i] >= 0) to[i] = static_cast<uint16_t>(c_.limits[i]);
+    const std::string problem = type_->checkLimits(to);
     if (!problem.empty())
-      return s_.out.fail(kExitBadArguments, problem + " (with the limits the PDU holds: " +
+      return s_.out.fail(kExitBadArguments, problem + " (with the limits the device holds: " +
                                                 limitsHuman(to) + "); nothing was written");
     Json json = fields().merge(limitsJson(to));
-    json.add("previous", std::vector<uint16_t>(before.begin(), before.end()));
+    json.add("previous", before);
     if (to == before) {
       s_.out.result(device() + ": limits are already " + limitsHuman(to) + "; nothing written",
                     json.add("changed", false));
@@ -295,7 +292,7 @@ class DeviceCommands {
     if (!s_.confirm("Change the limits of the " + device() + " from " + limitsHuman(before) +
                     " to " + limitsHuman(to) + "?"))
       return s_.out.fail(kExitNotConfirmed, "not confirmed; nothing was changed");
-    r = pdu.writeLimitRegisters(s_.bus, to);
+    r = type_->writeLimits(s_.bus, c_.address, to);
     if (!r.ok()) return s_.out.fail(r, "writing the limits of the " + device());
     s_.out.result(device() + ": limits set to " + limitsHuman(to) + " (was " + limitsHuman(before) +
                       "); read back",
@@ -325,7 +322,7 @@ class DeviceCommands {
 
   Session& s_;
   const CommissionCommand& c_;
-  const Commissioning* type_;  // --type's class; null for the PDU's own commands and info
+  const Commissioning* type_;  // --type's class; null for info
 };
 
 }  // namespace

@@ -2,6 +2,7 @@
 // the boards' ranges, factory settings and manuals, the scan's duration, confirmations, exit
 // codes), after those lists. What is said of a type comes from its descriptor and its class
 // (devices/commissioning.h), so a new type shows up here by itself.
+#include <algorithm>
 #include <functional>
 #include <sstream>
 
@@ -109,6 +110,26 @@ std::string settingsHelp() {
   return h.str();
 }
 
+// get-limits / set-limits for the types that have limits.
+std::string limitsHelp() {
+  std::ostringstream h;
+  for (const CommissioningType& t : typesWith(BoardFeature::kLimits)) {
+    std::string options, names;
+    for (const LimitSpec& l : t.commissioning->limitList()) {
+      std::string option = std::string("--") + l.name;
+      std::replace(option.begin(), option.end(), '_', '-');
+      options += " [" + option + " " + l.unit + "]";
+      names += (names.empty() ? "" : ", ") + option.substr(2);
+    }
+    h << "  get-limits --address A                   (" << t.type->name << ": " << names
+      << ")\n  set-limits --address A" << options << "\n      (" << t.type->name
+      << ") Limits not given stay as the device holds them (it is read first); read\n"
+      << "      back after the write. The manual's rules, checked on the register values:\n"
+      << "      " << t.commissioning->limitRules() << ".\n";
+  }
+  return h.str();
+}
+
 // Each registered type's addresses, factory settings and manual (its descriptor).
 std::string typesHelp() {
   std::ostringstream h;
@@ -143,14 +164,8 @@ Details (COMMAND --help lists a command's options):
       about 9 minutes (each device found adds up to 4 reads).
   info --address A                         type and settings of the device at A
 )" + settingsHelp() +
-         R"(  get-limits --address A                   (yespeed_pdu: over-voltage, under-voltage,
-                                           over-current)
-  set-limits --address A [--over-voltage V] [--under-voltage V] [--over-current A]
-      (yespeed_pdu) Limits not given stay as the PDU holds them (it is read first). The
-      manual's rules, checked on the register values that will be written (0.1 V, 0.01 A):
-      over-voltage above 180.0 V and above under-voltage, under-voltage below 280.0 V,
-      over-current above 5.00 A and below 20.00 A. Read back after the write.
-  read --address A coils|discrete-inputs|holding|input-registers START [COUNT]
+         R"()" + limitsHelp() +
+         R"(  read --address A coils|discrete-inputs|holding|input-registers START [COUNT]
   write --address A coils|holding START VALUE... [--multiple]
                                            FC05/FC06 for one value, FC15/FC16 for more
                                            (--multiple: FC15/FC16 always)
@@ -158,7 +173,7 @@ Details (COMMAND --help lists a command's options):
       Polls and prints a line only when something changed; Ctrl-C ends it.
 
 Numbers may be decimal or 0x-hex. Changes to how a device answers (address, baud, parity,
-return delay, factory reset) and the PDU's limits ask for confirmation on stdin unless --yes;
+return delay, factory reset) and protection limits ask for confirmation on stdin unless --yes;
 without a "y" (or at end of input) nothing is changed.
 Baud and parity take effect after the device is powered off and on.
 --timeout: wait for a reply, default 0.05 s + 30 characters for scans, and for other

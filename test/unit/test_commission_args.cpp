@@ -241,9 +241,9 @@ TEST(CommissionArgs, PduLimitsAreCheckedOnTheRegisterValues) {
   CommissionCommand c = parsed({"set-limits", "--address", "1", "--over-voltage", "260",
                                 "--under-voltage", "160", "--over-current", "7"});
   EXPECT_EQ(c.type, "yespeed_pdu");
-  EXPECT_EQ(c.limits, (std::array<int, 3>{{2600, 1600, 700}}));
+  EXPECT_EQ(c.limits, (std::vector<int>{2600, 1600, 700}));
   c = parsed({"set-limits", "--address", "2", "--over-voltage", "250"});
-  EXPECT_EQ(c.limits, (std::array<int, 3>{{2500, -1, -1}}));  // the others stay
+  EXPECT_EQ(c.limits, (std::vector<int>{2500, -1, -1}));  // the others stay
   EXPECT_EQ(parsed({"get-limits", "--address", "2", "--type", "yespeed_pdu"}).address, 2);
 
   EXPECT_EQ(refusal({"set-limits", "--address", "1", "--over-voltage", "180.00001"}),

@@ -27,6 +27,15 @@ enum class BoardFeature {
   kReturnDelay,    // get-return-delay, set-return-delay (in steps of returnDelayStepMs())
   kPowerDownSave,  // get-save, set-save (0 off, 1 on)
   kFactoryReset,   // factory-reset
+  kLimits,         // get-limits, set-limits: protection limits held in registers
+};
+
+// One protection limit (kLimits): its name (an option --over-voltage for "over_voltage"), unit
+// and the decimals its register's step has (0.1 V: 1).
+struct LimitSpec {
+  const char* name;
+  const char* unit;
+  int decimals;
 };
 
 // One identification probe's answer.
@@ -107,6 +116,21 @@ class Commissioning {
                              uint16_t* value) const;
   virtual Result writeSetting(Transport& bus, int address, BoardFeature which,
                               uint16_t value) const;
+
+  // --- limits (kLimits), as the registers hold them, in limitList()'s order ---
+  virtual std::vector<LimitSpec> limitList() const { return {}; }
+  // The manual's rules in words, for --help.
+  virtual std::string limitRules() const { return ""; }
+  // Limit `which` in its unit as the register value that would be written, checked against
+  // its own rule there; messages call it `option`. Empty when fine.
+  virtual std::string limitToRegister(size_t which, double value, uint16_t* reg,
+                                      const std::string& option) const;
+  // All the rules, on the register values of every limit; empty when they hold.
+  virtual std::string checkLimits(const std::vector<uint16_t>& regs) const;
+  virtual Result readLimits(Transport& bus, int address, std::vector<uint16_t>* regs) const;
+  // Checked first (nothing is sent when a rule is broken), then written and read back: a
+  // device that holds other values afterwards is a failure.
+  virtual Result writeLimits(Transport& bus, int address, const std::vector<uint16_t>& regs) const;
 
   // --- factory reset (kFactoryReset); the factory settings are the descriptor's ---
   // What else the reset restores, for the question: ", no return delay, PWM settings cleared".

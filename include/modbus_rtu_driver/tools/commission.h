@@ -32,9 +32,10 @@ struct CommissionCommand {
   // set-*: the new value in the device's own units: address, baud code, parity code (0 none,
   // 1 even, 2 odd), return delay in 40 ms steps, power-down save 0/1.
   int new_value = -1;
-  // set-limits: over-voltage, under-voltage (0.1 V), over-current (0.01 A) as the registers
-  // take them, each already checked against its own rule; -1 = keep what the PDU holds.
-  std::array<int, 3> limits{{-1, -1, -1}};
+  // set-limits: the type's limits (devices/commissioning.h, its limitList() order) as the
+  // registers take them, each already checked against its own rule; -1 = keep what the device
+  // holds.
+  std::vector<int> limits;
   // read / write / watch
   std::string table;  // coils | discrete-inputs | holding | input-registers
   int start = 0, count = 1;
