@@ -1,17 +1,18 @@
 // Command line of modbus_rtu_commission, parsed by CLI11: every value is checked against the
 // manuals' ranges before anything is opened or sent, and each refusal names the option and its
-// range. CLI11 splits the words into the command, its options and its positional values and
-// runs the checks that need nothing else; the checks that depend on the command or on another
-// option (the board type's address range, --to after --from, the PDU's limits) follow.
+// range. CLI11 splits the words into the command, its options and its positional values,
+// converts each to its type and runs the checks that need nothing else (CLI::Range,
+// CLI::IsMember, in this tool's words); the checks that depend on the command or on another
+// option (the board type's ranges, from its class in devices/commissioning.h; --to after
+// --from; a type's limits) follow, on the converted values.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
+#include <functional>
 #include <map>
 #include <sstream>
 
-#include "modbus_rtu_driver/core/config/device_types/lc_relay8.h"
-#include "modbus_rtu_driver/core/config/device_types/ld58a08.h"
-#include "modbus_rtu_driver/devices/yespeed_pdu.h"
+#include "modbus_rtu_driver/devices/commissioning.h"
 #include "modbus_rtu_driver/tools/commission.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
 
@@ -55,6 +56,13 @@ int intIn(const std::string& what, const std::string& text, int lo, int hi) {
   return static_cast<int>(v);
 }
 
+// The same check on a value CLI11 already converted.
+void checkIn(const std::string& what, int value, int lo, int hi) {
+  if (value < lo || value > hi)
+    bad(what + ": '" + std::to_string(value) + "' is outside " + std::to_string(lo) + "-" +
+        std::to_string(hi));
+}
+
 bool toDouble(const std::string& text, double* out) {
   std::istringstream in(text);
   char rest = 0;
@@ -78,73 +86,286 @@ std::vector<std::string> splitList(const std::string& text) {
   return items;
 }
 
-// CLI11 checks of one option's value on its own; CLI11 puts the option's name in front.
+// "a, b or c"
+std::string orList(const std::vector<std::string>& items) {
+  std::string out;
+  for (size_t i = 0; i < items.size(); ++i)
+    out += (i == 0 ? "" : i + 1 == items.size() ? " or " : ", ") + items[i];
+  return out;
+}
+
+// CLI11's checks of one option's value on its own; CLI11 puts the option's name in front. The
+// check is CLI11's (CLI::Range, CLI::IsMember); the refusal is in this tool's words.
+using Message = std::function<std::string(const std::string&)>;
+CLI::Validator refusing(const CLI::Validator& check, const Message& message) {
+  const std::string description = check.get_description();
+  return CLI::Validator(
+      [check, message](std::string& text) {
+        std::string copy = text;
+        return check(copy).empty() ? std::string() : message(text);
+      },
+      description);
+}
+
+// An integer in lo-hi, decimal or 0x-hex, rewritten as decimal for CLI11 to convert (so "010"
+// is ten with every CLI11 version, not octal).
 CLI::Validator intRange(long lo, long hi) {
-  return CLI::Validator([lo, hi](std::string& text) { return outsideInts(text, lo, hi); },
-                        std::to_string(lo) + "-" + std::to_string(hi));
+  const CLI::Range range(lo, hi);
+  return CLI::Validator(
+      [lo, hi, range](std::string& text) -> std::string {
+        long v = 0;
+        std::string decimal;
+        if (toLong(text, &v)) decimal = std::to_string(v);
+        if (decimal.empty() || !range(decimal).empty())
+          return "'" + text + "' is outside " + std::to_string(lo) + "-" + std::to_string(hi);
+        text = decimal;
+        return "";
+      },
+      std::to_string(lo) + "-" + std::to_string(hi));
+}
+
+// An integer whose range depends on another value (COUNT: on the table), checked after parsing.
+CLI::Validator anInteger(const std::string& range) {
+  return CLI::Validator(
+      [range](std::string& text) -> std::string {
+        long v = 0;
+        if (!toLong(text, &v)) return "'" + text + "' is not a number (" + range + ")";
+        text = std::to_string(v);
+        return "";
+      },
+      "N");
 }
 
 CLI::Validator secondsRange(double lo, double hi) {
+  const CLI::Range range(lo, hi);
   return CLI::Validator(
-      [lo, hi](std::string& text) -> std::string {
+      [lo, hi, range](std::string& text) -> std::string {
         double v = 0;
-        if (toDouble(text, &v) && v >= lo && v <= hi) return "";
+        std::string copy = text;
+        if (toDouble(text, &v) && range(copy).empty()) return "";
         return "'" + text + "' is outside " + rangeText(lo, hi) + " s";
       },
       rangeText(lo, hi) + " s");
 }
 
-const CLI::Validator kBaud(
-    [](std::string& text) -> std::string {
-      std::string problem = outsideInts(text, 1200, 115200);
-      if (!problem.empty()) return problem;
-      long v = 0;
-      toLong(text, &v);
-      if (!isStandardBaud(static_cast<int>(v)))
-        return "'" + text + "' is not one of " + standardBaudList();
-      return "";
-    },
-    "1200-115200");
+// A standard rate (core/config/link_config.h), checked as an integer first.
+CLI::Validator baudRate() {
+  const CLI::Validator number = intRange(1200, 115200);
+  const CLI::Validator standard = refusing(
+      CLI::IsMember(std::vector<int>(std::begin(kStandardBauds), std::end(kStandardBauds))),
+      [](const std::string& text) { return "'" + text + "' is not one of " + standardBaudList(); });
+  return CLI::Validator(
+      [number, standard](std::string& text) {
+        std::string problem = number(text);
+        return problem.empty() ? standard(text) : problem;
+      },
+      "1200-115200");
+}
 
-const CLI::Validator kParity(
-    [](std::string& text) -> std::string {
-      Parity p;
-      return parseParity(text, &p) ? "" : "'" + text + "' is not none, even or odd";
-    },
-    "none|even|odd");
+// Parity names as parseParity takes them, to the Parity's number.
+const std::map<std::string, int> kParityNames = {
+    {"none", static_cast<int>(Parity::kNone)}, {"N", static_cast<int>(Parity::kNone)},
+    {"even", static_cast<int>(Parity::kEven)}, {"E", static_cast<int>(Parity::kEven)},
+    {"odd", static_cast<int>(Parity::kOdd)},   {"O", static_cast<int>(Parity::kOdd)}};
+
+// One of kParityNames' names (not their numbers, which CLI::CheckedTransformer would also take).
+CLI::Validator parityWords(const std::string& suffix = "") {
+  std::vector<std::string> names;
+  names.reserve(kParityNames.size());
+  for (const auto& kv : kParityNames) names.emplace_back(kv.first);
+  return refusing(CLI::IsMember(names),
+                  [suffix](const std::string& text) {
+                    return "'" + text + "' is not none, even or odd" + suffix;
+                  })
+      .description("none|even|odd");
+}
+
+// The name, checked, as its Parity's number for CLI11 to convert.
+CLI::Validator parityOption() {
+  const CLI::Validator check = parityWords();
+  return CLI::Validator(
+      [check](std::string& text) {
+        std::string problem = check(text);
+        if (problem.empty()) text = std::to_string(kParityNames.at(text));
+        return problem;
+      },
+      "none|even|odd");
+}
 
 const CLI::Validator kBaudList(
     [](std::string& text) -> std::string {
-      for (const std::string& b : splitList(text == "all" ? standardBaudList() : text)) {
-        long v = 0;
-        if (!toLong(b, &v) || !isStandardBaud(static_cast<int>(v)))
+      const CLI::Validator rate = baudRate();
+      for (std::string b : splitList(text == "all" ? standardBaudList() : text))
+        if (!rate(b).empty())
           return "'" + b + "' is not one of " + standardBaudList() + " (or all)";
-      }
       return "";
     },
     "LIST|all");
 
 const CLI::Validator kParityList(
     [](std::string& text) -> std::string {
-      for (const std::string& p : splitList(text == "all" ? "none,even,odd" : text)) {
-        Parity parity;
-        if (!parseParity(p, &parity)) return "'" + p + "' is not none, even or odd (or all)";
+      const CLI::Validator name = parityWords(" (or all)");
+      for (std::string p : splitList(text == "all" ? "none,even,odd" : text)) {
+        std::string problem = name(p);
+        if (!problem.empty()) return problem;
       }
       return "";
     },
     "LIST|all");
 
-// Every word of the command line lands here as text; the checks above and below turn it into
-// a CommissionCommand.
-struct Words {
-  std::string port, baud, parity, timeout;
-  std::string type, address, from, to, addresses, bauds, parities, interval, count;
-  std::array<std::string, 3> limits;
-  std::string value, table, start, table_count;
-  std::vector<std::string> values;
+const std::vector<std::string> kTables = {"coils", "discrete-inputs", "holding", "input-registers"};
+
+// --- the settings commands, and which registered types have them ---
+
+struct SettingCommand {
+  const char* get;
+  const char* set;  // null: factory-reset (no value, no get)
+  BoardFeature feature;
+  const char* what;   // "the stored baud rate"
+  const char* value;  // the value's name in --help: "BAUD"
+  const char* label;  // the value in messages: "baud"
 };
 
-const char* const kLimitOptions[3] = {"--over-voltage", "--under-voltage", "--over-current"};
+const SettingCommand kSettingCommands[] = {
+    {"get-address", "set-address", BoardFeature::kAddress, "the board's address", "NEW",
+     "new address"},
+    {"get-baud", "set-baud", BoardFeature::kBaud, "the stored baud rate", "BAUD", "baud"},
+    {"get-parity", "set-parity", BoardFeature::kParity, "the stored parity", "none|even|odd",
+     "parity"},
+    {"get-return-delay", "set-return-delay", BoardFeature::kReturnDelay,
+     "the wait before answering", "MS", "return delay"},
+    {"get-save", "set-save", BoardFeature::kPowerDownSave,
+     "the power-down save of the PWM settings", "on|off", "power-down save"},
+    {"factory-reset", nullptr, BoardFeature::kFactoryReset, "factory settings", "", ""},
+};
+
+const SettingCommand* settingCommand(const std::string& command) {
+  for (const SettingCommand& s : kSettingCommands)
+    if (command == s.get || (s.set && command == s.set)) return &s;
+  return nullptr;
+}
+
+// The registered types that have `feature`, in probe order.
+std::vector<CommissioningType> typesWith(BoardFeature feature) {
+  std::vector<CommissioningType> out;
+  for (const CommissioningType& t : commissioningTypes())
+    if (t.commissioning->has(feature)) out.push_back(t);
+  return out;
+}
+
+std::vector<std::string> namesOf(const std::vector<CommissioningType>& types) {
+  std::vector<std::string> names;
+  names.reserve(types.size());
+  for (const auto& t : types) names.emplace_back(t.type->name);
+  return names;
+}
+
+// "a" or "an" before a type's name, read as letters ("an ld58a08", "a yespeed_pdu").
+std::string withArticle(const std::string& name) {
+  const std::string vowel_sounds = "aefhilmnorsx";
+  const bool an = !name.empty() && vowel_sounds.find(name[0]) != std::string::npos;
+  return (an ? "an " : "a ") + name;
+}
+
+// --type of a settings command: a registered type that has the command's feature.
+CLI::Validator typeFor(const std::string& command, BoardFeature feature) {
+  const std::string names = orList(namesOf(typesWith(feature)));
+  return CLI::Validator(
+      [command, feature, names](std::string& text) -> std::string {
+        const Commissioning* type = commissioningOf(text);
+        if (!type) return "'" + text + "' is not " + names;
+        if (!type->has(feature))
+          return command + " is " + withArticle(names) + " command; " + type->title() +
+                 " has no such setting";
+        return "";
+      },
+      "");  // the option's help names them already
+}
+
+// The codes a type's baud setting takes, as rates: "4800, 9600, 19200", or "1200-115200" for
+// more than three.
+std::string baudsOf(const Commissioning& type, bool short_form) {
+  const auto [lo, hi] = type.baudCodes();
+  if (short_form && hi - lo > 2)
+    return std::to_string(baudOfCode(lo)) + "-" + std::to_string(baudOfCode(hi));
+  std::string list;
+  for (int code = lo; code <= hi; ++code)
+    list += (code == lo ? "" : ", ") + std::to_string(baudOfCode(code));
+  return list;
+}
+
+// What --help says of a settings command's value and types, from the registered classes.
+std::string rangeHelp(const SettingCommand& s) {
+  const std::vector<CommissioningType> types = typesWith(s.feature);
+  std::string text;
+  auto each = [&types, &text](const std::function<std::string(const CommissioningType&)>& f) {
+    for (size_t i = 0; i < types.size(); ++i) text += (i ? ", " : "") + f(types[i]);
+  };
+  switch (s.feature) {
+    case BoardFeature::kAddress:
+      each([](const CommissioningType& t) {
+        return std::string(t.type->name) + " 1-" + std::to_string(t.type->max_address);
+      });
+      text += "; without --address ";
+      for (size_t i = 0; i < types.size(); ++i)
+        text += (i ? " / " : "") + types[i].commissioning->addressPath();
+      return text + ": board alone on the bus";
+    case BoardFeature::kBaud:
+      text = "a rate or a code: ";
+      each([](const CommissioningType& t) {
+        const auto [lo, hi] = t.commissioning->baudCodes();
+        return std::string(t.type->name) + " " + std::to_string(lo) + "-" + std::to_string(hi) +
+               " (" + baudsOf(*t.commissioning, true) + ")";
+      });
+      return text;
+    case BoardFeature::kReturnDelay:
+      each([](const CommissioningType& t) {
+        const int step = t.commissioning->returnDelayStepMs();
+        return std::string(t.type->name) + " 0-" +
+               std::to_string(step * t.commissioning->returnDelayMaxUnits()) + " ms in steps of " +
+               std::to_string(step);
+      });
+      return text;
+    case BoardFeature::kParity:
+      return "none, even or odd";
+    case BoardFeature::kPowerDownSave:
+      return "on or off";
+    case BoardFeature::kFactoryReset:
+    case BoardFeature::kLimits:
+      break;
+  }
+  return text;
+}
+
+// The command line's values, each converted by CLI11 once its check passed. The setting
+// commands' value stays text: what it may be (a code or a rate, a multiple of a step) is the
+// type's, known only once --type is.
+struct Words {
+  std::string port;
+  int baud = 0, parity = 0;
+  double timeout = 0;
+  std::string type;
+  int address = 0, from = 0, to = 0;
+  std::string addresses, bauds, parities;
+  double interval = 0;
+  int count = 0;
+  std::map<std::string, std::string> limits;  // by option: "--over-voltage" -> "260"
+  std::string value, table;
+  int start = 0, table_count = 0;
+  std::vector<int> values;
+};
+
+// "over_voltage" -> "--over-voltage"
+std::string limitOption(const std::string& name) {
+  std::string option = "--" + name;
+  std::replace(option.begin(), option.end(), '_', '-');
+  return option;
+}
+
+// "0.1" for one decimal
+std::string stepText(int decimals) {
+  return decimals <= 0 ? "1" : "0." + std::string(static_cast<size_t>(decimals - 1), '0') + "1";
+}
 
 // The command line: options before the command are the link's; every command has its own.
 // Global options may also follow the command (fallthrough). Unknown words are kept as extras
@@ -164,10 +385,12 @@ struct Cli {
            "--port", w.port,
            "the serial device (/dev/ttyUSB0), tcp://HOST:PORT or rtu+tcp://HOST:PORT (needed)")
         ->type_name("PORT");
-    app.add_option("--baud", w.baud, "line speed (default 9600)")->type_name("B")->check(kBaud);
+    app.add_option("--baud", w.baud, "line speed (default 9600)")
+        ->type_name("B")
+        ->transform(baudRate());
     app.add_option("--parity", w.parity, "line parity (default none)")
         ->type_name("P")
-        ->check(kParity);
+        ->transform(parityOption());
     app.add_option("--timeout", w.timeout, "wait for a reply (see below)")
         ->type_name("S")
         ->check(secondsRange(0.005, 10));
@@ -178,8 +401,10 @@ struct Cli {
         "scan", "harmless reads at every address and line setting; names what answers");
     scan->add_option("--from", w.from, "first address (default 1)")
         ->type_name("A")
-        ->check(intRange(1, 255));
-    scan->add_option("--to", w.to, "last address, --from-255 (default 255)")->type_name("B");
+        ->transform(intRange(1, 255));
+    scan->add_option("--to", w.to, "last address, --from-255 (default 255)")
+        ->type_name("B")
+        ->transform(intRange(1, 255));
     scan->add_option("--addresses", w.addresses, "instead of --from/--to: e.g. 1-5,255")
         ->type_name("LIST");
     scan->add_option("--bauds", w.bauds, "e.g. 9600,19200 or all (default --baud)")
@@ -191,53 +416,66 @@ struct Cli {
     CLI::App* info = app.add_subcommand("info", "type and settings of the device at --address");
     addAddress(info);
 
-    struct Setting {
-      const char* get;
-      const char* set;
-      const char* what;
-      const char* value;
-      const char* range;
-    };
-    const Setting settings[] = {
-        {"get-address", "set-address", "the board's address", "NEW",
-         "ld58a08 1-248, lc_relay8 1-255; without --address through 0xFF / 0: board alone on "
-         "the bus"},
-        {"get-baud", "set-baud", "the stored baud rate", "BAUD",
-         "a rate or a code: ld58a08 0-7 (1200-115200), lc_relay8 2-4 (4800, 9600, 19200)"},
-        {"get-parity", "set-parity", "the stored parity (ld58a08)", "none|even|odd",
-         "none, even or odd"},
-        {"get-return-delay", "set-return-delay", "the wait before answering (ld58a08)", "MS",
-         "0-1000 ms in steps of 40"},
-        {"get-save", "set-save", "the power-down save of the PWM settings (ld58a08)", "on|off",
-         "on or off"},
-    };
-    for (const Setting& s : settings) {
-      addTyped(app.add_subcommand(s.get, std::string("read ") + s.what));
-      CLI::App* set = app.add_subcommand(s.set, std::string("change ") + s.what + ": " + s.range);
-      addTyped(set);
-      set->add_option("value", w.value, s.range)->type_name(s.value);
+    // The settings commands, each for the registered types that have its setting.
+    for (const SettingCommand& s : kSettingCommands) {
+      const std::vector<std::string> names = namesOf(typesWith(s.feature));
+      const std::string types = " (" + orList(names) + ")";
+      if (!s.set) {
+        addTyped(app.add_subcommand(s.get, std::string(s.what) + types +
+                                               (s.feature == BoardFeature::kFactoryReset
+                                                    ? ", without --address through the "
+                                                      "address every board takes"
+                                                    : "")),
+                 s);
+        continue;
+      }
+      const std::string range = rangeHelp(s);
+      addTyped(app.add_subcommand(s.get, std::string("read ") + s.what + types), s);
+      CLI::App* set =
+          app.add_subcommand(s.set, std::string("change ") + s.what + types + ": " + range);
+      addTyped(set, s);
+      CLI::Option* value = set->add_option("value", w.value, range)->type_name(s.value);
+      // The settings whose words are the same for every type are checked here already.
+      if (s.feature == BoardFeature::kParity)
+        value->check(refusing(
+            CLI::IsMember(std::vector<std::string>{"none", "even", "odd"}),
+            [](const std::string& text) { return "'" + text + "' is not none, even or odd"; }));
+      if (s.feature == BoardFeature::kPowerDownSave)
+        value->check(
+            refusing(CLI::IsMember(std::vector<std::string>{"on", "off", "1", "0"}),
+                     [](const std::string& text) { return "'" + text + "' is not on or off"; }));
     }
-    addTyped(app.add_subcommand("factory-reset",
-                                "ld58a08 factory settings (through 0xFF without --address)"));
 
-    addLimitsType(
-        addAddress(app.add_subcommand("get-limits", "the PDU's limits (yespeed_pdu)"), "1-247"));
-    CLI::App* set_limits = app.add_subcommand(
-        "set-limits", "change the PDU's limits; those not given stay (yespeed_pdu)");
-    addLimitsType(addAddress(set_limits, "1-247"));
-    const char* limit_help[3] = {"V, in 0.1 V", "V, in 0.1 V", "A, in 0.01 A"};
-    for (size_t i = 0; i < 3; ++i)
-      set_limits->add_option(kLimitOptions[i], w.limits[i], limit_help[i])
-          ->type_name(YespeedPdu::kLimitUnits[i]);
+    // The limits commands, for the registered types that have limits; one option per limit
+    // name any of them has.
+    const std::vector<CommissioningType> limited = typesWith(BoardFeature::kLimits);
+    if (!limited.empty()) {
+      const std::string names = " (" + orList(namesOf(limited)) + ")";
+      CLI::App* get_limits = app.add_subcommand("get-limits", "the protection limits" + names);
+      CLI::App* set_limits = app.add_subcommand(
+          "set-limits", "change the protection limits; those not given stay" + names);
+      for (CLI::App* command : {get_limits, set_limits}) addLimitsType(command);
+      for (const CommissioningType& t : limited)
+        for (const LimitSpec& limit : t.commissioning->limitList()) {
+          const std::string option = limitOption(limit.name);
+          if (set_limits->get_option_no_throw(option)) continue;
+          set_limits
+              ->add_option(
+                  option, w.limits[option],
+                  std::string(limit.unit) + ", in " + stepText(limit.decimals) + " " + limit.unit)
+              ->type_name(limit.unit);
+        }
+    }
 
     CLI::App* read = app.add_subcommand("read", "one request: COUNT values from START");
     addTableCount(addTable(read));
     CLI::App* write = app.add_subcommand(
         "write", "FC05/FC06 for one value, FC15/FC16 for more (--multiple: always)");
     addTable(write)
-        ->add_option("values", w.values, "0 or 1 (coils), 0-65535 (holding)")
+        ->add_option("value", w.values, "0 or 1 (coils), 0-65535 (holding)")
         ->type_name("VALUE...")
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+        ->transform(intRange(0, 65535));
     write->add_flag("--multiple", "FC15/FC16 even for one value");
     CLI::App* watch =
         app.add_subcommand("watch", "polls; prints a line only when something changed");
@@ -247,7 +485,7 @@ struct Cli {
         ->check(secondsRange(0.01, 3600));
     watch->add_option("--count", w.count, "polls, then stop (default: until Ctrl-C)")
         ->type_name("N")
-        ->check(intRange(1, 100000000));
+        ->transform(intRange(1, 100000000));
     for (CLI::App* command : app.get_subcommands({}))
       command->footer(
           "\n(modbus_rtu_commission --help: every command, the boards' ranges, "
@@ -255,31 +493,47 @@ struct Cli {
     app.footer(commissionHelpDetails());
   }
 
+  // Any address a board can have here; a type's narrower range is checked once --type is known.
   CLI::App* addAddress(CLI::App* command, const std::string& range = "1-255") {
     command->add_option("--address", w.address, "the device's address (" + range + ")")
-        ->type_name("A");
+        ->type_name("A")
+        ->transform(intRange(1, 255));
     return command;
   }
-  void addTyped(CLI::App* command) {
-    command->add_option("--type", w.type, "ld58a08 or lc_relay8")->type_name("T");
-    addAddress(command, "ld58a08 1-248, lc_relay8 1-255");
+  void addTyped(CLI::App* command, const SettingCommand& s) {
+    const std::vector<CommissioningType> types = typesWith(s.feature);
+    std::string ranges;
+    for (const auto& t : types)
+      ranges += (ranges.empty() ? "" : ", ") + std::string(t.type->name) + " 1-" +
+                std::to_string(t.type->max_address);
+    command->add_option("--type", w.type, orList(namesOf(types)))
+        ->type_name("T")
+        ->check(typeFor(command->get_name(), s.feature));
+    addAddress(command, ranges);
   }
   void addLimitsType(CLI::App* command) {
-    command->add_option("--type", w.type, "yespeed_pdu (the only one)")->type_name("T");
+    addTyped(command, SettingCommand{"", nullptr, BoardFeature::kLimits, "", "", ""});
   }
   // The positional COUNT is named "table-count", not "count": watch also has the option
   // --count (polls), and CLI11 2.4 (Debian 13) refuses a positional whose name equals another
   // option's long name (OptionAlreadyAdded at start), where CLI11 2.1 (Debian 12) let it pass.
   static constexpr const char* kTableCount = "table-count";
   void addTableCount(CLI::App* command) {
-    command->add_option(kTableCount, w.table_count, "how many (default 1)")->type_name("COUNT");
+    command->add_option(kTableCount, w.table_count, "how many (default 1)")
+        ->type_name("COUNT")
+        ->transform(anInteger("1-" + std::to_string(kMaxReadBits) + " values of a bit table, 1-" +
+                              std::to_string(kMaxReadRegisters) + " registers"));
   }
   CLI::App* addTable(CLI::App* command) {
     addAddress(command);
     command->add_option("table", w.table, "coils, discrete-inputs, holding or input-registers")
-        ->type_name("TABLE");
+        ->type_name("TABLE")
+        ->check(refusing(CLI::IsMember(kTables), [](const std::string& text) {
+          return "'" + text + "' is not coils, discrete-inputs, holding or input-registers";
+        }));
     command->add_option("start", w.start, "first address in the table (0-65535)")
-        ->type_name("START");
+        ->type_name("START")
+        ->transform(intRange(0, 65535));
     return command;
   }
 };
@@ -298,14 +552,18 @@ void parseLink(const Parsed& p, CommissionCommand& c) {
   PortAddress address;
   std::string port_error;
   if (!parsePortAddress(c.link.port, &address, &port_error)) bad("--" + port_error);
-  if (p.top.count("--baud")) c.link.baud = intIn("--baud", p.w.baud, 1200, 115200);
-  if (p.top.count("--parity")) parseParity(p.w.parity, &c.link.parity);
+  if (p.top.count("--baud")) c.link.baud = p.w.baud;
+  if (p.top.count("--parity")) c.link.parity = static_cast<Parity>(p.w.parity);
   c.link.retries = 0;
-  // Scans try many silent addresses: wait little. Other commands wait out an LD58A08's return
-  // delay (up to 1000 ms) too.
+  // Scans try many silent addresses: wait little. Other commands wait out the longest return
+  // delay a registered type can be set to (an LD58A08's 1000 ms) too.
+  int longest_delay_ms = 0;
+  for (const CommissioningType& t : typesWith(BoardFeature::kReturnDelay))
+    longest_delay_ms = std::max(longest_delay_ms, t.commissioning->returnDelayStepMs() *
+                                                      t.commissioning->returnDelayMaxUnits());
   const double wire = 30.0 * bitsPerCharacter(c.link) / c.link.baud;
-  c.link.response_timeout = (c.command == "scan" ? 0.05 : 1.05) + wire;
-  if (p.top.count("--timeout")) toDouble(p.w.timeout, &c.link.response_timeout);
+  c.link.response_timeout = 0.05 + (c.command == "scan" ? 0 : longest_delay_ms / 1000.0) + wire;
+  if (p.top.count("--timeout")) c.link.response_timeout = p.w.timeout;
 }
 
 void parseScan(const Parsed& p, CommissionCommand& c) {
@@ -322,8 +580,9 @@ void parseScan(const Parsed& p, CommissionCommand& c) {
           c.addresses.push_back(a);
     }
   } else {
-    const int from = p.has("--from") ? intIn("--from", w.from, 1, 255) : 1;
-    const int to = p.has("--to") ? intIn("--to", w.to, from, 255) : 255;
+    const int from = p.has("--from") ? w.from : 1;
+    if (p.has("--to")) checkIn("--to", w.to, from, 255);
+    const int to = p.has("--to") ? w.to : 255;
     for (int a = from; a <= to; ++a) c.addresses.push_back(a);
   }
   // Each item was checked by kBaudList / kParityList.
@@ -334,19 +593,16 @@ void parseScan(const Parsed& p, CommissionCommand& c) {
     c.bauds.push_back(static_cast<int>(v));
   }
   const std::string parities = p.has("--parities") ? w.parities : parityName(c.link.parity);
-  for (const std::string& name : splitList(parities == "all" ? "none,even,odd" : parities)) {
-    Parity parity;
-    parseParity(name, &parity);
-    c.parities.push_back(parity);
-  }
+  for (const std::string& name : splitList(parities == "all" ? "none,even,odd" : parities))
+    c.parities.push_back(static_cast<Parity>(kParityNames.at(name)));
   if (c.addresses.empty() || c.bauds.empty() || c.parities.empty())
     bad("--addresses / --bauds / --parities: empty list");
   c.first_only = p.has("--first");
 }
 
-// A baud rate or a code, as the board's own code.
-int baudCode(const std::string& text, bool lc) {
-  const int lo = lc ? 2 : 0, hi = lc ? 4 : 7;
+// A baud rate or a code, as the board's own code (the type's codes index kStandardBauds).
+int baudCode(const std::string& text, const CommissioningType& t) {
+  const auto [lo, hi] = t.commissioning->baudCodes();
   long v = -1;
   if (toLong(text, &v)) {
     if (v >= lo && v <= hi) return static_cast<int>(v);
@@ -354,126 +610,157 @@ int baudCode(const std::string& text, bool lc) {
       if (baudOfCode(code) == v) return code;
   }
   bad("baud: '" + text + "' is neither a code " + std::to_string(lo) + "-" + std::to_string(hi) +
-      " nor one of " + (lc ? "4800, 9600, 19200" : standardBaudList()) + " (" +
-      (lc ? kLcRelay8Type.name : kLd58a08Type.name) + ")");
+      " nor one of " + baudsOf(*t.commissioning, false) + " (" + t.type->name + ")");
 }
 
-// The settings commands: --type (ld58a08 unless the command fits both boards), --address and
-// the new value in the board's units.
+// The settings commands: --type (needed only when more than one registered type has the
+// setting), --address in the type's range, and the new value in the board's units.
 void parseDevice(const Parsed& p, CommissionCommand& c) {
   const std::string& cmd = c.command;
-  const bool both_boards =
-      cmd == "get-address" || cmd == "set-address" || cmd == "get-baud" || cmd == "set-baud";
-  const std::string ld = kLd58a08Type.name, lc_type = kLcRelay8Type.name;
+  const SettingCommand& s = *settingCommand(cmd);
+  const std::vector<CommissioningType> types = typesWith(s.feature);
   if (p.has("--type")) {
-    c.type = p.w.type;
-    if (c.type != ld && c.type != lc_type)
-      bad("--type: '" + c.type + "' is not " + ld + " or " + lc_type);
-    if (!both_boards && c.type != ld)
-      bad("--type: " + cmd + " is an ld58a08 command; the LC relay board has no such setting");
-  } else if (both_boards) {
-    bad("--type: missing (" + ld + " or " + lc_type + ")");
+    c.type = p.w.type;  // checked by typeFor
+  } else if (types.size() == 1) {
+    c.type = types.front().type->name;
   } else {
-    c.type = ld;
+    bad("--type: missing (" + orList(namesOf(types)) + ")");
   }
-  const bool lc = c.type == lc_type;
-  const int max_address = lc ? kLcRelay8Type.max_address : kLd58a08Type.max_address;
-  if (p.has("--address")) c.address = intIn("--address", p.w.address, 1, max_address);
+  const auto it = std::find_if(types.begin(), types.end(),
+                               [&c](const auto& t) { return c.type == t.type->name; });
+  if (it == types.end()) bad("--type: '" + c.type + "' is not " + orList(namesOf(types)));
+  const CommissioningType& type = *it;
+  const int max_address = type.type->max_address;
+  if (p.has("--address")) {
+    c.address = p.w.address;
+    checkIn("--address", c.address, 1, max_address);
+  }
+  // Address commands and the factory reset may go through the address every board of the
+  // type takes, where it has one.
   const bool address_optional =
-      cmd == "get-address" || cmd == "set-address" || cmd == "factory-reset";
+      (s.feature == BoardFeature::kAddress || s.feature == BoardFeature::kFactoryReset) &&
+      !type.commissioning->addressPath().empty();
   if (c.address < 0 && !address_optional)
     bad("--address: missing (1-" + std::to_string(max_address) + ")");
-  if (cmd.compare(0, 4, "set-") != 0) return;
+  if (!s.set || cmd != s.set) return;
   if (!p.has("value")) bad("value: missing (see --help)");
   const std::string& v = p.w.value;
-  if (cmd == "set-address") {
-    c.new_value = intIn("new address", v, 1, max_address);
-  } else if (cmd == "set-baud") {
-    c.new_value = baudCode(v, lc);
-  } else if (cmd == "set-parity") {
-    Parity parity;
-    if (!parseParity(v, &parity)) bad("parity: '" + v + "' is not none, even or odd");
-    c.new_value = parity == Parity::kEven ? 1 : parity == Parity::kOdd ? 2 : 0;
-  } else if (cmd == "set-return-delay") {
-    const int ms = intIn("return delay", v, 0, 1000);
-    if (ms % 40) bad("return delay: " + v + " ms is not a multiple of 40 ms (0-1000)");
-    c.new_value = ms / 40;
-  } else if (cmd == "set-save") {
-    if (v != "on" && v != "off" && v != "1" && v != "0")
-      bad("power-down save: '" + v + "' is not on or off");
-    c.new_value = v == "on" || v == "1";
+  switch (s.feature) {
+    case BoardFeature::kAddress:
+      c.new_value = intIn(s.label, v, 1, max_address);
+      break;
+    case BoardFeature::kBaud:
+      c.new_value = baudCode(v, type);
+      break;
+    case BoardFeature::kParity:  // the word was checked by CLI::IsMember
+      c.new_value = v == "even" ? 1 : v == "odd" ? 2 : 0;
+      break;
+    case BoardFeature::kReturnDelay: {
+      const int step = type.commissioning->returnDelayStepMs();
+      const int max_ms = step * type.commissioning->returnDelayMaxUnits();
+      const int ms = intIn(s.label, v, 0, max_ms);
+      if (ms % step)
+        bad(std::string(s.label) + ": " + v + " ms is not a multiple of " + std::to_string(step) +
+            " ms (0-" + std::to_string(max_ms) + ")");
+      c.new_value = ms / step;
+      break;
+    }
+    case BoardFeature::kPowerDownSave:  // the word was checked by CLI::IsMember
+      c.new_value = v == "on" || v == "1";
+      break;
+    case BoardFeature::kFactoryReset:
+    case BoardFeature::kLimits:
+      break;
   }
 }
 
-// The PDU's field names as the tool's options: "over_voltage: ..." -> "--over-voltage: ...".
-std::string asOptions(std::string message) {
-  for (const char* field : YespeedPdu::kLimitNames) {
-    std::string option = std::string("--") + field;
-    std::replace(option.begin(), option.end(), '_', '-');
+// A type's limit names as the tool's options: "over_voltage: ..." -> "--over-voltage: ...".
+std::string asOptions(std::string message, const std::vector<LimitSpec>& limits) {
+  for (const LimitSpec& limit : limits) {
+    const std::string field = limit.name, option = limitOption(field);
     for (size_t at = message.find(field); at != std::string::npos;
          at = message.find(field, at + option.size())) {
       if (at >= 2 && message.compare(at - 2, 2, "--") == 0) continue;
-      message.replace(at, std::string(field).size(), option);
+      message.replace(at, field.size(), option);
     }
   }
   return message;
 }
 
-// get-limits / set-limits (Yespeed PDU). Each limit given is converted to the register value
-// that would be written and checked there (the manual's rules, on integers); with all three the
-// rule between them too. With fewer, the others are the PDU's own, and the rules are checked
-// on the merged set once they are read.
+// get-limits / set-limits. Each limit given is converted to the register value that would be
+// written and checked there (the manual's rules, on integers); with all of them the rules
+// between them too. With fewer, the others are the device's own, and the rules are checked on
+// the merged set once they are read.
 void parseLimits(const Parsed& p, CommissionCommand& c) {
-  c.type = kYespeedPduType.name;
-  if (p.has("--type") && p.w.type != c.type)
-    bad("--type: " + c.command + " is a " + c.type + " command; '" + p.w.type + "' has no limits");
-  const int max_address = kYespeedPduType.max_address;
+  const std::vector<CommissioningType> types = typesWith(BoardFeature::kLimits);
+  if (p.has("--type")) {
+    c.type = p.w.type;  // checked by typeFor
+  } else if (types.size() == 1) {
+    c.type = types.front().type->name;
+  } else {
+    bad("--type: missing (" + orList(namesOf(types)) + ")");
+  }
+  const auto it = std::find_if(types.begin(), types.end(),
+                               [&c](const auto& t) { return c.type == t.type->name; });
+  if (it == types.end()) bad("--type: '" + c.type + "' is not " + orList(namesOf(types)));
+  const Commissioning& type = *it->commissioning;
+  const int max_address = it->type->max_address;
   if (!p.has("--address")) bad("--address: missing (1-" + std::to_string(max_address) + ")");
-  c.address = intIn("--address", p.w.address, 1, max_address);
+  c.address = p.w.address;
+  checkIn("--address", c.address, 1, max_address);
   if (c.command == "get-limits") return;
-  bool all = true;
-  for (size_t i = 0; i < 3; ++i) {
-    const std::string option = kLimitOptions[i];
+  const std::vector<LimitSpec> limits = type.limitList();
+  c.limits.assign(limits.size(), -1);
+  bool all = true, any = false;
+  std::string given_list;
+  for (size_t i = 0; i < limits.size(); ++i) {
+    const std::string option = limitOption(limits[i].name);
+    given_list += (i ? ", " : "") + option + " " + limits[i].unit;
     if (!p.has(option)) {
       all = false;
       continue;
     }
-    const std::string& text = p.w.limits[i];
+    any = true;
+    const std::string& text = p.w.limits.at(option);
     double v = 0;
     if (!toDouble(text, &v))
-      bad(option + ": '" + text + "' is not a number (" + YespeedPdu::kLimitUnits[i] + ")");
+      bad(option + ": '" + text + "' is not a number (" + limits[i].unit + ")");
     uint16_t reg = 0;
-    const std::string problem = YespeedPdu::limitToRegister(i, v, &reg, option);
+    const std::string problem = type.limitToRegister(i, v, &reg, option);
     if (!problem.empty()) bad(problem);
     c.limits[i] = reg;
   }
-  if (c.limits[0] < 0 && c.limits[1] < 0 && c.limits[2] < 0)
-    bad("set-limits: give at least one of --over-voltage V, --under-voltage V, --over-current A "
-        "(the others stay as the PDU holds them)");
+  // An option of another type's limits.
+  for (const auto& [option, text] : p.w.limits)
+    if (p.has(option) &&
+        std::none_of(limits.begin(), limits.end(), [&option = option](const LimitSpec& l) {
+          return limitOption(l.name) == option;
+        }))
+      bad(option + ": not a limit of " + c.type + " (see --help)");
+  if (!any)
+    bad("set-limits: give at least one of " + given_list + " (the others stay as " + type.title() +
+        " holds them)");
   if (all) {
-    const std::string problem = YespeedPdu::checkLimitRegisters(
-        {static_cast<uint16_t>(c.limits[0]), static_cast<uint16_t>(c.limits[1]),
-         static_cast<uint16_t>(c.limits[2])});
-    if (!problem.empty()) bad(asOptions(problem));
+    const std::vector<uint16_t> regs(c.limits.begin(), c.limits.end());
+    const std::string problem = type.checkLimits(regs);
+    if (!problem.empty()) bad(asOptions(problem, limits));
   }
 }
 
 // info, read, write, watch: any device type, so any address a board can have.
 void parseAnyAddress(const Parsed& p, CommissionCommand& c) {
   if (!p.has("--address")) bad("--address: missing (1-255)");
-  c.address = intIn("--address", p.w.address, 1, 255);
+  c.address = p.w.address;  // checked by intRange(1, 255)
 }
 
 void parseTable(const Parsed& p, CommissionCommand& c) {
   const Words& w = p.w;
   parseAnyAddress(p, c);
   if (!p.has("table")) bad("table: missing (coils, discrete-inputs, holding or input-registers)");
-  c.table = w.table;
+  c.table = w.table;  // checked by CLI::IsMember
   const bool bits = c.table == "coils" || c.table == "discrete-inputs";
-  if (!bits && c.table != "holding" && c.table != "input-registers")
-    bad("table: '" + c.table + "' is not coils, discrete-inputs, holding or input-registers");
   if (!p.has("start")) bad("start: missing (0-65535)");
-  c.start = intIn("start", w.start, 0, 65535);
+  c.start = w.start;
   if (c.command == "write") {
     if (c.table != "coils" && c.table != "holding")
       bad("table: " + c.table + " cannot be written (coils or holding)");
@@ -481,26 +768,37 @@ void parseTable(const Parsed& p, CommissionCommand& c) {
     const size_t max = bits ? kMaxWriteBits : kMaxWriteRegisters;
     if (w.values.size() > max)
       bad("value: " + std::to_string(w.values.size()) + " values, at most " + std::to_string(max));
-    for (const std::string& value : w.values)
-      c.values.push_back(static_cast<uint16_t>(intIn("value", value, 0, bits ? 1 : 65535)));
+    for (const int value : w.values) {
+      checkIn("value", value, 0, bits ? 1 : 65535);
+      c.values.push_back(static_cast<uint16_t>(value));
+    }
     c.count = static_cast<int>(c.values.size());
     c.multiple = p.has("--multiple");
-  } else {
-    const int max = bits ? kMaxReadBits : kMaxReadRegisters;
-    if (p.has(Cli::kTableCount)) c.count = intIn("count", w.table_count, 1, max);
+  } else if (p.has(Cli::kTableCount)) {
+    c.count = w.table_count;
+    checkIn("count", c.count, 1, bits ? kMaxReadBits : kMaxReadRegisters);
   }
   if (c.start + c.count > 65536)
     bad("start: " + std::to_string(c.start) + " + " + std::to_string(c.count) + " passes 65535");
   if (c.command == "watch") {
-    if (p.has("--interval")) toDouble(w.interval, &c.interval);
-    if (p.has("--count")) c.polls = intIn("--count", w.count, 1, 100000000);
+    if (p.has("--interval")) c.interval = w.interval;
+    if (p.has("--count")) c.polls = w.count;
   }
 }
 
-// CLI11's own refusals, in this tool's words where they have a usual form.
-std::string describe(const CLI::ParseError& e) {
+// CLI11's own refusals, in this tool's words where they have a usual form. A positional value
+// is named in messages as the command calls it ("parity", "count"), not by its CLI11 name.
+std::string describe(const CLI::ParseError& e, const std::vector<std::string>& args) {
   std::string what = e.what();
   const size_t colon = what.find(':');
+  if (dynamic_cast<const CLI::ValidationError*>(&e) && colon != std::string::npos) {
+    const std::string name = what.substr(0, colon);
+    if (name == Cli::kTableCount) return "count" + what.substr(colon);
+    if (name == "value")
+      for (const std::string& word : args)
+        if (const SettingCommand* s = settingCommand(word))
+          if (s->set && word == s->set) return s->label + what.substr(colon);
+  }
   if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && what.compare(0, 2, "--") == 0 &&
       what.find("required") != std::string::npos && what.find("missing") != std::string::npos)
     return what.substr(0, colon) + ": missing value";
@@ -525,10 +823,6 @@ void refuseExtras(const CLI::App& top, const CLI::App* command) {
 
 }  // namespace
 
-std::string commissionUsage() {
-  return Cli().app.help();
-}
-
 bool parseCommission(const std::vector<std::string>& args, CommissionCommand* out,
                      std::string* error) {
   Cli cli;
@@ -544,7 +838,7 @@ bool parseCommission(const std::vector<std::string>& args, CommissionCommand* ou
       out->help = cli.app.help("", CLI::AppFormatMode::All);
       return true;
     } catch (const CLI::ParseError& e) {
-      bad(describe(e));
+      bad(describe(e, args));
     }
     const std::vector<CLI::App*> commands = cli.app.get_subcommands();
     const CLI::App* command = commands.empty() ? nullptr : commands.front();

@@ -3,20 +3,12 @@
 #include <set>
 
 #include "modbus_rtu_driver/core/link/make_transport.h"
-#include "modbus_rtu_driver/devices/lc_relay8.h"
-#include "modbus_rtu_driver/devices/ld58a08.h"
-#include "modbus_rtu_driver/devices/yespeed_pdu.h"
+#include "modbus_rtu_driver/devices/commissioning.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
 
 namespace modbus_rtu_driver {
 
 namespace {
-
-// An answer, even an exception, means something listens there. Garbage does not: at a wrong
-// baud, noise and half frames are what a scan hears most.
-bool answered(const Result& r) {
-  return r.ok() || r.error == ErrorKind::kException;
-}
 
 struct Found {
   int address, baud;
@@ -53,47 +45,39 @@ class Progress {
 
 }  // namespace
 
+// The coil read first: most boards answer it, and a silent address costs one read only. Then
+// each registered type's probe, in probe order (devices/commissioning.h).
 Identity identifyDevice(Transport& bus, uint8_t address) {
   Identity id;
   const Result presence = bus.execute(Request::readCoils(address, 0, 1));
   if (presence.error == ErrorKind::kWrongAddress)
     id.note =
         "a reply from another address arrived late: some device answers slower than "
-        "--timeout (an LD58A08 with a return delay?)";
+        "--timeout (a board with a return delay?)";
   if (!answered(presence)) return id;
   // Probes answered neither with data nor with a refusal: late replies or noise, which leave
   // the type open.
   bool unclear = false;
-  auto probe = [&](const Request& request) {
-    Result r = bus.execute(request);
-    unclear = unclear || !answered(r);
-    return r;
-  };
-  const Result ld = probe(Request::readHoldingRegisters(address, Ld58a08::kAddressRegister, 1));
-  if (ld.ok() && ld.values[0] == address) {
-    id.present = true;
-    id.type = kLd58a08Type.name;
+  std::string elsewhere;  // a board that answered for another address of its own
+  for (const CommissioningType& t : commissioningTypes()) {
+    const Probe p = t.commissioning->probe(bus, address);
+    unclear = unclear || p.unclear;
+    if (p.kind == Probe::kYes) {
+      id.present = true;
+      id.type = t.type->name;
+      return id;
+    }
+    if (p.kind == Probe::kElsewhere && elsewhere.empty()) elsewhere = p.note;
+  }
+  if (!elsewhere.empty()) {
+    id.note = "address " + std::to_string(address) + ": " + elsewhere;
     return id;
   }
-  // An LD58A08 answers 0xFF as "whoever you are": it is at its own address, not at 255.
-  const bool ld_elsewhere = address == 0xFF && ld.ok();
   id.present = true;
-  if (probe(Request::readInputRegisters(address, 0, 5)).ok()) {
-    id.type = kYespeedPduType.name;
-    return id;
-  }
-  const Result lc = probe(Request::readHoldingRegisters(address, LcRelay8::kBaudReadRegister, 1));
-  if (lc.ok() && lc.values[0] >= 2 && lc.values[0] <= 4) {
-    id.type = kLcRelay8Type.name;
-  } else if (ld_elsewhere) {
-    id.present = false;
-    id.note = "address 255: an LD58A08 answered for its address " + std::to_string(ld.values[0]);
-  } else {
-    id.type = "unknown modbus device";
-    if (unclear)
-      id.note = "address " + std::to_string(address) +
-                ": late or garbled replies; a larger --timeout may tell its type";
-  }
+  id.type = "unknown modbus device";
+  if (unclear)
+    id.note = "address " + std::to_string(address) +
+              ": late or garbled replies; a larger --timeout may tell its type";
   return id;
 }
 
@@ -151,10 +135,23 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
                   (complete ? "" : " (scan stopped early)"),
               Json());
   }
-  if (found.empty())
+  if (found.empty()) {
+    // Where each type's boards are when new (their descriptors' factory settings).
+    std::string factory;
+    for (const CommissioningType& t : commissioningTypes()) {
+      const FactorySettings& f = t.type->factory;
+      if (!f.address || !f.baud) continue;
+      factory += (factory.empty() ? "" : ", ") + std::string(t.type->name) + " at " +
+                 std::to_string(f.address) + " " +
+                 lineName(f.baud, f.parity == 'E'   ? Parity::kEven
+                                  : f.parity == 'O' ? Parity::kOdd
+                                                    : Parity::kNone);
+    }
     out.note(
         "nothing answered; check the wiring and --bauds/--parities, and give a board with a "
-        "return delay a --timeout above it");
+        "return delay a --timeout above it" +
+        (factory.empty() ? std::string() : " (factory settings: " + factory + ")"));
+  }
   return found.empty() ? kExitNotFound : kExitOk;
 }
 

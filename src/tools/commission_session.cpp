@@ -9,10 +9,6 @@
 
 namespace modbus_rtu_driver {
 
-int baudOfCode(int code) {
-  return code >= 0 && code < 8 ? kStandardBauds[code] : 0;
-}
-
 std::string lineName(int baud, Parity parity) {
   return std::to_string(baud) + " 8" + parityLetter(parity) + "1";
 }

@@ -1,8 +1,154 @@
 // modbus_rtu_commission --help: what CLI11's option lists do not say (each command's words,
-// the boards' ranges, the scan's duration, confirmations, exit codes), after those lists.
+// the boards' ranges, factory settings and manuals, the scan's duration, confirmations, exit
+// codes), after those lists. What is said of a type comes from its descriptor and its class
+// (devices/commissioning.h), so a new type shows up here by itself.
+#include <algorithm>
+#include <functional>
+#include <sstream>
+
+#include "modbus_rtu_driver/core/config/link_config.h"
+#include "modbus_rtu_driver/devices/commissioning.h"
 #include "modbus_rtu_driver/tools/commission.h"
 
 namespace modbus_rtu_driver {
+
+namespace {
+
+std::vector<CommissioningType> typesWith(BoardFeature feature) {
+  std::vector<CommissioningType> out;
+  for (const CommissioningType& t : commissioningTypes())
+    if (t.commissioning->has(feature)) out.push_back(t);
+  return out;
+}
+
+std::string namesWith(BoardFeature feature, const char* separator = "|") {
+  std::string out;
+  for (const CommissioningType& t : typesWith(feature))
+    out += (out.empty() ? "" : separator) + std::string(t.type->name);
+  return out;
+}
+
+Parity parityOf(char letter) {
+  return letter == 'E' ? Parity::kEven : letter == 'O' ? Parity::kOdd : Parity::kNone;
+}
+
+// The settings commands, one paragraph per command group, for the types registered.
+std::string settingsHelp() {
+  std::ostringstream h;
+  const auto addresses = typesWith(BoardFeature::kAddress);
+  if (!addresses.empty()) {
+    const std::string names = namesWith(BoardFeature::kAddress);
+    h << "  get-address --type " << names << " [--address A]\n"
+      << "  set-address --type " << names << " [--address A] NEW\n";
+    for (const auto& t : addresses) {
+      h << "      " << t.type->name << ": 1-" << t.type->max_address << ", ";
+      if (t.commissioning->addressReadableAt())
+        h << "at A, or " << t.commissioning->addressPath() << " without --address.\n";
+      else
+        h << "always " << t.commissioning->addressPath()
+          << " (--address A: check it is A first).\n";
+    }
+    h << "      Without --address the board must be ALONE on the bus: every board of its type "
+         "takes\n      the command.\n";
+  }
+  // A type that also answers another type's factory address garbles that one's replies.
+  for (const CommissioningType& t : commissioningTypes()) {
+    if (!t.type->also_answers) continue;
+    for (const CommissioningType& other : commissioningTypes())
+      if (other.type != t.type && other.type->factory.address == t.type->also_answers)
+        h << "      " << t.type->name << " boards also answer some requests at "
+          << t.type->also_answers << ":\n      move " << other.type->name
+          << " boards off their factory address " << other.type->factory.address
+          << " before they share a bus with one.\n";
+  }
+  const auto bauds = typesWith(BoardFeature::kBaud);
+  if (!bauds.empty()) {
+    h << "  get-baud --type T --address A\n  set-baud --type T --address A BAUD       a rate or "
+         "a code:";
+    for (const auto& t : bauds) {
+      const auto [lo, hi] = t.commissioning->baudCodes();
+      h << "\n      " << t.type->name << " " << lo << "-" << hi << " (";
+      for (int code = lo; code <= hi; ++code) h << (code == lo ? "" : ", ") << baudOfCode(code);
+      h << ")";
+    }
+    h << "\n";
+  }
+  struct Simple {
+    BoardFeature feature;
+    const char* get;
+    const char* set;
+    const char* value;
+  };
+  for (const Simple& s :
+       {Simple{BoardFeature::kParity, "get-parity", "set-parity", "none|even|odd"},
+        Simple{BoardFeature::kReturnDelay, "get-return-delay", "set-return-delay", "MS"},
+        Simple{BoardFeature::kPowerDownSave, "get-save", "set-save", "on|off"}}) {
+    const auto types = typesWith(s.feature);
+    if (types.empty()) continue;
+    h << "  " << s.get << " --address A / " << s.set << " --address A " << s.value << "\n      "
+      << (types.size() > 1 ? "--type " + namesWith(s.feature) + "; " : "");
+    if (s.feature == BoardFeature::kReturnDelay)
+      for (size_t i = 0; i < types.size(); ++i)
+        h << (i ? ", " : "") << types[i].type->name << " 0-"
+          << types[i].commissioning->returnDelayStepMs() *
+                 types[i].commissioning->returnDelayMaxUnits()
+          << " ms in steps of " << types[i].commissioning->returnDelayStepMs() << " ms";
+    else
+      h << namesWith(s.feature, ", ");
+    if (s.feature == BoardFeature::kPowerDownSave) h << ": power-down save of the PWM settings";
+    h << "\n";
+  }
+  const auto resets = typesWith(BoardFeature::kFactoryReset);
+  if (!resets.empty()) {
+    h << "  factory-reset --type " << namesWith(BoardFeature::kFactoryReset) << " [--address A]";
+    for (const auto& t : resets)
+      if (!t.commissioning->addressPath().empty())
+        h << "\n      " << t.type->name << " without --address: " << t.commissioning->addressPath()
+          << " (every board of the type takes it)";
+    h << "\n";
+  }
+  return h.str();
+}
+
+// get-limits / set-limits for the types that have limits.
+std::string limitsHelp() {
+  std::ostringstream h;
+  for (const CommissioningType& t : typesWith(BoardFeature::kLimits)) {
+    std::string options, names;
+    for (const LimitSpec& l : t.commissioning->limitList()) {
+      std::string option = std::string("--") + l.name;
+      std::replace(option.begin(), option.end(), '_', '-');
+      options += " [" + option + " " + l.unit + "]";
+      names += (names.empty() ? "" : ", ") + option.substr(2);
+    }
+    h << "  get-limits --address A                   (" << t.type->name << ": " << names
+      << ")\n  set-limits --address A" << options << "\n      (" << t.type->name
+      << ") Limits not given stay as the device holds them (it is read first); read\n"
+      << "      back after the write. The manual's rules, checked on the register values:\n"
+      << "      " << t.commissioning->limitRules() << ".\n";
+  }
+  return h.str();
+}
+
+// Each registered type's addresses, factory settings and manual (its descriptor).
+std::string typesHelp() {
+  std::ostringstream h;
+  h << "\nDevice types (factory settings; the manual the register map comes from):\n";
+  for (const CommissioningType& t : commissioningTypes()) {
+    const FactorySettings& f = t.type->factory;
+    h << "  " << t.type->name << ": addresses 1-" << t.type->max_address;
+    if (f.address) h << ", factory address " << f.address;
+    if (f.baud)
+      h << ", " << std::to_string(f.baud) << " 8" << parityLetter(parityOf(f.parity)) << "1";
+    if (t.commissioning->has(BoardFeature::kReturnDelay))
+      h << ", return delay up to "
+        << t.commissioning->returnDelayStepMs() * t.commissioning->returnDelayMaxUnits() << " ms";
+    h << " (" << t.type->manual << ")\n";
+  }
+  return h.str();
+}
+
+}  // namespace
 
 std::string commissionHelpDetails() {
   return R"(
@@ -17,30 +163,9 @@ Details (COMMAND --help lists a command's options):
       is 255 x 8 x 3 = 6120 reads: 6120 x 0.081 s = 8.3 min of timeouts + 0.8 min of gaps,
       about 9 minutes (each device found adds up to 4 reads).
   info --address A                         type and settings of the device at A
-  get-address --type ld58a08|lc_relay8 [--address A]
-  set-address --type ld58a08|lc_relay8 [--address A] NEW
-      ld58a08: 1-248, register 0x00FD at A, or through 0xFF without --address.
-      lc_relay8: 1-255, always through address 0 (--address A: check it is A first).
-      Through 0xFF or 0 the board must be ALONE on the bus: every board takes the command.
-      An LD58A08 also answers some requests at 0xFF: move LC boards off their factory
-      address 255 before they share a bus with one.
-  get-baud --type T --address A
-  set-baud --type T --address A BAUD       a rate or a code: ld58a08 0-7 (1200-115200),
-                                           lc_relay8 2-4 (4800, 9600, 19200)
-  get-parity --address A / set-parity --address A none|even|odd          (ld58a08)
-  get-return-delay --address A / set-return-delay --address A MS
-                                           (ld58a08, 0-1000 ms in steps of 40)
-  get-save --address A / set-save --address A on|off
-                                           (ld58a08, power-down save of the PWM settings)
-  factory-reset --type ld58a08 [--address A]   (through 0xFF without --address)
-  get-limits --address A                   (yespeed_pdu: over-voltage, under-voltage,
-                                           over-current)
-  set-limits --address A [--over-voltage V] [--under-voltage V] [--over-current A]
-      (yespeed_pdu) Limits not given stay as the PDU holds them (it is read first). The
-      manual's rules, checked on the register values that will be written (0.1 V, 0.01 A):
-      over-voltage above 180.0 V and above under-voltage, under-voltage below 280.0 V,
-      over-current above 5.00 A and below 20.00 A. Read back after the write.
-  read --address A coils|discrete-inputs|holding|input-registers START [COUNT]
+)" + settingsHelp() +
+         R"()" + limitsHelp() +
+         R"(  read --address A coils|discrete-inputs|holding|input-registers START [COUNT]
   write --address A coils|holding START VALUE... [--multiple]
                                            FC05/FC06 for one value, FC15/FC16 for more
                                            (--multiple: FC15/FC16 always)
@@ -48,16 +173,16 @@ Details (COMMAND --help lists a command's options):
       Polls and prints a line only when something changed; Ctrl-C ends it.
 
 Numbers may be decimal or 0x-hex. Changes to how a device answers (address, baud, parity,
-return delay, factory reset) and the PDU's limits ask for confirmation on stdin unless --yes;
+return delay, factory reset) and protection limits ask for confirmation on stdin unless --yes;
 without a "y" (or at end of input) nothing is changed.
 Baud and parity take effect after the device is powered off and on.
---timeout: wait for a reply, default 0.05 s + 30 characters for scans and 1 s more for other
-commands (an LD58A08 may wait up to 1000 ms before answering; scan such a board with a
---timeout above its return delay).
+--timeout: wait for a reply, default 0.05 s + 30 characters for scans, and for other
+commands more by the longest return delay below (a board with a return delay waits that long
+before answering; scan such a board with a --timeout above its return delay).
 
 exit codes: 0 ok, 2 bad arguments, 3 not found / no answer, 4 refused by the device (Modbus
 exception), 5 other bus error (CRC, I/O, port), 6 not confirmed by the user
-)";
+)" + typesHelp();
 }
 
 }  // namespace modbus_rtu_driver

@@ -25,6 +25,14 @@ std::string refusal(std::vector<std::string> args, bool with_port = true) {
   return parseCommission(args, &c, &error) ? "" : error;
 }
 
+// The whole --help text, as `modbus_rtu_commission --help` prints it.
+std::string commissionUsage() {
+  CommissionCommand c;
+  std::string error;
+  EXPECT_TRUE(parseCommission({"--help"}, &c, &error)) << error;
+  return c.help;
+}
+
 }  // namespace
 
 TEST(CommissionArgs, ScanDefaultsCoverEveryAddressAtTheGivenLine) {
@@ -233,9 +241,9 @@ TEST(CommissionArgs, PduLimitsAreCheckedOnTheRegisterValues) {
   CommissionCommand c = parsed({"set-limits", "--address", "1", "--over-voltage", "260",
                                 "--under-voltage", "160", "--over-current", "7"});
   EXPECT_EQ(c.type, "yespeed_pdu");
-  EXPECT_EQ(c.limits, (std::array<int, 3>{{2600, 1600, 700}}));
+  EXPECT_EQ(c.limits, (std::vector<int>{2600, 1600, 700}));
   c = parsed({"set-limits", "--address", "2", "--over-voltage", "250"});
-  EXPECT_EQ(c.limits, (std::array<int, 3>{{2500, -1, -1}}));  // the others stay
+  EXPECT_EQ(c.limits, (std::vector<int>{2500, -1, -1}));  // the others stay
   EXPECT_EQ(parsed({"get-limits", "--address", "2", "--type", "yespeed_pdu"}).address, 2);
 
   EXPECT_EQ(refusal({"set-limits", "--address", "1", "--over-voltage", "180.00001"}),
@@ -280,4 +288,27 @@ TEST(CommissionArgs, TheFullScanDurationInTheHelpFollowsTheTimeouts) {
   EXPECT_NE(commissionUsage().find("about 9 minutes"), std::string::npos);
   EXPECT_NE(commissionUsage().find("6120 x 0.081 s = 8.3 min of timeouts + 0.8 min of gaps"),
             std::string::npos);
+}
+
+// Each option is converted by CLI11 after its check: hex and the parity letters too, and
+// "010" is ten with every CLI11 version (2.1 would read it as octal).
+TEST(CommissionArgs, OptionsAreConvertedOnceTheirCheckPassed) {
+  CommissionCommand c =
+      parsed({"--parity", "E", "--baud", "0x4B00", "scan", "--from", "0x10", "--to", "016"});
+  EXPECT_EQ(c.link.parity, Parity::kEven);
+  EXPECT_EQ(c.link.baud, 19200);
+  EXPECT_EQ(c.addresses, std::vector<int>{16});
+  EXPECT_EQ(c.parities, std::vector<Parity>{Parity::kEven});
+  EXPECT_EQ(parsed({"--timeout", "0.25", "info", "--address", "0xF8"}).address, 248);
+  EXPECT_DOUBLE_EQ(parsed({"--timeout", "0.25", "info", "--address", "7"}).link.response_timeout,
+                   0.25);
+  EXPECT_EQ(refusal({"info", "--address", "0x100"}), "--address: '0x100' is outside 1-255");
+  EXPECT_EQ(refusal({"--parity", "X", "scan"}), "--parity: 'X' is not none, even or odd");
+  EXPECT_EQ(refusal({"--parity", "1", "scan"}), "--parity: '1' is not none, even or odd");
+  EXPECT_EQ(refusal({"scan", "--parities", "even,2"}),
+            "--parities: '2' is not none, even or odd (or all)");
+  EXPECT_EQ(refusal({"read", "--address", "1", "holding", "0", "0"}),
+            "count: '0' is outside 1-125");
+  EXPECT_EQ(refusal({"read", "--address", "1", "coils", "0", "many"}),
+            "count: 'many' is not a number (1-2000 values of a bit table, 1-125 registers)");
 }

@@ -57,6 +57,18 @@ TEST_F(CommissionOnScript, LcBoardAddressThroughZeroWithTheManualsFrames) {
   EXPECT_EQ(out_.str(), "lc_relay8 address changed from 7 to 255; it answers at 255\n");
 }
 
+// The LC board has no address register at its own address: get-address there asks whether it
+// answers (its baud code read, as the manual prints it).
+TEST_F(CommissionOnScript, LcBoardAtAnAddressOnlyAnswersOrNot) {
+  bus_.expect("FF 03 03 E8 00 01 11 A4", golden("FF 03 03 E8 00 01 11 A4"));
+  EXPECT_EQ(run({"get-address", "--type", "lc_relay8", "--address", "255"}), kExitOk);
+  EXPECT_EQ(out_.str(), "lc_relay8 answers at address 255\n");
+  bus_.expect("FF 03 03 E8 00 01 11 A4");  // silence
+  EXPECT_EQ(run({"get-address", "--type", "lc_relay8", "--address", "255"}), kExitNotFound);
+  EXPECT_NE(err_.str().find("asking the lc_relay8 at address 255"), std::string::npos)
+      << err_.str();
+}
+
 TEST_F(CommissionOnScript, LcBoardAddressChangeStopsWhenAnotherBoardAnswers) {
   R at_zero = R::readHoldingRegisters(0, 0, 1);
   at_zero.single_device_at_zero = true;
@@ -299,4 +311,118 @@ TEST_F(CommissionOnScript, Ld58a08AddressReadRefusedHintsAtAnotherBoardType) {
   EXPECT_NE(err_.str().find("another board type may be at 7 (info --address 7 names it)"),
             std::string::npos)
       << err_.str();
+}
+
+// A type the tool has never heard of: registering its class (as a new type's own
+// src/devices/<type>_commissioning.cpp does) is all it takes for the tool to offer its
+// settings, check its ranges and name its factory settings.
+namespace {
+
+inline constexpr DeviceDescriptor kRelayTestType{
+    "relay_test", 100, 4, 0, {7, 19200, 'E'}, "test/unit/test_commission_device.cpp"};
+
+class RelayTestCommissioning : public Commissioning {
+ public:
+  static constexpr uint16_t kBaudRegister = 0x0010, kResetRegister = 0x0011;
+  int probeOrder() const override { return 5; }
+  // Sends nothing: the other tests' scripts stay as they are.
+  Probe probe(Transport&, uint8_t) const override { return {}; }
+  Result report(Transport&, uint8_t, InfoReport*) const override { return Result::success(); }
+  bool has(BoardFeature f) const override {
+    return f == BoardFeature::kBaud || f == BoardFeature::kFactoryReset;
+  }
+  std::string title() const override { return "the test relay"; }
+  std::pair<int, int> baudCodes() const override { return {3, 5}; }  // 9600, 19200, 38400
+  Result readSetting(Transport& bus, int address, BoardFeature, uint16_t* v) const override {
+    Result r =
+        bus.execute(Request::readHoldingRegisters(static_cast<uint8_t>(address), kBaudRegister, 1));
+    if (r.ok()) *v = r.values[0];
+    return r;
+  }
+  Result writeSetting(Transport& bus, int address, BoardFeature, uint16_t v) const override {
+    return bus.execute(
+        Request::writeSingleRegister(static_cast<uint8_t>(address), kBaudRegister, v));
+  }
+  Result factoryReset(Transport& bus, int address) const override {
+    return bus.execute(
+        Request::writeSingleRegister(static_cast<uint8_t>(address), kResetRegister, 1));
+  }
+};
+
+const RelayTestCommissioning kRelayTest;
+[[maybe_unused]] const bool kRelayTestRegistered =
+    commissioningClasses().add(kRelayTestType, &kRelayTest);
+
+}  // namespace
+
+TEST_F(CommissionOnScript, ANewTypesSettingsNeedNoEditOfTheTool) {
+  const R baud = R::readHoldingRegisters(3, 0x0010, 1);
+  bus_.expect(frame(baud), reply(baud, {3}))
+      .expectEcho(frame(R::writeSingleRegister(3, 0x0010, 5)));
+  EXPECT_EQ(run({"--yes", "set-baud", "--type", "relay_test", "--address", "3", "38400"}), kExitOk);
+  EXPECT_EQ(out_.str(),
+            "relay_test at address 3: baud rate set to 38400 baud (code 5) (was 9600 baud (code "
+            "3)). It takes effect after the device is powered off and on; then reach it with "
+            "--baud 38400.\n");
+
+  // Its factory settings come from its descriptor; it has no address every board takes, so
+  // --address is needed.
+  bus_.expectEcho(frame(R::writeSingleRegister(3, 0x0011, 1)));
+  EXPECT_EQ(run({"factory-reset", "--type", "relay_test", "--address", "3"}, "y\n"), kExitOk);
+  EXPECT_NE(err_.str().find("Reset the relay_test at address 3 to factory settings: address 7, "
+                            "19200 baud, even parity?"),
+            std::string::npos)
+      << err_.str();
+  EXPECT_NE(out_.str().find("factory settings restored (address 7, 19200 8E1)"), std::string::npos)
+      << out_.str();
+
+  // Its ranges and the commands it has not, before anything is sent.
+  CommissionCommand c;
+  std::string error;
+  EXPECT_FALSE(parseCommission({"--port", "/dev/null", "factory-reset", "--type", "relay_test"}, &c,
+                               &error));
+  EXPECT_EQ(error, "--address: missing (1-100)");
+  EXPECT_FALSE(parseCommission(
+      {"--port", "/dev/null", "get-baud", "--type", "relay_test", "--address", "101"}, &c, &error));
+  EXPECT_EQ(error, "--address: '101' is outside 1-100");
+  EXPECT_FALSE(parseCommission(
+      {"--port", "/dev/null", "set-baud", "--type", "relay_test", "--address", "3", "4800"}, &c,
+      &error));
+  EXPECT_EQ(error, "baud: '4800' is neither a code 3-5 nor one of 9600, 19200, 38400 (relay_test)");
+  EXPECT_FALSE(parseCommission(
+      {"--port", "/dev/null", "get-address", "--type", "relay_test", "--address", "3"}, &c,
+      &error));
+  EXPECT_EQ(error,
+            "--type: get-address is an ld58a08 or lc_relay8 command; the test relay has no such "
+            "setting");
+  EXPECT_FALSE(parseCommission(
+      {"--port", "/dev/null", "get-address", "--type", "relay", "--address", "3"}, &c, &error));
+  EXPECT_EQ(error, "--type: 'relay' is not ld58a08 or lc_relay8");
+  EXPECT_FALSE(parseCommission(
+      {"--port", "/dev/null", "get-parity", "--type", "relay_test", "--address", "3"}, &c, &error));
+  EXPECT_EQ(error, "--type: get-parity is an ld58a08 command; the test relay has no such setting");
+  // --help names it, its factory settings and its manual.
+  EXPECT_TRUE(parseCommission({"--help"}, &c, &error));
+  EXPECT_NE(c.help.find("relay_test: addresses 1-100, factory address 7, 19200 8E1 "
+                        "(test/unit/test_commission_device.cpp)"),
+            std::string::npos)
+      << c.help;
+}
+
+// The registered types probe in the order their classes give: the LD58A08 first (it answers
+// 0xFF for its own address), the LC board's loose check last.
+TEST(CommissionTypes, ProbeOrderAndFactorySettingsComeFromTheRegistry) {
+  std::vector<std::string> names;
+  for (const CommissioningType& t : commissioningTypes()) names.emplace_back(t.type->name);
+  EXPECT_EQ(names, (std::vector<std::string>{"relay_test", "ld58a08", "yespeed_pdu", "lc_relay8"}));
+  CommissionCommand c;
+  std::string error;
+  ASSERT_TRUE(parseCommission({"--help"}, &c, &error));
+  for (const char* line : {"ld58a08: addresses 1-248, factory address 1, 9600 8N1, return delay "
+                           "up to 1000 ms (docs/devices/ld58a08.md)",
+                           "lc_relay8: addresses 1-255, factory address 255, 9600 8N1 "
+                           "(docs/devices/lc_relay8.md)",
+                           "ld58a08 boards also answer some requests at 255:\n      move "
+                           "lc_relay8 boards off their factory address 255"})
+    EXPECT_NE(c.help.find(line), std::string::npos) << line << "\n" << c.help;
 }

@@ -27,14 +27,15 @@ struct CommissionCommand {
   LinkConfig link;  // --port, --baud, --parity, --timeout; no retries: say what happened
   bool json = false, yes = false;
   std::string command;  // scan, get-address, set-address, ...
-  std::string type;     // ld58a08 | lc_relay8 (| yespeed_pdu for the limits)
+  std::string type;     // a registered type with the command's setting (devices/commissioning.h)
   int address = -1;     // --address; -1 = not given
   // set-*: the new value in the device's own units: address, baud code, parity code (0 none,
   // 1 even, 2 odd), return delay in 40 ms steps, power-down save 0/1.
   int new_value = -1;
-  // set-limits: over-voltage, under-voltage (0.1 V), over-current (0.01 A) as the registers
-  // take them, each already checked against its own rule; -1 = keep what the PDU holds.
-  std::array<int, 3> limits{{-1, -1, -1}};
+  // set-limits: the type's limits (devices/commissioning.h, its limitList() order) as the
+  // registers take them, each already checked against its own rule; -1 = keep what the device
+  // holds.
+  std::vector<int> limits;
   // read / write / watch
   std::string table;  // coils | discrete-inputs | holding | input-registers
   int start = 0, count = 1;
@@ -51,9 +52,8 @@ struct CommissionCommand {
   std::string help;
 };
 
-// The whole --help text (every command, range and exit code).
-std::string commissionUsage();
-// Its part after the option lists: each command's words and ranges, exit codes.
+// The part of --help after the option lists: each command's words and ranges (the registered
+// types', devices/commissioning.h), their factory settings and manuals, exit codes.
 std::string commissionHelpDetails();
 // False with a message naming the option and its allowed range; out->json then tells whether
 // --json was given (for the form of the message). --help parses to a command with only `help`.

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "modbus_rtu_driver/core/link/transport.h"
+#include "modbus_rtu_driver/devices/commissioning.h"
 #include "modbus_rtu_driver/tools/commission.h"
 #include "modbus_rtu_driver/tools/commission_output.h"
 
@@ -27,7 +28,8 @@ struct Session {
 // Harmless reads that tell whether something answers at `address` and which type it looks like.
 struct Identity {
   bool present = false;
-  std::string type;  // ld58a08, lc_relay8, yespeed_pdu, or "unknown modbus device"
+  std::string
+      type;  // a registered type's name (devices/commissioning.h), or "unknown modbus device"
   std::string note;  // why an answer was not taken as a device there
 };
 Identity identifyDevice(Transport& bus, uint8_t address);
@@ -42,7 +44,5 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
 
 // "9600 8N1"
 std::string lineName(int baud, Parity parity);
-// 1200 ... 115200 for the LD58A08's codes 0-7 (the LC board uses 2-4 the same way); 0 if none.
-int baudOfCode(int code);
 
 }  // namespace modbus_rtu_driver

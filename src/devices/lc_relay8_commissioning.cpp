@@ -1,0 +1,92 @@
+// The LC Technology relay board in modbus_rtu_commission (devices/commissioning.h): its baud
+// code (write 0x03E9, read 0x03E8), and its address, which it has no register for at its own
+// address: read and set through address 0 only, with the board alone on the bus (manual,
+// seeds/001).
+#include "modbus_rtu_driver/devices/commissioning.h"
+#include "modbus_rtu_driver/devices/lc_relay8.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+LcRelay8 boardAt(int address) {
+  DeviceConfig d;
+  d.name = d.type = kLcRelay8Type.name;
+  d.address = address;
+  return LcRelay8(d);
+}
+
+class LcRelay8Commissioning : public Commissioning {
+ public:
+  // After the LD58A08's and the PDU's probes: a baud code register that reads 2-4 is the
+  // least specific sign.
+  int probeOrder() const override { return 30; }
+
+  Probe probe(Transport& bus, uint8_t address) const override {
+    Probe p;
+    const Result r =
+        bus.execute(Request::readHoldingRegisters(address, LcRelay8::kBaudReadRegister, 1));
+    p.unclear = !answered(r);
+    const auto [lo, hi] = baudCodes();
+    if (r.ok() && r.values[0] >= lo && r.values[0] <= hi) p.kind = Probe::kYes;
+    return p;
+  }
+
+  Result report(Transport& bus, uint8_t address, InfoReport* out) const override {
+    uint16_t code = 0;
+    Result r = boardAt(address).readBaudCode(bus, &code);
+    if (!r.ok()) return r;
+    out->human = "\n  baud rate: " + baudCodeText(code);
+    out->fields = {{"baud_code", int{code}}, {"baud", baudOfCode(code)}};
+    return r;
+  }
+
+  bool has(BoardFeature feature) const override {
+    return feature == BoardFeature::kAddress || feature == BoardFeature::kBaud;
+  }
+  std::string title() const override { return "the LC relay board"; }
+
+  std::string addressPath() const override { return "through address 0"; }
+  bool addressReadableAt() const override { return false; }
+  Result readAddress(Transport& bus, int, uint16_t* value) const override {
+    Result r = LcRelay8::readAddressAtZero(bus);
+    if (r.ok()) *value = r.values[0];
+    return r;
+  }
+  Result writeAddress(Transport& bus, int, uint16_t value) const override {
+    return LcRelay8::setAddressAtZero(bus, static_cast<uint8_t>(value));
+  }
+  // It has no address register there: reading its baud code is the harmless question.
+  Result answersAt(Transport& bus, int address) const override {
+    uint16_t code = 0;
+    return boardAt(address).readBaudCode(bus, &code);
+  }
+  std::string addressPathWarning() const override {
+    return "Every LC board on the bus takes it, and other devices see a write to their register "
+           "0: only this board may be connected.";
+  }
+
+  std::pair<int, int> baudCodes() const override { return {2, 4}; }  // 4800, 9600, 19200
+  std::string powerCycleAdvice() const override {
+    return " (the manual advises about 30 s without power)";
+  }
+  Result readSetting(Transport& bus, int address, BoardFeature which,
+                     uint16_t* value) const override {
+    if (which != BoardFeature::kBaud) return unsupported();
+    return boardAt(address).readBaudCode(bus, value);
+  }
+  Result writeSetting(Transport& bus, int address, BoardFeature which,
+                      uint16_t value) const override {
+    if (which != BoardFeature::kBaud) return unsupported();
+    return boardAt(address).writeBaudCode(bus, value);
+  }
+};
+
+const LcRelay8Commissioning kCommissioning;
+
+}  // namespace
+
+[[maybe_unused]] const bool kLcRelay8CommissioningRegistered =
+    commissioningClasses().add(kLcRelay8Type, &kCommissioning);
+
+}  // namespace modbus_rtu_driver
