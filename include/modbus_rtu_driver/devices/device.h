@@ -40,7 +40,12 @@ std::vector<CoilRun> coilRuns(const std::vector<uint8_t>& channels,
 std::vector<std::string> withDefaults(const std::vector<std::string>& given, size_t n,
                                       const char* prefix);
 
+class OutputBatch;
+
 class Device {
+  // Writes its merge of requests it checked one by one through writeOutputs.
+  friend class OutputBatch;
+
  public:
   explicit Device(DeviceConfig config) : config_(std::move(config)) {}
   virtual ~Device() = default;
@@ -91,7 +96,8 @@ class Device {
   std::vector<std::string> inputNames() const;
 
  protected:
-  // The type's write of outputs setOutputs has checked (it checks nothing again).
+  // The type's write of outputs setOutputs (or OutputBatch::add, for the batch's merged write)
+  // has checked; it checks nothing again.
   virtual Result writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                               const std::vector<bool>& states) = 0;
   // Shared check of setOutputs arguments: sizes match, channels in range, no duplicates.
