@@ -57,6 +57,7 @@ class EncodedRequest {
   Bytes adu_;
   size_t reply_length_;
 };
+
 // How many bytes a reply needs in total, judged from the bytes read so far; 0 = need more to
 // tell. Used by the reader so it never waits for a byte timeout after a complete frame.
 size_t replyLengthFromHeader(const Request& request, const Bytes& partial);
