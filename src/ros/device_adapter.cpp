@@ -83,7 +83,7 @@ Result DeviceAdapter::runOnBus(BusScheduler::Job job) {
 Result DeviceAdapter::writeOutputs(const std::vector<uint8_t>& channels,
                                    const std::vector<bool>& states) {
   auto entry = batch_.add(*device_, channels, states);  // checked there, once
-  if (entry->result) return *entry->result;            // refused: nothing to queue
+  if (entry->result) return *entry->result;             // refused: nothing to queue
   return runOnBus([this, entry](Transport& t) { return completeBatch(t, entry); });
 }
 
