@@ -65,10 +65,15 @@ OutputTargets Device::outputsWrittenBy(const Request& request) const {
   return set;
 }
 
-Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& channels,
-                                const std::vector<bool>& states) {
+Result Device::setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                          const std::vector<bool>& states) {
   const std::string problem = validateChannels(channels, states);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
+  return writeOutputs(bus, channels, states);
+}
+
+Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                                const std::vector<bool>& states) {
   // Only the channels asked for go on the wire: one frame per run of adjacent channels, so a
   // channel between two requested ones is never rewritten (a rewrite would cancel its flash
   // or fight its PWM on the board).

@@ -39,8 +39,8 @@ GenericDevice::GenericDevice(DeviceConfig config)
   }
 }
 
-Result GenericDevice::setOutputs(Transport&, const std::vector<uint8_t>&,
-                                 const std::vector<bool>&) {
+Result GenericDevice::writeOutputs(Transport&, const std::vector<uint8_t>&,
+                                   const std::vector<bool>&) {
   return Result::failure(ErrorKind::kInvalidArgument,
                          "channels: a generic device has no outputs (write its signals)");
 }

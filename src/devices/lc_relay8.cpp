@@ -22,8 +22,8 @@ Result LcRelay8::poll(Transport& bus) {
   return inputs;
 }
 
-Result LcRelay8::setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
-                            const std::vector<bool>& states) {
+Result LcRelay8::writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                              const std::vector<bool>& states) {
   return writeCoilOutputs(bus, channels, states);
 }
 

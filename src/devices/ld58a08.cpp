@@ -224,10 +224,8 @@ Result Ld58a08::poll(Transport& bus) {
 // (manual, 0x0080): while the PWM runs, the board acknowledges the write and the output keeps
 // following the PWM. So the requested channels' PWM registers are read first (the snapshot may
 // be 8 polls old), a running PWM is stopped (confirmed), and then the outputs are written.
-Result Ld58a08::setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
-                           const std::vector<bool>& states) {
-  const std::string problem = validateChannels(channels, states);
-  if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
+Result Ld58a08::writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                             const std::vector<bool>& states) {
   std::vector<uint8_t> stopped;
   auto list = [](const std::vector<uint8_t>& chs) {
     std::string text = chs.size() == 1 ? "channel " : "channels ";

@@ -4,11 +4,17 @@
 
 namespace modbus_rtu_driver {
 
-std::shared_ptr<OutputBatch::Entry> OutputBatch::add(std::vector<uint8_t> channels,
+std::shared_ptr<OutputBatch::Entry> OutputBatch::add(const Device& device,
+                                                     std::vector<uint8_t> channels,
                                                      std::vector<bool> states) {
   auto entry = std::make_shared<Entry>();
+  const std::string problem = device.checkOutputs(channels, states);
   entry->channels = std::move(channels);
   entry->states = std::move(states);
+  if (!problem.empty()) {
+    entry->result = Result::failure(ErrorKind::kInvalidArgument, problem);
+    return entry;
+  }
   std::lock_guard<std::mutex> lock(mutex_);
   pending_.push_back(entry);
   return entry;
@@ -32,7 +38,9 @@ Result OutputBatch::complete(Device& device, Transport& bus, const std::shared_p
     channels.push_back(channel);
     states.push_back(state);
   }
-  Result r = device.setOutputs(bus, channels, states);
+  // Every entry was checked by add(), so their merge is a valid write: each channel in range and
+  // once (the map), a state for each. It goes to the type's write without a second check.
+  Result r = device.writeOutputs(bus, channels, states);
   if (r.ok() && on_written) on_written(channels, states);
   if (batch.size() > 1 && r.ok())
     r.message = (r.message.empty() ? "" : r.message + "; ") + "merged with " +

@@ -53,8 +53,8 @@ Result YespeedPdu::poll(Transport& bus) {
   return relays.ok() ? telemetry : relays;
 }
 
-Result YespeedPdu::setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
-                              const std::vector<bool>& states) {
+Result YespeedPdu::writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                                const std::vector<bool>& states) {
   return writeCoilOutputs(bus, channels, states);
 }
 

@@ -82,9 +82,8 @@ Result DeviceAdapter::runOnBus(BusScheduler::Job job) {
 
 Result DeviceAdapter::writeOutputs(const std::vector<uint8_t>& channels,
                                    const std::vector<bool>& states) {
-  const std::string problem = device_->checkOutputs(channels, states);
-  if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
-  auto entry = batch_.add(channels, states);
+  auto entry = batch_.add(*device_, channels, states);  // checked there, once
+  if (entry->result) return *entry->result;             // refused: nothing to queue
   return runOnBus([this, entry](Transport& t) { return completeBatch(t, entry); });
 }
 
@@ -140,7 +139,9 @@ bool DeviceAdapter::onSetOutputs(SetOutputs::Request& req, SetOutputs::Response&
 void DeviceAdapter::onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& msg) {
   failsafe_.commandReceived(channel, msg->data);  // the dead man's deadline
   std::lock_guard<std::mutex> lock(commands_mutex_);
-  newest_command_ = batch_.add({channel}, {static_cast<bool>(msg->data)});
+  auto entry = batch_.add(*device_, {channel}, {static_cast<bool>(msg->data)});
+  if (entry->result) return;  // refused (not for a channel it subscribed for: never)
+  newest_command_ = std::move(entry);
   if (command_job_queued_) return;  // the queued job will take this one too
   command_job_queued_ = true;
   bus_.submit(device_->name(), [this](Transport& t) {

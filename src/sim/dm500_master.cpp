@@ -55,7 +55,10 @@ Result Dm500Master::transact(const Request& request) {
     uint8_t buf[256];
     if (read(pty_.fd(), buf, sizeof buf) <= 0) break;
   }
-  const Bytes frame = encodeRequest(request);
+  Result refused;
+  const std::optional<EncodedRequest> encoded = EncodedRequest::encode(request, &refused);
+  if (!encoded) return refused;
+  const Bytes& frame = encoded->adu();
   if (write(pty_.fd(), frame.data(), frame.size()) != static_cast<ssize_t>(frame.size()))
     return Result::failure(ErrorKind::kIo, "cannot write to the pty");
   if (!request.expectsReply()) {  // a broadcast: nobody may answer
@@ -66,7 +69,7 @@ Result Dm500Master::transact(const Request& request) {
   }
   const Bytes reply = readFor(timeout_, 256, &request);
   if (reply.empty()) return Result::failure(ErrorKind::kTimeout, request.describe() + ": no reply");
-  return decodeReply(request, reply);
+  return decodeReply(*encoded, reply);
 }
 
 bool Dm500Master::step(const std::string& line, std::string* why) {

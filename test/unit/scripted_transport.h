@@ -4,6 +4,7 @@
 #pragma once
 
 #include <deque>
+#include <optional>
 #include <string>
 
 #include "modbus_rtu_driver/core/link/transport.h"
@@ -26,8 +27,12 @@ class ScriptedTransport : public Transport {
     return *this;
   }
 
+  // Checked and encoded once, as a link does (the same refusal of an invalid request).
   Result execute(const Request& request) override {
-    const Bytes sent = encodeRequest(request);
+    Result refused;
+    const std::optional<EncodedRequest> encoded = EncodedRequest::encode(request, &refused);
+    if (!encoded) return refused;
+    const Bytes& sent = encoded->adu();
     ++executed_;
     if (steps_.empty()) {
       mismatches_ += "unexpected request " + toHex(sent) + "\n";
@@ -42,7 +47,7 @@ class ScriptedTransport : public Transport {
     if (!request.expectsReply()) return Result::success(request.values);
     if (step.reply.empty())
       return Result::failure(ErrorKind::kTimeout, request.describe() + ": no reply");
-    return decodeReply(request, step.reply);
+    return decodeReply(*encoded, step.reply);
   }
 
   bool usedUp() const { return steps_.empty(); }

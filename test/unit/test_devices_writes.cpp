@@ -123,8 +123,8 @@ TEST(LcRelay8Writes, ASafeStateMapWithHoldBetweenWritesOnlyTheSafeChannels) {
 TEST(LcRelay8Writes, MergedRequestsWithAGapStayTwoWrites) {
   LcRelay8 board(config("lc_relay8", 3));
   OutputBatch batch;
-  auto a = batch.add({0}, {true});
-  auto b = batch.add({2}, {false});
+  auto a = batch.add(board, {0}, {true});
+  auto b = batch.add(board, {2}, {false});
   ScriptedTransport bus;
   expectAnswered(bus, Request::writeSingleCoil(3, 0, true));
   expectAnswered(bus, Request::writeSingleCoil(3, 2, false));

@@ -83,26 +83,28 @@ TEST(Frame, DecodeGoldenReplies) {
     if (g.slave == 0 && request->function == FunctionCode::kWriteMultipleRegisters)
       request->reply_echoes_request = true;
     EXPECT_EQ(replyLengthFromHeader(*request, g.response), g.response.size()) << g.meaning;
-    const Result r = decodeReply(*request, g.response);
+    const Result r = decodeReply(EncodedRequest::encode(*request).value(), g.response);
     EXPECT_TRUE(r.ok()) << g.meaning << ": " << r.message;
   }
 }
 
 TEST(Frame, DecodedValuesMatchTheManual) {
   auto rsp = [](const char* hex) { return *fromHex(hex); };
-  Result r = decodeReply(Request::readCoils(1, 0, 8), rsp("01 01 01 7C 50 69"));
+  Result r = decodeReply(EncodedRequest::encode(Request::readCoils(1, 0, 8)).value(),
+                         rsp("01 01 01 7C 50 69"));
   ASSERT_TRUE(r.ok());
   EXPECT_EQ(r.values, (std::vector<uint16_t>{0, 0, 1, 1, 1, 1, 1, 0}));
-  r = decodeReply(Request::readInputRegisters(1, 0, 5),
+  r = decodeReply(EncodedRequest::encode(Request::readInputRegisters(1, 0, 5)).value(),
                   rsp("01 04 0A 00 DD 02 71 08 98 02 D5 06 3B 86 51"));
   ASSERT_TRUE(r.ok());
   EXPECT_EQ(r.values, (std::vector<uint16_t>{221, 625, 2200, 725, 1595}));
-  r = decodeReply(Request::readHoldingRegisters(1, 0, 3), rsp("01 03 06 09 C4 07 D0 06 40 D2 E0"));
+  r = decodeReply(EncodedRequest::encode(Request::readHoldingRegisters(1, 0, 3)).value(),
+                  rsp("01 03 06 09 C4 07 D0 06 40 D2 E0"));
   ASSERT_TRUE(r.ok());
   EXPECT_EQ(r.values, (std::vector<uint16_t>{2500, 2000, 1600}));
   Request addr0 = Request::readHoldingRegisters(0, 0, 1);
   addr0.single_device_at_zero = true;
-  r = decodeReply(addr0, rsp("00 03 02 00 FF C5 C4"));
+  r = decodeReply(EncodedRequest::encode(addr0).value(), rsp("00 03 02 00 FF C5 C4"));
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(r.values, (std::vector<uint16_t>{255}));
 }
@@ -118,20 +120,23 @@ TEST(Frame, ErrorsAreToldApart) {
   const Request req = Request::readHoldingRegisters(1, 0x00FD, 1);
   Bytes bad_crc = *fromHex("01 03 02 00 01 79 84");
   bad_crc.back() ^= 0xFF;
-  EXPECT_EQ(decodeReply(req, bad_crc).error, ErrorKind::kCrc);
+  EXPECT_EQ(decodeReply(EncodedRequest::encode(req).value(), bad_crc).error, ErrorKind::kCrc);
   Bytes other = {0x02, 0x03, 0x02, 0x00, 0x01};
   appendCrc(other);
-  EXPECT_EQ(decodeReply(req, other).error, ErrorKind::kWrongAddress);
-  const Result exc = decodeReply(req, encodeException(1, 0x03, 0x02));
+  EXPECT_EQ(decodeReply(EncodedRequest::encode(req).value(), other).error,
+            ErrorKind::kWrongAddress);
+  const Result exc =
+      decodeReply(EncodedRequest::encode(req).value(), encodeException(1, 0x03, 0x02));
   EXPECT_EQ(exc.error, ErrorKind::kException);
   EXPECT_EQ(exc.exception_code, 2);
   EXPECT_NE(exc.message.find("illegal data address"), std::string::npos) << exc.message;
   EXPECT_NE(exc.message.find("FC03"), std::string::npos) << exc.message;
   EXPECT_NE(exc.message.find("0x00FD"), std::string::npos) << exc.message;
   // A write whose echo differs is not a confirmation.
-  EXPECT_EQ(
-      decodeReply(Request::writeSingleCoil(1, 0, true), *fromHex("01 05 00 00 00 00 CD CA")).error,
-      ErrorKind::kMalformed);
+  EXPECT_EQ(decodeReply(EncodedRequest::encode(Request::writeSingleCoil(1, 0, true)).value(),
+                        *fromHex("01 05 00 00 00 00 CD CA"))
+                .error,
+            ErrorKind::kMalformed);
 }
 
 TEST(Frame, RequestValidationNamesTheField) {

@@ -22,7 +22,7 @@ TEST(Mbap, ReplyBackToRtuGetsAFreshCrcAndDecodes) {
   EXPECT_EQ(mbapTransaction(mbap), 7);
   const Bytes rtu = mbapToRtu(mbap);
   EXPECT_TRUE(hasValidCrc(rtu));
-  const Result r = decodeReply(request, rtu);
+  const Result r = decodeReply(EncodedRequest::encode(request).value(), rtu);
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(r.values, (std::vector<uint16_t>{0x022B, 0x0000, 0x0064}));
 }

@@ -27,9 +27,9 @@ DeviceConfig relays() {
 TEST(OutputBatch, RequestsQueuedTogetherGoOutAsOneFc15) {
   LcRelay8 board(relays());
   OutputBatch batch;
-  auto a = batch.add({0}, {true});
-  auto b = batch.add({1}, {true});
-  auto c = batch.add({0, 2}, {false, true});  // newer than a for channel 0
+  auto a = batch.add(board, {0}, {true});
+  auto b = batch.add(board, {1}, {true});
+  auto c = batch.add(board, {0, 2}, {false, true});  // newer than a for channel 0
   ScriptedTransport bus;
   bus.expectEcho(toHex(encodeRequest(Request::writeMultipleCoils(255, 0, {false, true, true}))));
   const Result ra = batch.complete(board, bus, a);
@@ -50,8 +50,8 @@ TEST(OutputBatch, RequestsQueuedTogetherGoOutAsOneFc15) {
 TEST(OutputBatch, AFailedWriteFailsEveryMergedRequest) {
   LcRelay8 board(relays());
   OutputBatch batch;
-  auto a = batch.add({3}, {true});
-  auto b = batch.add({4}, {true});
+  auto a = batch.add(board, {3}, {true});
+  auto b = batch.add(board, {4}, {true});
   ScriptedTransport bus;
   bus.expect(toHex(encodeRequest(Request::writeMultipleCoils(255, 3, {true, true}))),
              toHex(encodeException(255, 0x0F, 4)));
@@ -63,13 +63,36 @@ TEST(OutputBatch, AFailedWriteFailsEveryMergedRequest) {
 TEST(OutputBatch, ALoneRequestIsOneFc05) {
   LcRelay8 board(relays());
   OutputBatch batch;
-  auto a = batch.add({5}, {true});
+  auto a = batch.add(board, {5}, {true});
   ScriptedTransport bus;
   bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(255, 5, true))));
   const Result r = batch.complete(board, bus, a);
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(r.message, "");
   EXPECT_TRUE(bus.usedUp());
+}
+
+// A request is checked once, as it is added: a bad one is refused there, with the device's
+// text, and never joins the merged write (which is not checked again).
+TEST(OutputBatch, ABadRequestIsRefusedAsItIsAdded) {
+  LcRelay8 board(relays());
+  OutputBatch batch;
+  auto bad = batch.add(board, {9}, {true});
+  ASSERT_TRUE(bad->result.has_value());
+  EXPECT_EQ(bad->result->error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(bad->result->message, "channel: 9 is outside 0-7");
+  auto twice = batch.add(board, {2, 2}, {true, false});
+  ASSERT_TRUE(twice->result.has_value());
+  EXPECT_EQ(twice->result->message, "channel: 2 is given twice");
+  auto good = batch.add(board, {1}, {true});
+  EXPECT_FALSE(good->result.has_value());
+  ScriptedTransport bus;
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(255, 1, true))));
+  const Result r = batch.complete(board, bus, good);
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(r.message, "");  // alone: the refused ones were never merged
+  EXPECT_TRUE(bus.usedUp());
+  EXPECT_EQ(bus.mismatches(), "");
 }
 
 namespace {
@@ -107,13 +130,13 @@ TEST(OutputBatch, ARequestRefusedWhileThePortIsGoneIsNeverSentLater) {
   auto job = [&](const std::shared_ptr<OutputBatch::Entry>& e) {
     return [&, e](Transport& t) { return batch.complete(*board, t, e); };
   };
-  const Result refused = bus.submit("relays", job(batch.add({3}, {true}))).get();
+  const Result refused = bus.submit("relays", job(batch.add(*board, {3}, {true}))).get();
   EXPECT_EQ(refused.error, ErrorKind::kNotConnected) << refused.message;
 
   port.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(255, 7, true))));
   port.plugged_ = true;
   ASSERT_TRUE(waitFor([&] { return bus.connected(); }, 10.0));
-  const Result later = bus.submit("relays", job(batch.add({7}, {true}))).get();
+  const Result later = bus.submit("relays", job(batch.add(*board, {7}, {true}))).get();
   EXPECT_TRUE(later.ok()) << later.message;
   EXPECT_EQ(later.message, "");  // not "merged with 1 other request(s)"
   bus.stop();

@@ -40,7 +40,12 @@ std::vector<CoilRun> coilRuns(const std::vector<uint8_t>& channels,
 std::vector<std::string> withDefaults(const std::vector<std::string>& given, size_t n,
                                       const char* prefix);
 
+class OutputBatch;
+
 class Device {
+  // Writes its merge of requests it checked one by one through writeOutputs.
+  friend class OutputBatch;
+
  public:
   explicit Device(DeviceConfig config) : config_(std::move(config)) {}
   virtual ~Device() = default;
@@ -65,10 +70,11 @@ class Device {
   // snapshot. On failure the snapshot keeps its previous values and the Result says why.
   virtual Result poll(Transport& bus) = 0;
   // Sets channels[i] to states[i] and touches no other channel: one frame per run of adjacent
-  // channels (FC05 for a run of one, FC15 otherwise); checks the arguments first (nothing is
-  // sent when they are bad). On success the snapshot holds the confirmed states.
-  virtual Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
-                            const std::vector<bool>& states) = 0;
+  // channels (FC05 for a run of one, FC15 otherwise); checks the arguments first, here and only
+  // here (nothing is sent when they are bad), then has the type write them (writeOutputs). On
+  // success the snapshot holds the confirmed states.
+  Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                    const std::vector<bool>& states);
 
   // Empty when setOutputs would accept these arguments, else a message naming the field.
   std::string checkOutputs(const std::vector<uint8_t>& channels,
@@ -90,12 +96,17 @@ class Device {
   std::vector<std::string> inputNames() const;
 
  protected:
+  // The type's write of outputs setOutputs (or OutputBatch::add, for the batch's merged write)
+  // has checked; it checks nothing again.
+  virtual Result writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                              const std::vector<bool>& states) = 0;
   // Shared check of setOutputs arguments: sizes match, channels in range, no duplicates.
   std::string validateChannels(const std::vector<uint8_t>& channels,
                                const std::vector<bool>& states) const;
   // Writes the outputs of a board whose coils 0..N-1 are the outputs: FC05 for a lone channel,
   // FC15 per run of adjacent channels; a channel nobody asked for is never written. Stops at
-  // the first run that fails (the message says which outputs were written before).
+  // the first run that fails (the message says which outputs were written before). For
+  // writeOutputs: the arguments are setOutputs' checked ones.
   Result writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& channels,
                           const std::vector<bool>& states);
   // True for failures after which the device may have done the write (its reply was lost or

@@ -41,9 +41,6 @@ class GenericDevice : public Device {
   size_t outputCount() const override { return 0; }
   // Reads group 0 (the signals at the device's own poll_rate).
   Result poll(Transport& bus) override { return pollGroup(bus, 0); }
-  Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
-                    const std::vector<bool>& states) override;
-
   const std::vector<SignalConfig>& signals() const { return planner_.signals(); }
   const std::vector<SignalState>& states() const { return states_; }
   // Group 0 always exists (it may be empty); one more per distinct signal poll_rate.
@@ -69,6 +66,11 @@ class GenericDevice : public Device {
 
   // Merged spans split after exception 02 or 03, in words (diagnostics).
   const std::vector<std::string>& splits() const { return planner_.splits(); }
+
+ protected:
+  // Never reached: setOutputs refuses first (no outputs; a generic device's signals are written).
+  Result writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                      const std::vector<bool>& states) override;
 
  private:
   // Reads one span; false when the device did not answer (the rest of the poll is skipped).

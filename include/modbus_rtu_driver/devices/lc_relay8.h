@@ -25,9 +25,6 @@ class LcRelay8 : public Device {
 
   // FC01 relays then FC02 inputs.
   Result poll(Transport& bus) override;
-  Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
-                    const std::vector<bool>& states) override;
-
   // Empty when valid: channel 0-7, duration 0.1-6553.5 s. The duration is converted to the
   // delay register's 0.1 s steps first (the nearest step, float noise allowed); the range is
   // checked on that integer (0x0001-0xFFFF), which goes to `tenths` when not null.
@@ -42,6 +39,10 @@ class LcRelay8 : public Device {
   // "Single device on the bus" operations at address 0 (any LC board answers them).
   static Result readAddressAtZero(Transport& bus);                  // values[0] = address
   static Result setAddressAtZero(Transport& bus, uint8_t address);  // 1-255
+
+ protected:
+  Result writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                      const std::vector<bool>& states) override;
 };
 
 }  // namespace modbus_rtu_driver

@@ -73,12 +73,6 @@ class Ld58a08 : public Device {
 
   // Polls the outputs (FC01) and the PWM registers of one channel (all on the first poll).
   Result poll(Transport& bus) override;
-  // The outputs drive a channel only while its PWM is off (manual, 0x0080): reads the requested
-  // channels' PWM registers, stops (FC06 0 to 0x00n2, confirmed) those that run, then writes the
-  // outputs (FC05 / FC15). The message then says "PWM on channel N stopped first".
-  Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
-                    const std::vector<bool>& states) override;
-
   // Empty when valid, else a message naming the field and its range.
   static std::string validatePwm(const PwmSettings& settings);
   // One FC16 write of the channel's three registers.
@@ -106,6 +100,13 @@ class Ld58a08 : public Device {
   // FC06 0 to 0x00FB: address 1 at once, 9600 8N1 after a power cycle, PWM cleared. The manual
   // sends it through 0xFF (every LD58A08 on the bus takes it).
   Result factoryReset(Transport& bus);
+
+ protected:
+  // The outputs drive a channel only while its PWM is off (manual, 0x0080): reads the requested
+  // channels' PWM registers, stops (FC06 0 to 0x00n2, confirmed) those that run, then writes the
+  // outputs (FC05 / FC15). The message then says "PWM on channel N stopped first".
+  Result writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                      const std::vector<bool>& states) override;
 
  private:
   Result readPwmChannel(Transport& bus, uint8_t channel, PwmState* out);

@@ -1,8 +1,9 @@
 // Output writes to one device that queue up while the bus is busy, merged into one write.
 // Every caller adds its request and queues a bus job; the first of those jobs to run writes
-// everything pending at that moment with one setOutputs call (FC05 for a lone channel, FC15
+// everything pending at that moment with one write of the device (FC05 for a lone channel, FC15
 // per run of adjacent channels; no other channel is written), newest state per channel winning, and
 // every merged caller gets that outcome. The later jobs find their request done and send nothing.
+// A request is checked once, as it is added; the merged write is made of checked ones only.
 // ROS-free.
 #pragma once
 
@@ -24,14 +25,17 @@ class OutputBatch {
     std::optional<Result> result;  // set on the bus thread once written (or refused)
   };
 
-  // Any thread: adds a request to the next write.
-  std::shared_ptr<Entry> add(std::vector<uint8_t> channels, std::vector<bool> states);
+  // Any thread: adds a request to the next write of `device`, checking it (Device::checkOutputs)
+  // here and only here. A refused request is not added: its entry comes back with its
+  // kInvalidArgument result set, and needs no bus job.
+  std::shared_ptr<Entry> add(const Device& device, std::vector<uint8_t> channels,
+                             std::vector<bool> states);
   // What a confirmed write set: channels[i] to states[i] (newest state per channel).
   using WrittenCallback =
       std::function<void(const std::vector<uint8_t>& channels, const std::vector<bool>& states)>;
 
   // Bus thread: the outcome of `entry`, writing the pending requests first if it is among them.
-  // `on_written` runs once per confirmed write.
+  // `device` is the one they were added for. `on_written` runs once per confirmed write.
   Result complete(Device& device, Transport& bus, const std::shared_ptr<Entry>& entry,
                   const WrittenCallback& on_written = {});
 

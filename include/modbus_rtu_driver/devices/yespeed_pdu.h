@@ -40,9 +40,6 @@ class YespeedPdu : public Device {
 
   // FC01 relays, then one FC04 for all five readings. Limits are read once (and after writes).
   Result poll(Transport& bus) override;
-  Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
-                    const std::vector<bool>& states) override;
-
   Result readTelemetry(Transport& bus);  // fills reading()
   Result readLimits(Transport& bus);     // fills limits()
   static constexpr const char* kLimitNames[3] = {"over_voltage", "under_voltage", "over_current"};
@@ -81,6 +78,10 @@ class YespeedPdu : public Device {
   const PduLimitValues& limits() const { return limits_; }
   const PduLimitRegisters& limitRegisters() const { return limit_registers_; }
   bool limitsKnown() const { return limits_known_; }
+
+ protected:
+  Result writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+                      const std::vector<bool>& states) override;
 
  private:
   PduReading reading_;

@@ -57,24 +57,27 @@ void Link::noteConnected() {
   last_activity_ = Steady::now();
 }
 
-Result Link::execute(const Request& request) {
-  const std::string problem = request.validate();
-  if (!problem.empty())
-    return Result::failure(ErrorKind::kInvalidArgument, request.describe() + ": " + problem);
+Result Link::execute(const Request& asked) {
+  // The one check and the one encoding of this request: every stage after this (each attempt's
+  // send, its timeouts, the reply's echo check, the late-reply guard) reads this frame.
+  Result refused;
+  const std::optional<EncodedRequest> encoded = EncodedRequest::encode(asked, &refused);
+  if (!encoded) return refused;
+  const EncodedRequest& request = *encoded;
   if (!connected())
     return Result::failure(ErrorKind::kNotConnected, "port " + config_.port + " is not open");
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.requests;
   }
-  if (!request.expectsReply()) return runBroadcast(request);
+  if (!asked.expectsReply()) return runBroadcast(request);
   const auto start = Steady::now();
   Result r;
   for (int attempt_no = 0;; ++attempt_no) {
     r = runAttempt(request);
     // Only a lost answer is retried, and only when doing it twice does no harm; a dropped
     // connection (kIo) is not: the request may have gone out, and the caller reads back.
-    if (r.ok() || !answerLost(r.error) || !request.repeatable || attempt_no >= config_.retries ||
+    if (r.ok() || !answerLost(r.error) || !asked.repeatable || attempt_no >= config_.retries ||
         !connected())
       break;
     std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -84,7 +87,7 @@ Result Link::execute(const Request& request) {
   return r;
 }
 
-Result Link::runAttempt(const Request& request) {
+Result Link::runAttempt(const EncodedRequest& request) {
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.attempts;
@@ -97,12 +100,12 @@ Result Link::runAttempt(const Request& request) {
   // A failure (not an answer) may be followed by a late reply. A success keeps an earlier
   // entry: after a retry, the first attempt's reply may be the one taken, the second's late.
   if (!r.ok() && r.error != ErrorKind::kException)
-    unsettled_[request.slave] = {last_activity_, encodeRequest(request)};
+    unsettled_[request.request().slave] = {last_activity_, request.adu()};
   if (r.error == ErrorKind::kIo) disconnect();
   return r;
 }
 
-Result Link::runBroadcast(const Request& request) {
+Result Link::runBroadcast(const EncodedRequest& request) {
   Result r = sendBroadcast(request);
   last_activity_ = Steady::now();
   if (!r.ok()) {  // not sent: not an attempt
@@ -115,12 +118,12 @@ Result Link::runBroadcast(const Request& request) {
   ++stats_.attempts;
   ++stats_.broadcasts;
   ++stats_.ok;
-  return Result::success(request.values);
+  return Result::success(request.request().values);
 }
 
-double Link::responseTimeout(const Request& request) const {
-  return effectiveResponseTimeout(config_, 1 + encodeRequestPdu(request).size() + 2) +
-         reply_delay_[request.slave];
+double Link::responseTimeout(const EncodedRequest& request) const {
+  return effectiveResponseTimeout(config_, request.adu().size()) +
+         reply_delay_[request.request().slave];
 }
 
 Result Link::readFailure(const Request& request, ReadStatus status, const Bytes& partial, int error,
@@ -155,16 +158,18 @@ ReadStatus Link::readObserved(int fd, double first, double between,
   return status;
 }
 
-Result Link::readRtuReply(int fd, const Request& request, double byte_timeout,
+Result Link::readRtuReply(int fd, const EncodedRequest& request, double byte_timeout,
                           const std::string& medium) {
   Bytes reply;
   int error = 0;
   const ReadStatus status = readObserved(
       fd, responseTimeout(request), byte_timeout,
-      [&](const Bytes& b) { return static_cast<long>(replyLengthFromHeader(request, b)); },
+      [&](const Bytes& b) {
+        return static_cast<long>(replyLengthFromHeader(request.request(), b));
+      },
       kShortestReply, kMaxAduLength, &reply, &error);
   if (status == ReadStatus::kComplete) return decodeReply(request, reply);
-  return readFailure(request, status, reply, error, medium);
+  return readFailure(request.request(), status, reply, error, medium);
 }
 
 void Link::account(const Result& r, double latency) {

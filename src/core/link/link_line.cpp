@@ -64,13 +64,13 @@ Steady::duration Link::gapSpinMargin() const {
 // until the line has been quiet that long. A retry (the same request) need not wait: a late
 // answer to it is the right answer; another slave's request cannot take it (the address
 // differs), so a dead device costs the others nothing.
-void Link::settleLine(int fd, const Request& request) {
+void Link::settleLine(int fd, const EncodedRequest& request) {
   const auto now = Steady::now();
   const auto guard = seconds(config_.late_reply_guard);
   for (auto it = unsettled_.begin(); it != unsettled_.end();)
     it = now - it->second.failed_at >= guard ? unsettled_.erase(it) : std::next(it);
-  const auto mine = unsettled_.find(request.slave);
-  if (mine != unsettled_.end() && mine->second.frame != encodeRequest(request)) {
+  const auto mine = unsettled_.find(request.request().slave);
+  if (mine != unsettled_.end() && mine->second.frame != request.adu()) {
     awaitQuietLine(fd, mine->second.failed_at + guard);
     unsettled_.clear();  // the line was quiet: nothing late is on its way
   }

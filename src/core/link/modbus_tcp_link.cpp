@@ -13,10 +13,12 @@ using Steady = std::chrono::steady_clock;
 
 // A connection the gateway closed while the bus was idle fails the request unsent (a late reply
 // still waiting is read and dropped by its transaction id below).
-Result ModbusTcpLink::attempt(const Request& request) {
-  if (closedByPeer(fd_)) return closedUnsent(request);
+// The MBAP frame is the encoded request's with this attempt's transaction id (a copy, not a
+// second encoding).
+Result ModbusTcpLink::attempt(const EncodedRequest& request) {
+  if (closedByPeer(fd_)) return closedUnsent(request.request());
   const uint16_t transaction = ++next_transaction_;
-  Result sent = send(request, rtuToMbap(transaction, encodeRequest(request)));
+  Result sent = send(request.request(), rtuToMbap(transaction, request.adu()));
   if (!sent.ok()) return sent;
   const auto deadline =
       Steady::now() + std::chrono::duration_cast<Steady::duration>(
@@ -37,7 +39,7 @@ Result ModbusTcpLink::attempt(const Request& request) {
       continue;
     }
     if (status == ReadStatus::kComplete) return decodeReply(request, mbapToRtu(reply));
-    Result r = readFailure(request, status, reply, error, medium());
+    Result r = readFailure(request.request(), status, reply, error, medium());
     // Part of a frame read, or a header that is not MBAP: the stream is out of step and only a
     // new connection puts it back (the link reports the answer lost, then reconnects).
     if (!reply.empty() && r.error != ErrorKind::kIo) {
@@ -50,9 +52,9 @@ Result ModbusTcpLink::attempt(const Request& request) {
 }
 
 // Unit id 0: the gateway broadcasts on its line and nobody answers.
-Result ModbusTcpLink::sendBroadcast(const Request& request) {
-  if (closedByPeer(fd_)) return closedUnsent(request);
-  return send(request, rtuToMbap(++next_transaction_, encodeRequest(request)));
+Result ModbusTcpLink::sendBroadcast(const EncodedRequest& request) {
+  if (closedByPeer(fd_)) return closedUnsent(request.request());
+  return send(request.request(), rtuToMbap(++next_transaction_, request.adu()));
 }
 
 }  // namespace modbus_rtu_driver

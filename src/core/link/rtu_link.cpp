@@ -54,7 +54,7 @@ void RtuLink::disconnect() {
   ctx_ = nullptr;
 }
 
-Result RtuLink::attempt(const Request& request) {
+Result RtuLink::attempt(const EncodedRequest& request) {
   prepareLine(request);
   Result sent = send(request);
   if (!sent.ok()) return sent;
@@ -62,35 +62,33 @@ Result RtuLink::attempt(const Request& request) {
                       config_.port);
 }
 
-Result RtuLink::sendBroadcast(const Request& request) {
+Result RtuLink::sendBroadcast(const EncodedRequest& request) {
   prepareLine(request);
   // Sent, not waited for: 3.1.6's write functions would wait for a reply nobody sends.
   Result sent = send(request);
   if (!sent.ok()) return sent;
   tcdrain(modbus_get_socket(ctx_));
-  return Result::success(request.values);
+  return Result::success(request.request().values);
 }
 
-// libmodbus sends (it adds the CRC, and drives RTS in RS485 mode). Sending fails only as the
-// port does (the request was validated): an i/o error, which disconnects.
-Result RtuLink::send(const Request& request) {
-  Bytes raw{request.slave};
-  const Bytes pdu = encodeRequestPdu(request);
-  raw.insert(raw.end(), pdu.begin(), pdu.end());
+// libmodbus sends the frame without its CRC (it adds the same CRC again, and drives RTS in
+// RS485 mode). Sending fails only as the port does (the request was validated): an i/o error,
+// which disconnects.
+Result RtuLink::send(const EncodedRequest& request) {
+  const Bytes& frame = request.adu();
   const auto start = std::chrono::steady_clock::now();
   const double cpu = observingWire() ? wireCpuSeconds() : 0;
-  if (modbus_send_raw_request(ctx_, raw.data(), static_cast<int>(raw.size())) == -1)
-    return Result::failure(
-        ErrorKind::kIo, request.describe() + ": " + config_.port + ": " + modbus_strerror(errno));
-  if (observingWire())
-    noteWire(true, start, std::chrono::steady_clock::now(), encodeRequest(request), cpu);
+  if (modbus_send_raw_request(ctx_, frame.data(), static_cast<int>(frame.size() - 2)) == -1)
+    return Result::failure(ErrorKind::kIo, request.request().describe() + ": " + config_.port +
+                                               ": " + modbus_strerror(errno));
+  noteWire(true, start, std::chrono::steady_clock::now(), frame, cpu);
   return Result::success();
 }
 
 // Late replies first (the guard), then the gap; whatever is still in the input (a late reply,
 // noise, a long echo) belongs to nobody. Asking for the byte count first is cheaper than a
 // flush on every request.
-void RtuLink::prepareLine(const Request& request) {
+void RtuLink::prepareLine(const EncodedRequest& request) {
   settleLine(modbus_get_socket(ctx_), request);
   keepGap();
   int pending = 0;

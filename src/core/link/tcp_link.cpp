@@ -37,10 +37,9 @@ std::string TcpLink::medium() const {
   return "gateway " + address_.host + ":" + std::to_string(address_.tcp_port);
 }
 
-double TcpLink::responseTimeout(const Request& request) const {
-  return gatewayResponseTimeout(config_, encodeRequest(request).size(),
-                                expectedReplyLength(request)) +
-         reply_delay_[request.slave];
+double TcpLink::responseTimeout(const EncodedRequest& request) const {
+  return gatewayResponseTimeout(config_, request.adu().size(), request.replyLength()) +
+         reply_delay_[request.request().slave];
 }
 
 Result TcpLink::closedUnsent(const Request& request) const {
@@ -61,7 +60,7 @@ Result TcpLink::send(const Request& request, const Bytes& frame) {
 
 // The late-reply guard and the gap, as on a serial port; then what is waiting (a late reply,
 // the gateway's noise) belongs to nobody.
-bool RtuOverTcpLink::prepareLine(const Request& request) {
+bool RtuOverTcpLink::prepareLine(const EncodedRequest& request) {
   settleLine(fd_, request);
   keepGap();
   const long stale = discardWaiting(fd_);
@@ -70,16 +69,16 @@ bool RtuOverTcpLink::prepareLine(const Request& request) {
   return true;
 }
 
-Result RtuOverTcpLink::attempt(const Request& request) {
-  if (!prepareLine(request)) return closedUnsent(request);
-  Result sent = send(request, encodeRequest(request));
+Result RtuOverTcpLink::attempt(const EncodedRequest& request) {
+  if (!prepareLine(request)) return closedUnsent(request.request());
+  Result sent = send(request.request(), request.adu());
   if (!sent.ok()) return sent;
   return readRtuReply(fd_, request, gatewayByteTimeout(config_), medium());
 }
 
-Result RtuOverTcpLink::sendBroadcast(const Request& request) {
-  if (!prepareLine(request)) return closedUnsent(request);
-  return send(request, encodeRequest(request));
+Result RtuOverTcpLink::sendBroadcast(const EncodedRequest& request) {
+  if (!prepareLine(request)) return closedUnsent(request.request());
+  return send(request.request(), request.adu());
 }
 
 }  // namespace modbus_rtu_driver

@@ -104,44 +104,39 @@ std::string where(const Request& r) {
 
 }  // namespace
 
-Bytes encodeRequestPdu(const Request& r) {
-  Bytes pdu;
-  pdu.push_back(static_cast<uint8_t>(r.function));
-  put16(pdu, r.address);
+Bytes encodeRequest(const Request& r) {
+  Bytes adu{r.slave, static_cast<uint8_t>(r.function)};
+  put16(adu, r.address);
   switch (r.function) {
     case FunctionCode::kWriteSingleCoil:
-      put16(pdu, r.values.at(0) ? 0xFF00 : 0x0000);
+      put16(adu, r.values.at(0) ? 0xFF00 : 0x0000);
       break;
     case FunctionCode::kWriteSingleRegister:
-      put16(pdu, r.values.at(0));
+      put16(adu, r.values.at(0));
       break;
     case FunctionCode::kWriteMultipleCoils: {
-      put16(pdu, r.count);
+      put16(adu, r.count);
       const Bytes packed = packBits(r.values);
-      pdu.push_back(static_cast<uint8_t>(packed.size()));
-      pdu.insert(pdu.end(), packed.begin(), packed.end());
+      adu.push_back(static_cast<uint8_t>(packed.size()));
+      adu.insert(adu.end(), packed.begin(), packed.end());
       break;
     }
     case FunctionCode::kWriteMultipleRegisters:
-      put16(pdu, r.count);
-      pdu.push_back(static_cast<uint8_t>(r.values.size() * 2));
-      for (uint16_t v : r.values) put16(pdu, v);
+      put16(adu, r.count);
+      adu.push_back(static_cast<uint8_t>(r.values.size() * 2));
+      for (uint16_t v : r.values) put16(adu, v);
       break;
     default:  // reads
-      put16(pdu, r.count);
+      put16(adu, r.count);
   }
-  return pdu;
-}
-
-Bytes encodeRequest(const Request& r) {
-  Bytes adu{r.slave};
-  const Bytes pdu = encodeRequestPdu(r);
-  adu.insert(adu.end(), pdu.begin(), pdu.end());
   appendCrc(adu);
   return adu;
 }
 
-size_t expectedReplyLength(const Request& r) {
+namespace {
+
+// Length of the normal reply ADU to `r` sent as `adu` (exceptions are 5 bytes).
+size_t normalReplyLength(const Request& r, const Bytes& adu) {
   switch (r.function) {
     case FunctionCode::kReadCoils:
     case FunctionCode::kReadDiscreteInputs:
@@ -150,8 +145,22 @@ size_t expectedReplyLength(const Request& r) {
     case FunctionCode::kReadInputRegisters:
       return 5 + 2u * r.count;
     default:
-      return r.reply_echoes_request ? encodeRequest(r).size() : 8;
+      return r.reply_echoes_request ? adu.size() : 8;
   }
+}
+
+}  // namespace
+
+std::optional<EncodedRequest> EncodedRequest::encode(const Request& request, Result* refused) {
+  const std::string problem = request.validate();
+  if (!problem.empty()) {
+    if (refused)
+      *refused = Result::failure(ErrorKind::kInvalidArgument, request.describe() + ": " + problem);
+    return std::nullopt;
+  }
+  Bytes adu = encodeRequest(request);
+  const size_t reply_length = normalReplyLength(request, adu);
+  return EncodedRequest(request, std::move(adu), reply_length);
 }
 
 size_t replyLengthFromHeader(const Request& r, const Bytes& p) {
@@ -163,7 +172,8 @@ size_t replyLengthFromHeader(const Request& r, const Bytes& p) {
   return 8;
 }
 
-Result decodeReply(const Request& r, const Bytes& reply) {
+Result decodeReply(const EncodedRequest& encoded, const Bytes& reply) {
+  const Request& r = encoded.request();
   if (reply.size() < 5)
     return Result::failure(ErrorKind::kMalformed,
                            where(r) + ": reply too short (" + toHex(reply) + ")");
@@ -179,7 +189,7 @@ Result decodeReply(const Request& r, const Bytes& reply) {
   if (reply[1] != fc)
     return Result::failure(ErrorKind::kMalformed,
                            where(r) + ": reply has function " + std::to_string(reply[1]));
-  const size_t expected = expectedReplyLength(r);
+  const size_t expected = encoded.replyLength();
   if (reply.size() != expected)
     return Result::failure(ErrorKind::kMalformed,
                            where(r) + ": reply is " + std::to_string(reply.size()) +
@@ -202,7 +212,7 @@ Result decodeReply(const Request& r, const Bytes& reply) {
       break;
   }
   // Writes: the reply must confirm exactly what was asked.
-  const Bytes sent = encodeRequest(r);
+  const Bytes& sent = encoded.adu();
   const size_t compare = r.reply_echoes_request || r.function == FunctionCode::kWriteSingleCoil ||
                                  r.function == FunctionCode::kWriteSingleRegister
                              ? sent.size() - 2

@@ -71,7 +71,8 @@ class Link : public Transport {
   Link(const Link&) = delete;
   Link& operator=(const Link&) = delete;
 
-  // Validates, retries lost answers of repeatable requests, keeps the statistics.
+  // Checks and encodes the request (once: EncodedRequest), retries lost answers of repeatable
+  // requests with the same frame, keeps the statistics.
   Result execute(const Request& request) final;
   void awaitLineFree() override {
     if (connected()) keepGap();
@@ -90,13 +91,14 @@ class Link : public Transport {
 
  protected:
   // One request out and its reply in (the line prepared first); a kIo result disconnects.
-  virtual Result attempt(const Request& request) = 0;
+  // Every attempt of a transaction gets the same frame, encoded once by execute.
+  virtual Result attempt(const EncodedRequest& request) = 0;
   // Sends a request nobody answers; success once it is out.
-  virtual Result sendBroadcast(const Request& request) = 0;
+  virtual Result sendBroadcast(const EncodedRequest& request) = 0;
   // Silence kept between frames on the (far) serial line.
   virtual double minGap() const { return effectiveMinGap(config_); }
-  // Seconds to wait for the first byte of the reply.
-  virtual double responseTimeout(const Request& request) const;
+  // Seconds to wait for the first byte of the reply (sized by the frame's length).
+  virtual double responseTimeout(const EncodedRequest& request) const;
 
   // Call after each successful connect: counts reconnects, restarts the line timing.
   void noteConnected();
@@ -105,7 +107,7 @@ class Link : public Transport {
   // The late-reply guard: when a transaction with this slave failed less than
   // late_reply_guard ago and this is a different request, drops what `fd` brings until it
   // has been quiet that long.
-  void settleLine(int fd, const Request& request);
+  void settleLine(int fd, const EncodedRequest& request);
   void addStaleBytes(uint64_t n);
   // The failure a reader status means ("gateway" or the port in `medium` messages).
   Result readFailure(const Request& request, ReadStatus status, const Bytes& partial, int error,
@@ -113,7 +115,7 @@ class Link : public Transport {
   // The RTU reply to `request` on `fd` (a serial port, or a transparent gateway's socket): its
   // first byte within the response timeout, each next one within `byte_timeout`, read by its
   // announced length and decoded (frame.h's checks); failures name `medium`.
-  Result readRtuReply(int fd, const Request& request, double byte_timeout,
+  Result readRtuReply(int fd, const EncodedRequest& request, double byte_timeout,
                       const std::string& medium);
   // readFrame (fd_io.h), and what it read to the wire observer.
   ReadStatus readObserved(int fd, double first, double between,
@@ -131,8 +133,8 @@ class Link : public Transport {
   std::chrono::steady_clock::time_point last_activity_{};
 
  private:
-  Result runAttempt(const Request& request);
-  Result runBroadcast(const Request& request);
+  Result runAttempt(const EncodedRequest& request);
+  Result runBroadcast(const EncodedRequest& request);
   void awaitQuietLine(int fd, std::chrono::steady_clock::time_point until);
   // How much of a gap a real-time thread spins: 1.5 x the sleeps' lateness + 10 us, at most
   // kMaxGapSpin.

@@ -32,12 +32,12 @@ class RtuLink : public Link {
   bool lowLatency() const override { return low_latency_.load(); }
 
  protected:
-  Result attempt(const Request& request) override;
-  Result sendBroadcast(const Request& request) override;
+  Result attempt(const EncodedRequest& request) override;
+  Result sendBroadcast(const EncodedRequest& request) override;
 
  private:
-  Result send(const Request& request);
-  void prepareLine(const Request& request);
+  Result send(const EncodedRequest& request);
+  void prepareLine(const EncodedRequest& request);
 
   modbus_t* ctx_ = nullptr;
   std::atomic<bool> low_latency_{false};  // read by the diagnostics thread

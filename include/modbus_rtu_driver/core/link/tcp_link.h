@@ -25,8 +25,9 @@ class TcpLink : public Link {
   void disconnect() override;
 
  protected:
-  double responseTimeout(const Request& request) const override;
-  // Sends `frame`; a failure is kIo (not sent, or the connection is gone).
+  double responseTimeout(const EncodedRequest& request) const override;
+  // Sends `frame` (the request's, or its MBAP form); a failure is kIo (not sent, or the
+  // connection is gone).
   Result send(const Request& request, const Bytes& frame);
   std::string medium() const;  // "gateway HOST:PORT"
   // The failure of a request found the connection closed before it was sent.
@@ -44,11 +45,11 @@ class RtuOverTcpLink : public TcpLink {
   PortKind kind() const override { return PortKind::kRtuOverTcp; }
 
  protected:
-  Result attempt(const Request& request) override;
-  Result sendBroadcast(const Request& request) override;
+  Result attempt(const EncodedRequest& request) override;
+  Result sendBroadcast(const EncodedRequest& request) override;
 
  private:
-  bool prepareLine(const Request& request);  // false: the connection is gone
+  bool prepareLine(const EncodedRequest& request);  // false: the connection is gone
 };
 
 class ModbusTcpLink : public TcpLink {
@@ -57,8 +58,8 @@ class ModbusTcpLink : public TcpLink {
   PortKind kind() const override { return PortKind::kModbusTcp; }
 
  protected:
-  Result attempt(const Request& request) override;
-  Result sendBroadcast(const Request& request) override;
+  Result attempt(const EncodedRequest& request) override;
+  Result sendBroadcast(const EncodedRequest& request) override;
   double minGap() const override { return 0; }  // the gateway paces its own line
 
  private:

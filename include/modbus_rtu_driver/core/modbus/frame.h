@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "modbus_rtu_driver/core/modbus/types.h"
@@ -27,22 +28,43 @@ bool hasValidCrc(const Bytes& frame);
 std::string toHex(const Bytes& bytes);             // "01 03 00 FD"
 std::optional<Bytes> fromHex(const std::string&);  // accepts spaces, upper or lower case
 
-// The request ADU (slave, PDU, CRC). The request must be valid (Request::validate()).
+// The request ADU (slave, PDU, CRC). The request must be valid (Request::validate()). For
+// servers, tests and tools; a link sends an EncodedRequest's frame instead.
 Bytes encodeRequest(const Request& request);
-// The request PDU without slave and CRC (what modbus_send_raw_request takes after the slave).
-Bytes encodeRequestPdu(const Request& request);
 
 // The shortest reply ADU there is: an exception (slave, function, code, CRC).
 constexpr size_t kShortestReply = 5;
-// Length of the normal reply ADU to `request` (exceptions are 5 bytes).
-size_t expectedReplyLength(const Request& request);
+
+// A request as a link runs it: checked and encoded once, where the link takes it, and then only
+// read. Every attempt (retries included) sends this frame, the timeouts are sized from it, and
+// a write's reply is compared with it; nothing after encode() checks or encodes the request
+// again. Only encode() makes one, so holding one means the request was valid.
+class EncodedRequest {
+ public:
+  // The request's frame, or nothing when Request::validate() refuses it: then `refused` (if
+  // given) is the kInvalidArgument failure naming the request and its bad field.
+  static std::optional<EncodedRequest> encode(const Request& request, Result* refused = nullptr);
+
+  const Request& request() const { return request_; }
+  const Bytes& adu() const { return adu_; }             // slave, PDU, CRC: the wire bytes
+  size_t replyLength() const { return reply_length_; }  // the normal reply ADU (not 5)
+
+ private:
+  EncodedRequest(const Request& request, Bytes adu, size_t reply_length)
+      : request_(request), adu_(std::move(adu)), reply_length_(reply_length) {}
+
+  Request request_;
+  Bytes adu_;
+  size_t reply_length_;
+};
+
 // How many bytes a reply needs in total, judged from the bytes read so far; 0 = need more to
 // tell. Used by the reader so it never waits for a byte timeout after a complete frame.
 size_t replyLengthFromHeader(const Request& request, const Bytes& partial);
 
-// Checks a complete reply ADU against its request (CRC, address, function, exception,
-// byte count, echo) and extracts the values.
-Result decodeReply(const Request& request, const Bytes& reply);
+// Checks a complete reply ADU against the request sent (CRC, address, function, exception,
+// byte count, echo against the sent frame) and extracts the values.
+Result decodeReply(const EncodedRequest& sent, const Bytes& reply);
 
 // Server side (simulator, slave role tests): parse a request ADU. Returns nothing when the
 // frame is incomplete, has a bad CRC or an unknown layout; `error` says why.
