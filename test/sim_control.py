@@ -2,7 +2,7 @@
 """Client of modbus_rtu_simulator's control socket (Python 3 standard library only).
 
     python3 test/sim_control.py SOCKET get '#0' coil 0 8       -> ok 0 0 1 0 0 0 0 0
-    python3 test/sim_control.py SOCKET set 255 input 1 1       -> ok
+    python3 test/sim_control.py SOCKET set 255 discrete_input 1 1       -> ok
     python3 test/sim_control.py SOCKET power_cycle 255         -> ok
 
 The socket is the simulator's --control path (default: the link path + ".ctl"). One command per
@@ -11,11 +11,12 @@ the simulator sent it: "ok ..." on stdout (exit 0), or the command and the error
 (exit 1).
 
 Devices: "#<index>" in config order, or the current address (decimal or 0x hex).
-Tables: coil, input (discrete inputs), holding, ireg (input registers).
+Tables: coil, discrete_input, holding_register, input_register.
 Commands:
     get DEV TABLE ADDR [COUNT]       values
-    set DEV TABLE ADDR V1 [V2 ...]   coils/holding: one bus write with the device's checks;
-                                     input/ireg: state from outside (-32768..65535)
+    set DEV TABLE ADDR V1 [V2 ...]   coil/holding_register: one bus write with the device's
+                                     checks; discrete_input/input_register: state from
+                                     outside (-32768..65535)
     silence DEV 0|1                  the device hears and answers nothing (unplugged)
     fail DEV 0|1                     the device answers everything with exception 04
     corrupt DEV N                    the next N replies of the device carry a bad CRC

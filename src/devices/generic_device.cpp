@@ -120,7 +120,7 @@ Result GenericDevice::writeSignal(Transport& bus, size_t i, double value) {
   const std::string problem = encodeWrite(i, value, &words);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
   const SignalConfig& s = signals()[i];
-  const bool coil = s.table == SignalTable::kCoil;
+  const bool coil = s.table == Table::kCoil;
   Result r = bus.execute(writeRequest(s, words));
   if (r.ok()) {
     setFromWords(i, words.data());
@@ -173,7 +173,7 @@ Result GenericDevice::writeSafeValue(Transport& bus, size_t i) {
     w.message = s.name + ": " + w.message;
     return w;
   }
-  const Request back = s.table == SignalTable::kCoil
+  const Request back = s.table == Table::kCoil
                            ? Request::readCoils(address(), s.address, 1)
                            : Request::readHoldingRegisters(address(), s.address, s.words());
   Result now = bus.execute(back);

@@ -6,13 +6,13 @@ namespace modbus_rtu_driver {
 
 Request ReadSpan::request(uint8_t slave) const {
   switch (table) {
-    case SignalTable::kCoil:
+    case Table::kCoil:
       return Request::readCoils(slave, address, count);
-    case SignalTable::kDiscreteInput:
+    case Table::kDiscreteInput:
       return Request::readDiscreteInputs(slave, address, count);
-    case SignalTable::kHoldingRegister:
+    case Table::kHoldingRegister:
       return Request::readHoldingRegisters(slave, address, count);
-    case SignalTable::kInputRegister:
+    case Table::kInputRegister:
       break;
   }
   return Request::readInputRegisters(slave, address, count);

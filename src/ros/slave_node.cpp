@@ -28,27 +28,27 @@ bool SlaveNode::start() {
   written_registers_ = nh_.advertise<WrittenRegisters>("written/holding_registers", 100);
   for (const auto& [address, name] : config_.coil_names) {
     coil_pubs_[address] = nh_.advertise<std_msgs::Bool>("coils/" + name, 1, true);
-    publishNamed(SlaveTable::kCoils, address, {0});
+    publishNamed(Table::kCoil, address, {0});
   }
   for (const auto& [address, name] : config_.holding_names) {
     holding_pubs_[address] = nh_.advertise<std_msgs::UInt16>("holding_registers/" + name, 1, true);
-    publishNamed(SlaveTable::kHoldingRegisters, address, {0});
+    publishNamed(Table::kHoldingRegister, address, {0});
   }
-  auto bits = [this](const char* name, SlaveTable table) {
+  auto bits = [this](const char* name, Table table) {
     services_.push_back(nh_.advertiseService<SetBits::Request, SetBits::Response>(
         name,
         [this, table](SetBits::Request& q, SetBits::Response& s) { return setBits(table, q, s); }));
   };
-  auto regs = [this](const char* name, SlaveTable table) {
+  auto regs = [this](const char* name, Table table) {
     services_.push_back(nh_.advertiseService<SetRegisters::Request, SetRegisters::Response>(
         name, [this, table](SetRegisters::Request& q, SetRegisters::Response& s) {
           return setRegisters(table, q, s);
         }));
   };
-  bits("set_coils", SlaveTable::kCoils);
-  bits("set_discrete_inputs", SlaveTable::kDiscreteInputs);
-  regs("set_holding_registers", SlaveTable::kHoldingRegisters);
-  regs("set_input_registers", SlaveTable::kInputRegisters);
+  bits("set_coils", Table::kCoil);
+  bits("set_discrete_inputs", Table::kDiscreteInput);
+  regs("set_holding_registers", Table::kHoldingRegister);
+  regs("set_input_registers", Table::kInputRegister);
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>();
   diagnostics_->setHardwareID(config_.link.port);
@@ -67,7 +67,7 @@ bool SlaveNode::start() {
 
 void SlaveNode::onWrite(const SlaveWrite& w) {
   const ros::Time now = ros::Time::now();
-  if (w.table == SlaveTable::kCoils) {
+  if (w.table == Table::kCoil) {
     WrittenCoils msg;
     msg.header.stamp = now;
     msg.address = w.address;
@@ -85,10 +85,9 @@ void SlaveNode::onWrite(const SlaveWrite& w) {
 }
 
 // Named signals: published on change (and once at start, latched).
-void SlaveNode::publishNamed(SlaveTable table, uint16_t address,
-                             const std::vector<uint16_t>& values) {
-  auto& pubs = table == SlaveTable::kCoils ? coil_pubs_ : holding_pubs_;
-  if (table != SlaveTable::kCoils && table != SlaveTable::kHoldingRegisters) return;
+void SlaveNode::publishNamed(Table table, uint16_t address, const std::vector<uint16_t>& values) {
+  auto& pubs = table == Table::kCoil ? coil_pubs_ : holding_pubs_;
+  if (table != Table::kCoil && table != Table::kHoldingRegister) return;
   std::lock_guard<std::mutex> lock(named_mutex_);
   for (size_t i = 0; i < values.size(); ++i) {
     const auto a = static_cast<uint16_t>(address + i);
@@ -98,7 +97,7 @@ void SlaveNode::publishNamed(SlaveTable table, uint16_t address,
     auto last = named_values_.find(key);
     if (last != named_values_.end() && last->second == values[i]) continue;
     named_values_[key] = values[i];
-    if (table == SlaveTable::kCoils) {
+    if (table == Table::kCoil) {
       std_msgs::Bool b;
       b.data = values[i] != 0;
       publishShared(pub->second, b);
@@ -110,24 +109,25 @@ void SlaveNode::publishNamed(SlaveTable table, uint16_t address,
   }
 }
 
-bool SlaveNode::setBits(SlaveTable table, SetBits::Request& req, SetBits::Response& res) {
+bool SlaveNode::setBits(Table table, SetBits::Request& req, SetBits::Response& res) {
   const std::vector<uint16_t> values(req.values.begin(), req.values.end());
   res.message = server_->set(table, req.address, values);
   res.success = res.message.empty();
   if (res.success) {
     publishNamed(table, req.address, values);
-    res.message = std::to_string(values.size()) + " " + slaveTableName(table) + " set";
+    res.message = tableName(table) + (" " + std::to_string(req.address)) + ": " +
+                  std::to_string(values.size()) + " value(s) set";
   }
   return true;
 }
 
-bool SlaveNode::setRegisters(SlaveTable table, SetRegisters::Request& req,
-                             SetRegisters::Response& res) {
+bool SlaveNode::setRegisters(Table table, SetRegisters::Request& req, SetRegisters::Response& res) {
   res.message = server_->set(table, req.address, req.values);
   res.success = res.message.empty();
   if (res.success) {
     publishNamed(table, req.address, req.values);
-    res.message = std::to_string(req.values.size()) + " " + slaveTableName(table) + " set";
+    res.message = tableName(table) + (" " + std::to_string(req.address)) + ": " +
+                  std::to_string(req.values.size()) + " value(s) set";
   }
   return true;
 }

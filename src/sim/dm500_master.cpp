@@ -149,17 +149,14 @@ bool Dm500Master::step(const std::string& line, std::string* why) {
         req = Request::writeSingleRegister(id, addr, static_cast<uint16_t>(num(3)));
       } else {
         const auto count = static_cast<uint16_t>(num(3));
-        const std::string what = op.substr(op.find('_') + 1);
-        if (what == "coils")
-          req = Request::readCoils(id, addr, count);
-        else if (what == "discrete")
-          req = Request::readDiscreteInputs(id, addr, count);
-        else if (what == "holding")
-          req = Request::readHoldingRegisters(id, addr, count);
-        else if (what == "input")
-          req = Request::readInputRegisters(id, addr, count);
-        else
-          throw std::runtime_error("unknown step '" + op + "'");
+        // read_<table> and wait_<table>, the table by its one name (read_holding_register).
+        const auto verb = op.substr(0, op.find('_'));
+        std::string problem;
+        const auto table = parseTableName(op.substr(op.find('_') + 1), &problem);
+        if ((verb != "read" && verb != "wait") || !table)
+          throw std::runtime_error("unknown step '" + op + "'" +
+                                   (verb == "read" || verb == "wait" ? ": " + problem : ""));
+        req = Request::read(id, *table, addr, count);
       }
     }
     const bool waiting = op.rfind("wait_", 0) == 0;

@@ -2,20 +2,6 @@
 
 namespace modbus_rtu_driver {
 
-bool parseTable(const std::string& name, Table* out) {
-  if (name == "coil")
-    *out = Table::kCoil;
-  else if (name == "input")
-    *out = Table::kDiscreteInput;
-  else if (name == "holding")
-    *out = Table::kHolding;
-  else if (name == "ireg")
-    *out = Table::kInputRegister;
-  else
-    return false;
-  return true;
-}
-
 int simBitsPerCharacter(const SimLineSettings& l) {
   return 1 + l.data_bits + (l.parity == 'N' ? 0 : 1) + l.stop_bits;
 }
@@ -37,7 +23,7 @@ Table readTable(FunctionCode fc) {
     case FunctionCode::kReadDiscreteInputs:
       return Table::kDiscreteInput;
     case FunctionCode::kReadHoldingRegisters:
-      return Table::kHolding;
+      return Table::kHoldingRegister;
     default:
       return Table::kInputRegister;
   }
@@ -79,7 +65,7 @@ std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point no
     case FunctionCode::kWriteSingleRegister:
     case FunctionCode::kWriteMultipleRegisters:
       if (r.values.empty() || r.values.size() > kMaxWriteRegisters) exception = kIllegalDataValue;
-      if (!exception) exception = write(Table::kHolding, r.address, r.values, now);
+      if (!exception) exception = write(Table::kHoldingRegister, r.address, r.values, now);
       break;
   }
   if (!exception && !isReadFunction(r.function) && (changed || startsSomething(r))) ++changes;
@@ -90,7 +76,7 @@ std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point no
 
 // True when a write would leave a coil or register other than it is now (counted in `changes`).
 bool SimDevice::wouldChange(const Request& r, SimClock::time_point now) {
-  const Table table = isBitFunction(r.function) ? Table::kCoil : Table::kHolding;
+  const Table table = isBitFunction(r.function) ? Table::kCoil : Table::kHoldingRegister;
   for (size_t i = 0; i < r.values.size(); ++i) {
     uint16_t v = 0;
     const uint32_t a = r.address + i;
@@ -106,7 +92,8 @@ Bytes SimDevice::unknownFunction(uint8_t slave, uint8_t function) const {
 
 uint8_t SimDevice::setDirect(Table table, uint16_t address, uint16_t value,
                              SimClock::time_point now) {
-  if (table == Table::kCoil || table == Table::kHolding) return write(table, address, {value}, now);
+  if (table == Table::kCoil || table == Table::kHoldingRegister)
+    return write(table, address, {value}, now);
   return kIllegalDataAddress;
 }
 

@@ -19,23 +19,6 @@ namespace modbus_rtu_driver {
 
 namespace {
 
-SignalTable signalTable(Table t) {
-  switch (t) {
-    case Table::kCoil:
-      return SignalTable::kCoil;
-    case Table::kDiscreteInput:
-      return SignalTable::kDiscreteInput;
-    case Table::kHolding:
-      return SignalTable::kHoldingRegister;
-    case Table::kInputRegister:
-      break;
-  }
-  return SignalTable::kInputRegister;
-}
-
-const SignalTable kTables[] = {SignalTable::kCoil, SignalTable::kDiscreteInput,
-                               SignalTable::kHoldingRegister, SignalTable::kInputRegister};
-
 void parseHoles(const YAML::Node& n, const std::string& key, SimGenericConfig* out) {
   using namespace config;
   if (!n.IsSequence()) fail(key, show(n) + " is not a list of {table, from, to}");
@@ -43,17 +26,7 @@ void parseHoles(const YAML::Node& n, const std::string& key, SimGenericConfig* o
     const std::string at = key + "[" + std::to_string(i) + "]/";
     checkKeys(n[i], at, {"table", "from", "to"});
     SimGenericConfig::Hole h{};
-    const std::string table = get<std::string>(n[i]["table"], at + "table", "a table");
-    bool found = false;
-    for (SignalTable t : kTables)
-      if (table == tableName(t)) {
-        h.table = t;
-        found = true;
-      }
-    if (!found)
-      fail(at + "table", "'" + table +
-                             "' is not coil, discrete_input, holding_register or "
-                             "input_register");
+    h.table = getTable(n[i]["table"], at + "table");
     const int from = getInt(n[i]["from"], at + "from");
     const int to = n[i]["to"] ? getInt(n[i]["to"], at + "to") : from;
     if (from < 0 || to < from || to > 0xFFFF)
@@ -106,7 +79,7 @@ uint16_t SimGeneric::readLimit(bool bits) const {
   return config_.max_read == 0 ? protocol : std::min(protocol, config_.max_read);
 }
 
-bool SimGeneric::mapped(SignalTable table, uint16_t address) const {
+bool SimGeneric::mapped(Table table, uint16_t address) const {
   auto it = blocks_.find(table);
   if (it == blocks_.end() || address < it->second.first || address > it->second.second)
     return false;
@@ -116,7 +89,7 @@ bool SimGeneric::mapped(SignalTable table, uint16_t address) const {
 }
 
 uint8_t SimGeneric::read(Table table, uint16_t address, SimClock::time_point, uint16_t* value) {
-  const SignalTable t = signalTable(table);
+  const Table t = table;
   if (!mapped(t, address)) return kIllegalDataAddress;
   auto it = values_.find({t, address});
   *value = it == values_.end() ? 0 : it->second;
@@ -126,7 +99,7 @@ uint8_t SimGeneric::read(Table table, uint16_t address, SimClock::time_point, ui
 // A write touching an unmapped address changes nothing (checked as a whole).
 uint8_t SimGeneric::write(Table table, uint16_t address, const std::vector<uint16_t>& values,
                           SimClock::time_point) {
-  const SignalTable t = signalTable(table);
+  const Table t = table;
   for (size_t i = 0; i < values.size(); ++i)
     if (address + i > 0xFFFF || !mapped(t, static_cast<uint16_t>(address + i)))
       return kIllegalDataAddress;
@@ -137,7 +110,7 @@ uint8_t SimGeneric::write(Table table, uint16_t address, const std::vector<uint1
 
 uint8_t SimGeneric::setDirect(Table table, uint16_t address, uint16_t value,
                               SimClock::time_point now) {
-  if (isBitTable(signalTable(table)) && value > 1) return kIllegalDataValue;
+  if (isBitTable(table) && value > 1) return kIllegalDataValue;
   return write(table, address, {value}, now);
 }
 
@@ -159,9 +132,9 @@ void SimGeneric::loadState(const YAML::Node& n, SimClock::time_point) {
   for (const auto& v : n["values"]) {
     if (!v.IsSequence() || v.size() != 3) continue;
     const std::string table = v[0].as<std::string>("");
-    for (SignalTable t : kTables)
-      if (table == tableName(t) && mapped(t, v[1].as<uint16_t>(0)))
-        values_[{t, v[1].as<uint16_t>(0)}] = v[2].as<uint16_t>(0);
+    const auto t = valueIn(kTableNames, table);
+    if (t && mapped(*t, v[1].as<uint16_t>(0)))
+      values_[{*t, v[1].as<uint16_t>(0)}] = v[2].as<uint16_t>(0);
   }
 }
 

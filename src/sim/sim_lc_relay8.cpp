@@ -71,7 +71,7 @@ uint8_t SimLcRelay8::read(Table table, uint16_t a, SimClock::time_point now, uin
       if (a > 7) return kIllegalDataAddress;
       *v = (inputs_ >> a) & 1;
       return 0;
-    case Table::kHolding:
+    case Table::kHoldingRegister:
       if (a == kBaudRead) {
         *v = baud_code_;
         return 0;
@@ -104,7 +104,7 @@ uint8_t SimLcRelay8::write(Table table, uint16_t a, const std::vector<uint16_t>&
     }
     return 0;
   }
-  if (table != Table::kHolding) return kIllegalFunction;
+  if (table != Table::kHoldingRegister) return kIllegalFunction;
   if (a == kBaudWrite && values.size() == 1) {
     if (values[0] < 2 || values[0] > 4) return kIllegalDataValue;  // 4800, 9600, 19200
     baud_code_ = values[0];

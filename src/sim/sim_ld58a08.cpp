@@ -105,7 +105,7 @@ uint8_t SimLd58a08::read(Table table, uint16_t a, SimClock::time_point now, uint
     *v = (outputs_ >> a) & 1;
     return 0;
   }
-  if (table != Table::kHolding) return kIllegalFunction;  // FC02/FC04 are not supported
+  if (table != Table::kHoldingRegister) return kIllegalFunction;  // FC02/FC04 are not supported
   if (isPwmRegister(a)) {
     *v = pwm_[a >> 4].reg[a & 0x0F];
     return 0;
@@ -147,7 +147,7 @@ uint8_t SimLd58a08::write(Table table, uint16_t a, const std::vector<uint16_t>& 
     tick(now);  // a running PWM keeps its output
     return 0;
   }
-  if (table != Table::kHolding) return kIllegalFunction;
+  if (table != Table::kHoldingRegister) return kIllegalFunction;
   const uint8_t e = checkHolding(a, values);
   if (e) return e;
   for (size_t i = 0; i < values.size(); ++i)

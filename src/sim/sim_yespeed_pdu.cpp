@@ -75,7 +75,7 @@ uint8_t SimYespeedPdu::read(Table table, uint16_t a, SimClock::time_point now, u
       if (a > 4) return kIllegalDataAddress;
       *v = value(a);
       return 0;
-    case Table::kHolding:
+    case Table::kHoldingRegister:
       if (a > 2) return kIllegalDataAddress;
       *v = limits_[a];
       return 0;
@@ -95,7 +95,7 @@ uint8_t SimYespeedPdu::write(Table table, uint16_t a, const std::vector<uint16_t
     tick(now);  // the current follows the outlets at once
     return 0;
   }
-  if (table != Table::kHolding) return kIllegalFunction;
+  if (table != Table::kHoldingRegister) return kIllegalFunction;
   if (a + values.size() > 3) return kIllegalDataAddress;
   auto next = limits_;
   for (size_t i = 0; i < values.size(); ++i) next[a + i] = values[i];

@@ -43,7 +43,9 @@ namespace modbus_rtu_driver {
 namespace {
 
 constexpr size_t kMaxLine = 4096;
-const char* kUsage = "usage: get|set DEVICE coil|input|holding|ireg ADDRESS [COUNT | VALUES...]";
+const char* kUsage =
+    "usage: get|set DEVICE coil|discrete_input|holding_register|input_register ADDRESS [COUNT | "
+    "VALUES...]";
 
 bool parseNumber(const std::string& text, long min, long max, long* out) {
   if (text.empty()) return false;
@@ -209,8 +211,11 @@ std::string Simulator::deviceCommand(const std::string& verb, SimDevice& d, std:
     counter = static_cast<int>(n);
     return "ok";
   }
-  Table table;
-  if (!(in >> a) || !parseTable(a, &table)) return "error table '" + a + "'; " + kUsage;
+  if (!(in >> a)) return std::string("error no table; ") + kUsage;
+  std::string table_error;
+  const auto parsed_table = parseTableName(a, &table_error);
+  if (!parsed_table) return "error table " + table_error + "; " + kUsage;
+  const Table table = *parsed_table;
   if (!(in >> b) || !parseNumber(b, 0, 0xFFFF, &address))
     return "error address '" + b + "' is not 0-65535; " + std::string(kUsage);
   if (verb == "get") {
@@ -235,7 +240,7 @@ std::string Simulator::deviceCommand(const std::string& verb, SimDevice& d, std:
   if (values.empty()) return "error set needs at least one value; " + std::string(kUsage);
   if (address + static_cast<long>(values.size()) > 0x10000)
     return "error " + exceptionName(kIllegalDataAddress) + " at 65536";
-  if (table == Table::kCoil || table == Table::kHolding) {  // one write, checked as a whole
+  if (table == Table::kCoil || table == Table::kHoldingRegister) {  // one write, checked as a whole
     for (uint16_t v : values)
       if (table == Table::kCoil && v > 1) return "error coil values are 0 or 1";
     const uint8_t e = d.write(table, static_cast<uint16_t>(address), values, now);

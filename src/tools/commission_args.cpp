@@ -213,7 +213,13 @@ const CLI::Validator kParityList(
     },
     "LIST|all");
 
-const std::vector<std::string> kTables = {"coils", "discrete-inputs", "holding", "input-registers"};
+// A table by its one name; a spelling of earlier versions is refused with the name to use.
+const CLI::Validator kTableName(
+    [](std::string& text) -> std::string {
+      std::string problem;
+      return parseTableName(text, &problem) ? "" : problem;
+    },
+    "TABLE");
 
 // --- the settings commands, and which registered types have them ---
 
@@ -526,11 +532,9 @@ struct Cli {
   }
   CLI::App* addTable(CLI::App* command) {
     addAddress(command);
-    command->add_option("table", w.table, "coils, discrete-inputs, holding or input-registers")
+    command->add_option("table", w.table, namesIn(kTableNames))
         ->type_name("TABLE")
-        ->check(refusing(CLI::IsMember(kTables), [](const std::string& text) {
-          return "'" + text + "' is not coils, discrete-inputs, holding or input-registers";
-        }));
+        ->check(kTableName);
     command->add_option("start", w.start, "first address in the table (0-65535)")
         ->type_name("START")
         ->transform(intRange(0, 65535));
@@ -756,14 +760,15 @@ void parseAnyAddress(const Parsed& p, CommissionCommand& c) {
 void parseTable(const Parsed& p, CommissionCommand& c) {
   const Words& w = p.w;
   parseAnyAddress(p, c);
-  if (!p.has("table")) bad("table: missing (coils, discrete-inputs, holding or input-registers)");
-  c.table = w.table;  // checked by CLI::IsMember
-  const bool bits = c.table == "coils" || c.table == "discrete-inputs";
+  if (!p.has("table")) bad("table: missing (" + namesIn(kTableNames) + ")");
+  c.table = *parseTableName(w.table, nullptr);  // checked by kTableName
+  const bool bits = isBitTable(c.table);
   if (!p.has("start")) bad("start: missing (0-65535)");
   c.start = w.start;
   if (c.command == "write") {
-    if (c.table != "coils" && c.table != "holding")
-      bad("table: " + c.table + " cannot be written (coils or holding)");
+    if (c.table != Table::kCoil && c.table != Table::kHoldingRegister)
+      bad(std::string("table: ") + tableName(c.table) +
+          " cannot be written (coil or holding_register)");
     if (w.values.empty()) bad("value: missing (" + std::string(bits ? "0 or 1" : "0-65535") + ")");
     const size_t max = bits ? kMaxWriteBits : kMaxWriteRegisters;
     if (w.values.size() > max)

@@ -24,27 +24,27 @@ class TableCommands {
   }
 
  private:
-  bool bits() const { return c_.table == "coils" || c_.table == "discrete-inputs"; }
+  bool bits() const { return isBitTable(c_.table); }
 
-  // "holding 253 (0x00FD)"
+  // "holding_register 253 (0x00FD)"
   std::string item(int offset) const {
     const int a = c_.start + offset;
     char hex[16];
     std::snprintf(hex, sizeof hex, " (0x%04X)", a);
-    return c_.table + " " + std::to_string(a) + (bits() ? "" : hex);
+    return tableName(c_.table) + (" " + std::to_string(a)) + (bits() ? "" : hex);
   }
 
   Json fields() const {
-    return Json().add("address", c_.address).add("table", c_.table).add("start", c_.start);
+    return Json()
+        .add("address", c_.address)
+        .add("table", std::string(tableName(c_.table)))
+        .add("start", c_.start);
   }
 
   Request readRequest() const {
     const auto start = static_cast<uint16_t>(c_.start);
     const auto n = static_cast<uint16_t>(c_.count);
-    if (c_.table == "coils") return Request::readCoils(slave_, start, n);
-    if (c_.table == "discrete-inputs") return Request::readDiscreteInputs(slave_, start, n);
-    if (c_.table == "holding") return Request::readHoldingRegisters(slave_, start, n);
-    return Request::readInputRegisters(slave_, start, n);
+    return Request::read(slave_, c_.table, start, n);
   }
 
   int read() {
@@ -61,7 +61,7 @@ class TableCommands {
     const auto start = static_cast<uint16_t>(c_.start);
     const bool one = c_.values.size() == 1 && !c_.multiple;
     Request req;
-    if (c_.table == "coils")
+    if (c_.table == Table::kCoil)
       req = one ? Request::writeSingleCoil(slave_, start, c_.values[0] != 0)
                 : Request::writeMultipleCoils(
                       slave_, start, std::vector<bool>(c_.values.begin(), c_.values.end()));
@@ -71,7 +71,7 @@ class TableCommands {
     const Result r = s_.bus.execute(req);
     if (!r.ok()) return s_.out.fail(r);
     const int fc = static_cast<int>(req.function);
-    const std::string span = c_.table + " " + std::to_string(c_.start) +
+    const std::string span = tableName(c_.table) + (" " + std::to_string(c_.start)) +
                              (c_.count > 1 ? "-" + std::to_string(c_.start + c_.count - 1) : "");
     s_.out.result(
         "wrote " + span + " with function " + std::to_string(fc) + "; the device confirmed",

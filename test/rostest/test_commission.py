@@ -181,9 +181,9 @@ class CommissionTest(unittest.TestCase):
         out = self.ok(["set-address", "--type", "ld58a08", "--address", "1", "9"], stdin="y\n")
         self.assertEqual(out, "ld58a08 address changed from 1 to 9; it answers at 9\n")
         self.assertEqual(self.sim.devices()["ld58a08"][0], 9)
-        self.assertEqual(self.run_tool(["read", "--address", "1", "coils", "0"])[0], NOT_FOUND)
-        self.assertEqual(self.ok(["--json", "read", "--address", "9", "holding", "0xFD"]),
-                         '{"ok":true,"address":9,"table":"holding","start":253,"values":[9]}\n')
+        self.assertEqual(self.run_tool(["read", "--address", "1", "coil", "0"])[0], NOT_FOUND)
+        self.assertEqual(self.ok(["--json", "read", "--address", "9", "holding_register", "0xFD"]),
+                         '{"ok":true,"address":9,"table":"holding_register","start":253,"values":[9]}\n')
         # Address unknown: through 0xFF, as the manual prints it.
         self.assertEqual(self.ok(["get-address", "--type", "ld58a08"]), "ld58a08 address: 9\n")
         self.ok(["--yes", "set-address", "--type", "ld58a08", "4"])
@@ -204,9 +204,9 @@ class CommissionTest(unittest.TestCase):
         self.assertIn("only this board may be connected", err)
         out = self.ok(["--yes", "set-address", "--type", "lc_relay8", "--address", "255", "200"])
         self.assertEqual(out, "lc_relay8 address changed from 255 to 200; it answers at 200\n")
-        self.assertEqual(self.run_tool(["read", "--address", "255", "coils", "0", "8"])[0],
+        self.assertEqual(self.run_tool(["read", "--address", "255", "coil", "0", "8"])[0],
                          NOT_FOUND)
-        self.ok(["read", "--address", "200", "coils", "0", "8"])
+        self.ok(["read", "--address", "200", "coil", "0", "8"])
         self.assertEqual(self.scan("--addresses", "199-201,255"),
                          [(200, "lc_relay8", 9600, "none")])
         self.ok(["--yes", "set-address", "--type", "lc_relay8", "255"])
@@ -236,7 +236,7 @@ class CommissionTest(unittest.TestCase):
         self.start_sim([("ld58a08", 1)])
         out = self.ok(["--yes", "set-parity", "--address", "1", "even"])
         self.assertIn("powered off and on; then reach it with --parity even", out)
-        self.assertEqual(self.sim.control.get("1", "holding", 0xFF), [1])
+        self.assertEqual(self.sim.control.get("1", "holding_register", 0xFF), [1])
         self.assertEqual(self.ok(["get-parity", "--address", "1"]),
                          "ld58a08 at address 1, parity: even\n")  # still answers at 8N1
         self.assertEqual(self.sim.devices()["ld58a08"][2], "N")
@@ -256,8 +256,8 @@ class CommissionTest(unittest.TestCase):
             (["set-parity", "--address", "1", "mark"], "parity: 'mark' is not none, even or odd"),
             (["set-return-delay", "--address", "1", "1001"], "'1001' is outside 0-1000"),
             (["set-return-delay", "--address", "1", "100"], "not a multiple of 40 ms"),
-            (["read", "--address", "1", "holding", "0", "126"], "count: '126' is outside 1-125"),
-            (["write", "--address", "255", "coils", "0", "2"], "value: '2' is outside 0-1"),
+            (["read", "--address", "1", "holding_register", "0", "126"], "count: '126' is outside 1-125"),
+            (["write", "--address", "255", "coil", "0", "2"], "value: '2' is outside 0-1"),
             (["--baud", "9601", "scan"], "--baud: '9601'"),
             (["scan", "--parities", "mark"], "--parities: 'mark'"),
         ]
@@ -273,17 +273,17 @@ class CommissionTest(unittest.TestCase):
 
     def test_exit_codes_tell_no_answer_refusal_and_bus_errors_apart(self):
         self.start_sim([("ld58a08", 1), ("yespeed_pdu", 2)])
-        self.assertEqual(self.run_tool(["read", "--address", "9", "coils", "0"])[0], NOT_FOUND)
-        code, _, err = self.run_tool(["read", "--address", "1", "holding", "5"])
+        self.assertEqual(self.run_tool(["read", "--address", "9", "coil", "0"])[0], NOT_FOUND)
+        code, _, err = self.run_tool(["read", "--address", "1", "holding_register", "5"])
         self.assertEqual(code, REFUSED)
         self.assertIn("illegal data address", err)
         self.sim.control.fail("2")
-        self.assertEqual(self.run_tool(["read", "--address", "2", "coils", "0"])[0], REFUSED)
+        self.assertEqual(self.run_tool(["read", "--address", "2", "coil", "0"])[0], REFUSED)
         self.sim.control.corrupt("1", 1)
-        code, out, _ = self.run_tool(["--json", "read", "--address", "1", "coils", "0"])
+        code, out, _ = self.run_tool(["--json", "read", "--address", "1", "coil", "0"])
         self.assertEqual(code, BUS_ERROR)
         self.assertEqual(json.loads(out)["exit"], BUS_ERROR)
-        self.ok(["read", "--address", "1", "coils", "0"])  # the next reply is clean again
+        self.ok(["read", "--address", "1", "coil", "0"])  # the next reply is clean again
         sim, self.sim = self.sim, None  # --port /nonexistent
         self.assertEqual(self.run_tool(["info", "--address", "1"])[0], BUS_ERROR)
         self.sim = sim
@@ -325,17 +325,17 @@ class CommissionTest(unittest.TestCase):
         self.assertEqual(self.sim.frames_received(), before, "a refused command sent a frame")
         code, _, err = self.run_tool(["set-limits", "--address", "2", "--over-voltage", "260"])
         self.assertEqual(code, NOT_CONFIRMED, err)
-        self.assertEqual(self.sim.control.get("2", "holding", 0, 3), [2500, 2000, 1600])
+        self.assertEqual(self.sim.control.get("2", "holding_register", 0, 3), [2500, 2000, 1600])
         # One limit: the others stay as the PDU holds them.
         out = self.ok(["--yes", "set-limits", "--address", "2", "--over-voltage", "260"])
         self.assertIn("limits set to over-voltage 260.0 V, under-voltage 200.0 V", out)
-        self.assertEqual(self.sim.control.get("2", "holding", 0, 3), [2600, 2000, 1600])
+        self.assertEqual(self.sim.control.get("2", "holding_register", 0, 3), [2600, 2000, 1600])
         # Not above the PDU's own under-voltage: refused before the write.
         code, _, err = self.run_tool(["--yes", "set-limits", "--address", "2",
                                       "--over-voltage", "190"])
         self.assertEqual(code, BAD_ARGUMENTS, err)
         self.assertIn("must be above under_voltage (200.0 V)", err)
-        self.assertEqual(self.sim.control.get("2", "holding", 0, 3), [2600, 2000, 1600])
+        self.assertEqual(self.sim.control.get("2", "holding_register", 0, 3), [2600, 2000, 1600])
         self.sim.stop()
         self.assertIn("rx 02 10 00 00 00 03 06 0A 28 07 D0 06 40", self.sim.log())
 
@@ -361,14 +361,14 @@ class CommissionTest(unittest.TestCase):
 
     def test_write_read_and_watch(self):
         self.start_sim([("lc_relay8", 255), ("ld58a08", 1)])
-        self.ok(["write", "--address", "255", "coils", "0", "1", "0", "1"])
+        self.ok(["write", "--address", "255", "coil", "0", "1", "0", "1"])
         self.assertEqual(self.sim.control.get("255", "coil", 0, 3), [1, 0, 1])
-        self.ok(["write", "--address", "1", "holding", "0x80", "9"])
+        self.ok(["write", "--address", "1", "holding_register", "0x80", "9"])
         self.assertEqual(self.sim.control.get("1", "coil", 0, 4), [1, 0, 0, 1])
-        self.assertEqual(json.loads(self.ok(["--json", "read", "--address", "1", "coils", "0",
+        self.assertEqual(json.loads(self.ok(["--json", "read", "--address", "1", "coil", "0",
                                              "4"]))["values"], [1, 0, 0, 1])
 
-        proc = subprocess.Popen(self.argv(["watch", "--address", "255", "discrete-inputs", "0",
+        proc = subprocess.Popen(self.argv(["watch", "--address", "255", "discrete_input", "0",
                                            "8", "--interval", "0.05"]),
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                 env=self.env)
@@ -377,7 +377,7 @@ class CommissionTest(unittest.TestCase):
         try:
             first = lines.get(timeout=10)
             self.assertIn("discrete-inputs 0: 0, discrete-inputs 1: 0", first)
-            self.sim.control.set("255", "input", 1, 1)
+            self.sim.control.set("255", "discrete_input", 1, 1)
             change = lines.get(timeout=10)
             self.assertRegex(change, r"^\+[0-9.]+ s  discrete-inputs 1: 0 -> 1\n$")
             time.sleep(0.3)  # several more polls: nothing changed, nothing printed
@@ -391,7 +391,7 @@ class CommissionTest(unittest.TestCase):
         self.start_sim([("lc_relay8", 255), ("yespeed_pdu", 2)], rtu_tcp=free_port())
         self.assertEqual(self.scan("--addresses", "1-3,255"),
                          [(2, "yespeed_pdu", 9600, "none"), (255, "lc_relay8", 9600, "none")])
-        self.ok(["write", "--address", "255", "coils", "0", "1", "1"])
+        self.ok(["write", "--address", "255", "coil", "0", "1", "1"])
         self.assertEqual(self.sim.control.get("255", "coil", 0, 2), [1, 1])
         self.assertEqual(self.ok(["get-address", "--type", "lc_relay8"]),  # through address 0
                          "lc_relay8 address: 255\n")

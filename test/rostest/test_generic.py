@@ -57,9 +57,9 @@ class GenericDeviceTest(unittest.TestCase):
         return msg.values[i], msg.valid[i]
 
     def test_reads_follow_the_device(self):
-        self.sim.set(METER, "ireg", 0, *float_words(230.5))
-        self.sim.set(METER, "ireg", 6, *float_words(1.25))
-        self.sim.set(METER, "input", 0, 1)
+        self.sim.set(METER, "input_register", 0, *float_words(230.5))
+        self.sim.set(METER, "input_register", 6, *float_words(1.25))
+        self.sim.set(METER, "discrete_input", 0, 1)
         voltage = helpers.Latest(NS + "voltage", Float64)
         voltage.wait(10, lambda m: m.data == 230.5, "230.5 V latched")
         helpers.Latest(NS + "current", Float64).wait(10, lambda m: m.data == 1.25, "1.25 A")
@@ -74,14 +74,14 @@ class GenericDeviceTest(unittest.TestCase):
         setpoint = helpers.service(NS + "setpoint/set", SetValue)
         res = setpoint(21.5)
         self.assertTrue(res.success, res.message)
-        self.assertEqual(self.sim.get(METER, "holding", 100), [215])
+        self.assertEqual(self.sim.get(METER, "holding_register", 100), [215])
         res = setpoint(-12.3)
         self.assertTrue(res.success, res.message)
-        self.assertEqual(self.sim.get(METER, "holding", 100), [0x10000 - 123])  # int16
+        self.assertEqual(self.sim.get(METER, "holding_register", 100), [0x10000 - 123])  # int16
         counter = helpers.service(NS + "counter/set", SetValue)
         res = counter(65538)
         self.assertTrue(res.success, res.message)
-        self.assertEqual(self.sim.get(METER, "holding", 102, 2), [2, 1])  # little word order
+        self.assertEqual(self.sim.get(METER, "holding_register", 102, 2), [2, 1])  # little word order
         relay = helpers.service(NS + "relay/set", SetBool)
         res = relay(True)
         self.assertTrue(res.success, res.message)
@@ -98,7 +98,7 @@ class GenericDeviceTest(unittest.TestCase):
         limit = helpers.service(NS + "limit/set", SetValue)
         res = limit(1234)
         self.assertTrue(res.success, res.message)
-        self.assertEqual(self.sim.get(METER, "holding", 104), [1234])
+        self.assertEqual(self.sim.get(METER, "holding_register", 104), [1234])
         lamp = helpers.service(NS + "lamp/set", SetBool)
         res = lamp(True)
         self.assertTrue(res.success, res.message)
@@ -141,8 +141,8 @@ class GenericDeviceTest(unittest.TestCase):
         self.assertIn("poll rate achieved [Hz]", {v.key for v in self.status("relays").values})
 
     def test_bad_values_are_refused_and_nothing_is_written(self):
-        self.sim.set(METER, "holding", 100, 100)
-        self.sim.set(METER, "holding", 102, 5, 0)
+        self.sim.set(METER, "holding_register", 100, 100)
+        self.sim.set(METER, "holding_register", 102, 5, 0)
         before = self.sim.command("stats " + METER)
         setpoint = helpers.service(NS + "setpoint/set", SetValue)
         res = setpoint(50.5)
@@ -156,8 +156,8 @@ class GenericDeviceTest(unittest.TestCase):
         self.assertIn("outside what uint32 holds", res.message)
         res = counter(4294967296)
         self.assertFalse(res.success)
-        self.assertEqual(self.sim.get(METER, "holding", 100), [100])
-        self.assertEqual(self.sim.get(METER, "holding", 102, 2), [5, 0])
+        self.assertEqual(self.sim.get(METER, "holding_register", 100), [100])
+        self.assertEqual(self.sim.get(METER, "holding_register", 102, 2), [5, 0])
         self.assertEqual(self.sim.command("stats " + METER), before)  # no write reached it
         # Read-only signals have no set service.
         with self.assertRaises(rospy.ROSException):
@@ -172,8 +172,8 @@ class GenericDeviceTest(unittest.TestCase):
         self.assertIn("input_register 0-31", kv["split 0"])
         self.assertIn("refused (exception 02)", kv["split 0"])
         # Both sides of the hole are read since.
-        self.sim.set(METER, "ireg", 0, *float_words(199.0))
-        self.sim.set(METER, "ireg", 30, *float_words(0.5))
+        self.sim.set(METER, "input_register", 0, *float_words(199.0))
+        self.sim.set(METER, "input_register", 30, *float_words(0.5))
         self.signals.wait(10, lambda m: self.value(m, "voltage") == (199.0, True) and
                           self.value(m, "power_factor") == (0.5, True), "both parts read")
 

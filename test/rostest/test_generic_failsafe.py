@@ -115,14 +115,14 @@ class GenericFailsafeTest(unittest.TestCase):
 
     def board(self):
         """(speed register, run coil) as the simulated device holds them."""
-        return self.sim.get(DRIVE, "holding", 0)[0], self.sim.get(DRIVE, "coil", 0)[0]
+        return self.sim.get(DRIVE, "holding_register", 0)[0], self.sim.get(DRIVE, "coil", 0)[0]
 
     def diag(self):
         s = self.statuses.get("device drive")
         return None if s is None else (s, {v.key: v.value for v in s.values})
 
     def test_1_start_up_writes_the_safe_values_before_any_service(self):
-        self.sim.set(DRIVE, "holding", 0, 50)  # 5.0 Hz
+        self.sim.set(DRIVE, "holding_register", 0, 50)  # 5.0 Hz
         self.sim.set(DRIVE, "coil", 0, 1)
         self.start_node()
         # By the time the node takes requests, the device holds its safe values.
@@ -177,7 +177,7 @@ class GenericFailsafeTest(unittest.TestCase):
         sub = rospy.Subscriber(NS + "drive/power", Float64, received.append)
         signals = helpers.Latest(NS + "drive/signals", SignalValues)
         try:
-            self.sim.set(DRIVE, "ireg", 0, *nan)
+            self.sim.set(DRIVE, "input_register", 0, *nan)
             helpers.wait_until(lambda: any(m.data != m.data for m in received), 15,
                                "NaN on drive/power")
             polls = signals.count
@@ -185,7 +185,7 @@ class GenericFailsafeTest(unittest.TestCase):
             helpers.wait_until(lambda: signals.count >= polls + 10, 15, "ten more polls")
             self.assertEqual(sum(1 for m in received if m.data != m.data), 1,
                              [m.data for m in received])
-            self.sim.set(DRIVE, "ireg", 0, *struct.unpack(">HH", struct.pack(">f", 12.5)))
+            self.sim.set(DRIVE, "input_register", 0, *struct.unpack(">HH", struct.pack(">f", 12.5)))
             helpers.wait_until(lambda: received and received[-1].data == 12.5, 15,
                                "12.5 after the NaN")
         finally:
@@ -193,7 +193,7 @@ class GenericFailsafeTest(unittest.TestCase):
 
     def test_4_a_merged_read_refused_with_exception_03_is_split(self):
         self.ensure_node()
-        self.sim.set(DRIVE, "ireg", 4, *struct.unpack(">HH", struct.pack(">f", 7.25)))
+        self.sim.set(DRIVE, "input_register", 4, *struct.unpack(">HH", struct.pack(">f", 7.25)))
         signals = helpers.Latest(NS + "drive/signals", SignalValues)
 
         def energy_read():
@@ -213,12 +213,12 @@ class GenericFailsafeTest(unittest.TestCase):
         flow = helpers.service(NS + "drive/flow/set", SetValue)
         res = flow(90.0)
         self.assertTrue(res.success, res.message)
-        self.assertEqual(self.sim.get(DRIVE, "holding", 1), [9])
+        self.assertEqual(self.sim.get(DRIVE, "holding_register", 1), [9])
         res = flow(95.0)  # raw 9.5 rounds to 10, which is 100 l/h
         self.assertFalse(res.success)
         self.assertIn("95 l/h would be written as 100 l/h (raw 10), outside -inf to 95 l/h",
                       res.message)
-        self.assertEqual(self.sim.get(DRIVE, "holding", 1), [9], "nothing written")
+        self.assertEqual(self.sim.get(DRIVE, "holding_register", 1), [9], "nothing written")
 
     def test_5_node_stop_writes_the_safe_values(self):
         self.ensure_node()
@@ -237,7 +237,7 @@ class GenericFailsafeTest(unittest.TestCase):
         del config["devices"]["drive"]["heartbeat"]
         config["devices"]["drive"]["on_start"] = "keep"
         type(self).config = config
-        self.sim.set(DRIVE, "holding", 0, 50)
+        self.sim.set(DRIVE, "holding_register", 0, 50)
         self.start_node()
         self.assertEqual(self.board()[0], 50, "on_start: keep leaves it")
         self.speed(2.0)

@@ -102,7 +102,7 @@ class LaunchFilesTest(unittest.TestCase):
         report = os.path.join(log_dir, "report.txt")
         with open(script, "w") as f:
             f.write("wait_ready 1 within 30\n"
-                    "wait_holding 1 5 1 equals 42 within 60\n"
+                    "wait_holding_register 1 5 1 equals 42 within 60\n"
                     "write_coils 1 6 12 03 04\n")
         dm500 = up.Process(["rosrun", "modbus_rtu_driver", "modbus_rtu_dm500_sim", "--link", link,
                             "--script", script, "--report", report], log_dir, "dm500")

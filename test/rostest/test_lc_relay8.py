@@ -83,12 +83,12 @@ class LcRelay8Test(unittest.TestCase):
         helpers.service(NS + "out5/set", SetBool)(False)
 
     def test_inputs_follow_the_board(self):
-        self.sim.set(BOARD, "input", 1, 1)
+        self.sim.set(BOARD, "discrete_input", 1, 1)
         self.inputs.wait(5, lambda m: m.states[1], "estop active in inputs")
         self.assertEqual(list(self.inputs.msg.names[:2]), ["door", "estop"])
         helpers.wait_until(lambda: rospy.wait_for_message(NS + "estop/state", Bool, 5).data, 5,
                            "estop/state true")
-        self.sim.set(BOARD, "input", 1, 0)
+        self.sim.set(BOARD, "discrete_input", 1, 0)
         self.inputs.wait(5, lambda m: not m.states[1], "estop released in inputs")
 
     def test_diagnostics_per_bus_and_device(self):

@@ -30,7 +30,7 @@ class Ld58a08Test(unittest.TestCase):
         cls.stop_pwm = helpers.service(NS + "stop_pwm", StopPwm)
 
     def regs(self, address, count):
-        return self.sim.get(BOARD, "holding", address, count)
+        return self.sim.get(BOARD, "holding_register", address, count)
 
     def test_set_bool_and_mask_register_agree(self):
         res = helpers.service(NS + "out4/set", SetBool)(True)

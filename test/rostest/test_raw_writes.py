@@ -25,13 +25,13 @@ class RawWritesTest(unittest.TestCase):
 
     def refused(self, call, *fragments):
         """call() must fail naming `fragments`, and the PDU's registers must stay."""
-        before_pdu = self.sim.get("2", "holding", 0, 3)
+        before_pdu = self.sim.get("2", "holding_register", 0, 3)
         res = call()
         self.assertFalse(res.success, res.message)
         for f in fragments:
             self.assertIn(f, res.message)
         # Polls go on, so frames keep coming; the registers a write would change must not.
-        self.assertEqual(self.sim.get("2", "holding", 0, 3), before_pdu)
+        self.assertEqual(self.sim.get("2", "holding_register", 0, 3), before_pdu)
 
     def test_refused_or_written(self):
         if not self.allowed:
@@ -41,7 +41,7 @@ class RawWritesTest(unittest.TestCase):
             return
         res = self.registers(slave=1, address=0x0010, values=[30, 10, 0])
         self.assertTrue(res.success, res.message)
-        self.assertEqual(self.sim.get("1", "holding", 0x10, 3), [30, 10, 0])
+        self.assertEqual(self.sim.get("1", "holding_register", 0x10, 3), [30, 10, 0])
         res = self.coils(slave=1, address=5, values=[True, False, True])
         self.assertTrue(res.success, res.message)
         self.assertEqual(self.sim.get("1", "coil", 5, 3), [1, 0, 1])

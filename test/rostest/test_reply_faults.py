@@ -74,16 +74,16 @@ class ReplyFaultsTest(unittest.TestCase):
                 self.assertTrue(res.success, "%s: %s" % (kind, res.message))
             self.counter_grows(key, before)
             # Still polled correctly afterwards: an input set on the board shows.
-            self.sim.set(RELAYS, "input", 5, 1)
+            self.sim.set(RELAYS, "discrete_input", 5, 1)
             self.inputs.wait(5, lambda m: m.states[5], "input 5 on after %s" % kind)
-            self.sim.set(RELAYS, "input", 5, 0)
+            self.sim.set(RELAYS, "discrete_input", 5, 0)
             self.inputs.wait(5, lambda m: not m.states[5], "input 5 off after %s" % kind)
 
     def test_2_a_late_reply_of_the_same_shape_is_never_read_for_another_channel(self):
         # Each stopped channel gets its own period (1.0 + 0.1 k s): a reply read for the wrong
         # channel would show another channel's period in the topic.
         for ch in range(6):
-            self.sim.set(PWM, "holding", ch * 16, 10 + ch, ch, 0)
+            self.sim.set(PWM, "holding_register", ch * 16, 10 + ch, ch, 0)
         expected = [1.0 + 0.1 * ch for ch in range(6)]
         self.pwm.wait(10, lambda m: all(abs(m.channels[c].period - expected[c]) < 1e-6
                                         for c in range(6)), "every channel's own period")
@@ -108,7 +108,7 @@ class ReplyFaultsTest(unittest.TestCase):
                            "the bus to have kept polling (over 40 transactions ok)")
 
     def test_3_a_device_with_a_1000_ms_return_delay_works(self):
-        self.sim.set(SLOW, "holding", 0x00FC, 25)  # 25 x 40 ms
+        self.sim.set(SLOW, "holding_register", 0x00FC, 25)  # 25 x 40 ms
         try:
             out0 = helpers.service(NS + "slow_board/out0/set", SetBool)
             t0 = time.time()
@@ -128,7 +128,7 @@ class ReplyFaultsTest(unittest.TestCase):
             print("slow device: SetBool answered in %.2f s; relay inputs %.1f Hz meanwhile" %
                   (took, (self.inputs.count - count) / 4.0))
         finally:
-            self.sim.set(SLOW, "holding", 0x00FC, 0)
+            self.sim.set(SLOW, "holding_register", 0x00FC, 0)
 
     def test_4_lost_requests_and_replies_give_true_outcomes_and_no_double_action(self):
         self.sim.drop(RELAYS, 10, "reply")
@@ -162,7 +162,7 @@ class ReplyFaultsTest(unittest.TestCase):
                 calls += 1
                 if res.success:
                     pwm_ok += 1
-                    regs = self.sim.get(PWM, "holding", ch * 16, 3)
+                    regs = self.sim.get(PWM, "holding_register", ch * 16, 3)
                     self.assertEqual(regs[:2], [200 + 10 * i, 100], res.message)
                     self.assertGreater(regs[2], 0, res.message)
             starts = self.sim.stats(PWM)["changes"] - pwm_starts
@@ -181,7 +181,7 @@ class ReplyFaultsTest(unittest.TestCase):
                 self.sim.drop(dev, 0, "reply")
                 self.sim.drop(dev, 0, "request")
             for ch in range(6):
-                self.sim.set(PWM, "holding", ch * 16 + 2, 0)
+                self.sim.set(PWM, "holding_register", ch * 16 + 2, 0)
 
     def test_5_the_bus_level_says_how_the_line_is_now(self):
         """WARN while failed attempts are recent (also those a retry made good), OK again once

@@ -60,7 +60,7 @@ class RobotBagTest(unittest.TestCase):
         sim_process = up.start_simulator(up.simulator_config_for(config, self.dir), link,
                                          self.dir)
         sim = SimControl(link + ".ctl")
-        sim.set(1, "ireg", 1, 215, 480)  # 21.5 C, 48.0 %RH
+        sim.set(1, "input_register", 1, 215, 480)  # 21.5 C, 48.0 %RH
         launch_file = os.path.join(self.dir, "robot.launch")
         with open(launch_file, "w") as f:
             f.write("""<launch><group ns="robot">
@@ -92,7 +92,7 @@ class RobotBagTest(unittest.TestCase):
             res = up.call(ns + "/pwm_board/set_pwm", SetPwm, lambda: None, 0, 1.0, 0.5, 3, 0,
                           0, 0.0)
             self.assertTrue(res.success, res.message)
-            sim.set(1, "ireg", 1, 230)
+            sim.set(1, "input_register", 1, 230)
             # The pump on by its command topic, then silence: the dead man puts it off.
             pump = rospy.Publisher(ns + "/relays/pump/command", Bool, queue_size=1)
             wait_until(lambda: pump.get_num_connections() > 0, 10, "the pump's command topic")

@@ -68,7 +68,7 @@ class ShareTest(unittest.TestCase):
         self.assertEqual(coils, [int(s) for s in self.outputs.msg.states])
         code, text, limits = mbpoll(self.port, PDU, "4", 0, count=3)
         self.assertEqual(code, 0, text)
-        self.assertEqual(limits, self.sim.get(PDU, "holding", 0, 3))
+        self.assertEqual(limits, self.sim.get(PDU, "holding_register", 0, 3))
         res = set_outputs(channels=[0, 3], states=[False, False])
         self.assertTrue(res.success, res.message)
 
@@ -78,11 +78,11 @@ class ShareTest(unittest.TestCase):
         self.assertNotEqual(code, 0, text)
         self.assertIn("Target device failed to respond", text)
         # The PDU refuses an over-voltage limit below 180 V: its own exception passes through.
-        before = self.sim.get(PDU, "holding", 0)
+        before = self.sim.get(PDU, "holding_register", 0)
         code, text, _ = mbpoll(self.port, PDU, "4", 0, 1000)
         self.assertNotEqual(code, 0, text)
         self.assertIn("Illegal data value", text)
-        self.assertEqual(self.sim.get(PDU, "holding", 0), before)
+        self.assertEqual(self.sim.get(PDU, "holding_register", 0), before)
 
     def test_diagnostics_count_requests_per_client(self):
         code, text, _ = mbpoll(self.port, BOARD, "1", 0, count=8)

@@ -60,7 +60,7 @@ class SlaveDm500Test(unittest.TestCase):
         res = set_holding(address=64, values=[1])
         self.assertFalse(res.success)
         self.assertIn("address", res.message)
-        self.assertIn("holding_registers 0-63", res.message)
+        self.assertIn("holding_register 0-63", res.message)
         res = set_coils(address=63, values=[True, True])
         self.assertFalse(res.success)
         # What the master reads next.

@@ -38,8 +38,8 @@ class YespeedPduTest(unittest.TestCase):
 
     def test_telemetry_follows_the_device(self):
         # Pin the device's voltage and temperature registers (-5.5 C is signed) and watch them.
-        self.sim.set(PDU, "ireg", 0, 0x10000 - 55)
-        self.sim.set(PDU, "ireg", 2, 2305)
+        self.sim.set(PDU, "input_register", 0, 0x10000 - 55)
+        self.sim.set(PDU, "input_register", 2, 2305)
         self.telemetry.wait(5, lambda m: abs(m.voltage - 230.5) < 0.01 and
                             abs(m.temperature + 5.5) < 0.01, "230.5 V and -5.5 C")
 
@@ -51,12 +51,12 @@ class YespeedPduTest(unittest.TestCase):
         set_limits = helpers.service(NS + "set_limits", SetPduLimits)
         res = set_limits(PduLimits(over_voltage=260.0, under_voltage=160.0, over_current=7.0))
         self.assertTrue(res.success, res.message)
-        self.assertEqual(self.sim.get(PDU, "holding", 0, 3), [2600, 1600, 700])
+        self.assertEqual(self.sim.get(PDU, "holding_register", 0, 3), [2600, 1600, 700])
         latest = helpers.Latest(NS + "limits", PduLimits)
         latest.wait(5, lambda m: abs(m.over_voltage - 260.0) < 0.01, "the new limits latched")
 
     def test_bad_limits_are_refused_and_nothing_is_written(self):
-        before = self.sim.get(PDU, "holding", 0, 3)
+        before = self.sim.get(PDU, "holding_register", 0, 3)
         set_limits = helpers.service(NS + "set_limits", SetPduLimits)
         cases = [
             (PduLimits(over_voltage=170.0, under_voltage=160.0, over_current=10.0), "over_voltage"),
@@ -69,12 +69,12 @@ class YespeedPduTest(unittest.TestCase):
             self.assertFalse(res.success, limits)
             self.assertIn(field, res.message)
         time.sleep(0.2)
-        self.assertEqual(self.sim.get(PDU, "holding", 0, 3), before)
+        self.assertEqual(self.sim.get(PDU, "holding_register", 0, 3), before)
 
     def test_limit_rules_hold_for_the_register_values_written(self):
         # Issue #13/6: 180.00001 V would be written as 1800 and 19.999999 A as 2000; both
         # break the rules on the device: refused by the node, nothing sent.
-        before = self.sim.get(PDU, "holding", 0, 3)
+        before = self.sim.get(PDU, "holding_register", 0, 3)
         set_limits = helpers.service(NS + "set_limits", SetPduLimits)
         for limits, words in [
                 (PduLimits(over_voltage=180.00001, under_voltage=160.0, over_current=10.0),
@@ -84,15 +84,15 @@ class YespeedPduTest(unittest.TestCase):
             res = set_limits(limits)
             self.assertFalse(res.success, limits)
             self.assertIn(words, res.message)
-        self.assertEqual(self.sim.get(PDU, "holding", 0, 3), before)
+        self.assertEqual(self.sim.get(PDU, "holding_register", 0, 3), before)
 
     def test_one_limit_alone_keeps_the_others(self):
         set_limits = helpers.service(NS + "set_limits", SetPduLimits)
-        before = self.sim.get(PDU, "holding", 0, 3)
+        before = self.sim.get(PDU, "holding_register", 0, 3)
         target = 2550 if before[0] != 2550 else 2560
         res = set_limits(PduLimits(over_voltage=target / 10.0))
         self.assertTrue(res.success, res.message)
-        self.assertEqual(self.sim.get(PDU, "holding", 0, 3), [target] + before[1:])
+        self.assertEqual(self.sim.get(PDU, "holding_register", 0, 3), [target] + before[1:])
         latest = helpers.Latest(NS + "limits", PduLimits)
         latest.wait(5, lambda m: abs(m.over_voltage - target / 10.0) < 0.01, "the new limit")
         # The merged set must follow the rules: an under-voltage not below the device's own
@@ -100,7 +100,7 @@ class YespeedPduTest(unittest.TestCase):
         res = set_limits(PduLimits(under_voltage=(target + 10) / 10.0))
         self.assertFalse(res.success)
         self.assertIn("must be above under_voltage", res.message)
-        self.assertEqual(self.sim.get(PDU, "holding", 0, 3), [target] + before[1:])
+        self.assertEqual(self.sim.get(PDU, "holding_register", 0, 3), [target] + before[1:])
 
     def test_relays(self):
         res = helpers.service(NS + "out1/set", SetBool)(True)

@@ -66,10 +66,9 @@ TEST(CommissionArgs, ScanLists) {
 }
 
 TEST(CommissionArgs, OtherCommandsWaitOutTheLongestReturnDelay) {
-  EXPECT_GT(parsed({"read", "--address", "1", "coils", "0"}).link.response_timeout, 1.0);
+  EXPECT_GT(parsed({"read", "--address", "1", "coil", "0"}).link.response_timeout, 1.0);
   EXPECT_DOUBLE_EQ(
-      parsed({"--timeout", "2", "read", "--address", "1", "coils", "0"}).link.response_timeout,
-      2.0);
+      parsed({"--timeout", "2", "read", "--address", "1", "coil", "0"}).link.response_timeout, 2.0);
 }
 
 TEST(CommissionArgs, SettingsAreParsedIntoTheBoardsOwnCodes) {
@@ -95,19 +94,20 @@ TEST(CommissionArgs, SettingsAreParsedIntoTheBoardsOwnCodes) {
 }
 
 TEST(CommissionArgs, TablesAcceptDecimalAndHex) {
-  CommissionCommand c = parsed({"--json", "read", "--address", "0x01", "holding", "0xFD", "3"});
+  CommissionCommand c =
+      parsed({"--json", "read", "--address", "0x01", "holding_register", "0xFD", "3"});
   EXPECT_TRUE(c.json);
   EXPECT_EQ(c.address, 1);
-  EXPECT_EQ(c.table, "holding");
+  EXPECT_EQ(c.table, Table::kHoldingRegister);
   EXPECT_EQ(c.start, 253);
   EXPECT_EQ(c.count, 3);
-  EXPECT_EQ(parsed({"read", "--address", "010", "coils", "0"}).address, 10);  // not octal
-  c = parsed({"write", "--address", "255", "coils", "0", "1", "0", "1", "--multiple"});
+  EXPECT_EQ(parsed({"read", "--address", "010", "coil", "0"}).address, 10);  // not octal
+  c = parsed({"write", "--address", "255", "coil", "0", "1", "0", "1", "--multiple"});
   EXPECT_EQ(c.values, (std::vector<uint16_t>{1, 0, 1}));
   EXPECT_EQ(c.count, 3);
   EXPECT_TRUE(c.multiple);
-  c = parsed({"watch", "--address", "2", "input-registers", "0", "5", "--interval", "0.2",
-              "--count", "7"});
+  c = parsed(
+      {"watch", "--address", "2", "input_register", "0", "5", "--interval", "0.2", "--count", "7"});
   EXPECT_EQ(c.count, 5);
   EXPECT_DOUBLE_EQ(c.interval, 0.2);
   EXPECT_EQ(c.polls, 7);
@@ -127,7 +127,7 @@ TEST(CommissionArgs, AddressesOutsideTheBoardsRangeAreRefused) {
             "new address: '0' is outside 1-255");
   EXPECT_EQ(refusal({"get-baud", "--type", "ld58a08", "--address", "249"}),
             "--address: '249' is outside 1-248");
-  EXPECT_EQ(refusal({"read", "--address", "0", "coils", "0"}), "--address: '0' is outside 1-255");
+  EXPECT_EQ(refusal({"read", "--address", "0", "coil", "0"}), "--address: '0' is outside 1-255");
   EXPECT_EQ(refusal({"set-address", "--type", "ld58a08"}), "value: missing (see --help)");
   EXPECT_EQ(refusal({"set-address", "5"}), "--type: missing (ld58a08 or lc_relay8)");
   EXPECT_EQ(refusal({"set-address", "--type", "relay", "5"}),
@@ -160,21 +160,25 @@ TEST(CommissionArgs, SettingsOutsideTheManualsRangesAreRefused) {
 }
 
 TEST(CommissionArgs, TableRequestsMustFitOneModbusFrame) {
-  EXPECT_EQ(refusal({"read", "--address", "1", "holding", "0", "126"}),
+  EXPECT_EQ(refusal({"read", "--address", "1", "holding_register", "0", "126"}),
             "count: '126' is outside 1-125");
-  EXPECT_EQ(refusal({"read", "--address", "1", "coils", "0", "2001"}),
+  EXPECT_EQ(refusal({"read", "--address", "1", "coil", "0", "2001"}),
             "count: '2001' is outside 1-2000");
-  EXPECT_EQ(refusal({"read", "--address", "1", "holding", "65535", "2"}),
+  EXPECT_EQ(refusal({"read", "--address", "1", "holding_register", "65535", "2"}),
             "start: 65535 + 2 passes 65535");
   EXPECT_EQ(refusal({"read", "--address", "1", "bits", "0"}),
-            "table: 'bits' is not coils, discrete-inputs, holding or input-registers");
-  EXPECT_EQ(refusal({"write", "--address", "1", "input-registers", "0", "5"}),
-            "table: input-registers cannot be written (coils or holding)");
-  EXPECT_EQ(refusal({"write", "--address", "1", "coils", "0", "2"}), "value: '2' is outside 0-1");
-  EXPECT_EQ(refusal({"write", "--address", "1", "holding", "0", "65536"}),
+            "table: 'bits' is not one of coil, discrete_input, holding_register, input_register");
+  EXPECT_EQ(refusal({"read", "--address", "1", "holding", "0"}),
+            "table: 'holding' is not one of coil, discrete_input, holding_register, "
+            "input_register (the table is now named 'holding_register')");
+  EXPECT_EQ(refusal({"write", "--address", "1", "input_register", "0", "5"}),
+            "table: input_register cannot be written (coil or holding_register)");
+  EXPECT_EQ(refusal({"write", "--address", "1", "coil", "0", "2"}), "value: '2' is outside 0-1");
+  EXPECT_EQ(refusal({"write", "--address", "1", "holding_register", "0", "65536"}),
             "value: '65536' is outside 0-65535");
-  EXPECT_EQ(refusal({"write", "--address", "1", "holding", "0"}), "value: missing (0-65535)");
-  EXPECT_EQ(refusal({"watch", "--address", "1", "coils", "0", "--interval", "0"}),
+  EXPECT_EQ(refusal({"write", "--address", "1", "holding_register", "0"}),
+            "value: missing (0-65535)");
+  EXPECT_EQ(refusal({"watch", "--address", "1", "coil", "0", "--interval", "0"}),
             "--interval: '0' is outside 0.01-3600 s");
 }
 
@@ -199,11 +203,11 @@ TEST(CommissionArgs, UnknownWordsAreRefused) {
   EXPECT_EQ(refusal({}), "command: missing (see --help)");
   EXPECT_EQ(refusal({"frobnicate"}), "command: 'frobnicate' is not known (see --help)");
   EXPECT_EQ(refusal({"scan", "--colour", "red"}), "--colour: not an option of scan (see --help)");
-  EXPECT_EQ(refusal({"read", "--address", "1", "coils", "0", "--first"}),
+  EXPECT_EQ(refusal({"read", "--address", "1", "coil", "0", "--first"}),
             "--first: not an option of read (see --help)");
   EXPECT_EQ(refusal({"info", "--address"}), "--address: missing value");
   EXPECT_EQ(refusal({"info", "--address", "1", "extra"}), "unexpected argument 'extra'");
-  EXPECT_EQ(refusal({"read", "--address", "1", "coils", "zero"}),
+  EXPECT_EQ(refusal({"read", "--address", "1", "coil", "zero"}),
             "start: 'zero' is outside 0-65535");
 }
 
@@ -307,8 +311,8 @@ TEST(CommissionArgs, OptionsAreConvertedOnceTheirCheckPassed) {
   EXPECT_EQ(refusal({"--parity", "1", "scan"}), "--parity: '1' is not none, even or odd");
   EXPECT_EQ(refusal({"scan", "--parities", "even,2"}),
             "--parities: '2' is not none, even or odd (or all)");
-  EXPECT_EQ(refusal({"read", "--address", "1", "holding", "0", "0"}),
+  EXPECT_EQ(refusal({"read", "--address", "1", "holding_register", "0", "0"}),
             "count: '0' is outside 1-125");
-  EXPECT_EQ(refusal({"read", "--address", "1", "coils", "0", "many"}),
+  EXPECT_EQ(refusal({"read", "--address", "1", "coil", "0", "many"}),
             "count: 'many' is not a number (1-2000 values of a bit table, 1-125 registers)");
 }

@@ -13,7 +13,7 @@ using namespace modbus_rtu_driver;
 
 namespace {
 
-SignalConfig sig(const std::string& name, SignalTable table, uint16_t address,
+SignalConfig sig(const std::string& name, Table table, uint16_t address,
                  SignalType type = SignalType::kUint16) {
   SignalConfig s;
   s.name = name;
@@ -49,18 +49,18 @@ void expectRefused(ScriptedTransport& bus, const Request& r, uint8_t code) {
     EXPECT_TRUE((bus).usedUp());       \
   } while (0)
 
-const auto kH = SignalTable::kHoldingRegister;
-const auto kI = SignalTable::kInputRegister;
+const auto kH = Table::kHoldingRegister;
+const auto kI = Table::kInputRegister;
 
 }  // namespace
 
 TEST(ReadPlanner, MergesWithinMaxGapByTable) {
   ReadPlanner p({sig("a", kH, 0), sig("b", kH, 3, SignalType::kUint32), sig("c", kH, 14),
-                 sig("d", kI, 4), sig("e", SignalTable::kCoil, 0), sig("f", SignalTable::kCoil, 9)},
+                 sig("d", kI, 4), sig("e", Table::kCoil, 0), sig("f", Table::kCoil, 9)},
                 8);
   const auto spans = p.plan({0, 1, 2, 3, 4, 5});
   ASSERT_EQ(spans.size(), 4u);
-  EXPECT_EQ(spans[0].table, SignalTable::kCoil);  // coils 0 and 9: 8 bits apart, merged
+  EXPECT_EQ(spans[0].table, Table::kCoil);  // coils 0 and 9: 8 bits apart, merged
   EXPECT_EQ(spans[0].address, 0);
   EXPECT_EQ(spans[0].count, 10);
   EXPECT_EQ(spans[1].table, kH);  // a (0) and b (3-4): gap 2
@@ -85,14 +85,13 @@ TEST(ReadPlanner, KeepsTheProtocolLimits) {
   EXPECT_EQ(spans[0].count, kMaxReadRegisters);
   EXPECT_EQ(spans[1].address, 125);
   // 2000 bits.
-  ReadPlanner bits(
-      {sig("a", SignalTable::kDiscreteInput, 0), sig("b", SignalTable::kDiscreteInput, 1999),
-       sig("c", SignalTable::kDiscreteInput, 2000)},
-      123);
+  ReadPlanner bits({sig("a", Table::kDiscreteInput, 0), sig("b", Table::kDiscreteInput, 1999),
+                    sig("c", Table::kDiscreteInput, 2000)},
+                   123);
   EXPECT_EQ(bits.plan({0, 1}).size(), 2u);  // 1998 bits apart: beyond max_gap
   std::vector<SignalConfig> many;
   for (uint16_t a = 0; a < 2001; a += 100)
-    many.push_back(sig("b" + std::to_string(a), SignalTable::kDiscreteInput, a));
+    many.push_back(sig("b" + std::to_string(a), Table::kDiscreteInput, a));
   ReadPlanner wide(many, 123);
   std::vector<size_t> idx;
   for (size_t i = 0; i < many.size(); ++i) idx.push_back(i);
@@ -219,7 +218,7 @@ TEST(GenericDevice, WritesUseFc06Fc16Fc05AndTheEchoConfirms) {
   auto f = sig("limit", kH, 20, SignalType::kFloat32);
   f.writable = true;
   f.word_order = WordOrder::kLittle;
-  auto relay = sig("relay", SignalTable::kCoil, 3);
+  auto relay = sig("relay", Table::kCoil, 3);
   relay.writable = true;
   GenericDevice d(generic({sp, f, relay}));
   ScriptedTransport bus;
@@ -267,7 +266,7 @@ DeviceConfig multipleWritesOnly() {
   sp.writable = true;
   sp.scale = 0.1;
   sp.write_function = 16;
-  auto relay = sig("relay", SignalTable::kCoil, 3);
+  auto relay = sig("relay", Table::kCoil, 3);
   relay.writable = true;
   relay.write_function = 15;
   return generic({sp, relay});
@@ -312,7 +311,7 @@ TEST(GenericDevice, AWriteFunctionThatCannotWriteTheSignalSendsNothing) {
   auto wide = sig("wide", kH, 0, SignalType::kUint32);
   wide.writable = true;
   wide.write_function = 6;
-  auto coil = sig("coil", SignalTable::kCoil, 0);
+  auto coil = sig("coil", Table::kCoil, 0);
   coil.writable = true;
   coil.write_function = 16;
   GenericDevice d(generic({wide, coil}));
@@ -422,7 +421,7 @@ TEST(GenericDevice, SafeValuesAreWrittenAndReadBack) {
   speed.writable = true;
   speed.scale = 0.1;
   speed.safe_value = -2.5;
-  auto run = sig("run", SignalTable::kCoil, 3);
+  auto run = sig("run", Table::kCoil, 3);
   run.writable = true;
   run.safe_value = 0;
   auto free = sig("free", kH, 11);

@@ -56,7 +56,7 @@ TEST_F(LinkVsSimulator, EveryFunctionCode) {
   r = link_->execute(Request::readCoils(255, 0, 8));  // FC01
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(r.values, (std::vector<uint16_t>{0, 0, 1, 0, 1, 1, 0, 0}));
-  EXPECT_EQ(sim("set 255 input 6 1"), "ok");
+  EXPECT_EQ(sim("set 255 discrete_input 6 1"), "ok");
   r = link_->execute(Request::readDiscreteInputs(255, 0, 8));  // FC02
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(r.values[6], 1);
@@ -68,8 +68,8 @@ TEST_F(LinkVsSimulator, EveryFunctionCode) {
   EXPECT_EQ(r.values, std::vector<uint16_t>{1});
   r = link_->execute(Request::writeMultipleRegisters(2, 0, {2600, 1600, 700}));  // FC16
   ASSERT_TRUE(r.ok()) << r.message;
-  EXPECT_EQ(sim("get 2 holding 0 3"), "ok 2600 1600 700");
-  EXPECT_EQ(sim("set 2 ireg 2 2203"), "ok");
+  EXPECT_EQ(sim("get 2 holding_register 0 3"), "ok 2600 1600 700");
+  EXPECT_EQ(sim("set 2 input_register 2 2203"), "ok");
   r = link_->execute(Request::readInputRegisters(2, 0, 5));  // FC04
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(r.values[2], 2203);
@@ -181,7 +181,7 @@ TEST_F(LinkVsSimulator, Ld58a08At248WorksEndToEnd) {
   s.duty_cycle = 30;
   r = board.setPwm(*link_, s);
   ASSERT_TRUE(r.ok()) << r.message;
-  EXPECT_EQ(sim("get 248 holding 0x60 3"), "ok 2000 30 65535");
+  EXPECT_EQ(sim("get 248 holding_register 0x60 3"), "ok 2000 30 65535");
   Ld58a08Settings settings;
   r = board.readSettings(*link_, &settings);
   ASSERT_TRUE(r.ok()) << r.message;

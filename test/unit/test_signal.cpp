@@ -95,7 +95,7 @@ signals:
   ASSERT_EQ(m.signals.size(), 4u);
   EXPECT_EQ(m.max_gap, 3);
   const SignalConfig& e = m.signals[1];
-  EXPECT_EQ(e.table, SignalTable::kHoldingRegister);
+  EXPECT_EQ(e.table, Table::kHoldingRegister);
   EXPECT_EQ(e.address, 10);
   EXPECT_EQ(e.type, SignalType::kFloat32);
   EXPECT_EQ(e.word_order, WordOrder::kLittle);
@@ -108,7 +108,7 @@ signals:
   EXPECT_FALSE(m.signals[0].poll_rate.has_value());
   EXPECT_EQ(m.signals[0].unit, "C");
   EXPECT_EQ(m.signals[2].type, SignalType::kBool);  // bits default to bool
-  EXPECT_EQ(m.signals[3].table, SignalTable::kDiscreteInput);
+  EXPECT_EQ(m.signals[3].table, Table::kDiscreteInput);
 }
 
 TEST(SignalYaml, ErrorsNameTheKey) {

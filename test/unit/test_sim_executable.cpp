@@ -120,8 +120,8 @@ TEST(SimExecutable, ReadyLineFramesSighupAndACleanExit) {
   // The Python client's command line.
   // The simulator's answer as it came (docs/simulator.md), "ok" included: a set says it worked.
   EXPECT_EQ(control(socket, "info"), "ok #0:ld58a08:1:9600:N #1:lc_relay8:255:9600:N\n");
-  EXPECT_EQ(control(socket, "set 255 input 2 1"), "ok\n");
-  EXPECT_EQ(control(socket, "get '#1' input 0 3"), "ok 0 0 1\n");
+  EXPECT_EQ(control(socket, "set 255 discrete_input 2 1"), "ok\n");
+  EXPECT_EQ(control(socket, "get '#1' discrete_input 0 3"), "ok 0 0 1\n");
   EXPECT_EQ(control(socket, "power_cycle 255"), "ok\n");
   const auto [error, status] = shell("python3 " REPO_DIR "/test/sim_control.py " + socket + " x");
   EXPECT_EQ(status, 1);

@@ -59,8 +59,8 @@ TEST(SimGeneric, TheSameYamlAsTheNodes) {
             "devices[0]/holes: unknown key (expected address, type)");
   EXPECT_EQ(parseError("devices: [{type: generic, address: 7, signals: [{name: a, table: coil, "
                        "address: 0}], holes: [{table: coils, from: 1}]}]"),
-            "devices[0]/holes[0]/table: 'coils' is not coil, discrete_input, holding_register or "
-            "input_register");
+            "devices[0]/holes[0]/table: 'coils' is not one of coil, discrete_input, "
+            "holding_register, input_register (the table is now named 'coil')");
 }
 
 TEST(SimGeneric, TheExampleConfigLoads) {
@@ -102,9 +102,9 @@ TEST(SimGeneric, BlocksHolesWritesAndInputs) {
   // Writes land; an FC16 reaching past the block changes nothing.
   const Request w = Request::writeMultipleRegisters(7, 102, {2, 1});
   EXPECT_EQ(ask(d, w), toHex(encodeReply(w, {})));
-  EXPECT_EQ(get(d, Table::kHolding, 103), 1);
+  EXPECT_EQ(get(d, Table::kHoldingRegister, 103), 1);
   EXPECT_EQ(ask(d, Request::writeMultipleRegisters(7, 103, {9, 9})), exceptionHex(7, 0x10, 0x02));
-  EXPECT_EQ(get(d, Table::kHolding, 103), 1);
+  EXPECT_EQ(get(d, Table::kHoldingRegister, 103), 1);
   EXPECT_EQ(ask(d, Request::writeSingleCoil(7, 0, true)),
             toHex(encodeReply(Request::writeSingleCoil(7, 0, true), {})));
   EXPECT_EQ(get(d, Table::kCoil, 0), 1);
@@ -114,7 +114,7 @@ TEST(SimGeneric, BlocksHolesWritesAndInputs) {
   EXPECT_EQ(get(d, Table::kCoil, 0), 0);
   const Request fc16 = Request::writeMultipleRegisters(7, 100, {0xFF33});
   EXPECT_EQ(ask(d, fc16), toHex(encodeReply(fc16, {})));
-  EXPECT_EQ(get(d, Table::kHolding, 100), 0xFF33);
+  EXPECT_EQ(get(d, Table::kHoldingRegister, 100), 0xFF33);
   // No discrete inputs configured: that table refuses everything.
   EXPECT_EQ(ask(d, Request::readDiscreteInputs(7, 0, 1)), exceptionHex(7, 0x02, 0x02));
   // State survives a save and load.
@@ -122,7 +122,7 @@ TEST(SimGeneric, BlocksHolesWritesAndInputs) {
   d.saveState(state);
   SimGeneric again(7, {}, c.devices[0].generic);
   again.loadState(state, SimClock::now());
-  EXPECT_EQ(get(again, Table::kHolding, 102), 2);
+  EXPECT_EQ(get(again, Table::kHoldingRegister, 102), 2);
   EXPECT_EQ(get(again, Table::kInputRegister, 6), 0x3FC0);
 }
 

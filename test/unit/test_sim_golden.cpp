@@ -26,13 +26,13 @@ std::unique_ptr<SimDevice> deviceFor(const GoldenFrame& g, const Request& r) {
   const Table t = r.function == FunctionCode::kReadCoils            ? Table::kCoil
                   : r.function == FunctionCode::kReadDiscreteInputs ? Table::kDiscreteInput
                   : r.function == FunctionCode::kReadInputRegisters ? Table::kInputRegister
-                                                                    : Table::kHolding;
+                                                                    : Table::kHoldingRegister;
   for (uint16_t i = 0; i < r.count; ++i) {
     const uint16_t a = static_cast<uint16_t>(r.address + i);
     const uint16_t v = isBitFunction(r.function)
                            ? (reply[3 + i / 8] >> (i % 8)) & 1
                            : static_cast<uint16_t>(reply[3 + 2 * i] << 8 | reply[4 + 2 * i]);
-    if (t != Table::kHolding) {
+    if (t != Table::kHoldingRegister) {
       EXPECT_EQ(d->setDirect(t, a, v, now), 0) << g.meaning;
     } else if (a == 0x0080) {
       EXPECT_EQ(d->write(t, a, {v}, now), 0) << g.meaning;  // outputs as the reply shows

@@ -51,10 +51,10 @@ TEST(SimLcRelay8, FlashCloseAndFlashOpenRevertByThemselves) {
   EXPECT_EQ(ask(d, flash(7, 2, 30), t0), toHex(encodeReply(flash(7, 2, 30), {})));
   EXPECT_EQ(get(d, Table::kCoil, 7, t0 + 2999ms), 0) << "open for 3 s";
   EXPECT_EQ(get(d, Table::kCoil, 7, t0 + 3001ms), 1);
-  EXPECT_EQ(get(d, Table::kHolding, 3 + 5 * 7, t0 + 4s), 2) << "the last mode reads back";
-  EXPECT_EQ(get(d, Table::kHolding, 4 + 5 * 7, t0 + 4s), 30);
+  EXPECT_EQ(get(d, Table::kHoldingRegister, 3 + 5 * 7, t0 + 4s), 2) << "the last mode reads back";
+  EXPECT_EQ(get(d, Table::kHoldingRegister, 4 + 5 * 7, t0 + 4s), 30);
   // A manual switch ends a running flash; the longest delay is 6553.5 s.
-  ASSERT_EQ(d.write(Table::kHolding, 3 + 5 * 4, {4, 0xFFFF}, t0), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 3 + 5 * 4, {4, 0xFFFF}, t0), 0);
   ASSERT_EQ(d.write(Table::kCoil, 4, {1}, t0 + 1s), 0);
   EXPECT_EQ(get(d, Table::kCoil, 4, t0 + 7000s), 1);
 }
@@ -62,7 +62,7 @@ TEST(SimLcRelay8, FlashCloseAndFlashOpenRevertByThemselves) {
 TEST(SimLcRelay8, FlashRevertsOverRealTime) {
   SimLcRelay8 d(255, {});
   const auto t0 = SimClock::now();
-  ASSERT_EQ(d.write(Table::kHolding, 3 + 5 * 2, {4, 3}, t0), 0);  // close #3 for 0.3 s
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 3 + 5 * 2, {4, 3}, t0), 0);  // close #3 for 0.3 s
   SimClock::time_point reverted{};
   while (SimClock::now() - t0 < 2s) {
     if (get(d, Table::kCoil, 2, SimClock::now()) == 0) {
@@ -115,7 +115,7 @@ TEST(SimLcRelay8, AddressCommandsAtSlaveZero) {
 
 TEST(SimLcRelay8, BaudCodeIsStoredAndTakenAtPowerOn) {
   SimLcRelay8 d(255, {});
-  EXPECT_EQ(get(d, Table::kHolding, 0x03E8), 3);
+  EXPECT_EQ(get(d, Table::kHoldingRegister, 0x03E8), 3);
   EXPECT_EQ(ask(d, Request::writeMultipleRegisters(255, 0x03E9, {4})),
             toHex(encodeReply(Request::writeMultipleRegisters(255, 0x03E9, {4}), {})));
   EXPECT_EQ(ask(d, "FF 03 03 E8 00 01 11 A4"), "FF 03 02 00 04 90 53");
@@ -124,16 +124,16 @@ TEST(SimLcRelay8, BaudCodeIsStoredAndTakenAtPowerOn) {
               exceptionHex(255, 0x10, kIllegalDataValue))
         << bad;
   ASSERT_EQ(d.write(Table::kCoil, 0, {1, 1}, SimClock::now()), 0);
-  ASSERT_EQ(d.write(Table::kHolding, 3 + 5 * 3, {2, 100}, SimClock::now()), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 3 + 5 * 3, {2, 100}, SimClock::now()), 0);
   ASSERT_EQ(d.setDirect(Table::kDiscreteInput, 5, 1, SimClock::now()), 0);
   EXPECT_EQ(d.line().baud, 9600);
   d.powerCycle(SimClock::now());
   EXPECT_EQ(d.line().baud, 19200);
-  EXPECT_EQ(get(d, Table::kHolding, 0x03E8), 4);
+  EXPECT_EQ(get(d, Table::kHoldingRegister, 0x03E8), 4);
   for (uint16_t ch = 0; ch < 8; ++ch) EXPECT_EQ(get(d, Table::kCoil, ch), 0) << "relays open";
   EXPECT_EQ(get(d, Table::kCoil, 3, SimClock::now() + 20s), 0) << "the flash died with the power";
   EXPECT_EQ(get(d, Table::kDiscreteInput, 5), 1) << "inputs are wiring";
-  ASSERT_EQ(d.write(Table::kHolding, 0x03E9, {2}, SimClock::now()), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x03E9, {2}, SimClock::now()), 0);
   d.powerCycle(SimClock::now());
   EXPECT_EQ(d.line().baud, 4800);
 }
@@ -141,13 +141,13 @@ TEST(SimLcRelay8, BaudCodeIsStoredAndTakenAtPowerOn) {
 TEST(SimLcRelay8, StateKeepsAddressAndBaud) {
   SimLcRelay8 d(255, {});
   ASSERT_FALSE(ask(d, Request::writeMultipleRegisters(0, 0, {42})).empty());
-  ASSERT_EQ(d.write(Table::kHolding, 0x03E9, {2}, SimClock::now()), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x03E9, {2}, SimClock::now()), 0);
   YAML::Node node;
   d.saveState(node);
   SimLcRelay8 e(255, {});
   e.loadState(YAML::Load(YAML::Dump(node)), SimClock::now());
   EXPECT_EQ(e.address(), 42);
-  EXPECT_EQ(get(e, Table::kHolding, 0x03E8), 2);
+  EXPECT_EQ(get(e, Table::kHoldingRegister, 0x03E8), 2);
   EXPECT_EQ(e.line().baud, 9600);
   e.powerCycle(SimClock::now());
   EXPECT_EQ(e.line().baud, 4800);

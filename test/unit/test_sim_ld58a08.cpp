@@ -18,7 +18,7 @@ constexpr uint8_t kFc03 = 0x03, kFc06 = 0x06, kFc10 = 0x10;
 std::vector<uint16_t> regs(SimDevice& d, uint16_t address, int count,
                            SimClock::time_point now = SimClock::now()) {
   std::vector<uint16_t> out;
-  for (int i = 0; i < count; ++i) out.push_back(get(d, Table::kHolding, address + i, now));
+  for (int i = 0; i < count; ++i) out.push_back(get(d, Table::kHoldingRegister, address + i, now));
   return out;
 }
 
@@ -53,12 +53,12 @@ TEST(SimLd58a08, EveryPwmRegisterReadsBackAndGapsAreIllegal) {
     const std::vector<uint16_t> v =
         ch < 6 ? std::vector<uint16_t>{uint16_t(100 + ch), uint16_t(50 + ch), 0}
                : std::vector<uint16_t>{uint16_t(1000 * ch), uint16_t(10 * ch), 0};
-    ASSERT_EQ(d.write(Table::kHolding, base, v, SimClock::now()), 0) << ch;
+    ASSERT_EQ(d.write(Table::kHoldingRegister, base, v, SimClock::now()), 0) << ch;
     EXPECT_EQ(regs(d, base, 3), v) << ch;
   }
   for (uint16_t a : {0x0003, 0x000F, 0x0073, 0x0081, 0x00F9, 0x0100}) {
     uint16_t v = 0;
-    EXPECT_EQ(d.read(Table::kHolding, a, SimClock::now(), &v), kIllegalDataAddress) << a;
+    EXPECT_EQ(d.read(Table::kHoldingRegister, a, SimClock::now(), &v), kIllegalDataAddress) << a;
   }
   // A write running into a gap is refused whole.
   EXPECT_EQ(ask(d, Request::writeMultipleRegisters(1, 0x0001, {7, 8, 9})),
@@ -86,10 +86,10 @@ TEST(SimLd58a08, PwmValuesOutsideTheManualAreRefusedAndChangeNothing) {
   EXPECT_EQ(regs(d, 0x10, 3), (std::vector<uint16_t>{0, 0, 0}));
   EXPECT_EQ(regs(d, 0x60, 3), (std::vector<uint16_t>{0, 0, 0}));
   // Staging one register at a time in any order is fine while the channel is stopped.
-  EXPECT_EQ(d.write(Table::kHolding, 0x0011, {30}, SimClock::now()), 0);
-  EXPECT_EQ(d.write(Table::kHolding, 0x0010, {20}, SimClock::now()), 0);
+  EXPECT_EQ(d.write(Table::kHoldingRegister, 0x0011, {30}, SimClock::now()), 0);
+  EXPECT_EQ(d.write(Table::kHoldingRegister, 0x0010, {20}, SimClock::now()), 0);
   EXPECT_TRUE(refused(0x0012, {1})) << "on-time 3 s > period 2 s cannot run";
-  EXPECT_EQ(d.write(Table::kHolding, 0x0010, {40, 30, 1}, SimClock::now()), 0);
+  EXPECT_EQ(d.write(Table::kHoldingRegister, 0x0010, {40, 30, 1}, SimClock::now()), 0);
   EXPECT_TRUE(refused(0x0011, {41})) << "running: on-time stays within the period";
 }
 
@@ -97,7 +97,7 @@ TEST(SimLd58a08, SlowChannelPulsesCountDownAndStop) {
   SimLd58a08 d(1, {});
   const auto t0 = SimClock::now();
   // Period 0.2 s, on 0.1 s, 3 pulses: on in [0, 0.1), off in [0.1, 0.2), ... done at 0.6 s.
-  ASSERT_EQ(d.write(Table::kHolding, 0x0010, {2, 1, 3}, t0), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0010, {2, 1, 3}, t0), 0);
   int rising = 0;
   uint16_t last = 0, last_count = 3;
   for (int ms = 0; ms <= 800; ms += 10) {
@@ -118,13 +118,13 @@ TEST(SimLd58a08, SlowChannelPulsesCountDownAndStop) {
 TEST(SimLd58a08, ContinuousPulsesRunUntilStoppedAndOverrideCoilWrites) {
   SimLd58a08 d(1, {});
   const auto t0 = SimClock::now();
-  ASSERT_EQ(d.write(Table::kHolding, 0x0000, {10, 5, 0xFFFF}, t0), 0);  // 1 s, 50 %
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0000, {10, 5, 0xFFFF}, t0), 0);  // 1 s, 50 %
   EXPECT_EQ(regs(d, 0x02, 1, t0 + 3600s)[0], 0xFFFF);
   EXPECT_EQ(coil(d, 0, t0 + 3600s + 700ms), 0);
   EXPECT_EQ(d.write(Table::kCoil, 0, {1}, t0 + 3600s + 700ms), 0);
   EXPECT_EQ(coil(d, 0, t0 + 3600s + 700ms), 0) << "the PWM owns the output";
   EXPECT_EQ(coil(d, 0, t0 + 3601s + 200ms), 1);
-  ASSERT_EQ(d.write(Table::kHolding, 0x0002, {0}, t0 + 3601s + 300ms), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0002, {0}, t0 + 3601s + 300ms), 0);
   EXPECT_EQ(coil(d, 0, t0 + 3601s + 300ms), 0) << "stopping turns the output off";
   EXPECT_EQ(coil(d, 0, t0 + 3601s + 800ms), 0);
 }
@@ -135,8 +135,10 @@ TEST(SimLd58a08, ContinuousPulsesRunUntilStoppedAndOverrideCoilWrites) {
 TEST(SimLd58a08, OutputWritesDoNotMoveAChannelWhosePwmRuns) {
   SimLd58a08 d(1, {});
   const auto t0 = SimClock::now();
-  ASSERT_EQ(d.write(Table::kHolding, 0x0020, {10, 5, 0xFFFF}, t0), 0);    // 2: on 0.5 s of 1 s
-  ASSERT_EQ(d.write(Table::kHolding, 0x0060, {1000, 0, 0xFFFF}, t0), 0);  // 6: 0 % duty, off
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0020, {10, 5, 0xFFFF}, t0),
+            0);  // 2: on 0.5 s of 1 s
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0060, {1000, 0, 0xFFFF}, t0),
+            0);  // 6: 0 % duty, off
   const std::vector<Request> writes = {
       Request::writeSingleCoil(1, 2, true),
       Request::writeSingleCoil(1, 6, true),
@@ -149,7 +151,7 @@ TEST(SimLd58a08, OutputWritesDoNotMoveAChannelWhosePwmRuns) {
     const std::string frame = toHex(encodeRequest(w));
     const auto off_phase = second + 700ms, on_phase = second + 1200ms;
     second += 1s;
-    ASSERT_EQ(d.write(Table::kHolding, 0x80, {0}, off_phase), 0);
+    ASSERT_EQ(d.write(Table::kHoldingRegister, 0x80, {0}, off_phase), 0);
     EXPECT_FALSE(ask(d, w, off_phase).empty()) << "the board acknowledges: " << frame;
     EXPECT_EQ(coil(d, 2, off_phase), 0) << "the PWM's off phase, not the write: " << frame;
     EXPECT_EQ(coil(d, 6, off_phase), 0) << "0 % duty, not the write: " << frame;
@@ -162,7 +164,7 @@ TEST(SimLd58a08, OutputWritesDoNotMoveAChannelWhosePwmRuns) {
     EXPECT_EQ(coil(d, 2, on_phase), 1) << frame;
   }
   // Enable 0: a plain output again, written as asked.
-  ASSERT_EQ(d.write(Table::kHolding, 0x0022, {0}, second), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0022, {0}, second), 0);
   ASSERT_EQ(d.write(Table::kCoil, 2, {1}, second), 0);
   EXPECT_EQ(coil(d, 2, second + 10s + 700ms), 1);
   EXPECT_EQ(regs(d, 0x22, 1, second + 10s)[0], 0);
@@ -171,9 +173,9 @@ TEST(SimLd58a08, OutputWritesDoNotMoveAChannelWhosePwmRuns) {
 TEST(SimLd58a08, NewTimingWhileRunningKeepsThePulsesLeft) {
   SimLd58a08 d(1, {});
   const auto t0 = SimClock::now();
-  ASSERT_EQ(d.write(Table::kHolding, 0x0020, {10, 5, 10}, t0), 0);  // 10 pulses of 1 s
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0020, {10, 5, 10}, t0), 0);  // 10 pulses of 1 s
   EXPECT_EQ(regs(d, 0x22, 1, t0 + 3500ms)[0], 7);
-  ASSERT_EQ(d.write(Table::kHolding, 0x0020, {2, 1}, t0 + 3500ms), 0);  // now 0.2 s each
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0020, {2, 1}, t0 + 3500ms), 0);  // now 0.2 s each
   EXPECT_EQ(regs(d, 0x22, 1, t0 + 3500ms)[0], 7);
   EXPECT_EQ(regs(d, 0x22, 1, t0 + 3500ms + 1300ms)[0], 1);
   EXPECT_EQ(regs(d, 0x22, 1, t0 + 3500ms + 1450ms)[0], 0);
@@ -182,16 +184,16 @@ TEST(SimLd58a08, NewTimingWhileRunningKeepsThePulsesLeft) {
 TEST(SimLd58a08, FastChannelRunsForItsOutputTime) {
   SimLd58a08 d(1, {});
   const auto t0 = SimClock::now();
-  ASSERT_EQ(d.write(Table::kHolding, 0x0070, {10000, 30, 3}, t0), 0);  // 0.3 s
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0070, {10000, 30, 3}, t0), 0);  // 0.3 s
   EXPECT_EQ(coil(d, 7, t0 + 10ms), 1) << "on while it runs";
   EXPECT_EQ(regs(d, 0x72, 1, t0 + 10ms)[0], 3);
   EXPECT_EQ(regs(d, 0x72, 1, t0 + 150ms)[0], 2);
   EXPECT_EQ(regs(d, 0x72, 1, t0 + 250ms)[0], 1);
   EXPECT_EQ(regs(d, 0x72, 1, t0 + 310ms)[0], 0);
   EXPECT_EQ(coil(d, 7, t0 + 310ms), 0);
-  ASSERT_EQ(d.write(Table::kHolding, 0x0060, {2000, 0, 0xFFFF}, t0), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0060, {2000, 0, 0xFFFF}, t0), 0);
   EXPECT_EQ(coil(d, 6, t0 + 1h), 0) << "a 0 % duty cycle never drives the output";
-  ASSERT_EQ(d.write(Table::kHolding, 0x0061, {55}, t0 + 1h), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0061, {55}, t0 + 1h), 0);
   EXPECT_EQ(coil(d, 6, t0 + 1h), 1);
   EXPECT_EQ(regs(d, 0x62, 1, t0 + 2h)[0], 0xFFFF) << "continuous";
 }
@@ -199,8 +201,8 @@ TEST(SimLd58a08, FastChannelRunsForItsOutputTime) {
 TEST(SimLd58a08, PulsesAndOutputTimeOverRealTime) {
   SimLd58a08 d(1, {});
   const auto t0 = SimClock::now();
-  ASSERT_EQ(d.write(Table::kHolding, 0x0030, {2, 1, 5}, t0), 0);     // 5 pulses of 0.2 s
-  ASSERT_EQ(d.write(Table::kHolding, 0x0060, {500, 50, 3}, t0), 0);  // 0.3 s output time
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0030, {2, 1, 5}, t0), 0);     // 5 pulses of 0.2 s
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0060, {500, 50, 3}, t0), 0);  // 0.3 s output time
   EXPECT_EQ(coil(d, 3, t0 + 10ms), 1);
   EXPECT_EQ(coil(d, 6, t0 + 10ms), 1);
   uint16_t last = 5;
@@ -268,7 +270,7 @@ TEST(SimLd58a08, BaudAndParityAreStoredAndTakenAtPowerOn) {
   EXPECT_EQ(d.line().baud, 4800);
   EXPECT_EQ(d.line().parity, 'E');
   // Parity over 2 is stored as written and becomes "none" at power-on (manual).
-  ASSERT_EQ(d.write(Table::kHolding, 0xFF, {3}, SimClock::now()), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0xFF, {3}, SimClock::now()), 0);
   EXPECT_EQ(regs(d, 0xFF, 1)[0], 3);
   d.powerCycle(SimClock::now());
   EXPECT_EQ(d.line().parity, 'N');
@@ -279,11 +281,12 @@ TEST(SimLd58a08, FactoryResetKeepsPlainOutputsAndTheLineUntilPowerOn) {
   for (const char* reset : {"FF 06 00 FB 00 00 ED E5", "01 06 00 FE 00 08 E9 FC"}) {
     SimLd58a08 d(1, {});
     const auto t0 = SimClock::now();
-    ASSERT_EQ(d.write(Table::kHolding, 0xFC, {5, 1, 4, 2}, t0), 0);  // delay, address, 19200, odd
-    ASSERT_EQ(d.write(Table::kHolding, 0xFA, {1}, t0), 0);
+    ASSERT_EQ(d.write(Table::kHoldingRegister, 0xFC, {5, 1, 4, 2}, t0),
+              0);  // delay, address, 19200, odd
+    ASSERT_EQ(d.write(Table::kHoldingRegister, 0xFA, {1}, t0), 0);
     d.powerCycle(t0);
     ASSERT_EQ(d.line().baud, 19200);
-    ASSERT_EQ(d.write(Table::kHolding, 0x0070, {1000, 50, 0xFFFF}, t0), 0);
+    ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0070, {1000, 50, 0xFFFF}, t0), 0);
     ASSERT_EQ(d.write(Table::kCoil, 0, {1}, t0), 0);
     ASSERT_FALSE(ask(d, reset, t0).empty()) << reset;
     EXPECT_EQ(d.address(), 1) << reset;
@@ -300,13 +303,13 @@ TEST(SimLd58a08, FactoryResetKeepsPlainOutputsAndTheLineUntilPowerOn) {
 TEST(SimLd58a08, PowerDownSaveDecidesWhetherPwmSurvives) {
   SimLd58a08 d(1, {});
   const auto t0 = SimClock::now();
-  ASSERT_EQ(d.write(Table::kHolding, 0x0020, {100, 50, 0xFFFF}, t0), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0020, {100, 50, 0xFFFF}, t0), 0);
   ASSERT_EQ(d.write(Table::kCoil, 7, {1}, t0), 0);
   d.powerCycle(t0 + 1s);
   EXPECT_EQ(regs(d, 0x20, 3, t0 + 1s), (std::vector<uint16_t>{0, 0, 0}));
   EXPECT_EQ(regs(d, 0x80, 1, t0 + 1s)[0], 0) << "outputs off after power-on";
-  ASSERT_EQ(d.write(Table::kHolding, 0xFA, {1}, t0 + 1s), 0);
-  ASSERT_EQ(d.write(Table::kHolding, 0x0020, {10, 5, 4}, t0 + 1s), 0);  // 4 pulses of 1 s
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0xFA, {1}, t0 + 1s), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0020, {10, 5, 4}, t0 + 1s), 0);  // 4 pulses of 1 s
   EXPECT_EQ(regs(d, 0x22, 1, t0 + 10s)[0], 0) << "the burst ended";
   d.powerCycle(t0 + 20s);
   EXPECT_EQ(regs(d, 0x20, 3, t0 + 20s), (std::vector<uint16_t>{10, 5, 4})) << "as written";
@@ -317,9 +320,9 @@ TEST(SimLd58a08, PowerDownSaveDecidesWhetherPwmSurvives) {
 TEST(SimLd58a08, StateRoundTripIsAPowerOnWithThatState) {
   SimLd58a08 d(1, {});
   const auto t0 = SimClock::now();
-  ASSERT_EQ(d.write(Table::kHolding, 0xFA, {1}, t0), 0);
-  ASSERT_EQ(d.write(Table::kHolding, 0xFC, {3, 17, 5, 2}, t0), 0);
-  ASSERT_EQ(d.write(Table::kHolding, 0x0050, {20, 10, 0xFFFF}, t0), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0xFA, {1}, t0), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0xFC, {3, 17, 5, 2}, t0), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x0050, {20, 10, 0xFFFF}, t0), 0);
   YAML::Node node;
   d.saveState(node);
   SimLd58a08 e(1, {});

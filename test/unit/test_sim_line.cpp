@@ -21,11 +21,11 @@ std::vector<std::string> prepare(const GoldenFrame& g, const Request& r) {
   if (!isReadFunction(r.function)) return {};
   const Bytes& reply = g.response;
   std::string table = r.function == FunctionCode::kReadCoils            ? "coil"
-                      : r.function == FunctionCode::kReadDiscreteInputs ? "input"
-                      : r.function == FunctionCode::kReadInputRegisters ? "ireg"
-                                                                        : "holding";
+                      : r.function == FunctionCode::kReadDiscreteInputs ? "discrete_input"
+                      : r.function == FunctionCode::kReadInputRegisters ? "input_register"
+                                                                        : "holding_register";
   uint16_t address = r.address;
-  if (table == "holding" && address != 0x80 && address != 0x03E8) return {};
+  if (table == "holding_register" && address != 0x80 && address != 0x03E8) return {};
   if (address == 0x03E8) address = 0x03E9;  // the stored baud code is written there
   std::string values;
   for (uint16_t i = 0; i < r.count; ++i)
@@ -104,7 +104,7 @@ TEST(SimLine, BroadcastsAreAppliedByAllAndAnsweredByNone) {
   EXPECT_EQ(line("get 254 coil 3"), "ok 1");
   EXPECT_EQ(client.exchange(encodeRequest(Request::writeSingleRegister(0, 0xFC, 2))), "");
   ASSERT_TRUE(line.tookFrames(2));
-  EXPECT_EQ(line("get 1 holding 252"), "ok 2");
+  EXPECT_EQ(line("get 1 holding_register 252"), "ok 2");
 }
 
 // Issue #13/8: what the commissioning tool's "alone on the bus" prevents. The LC board's address
@@ -127,8 +127,9 @@ TEST(SimLine, TheLcAddressCommandAtZeroReachesEveryBoardAndTheRepliesCollide) {
   EXPECT_EQ(line("info"),
             "ok #0:lc_relay8:200:9600:N #1:ld58a08:1:9600:N #2:yespeed_pdu:2:9600:N "
             "#3:lc_relay8:200:9600:N");
-  EXPECT_EQ(line("get 1 holding 0"), "ok 200") << "the LD58A08 took 200 as CH0's period";
-  EXPECT_EQ(line("get 2 holding 0"), "ok 2500") << "the PDU refuses 20.0 V as over-voltage";
+  EXPECT_EQ(line("get 1 holding_register 0"), "ok 200") << "the LD58A08 took 200 as CH0's period";
+  EXPECT_EQ(line("get 2 holding_register 0"), "ok 2500")
+      << "the PDU refuses 20.0 V as over-voltage";
 }
 
 TEST(SimLine, ABoardAloneAnswersItsAddressCommandsCleanly) {
@@ -167,7 +168,7 @@ TEST(SimLine, DevicesHearOnlyTheirOwnBaudAndParity) {
   ASSERT_TRUE(line.tookFrames(2));
   client.configure(B9600);
   EXPECT_EQ(client.exchange(read, 7), at1);
-  ASSERT_EQ(line("set 1 holding 254 4 1"), "ok");  // 19200, even: at power-on
+  ASSERT_EQ(line("set 1 holding_register 254 4 1"), "ok");  // 19200, even: at power-on
   EXPECT_EQ(client.exchange(read, 7), at1);
   ASSERT_EQ(line("power_cycle"), "ok");
   EXPECT_EQ(client.exchange(read), "");

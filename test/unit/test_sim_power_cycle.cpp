@@ -31,8 +31,8 @@ TEST(SimPowerCycleOne, OnlyTheNamedDeviceRestarts) {
   auto sim = started(dir, {{"lc_relay8", 255}, {"ld58a08", 1}, {"yespeed_pdu", 2}});
   ASSERT_EQ(sim->command("set 255 coil 0 1 1"), "ok");
   ASSERT_EQ(sim->command("set 1 coil 5 1"), "ok");
-  ASSERT_EQ(sim->command("set 255 holding 1001 4"), "ok");  // 19200 once powered again
-  ASSERT_EQ(sim->command("set 1 holding 254 2"), "ok");     // 4800 once powered again
+  ASSERT_EQ(sim->command("set 255 holding_register 1001 4"), "ok");  // 19200 once powered again
+  ASSERT_EQ(sim->command("set 1 holding_register 254 2"), "ok");     // 4800 once powered again
   ASSERT_EQ(sim->command("set 2 coil 0 1"), "ok");
 
   ASSERT_EQ(sim->command("power_cycle 1"), "ok");

@@ -99,17 +99,18 @@ TEST(SimControl, CommandsAndTheirErrors) {
             "ok #0:lc_relay8:255:9600:N #1:ld58a08:1:9600:N #2:yespeed_pdu:2:9600:N");
   EXPECT_EQ(sim->command("set 0xFF coil 0 1 0 1"), "ok");
   EXPECT_EQ(sim->command("get #0 coil 0 4"), "ok 1 0 1 0");
-  EXPECT_EQ(sim->command("set #0 input 7 1"), "ok");
-  EXPECT_EQ(sim->command("get 255 input 6 2"), "ok 0 1");
-  EXPECT_EQ(sim->command("set 2 ireg 0 -55"), "ok");
-  EXPECT_EQ(sim->command("get 2 ireg 0"), "ok 65481");
-  EXPECT_EQ(sim->command("set 2 holding 0 1900 1850"), "ok") << "one write, checked as a whole";
-  EXPECT_EQ(sim->command("set 2 holding 0 1700"), "error illegal data value (03) at 0");
-  EXPECT_EQ(sim->command("get 1 holding 0x80"), "ok 0");
-  EXPECT_EQ(sim->command("get 1 holding 5"), "error illegal data address (02) at 5");
+  EXPECT_EQ(sim->command("set #0 discrete_input 7 1"), "ok");
+  EXPECT_EQ(sim->command("get 255 discrete_input 6 2"), "ok 0 1");
+  EXPECT_EQ(sim->command("set 2 input_register 0 -55"), "ok");
+  EXPECT_EQ(sim->command("get 2 input_register 0"), "ok 65481");
+  EXPECT_EQ(sim->command("set 2 holding_register 0 1900 1850"), "ok")
+      << "one write, checked as a whole";
+  EXPECT_EQ(sim->command("set 2 holding_register 0 1700"), "error illegal data value (03) at 0");
+  EXPECT_EQ(sim->command("get 1 holding_register 0x80"), "ok 0");
+  EXPECT_EQ(sim->command("get 1 holding_register 5"), "error illegal data address (02) at 5");
   EXPECT_EQ(sim->command("get 1 coil 6 4"), "error illegal data address (02) at 8");
-  EXPECT_EQ(sim->command("get 1 input 0"), "error illegal function (01) at 0");
-  EXPECT_EQ(sim->command("set 1 input 0 1"), "error illegal data address (02) at 0");
+  EXPECT_EQ(sim->command("get 1 discrete_input 0"), "error illegal function (01) at 0");
+  EXPECT_EQ(sim->command("set 1 discrete_input 0 1"), "error illegal data address (02) at 0");
   EXPECT_EQ(sim->command("frames"), "ok 0 0 0");
   EXPECT_EQ(sim->command("bogus"), "error unknown command 'bogus' (try help)");
   EXPECT_EQ(sim->command("get 9 coil 0"), "error no device '9' (#index or address; see info)");
@@ -119,7 +120,7 @@ TEST(SimControl, CommandsAndTheirErrors) {
   EXPECT_EQ(sim->command("get 1 coil 0 0"), "error count '0' is not 1-2000");
   EXPECT_EQ(sim->command("set 1 coil 0").rfind("error set needs at least one value", 0), 0u);
   EXPECT_EQ(sim->command("set 1 coil 0 2"), "error coil values are 0 or 1");
-  EXPECT_EQ(sim->command("set 2 ireg 0 70000"), "error value '70000' is not 16 bits");
+  EXPECT_EQ(sim->command("set 2 input_register 0 70000"), "error value '70000' is not 16 bits");
   EXPECT_EQ(sim->command("silence 1 2"), "error silence: '2' is not 0 or 1");
   EXPECT_EQ(sim->command("silence 1"), "ok");
   EXPECT_EQ(sim->command("help").rfind("ok get set", 0), 0u);
@@ -153,9 +154,10 @@ TEST(SimPowerCycle, PendingSettingsApplyAndOutputsGoOff) {
   ScratchDir dir;
   auto sim = started(dir, {{"lc_relay8", 255}, {"ld58a08", 1}, {"yespeed_pdu", 2}});
   ASSERT_EQ(sim->command("set 255 coil 0 1 1"), "ok");
-  ASSERT_EQ(sim->command("set 255 holding 1001 4"), "ok");
+  ASSERT_EQ(sim->command("set 255 holding_register 1001 4"), "ok");
   ASSERT_EQ(sim->command("set 1 coil 5 1"), "ok");
-  ASSERT_EQ(sim->command("set 1 holding 252 3 7 2 1"), "ok");  // delay, address 7, 4800, even
+  ASSERT_EQ(sim->command("set 1 holding_register 252 3 7 2 1"),
+            "ok");  // delay, address 7, 4800, even
   ASSERT_EQ(sim->command("set 2 coil 0 1"), "ok");
   EXPECT_EQ(sim->command("info"),
             "ok #0:lc_relay8:255:9600:N #1:ld58a08:7:9600:N #2:yespeed_pdu:2:9600:N");
@@ -163,11 +165,11 @@ TEST(SimPowerCycle, PendingSettingsApplyAndOutputsGoOff) {
   EXPECT_EQ(sim->command("info"),
             "ok #0:lc_relay8:255:19200:N #1:ld58a08:7:4800:E #2:yespeed_pdu:2:9600:N");
   EXPECT_EQ(sim->command("get 255 coil 0 2"), "ok 0 0");
-  EXPECT_EQ(sim->command("get 7 holding 128"), "ok 0");
-  EXPECT_EQ(sim->command("get 7 holding 252"), "ok 3") << "the return delay is stored";
+  EXPECT_EQ(sim->command("get 7 holding_register 128"), "ok 0");
+  EXPECT_EQ(sim->command("get 7 holding_register 252"), "ok 3") << "the return delay is stored";
   EXPECT_EQ(sim->command("get 2 coil 0"), "ok 0");
   // SIGHUP's path: the line thread picks the request up.
-  ASSERT_EQ(sim->command("set 7 holding 254 3"), "ok");
+  ASSERT_EQ(sim->command("set 7 holding_register 254 3"), "ok");
   sim->requestPowerCycle();
   for (int i = 0; i < 200 && sim->command("info").find("7:9600") == std::string::npos; ++i)
     std::this_thread::sleep_for(10ms);
@@ -179,9 +181,9 @@ TEST(SimStateFile, WhatTheDevicesStoreSurvivesARestart) {
   ScratchDir dir;
   {
     auto sim = started(dir, {{"lc_relay8", 255}, {"ld58a08", 1}, {"yespeed_pdu", 2}});
-    ASSERT_EQ(sim->command("set 1 holding 253 9 4"), "ok");  // address 9, 19200 pending
-    ASSERT_EQ(sim->command("set 2 holding 0 2600 1600 700"), "ok");
-    ASSERT_EQ(sim->command("set 255 holding 1001 2"), "ok");
+    ASSERT_EQ(sim->command("set 1 holding_register 253 9 4"), "ok");  // address 9, 19200 pending
+    ASSERT_EQ(sim->command("set 2 holding_register 0 2600 1600 700"), "ok");
+    ASSERT_EQ(sim->command("set 255 holding_register 1001 2"), "ok");
     const std::string before = fileText(dir / "state.yaml");
     EXPECT_NE(before.find("address: 9"), std::string::npos) << before;
     ASSERT_EQ(sim->command("get 9 coil 0"), "ok 0");
@@ -192,7 +194,7 @@ TEST(SimStateFile, WhatTheDevicesStoreSurvivesARestart) {
     EXPECT_EQ(sim->command("info"),
               "ok #0:lc_relay8:255:9600:N #1:ld58a08:9:9600:N #2:yespeed_pdu:2:9600:N")
         << "baud codes still pending: the restart was no power cycle of the devices' own";
-    EXPECT_EQ(sim->command("get 2 holding 0 3"), "ok 2600 1600 700");
+    EXPECT_EQ(sim->command("get 2 holding_register 0 3"), "ok 2600 1600 700");
     ASSERT_EQ(sim->command("power_cycle"), "ok");
   }
   auto sim = started(dir, {{"lc_relay8", 255}, {"ld58a08", 1}, {"yespeed_pdu", 2}});

@@ -143,16 +143,16 @@ TEST(SimYespeedPdu, UnsupportedTablesAndAddresses) {
 
 TEST(SimYespeedPdu, StateKeepsTheLimits) {
   SimYespeedPdu d(1, {});
-  ASSERT_EQ(d.write(Table::kHolding, 0, {2600, 1600, 700}, SimClock::now()), 0);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0, {2600, 1600, 700}, SimClock::now()), 0);
   YAML::Node node;
   d.saveState(node);
   SimYespeedPdu e(1, {});
   e.loadState(YAML::Load(YAML::Dump(node)), SimClock::now());
-  EXPECT_EQ(get(e, Table::kHolding, 0), 2600);
-  EXPECT_EQ(get(e, Table::kHolding, 1), 1600);
-  EXPECT_EQ(get(e, Table::kHolding, 2), 700);
+  EXPECT_EQ(get(e, Table::kHoldingRegister, 0), 2600);
+  EXPECT_EQ(get(e, Table::kHoldingRegister, 1), 1600);
+  EXPECT_EQ(get(e, Table::kHoldingRegister, 2), 700);
   node["limits"][0] = 100;  // breaks the rules: ignored
   SimYespeedPdu f(1, {});
   f.loadState(YAML::Load(YAML::Dump(node)), SimClock::now());
-  EXPECT_EQ(get(f, Table::kHolding, 0), 2500);
+  EXPECT_EQ(get(f, Table::kHoldingRegister, 0), 2500);
 }

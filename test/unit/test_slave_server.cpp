@@ -60,10 +60,10 @@ TEST_F(SlaveServerTest, TheManualsTwoFrames) {
   ASSERT_TRUE(waitFor([this] { return writes().size() >= 2; })) << writes().size();
   const auto w = writes();
   ASSERT_EQ(w.size(), 2u);
-  EXPECT_EQ(w[0].table, SlaveTable::kCoils);
+  EXPECT_EQ(w[0].table, Table::kCoil);
   EXPECT_EQ(w[0].address, 6);
   EXPECT_EQ(w[0].values, (std::vector<uint16_t>{1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0}));
-  EXPECT_EQ(w[1].table, SlaveTable::kHoldingRegisters);
+  EXPECT_EQ(w[1].table, Table::kHoldingRegister);
   EXPECT_EQ(w[1].address, 5);
   EXPECT_EQ(w[1].values, (std::vector<uint16_t>{0x0807, 0x0A09}));
   EXPECT_EQ(registersToMacroBytes(w[1].values), (std::vector<uint8_t>{7, 8, 9, 10}));
@@ -73,8 +73,8 @@ TEST_F(SlaveServerTest, TheManualsTwoFrames) {
 }
 
 TEST_F(SlaveServerTest, SettersAreWhatTheMasterReads) {
-  EXPECT_EQ(server_->set(SlaveTable::kInputRegisters, 10, {500, 600}), "");
-  EXPECT_EQ(server_->set(SlaveTable::kDiscreteInputs, 0, {1, 0, 1}), "");
+  EXPECT_EQ(server_->set(Table::kInputRegister, 10, {500, 600}), "");
+  EXPECT_EQ(server_->set(Table::kDiscreteInput, 0, {1, 0, 1}), "");
   // set() queues the change; the server thread applies it at the top of its next loop, so a
   // request it is already waiting for may still be answered from the old table: ask again
   // until the new values show (bounded), rather than sleeping and hoping the loop came round.
@@ -87,9 +87,9 @@ TEST_F(SlaveServerTest, SettersAreWhatTheMasterReads) {
   // them before it reads the next one.
   const Request di = Request::readDiscreteInputs(1, 0, 3);
   EXPECT_EQ(toHex(ask(encodeRequest(di), 6)), toHex(encodeReply(di, {1, 0, 1})));
-  const std::string e = server_->set(SlaveTable::kHoldingRegisters, 63, {1, 2});
-  EXPECT_NE(e.find("holding_registers 0-63"), std::string::npos) << e;
-  EXPECT_NE(server_->set(SlaveTable::kCoils, 0, {2}), "");
+  const std::string e = server_->set(Table::kHoldingRegister, 63, {1, 2});
+  EXPECT_NE(e.find("holding_register 0-63"), std::string::npos) << e;
+  EXPECT_NE(server_->set(Table::kCoil, 0, {2}), "");
 }
 
 TEST_F(SlaveServerTest, OutOfRangeGetsException02AndNoWrite) {
@@ -172,13 +172,13 @@ port: /dev/ttyS1
 baud: 9600
 role: slave
 slave_id: 1
-coils: 64
-discrete_inputs: 64
-holding_registers: 64
-input_registers: 64
+coil: 64
+discrete_input: 64
+holding_register: 64
+input_register: 64
 names:
-  coils: {6: spindle_ready}
-  holding_registers: {5: job_number}
+  coil: {6: spindle_ready}
+  holding_register: {5: job_number}
 )";
   SlaveConfig c;
   std::string error;
@@ -187,7 +187,7 @@ names:
   EXPECT_EQ(c.slave_id, 1);
   EXPECT_EQ(c.coil_names.at(6), "spindle_ready");
   EXPECT_EQ(c.holding_names.at(5), "job_number");
-  ASSERT_TRUE(parseSlaveConfig(YAML::Load("role: slave\nslave_id: 3\nnames: {coils: {ready: 2}}"),
+  ASSERT_TRUE(parseSlaveConfig(YAML::Load("role: slave\nslave_id: 3\nnames: {coil: {ready: 2}}"),
                                &c, &error))
       << error;
   EXPECT_EQ(c.coil_names.at(2), "ready");
@@ -199,12 +199,18 @@ names:
   EXPECT_NE(errorOf("role: slave\nslave_id: 248").find("slave_id: 248 is outside 1-247"),
             std::string::npos);
   EXPECT_NE(errorOf("role: slave").find("slave_id"), std::string::npos);
-  EXPECT_NE(errorOf("role: slave\nslave_id: 1\ncoils: 70000").find("coils"), std::string::npos);
-  EXPECT_NE(
-      errorOf("role: slave\nslave_id: 1\ncoils: 8\nnames: {coils: {9: x}}").find("names/coils/9"),
-      std::string::npos);
-  EXPECT_NE(errorOf("role: slave\nslave_id: 1\nnames: {coils: {1: 2bad}}").find("2bad"),
+  EXPECT_NE(errorOf("role: slave\nslave_id: 1\ncoil: 70000").find("coil: 70000 is outside 0-10000"),
             std::string::npos);
+  EXPECT_NE(
+      errorOf("role: slave\nslave_id: 1\ncoil: 8\nnames: {coil: {9: x}}").find("names/coil/9"),
+      std::string::npos);
+  EXPECT_NE(errorOf("role: slave\nslave_id: 1\nnames: {coil: {1: 2bad}}").find("2bad"),
+            std::string::npos);
+  // The keys of earlier versions are refused, pointing at the table's one name.
+  EXPECT_EQ(errorOf("role: slave\nslave_id: 1\nholding_registers: 8"),
+            "holding_registers: the table is now named 'holding_register'");
+  EXPECT_EQ(errorOf("role: slave\nslave_id: 1\nnames: {coils: {1: x}}"),
+            "names/coils: the table is now named 'coil'");
   EXPECT_NE(errorOf("role: slave\nslave_id: 1\ndevices: {}").find("devices"), std::string::npos);
   EXPECT_NE(errorOf("role: slave\nslave_id: 1\nbaud: 7").find("baud"), std::string::npos);
 }

@@ -20,7 +20,7 @@ namespace modbus_rtu_driver {
 
 // One read request and the signals it carries (indices into the signal list, by address).
 struct ReadSpan {
-  SignalTable table = SignalTable::kHoldingRegister;
+  Table table = Table::kHoldingRegister;
   uint16_t address = 0;
   uint16_t count = 0;  // registers or bits
   std::vector<size_t> signals;
@@ -51,7 +51,7 @@ class ReadPlanner {
   std::vector<SignalConfig> signals_;
   int max_gap_;
   // (table, address of a signal): never merged with the signal before it.
-  std::set<std::pair<SignalTable, uint16_t>> breaks_;
+  std::set<std::pair<Table, uint16_t>> breaks_;
   std::vector<std::string> split_log_;
 };
 

@@ -24,9 +24,9 @@ class SlaveNode {
 
  private:
   void onWrite(const SlaveWrite& write);  // server thread
-  void publishNamed(SlaveTable table, uint16_t address, const std::vector<uint16_t>& values);
-  bool setBits(SlaveTable table, SetBits::Request& req, SetBits::Response& res);
-  bool setRegisters(SlaveTable table, SetRegisters::Request& req, SetRegisters::Response& res);
+  void publishNamed(Table table, uint16_t address, const std::vector<uint16_t>& values);
+  bool setBits(Table table, SetBits::Request& req, SetBits::Response& res);
+  bool setRegisters(Table table, SetRegisters::Request& req, SetRegisters::Response& res);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   ros::NodeHandle nh_;

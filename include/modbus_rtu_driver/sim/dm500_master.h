@@ -4,8 +4,9 @@
 //   write_coils ID ADDR COUNT BYTE...     FC15, coils packed in macro bytes (hex), as #1204/#1230
 //   write_bytes ID ADDR BYTE...           FC16, macro bytes (decimal) two per register, low first
 //   write_coil ID ADDR 0|1                FC05        write_register ID ADDR VALUE   FC06
-//   read_coils|read_discrete|read_holding|read_input ID ADDR COUNT [expect V...]
-//   wait_coils|wait_discrete|wait_holding|wait_input ID ADDR COUNT equals V... within SECONDS
+//   read_TABLE ID ADDR COUNT [expect V...]  TABLE: coil, discrete_input, holding_register,
+//                                           input_register (read_holding_register 1 5 2)
+//   wait_TABLE ID ADDR COUNT equals V... within SECONDS
 //   wait_ready ID within SECONDS          until slave ID answers (the node opened the port)
 //   raw HEX...                            send bytes as they are
 //   garbage ID ROUNDS SEED ADDR VALUE     ROUNDS of random junk (noise, frames with bad CRCs,

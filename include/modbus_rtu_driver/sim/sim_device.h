@@ -22,9 +22,6 @@ class Node;
 
 namespace modbus_rtu_driver {
 
-enum class Table { kCoil, kDiscreteInput, kHolding, kInputRegister };
-bool parseTable(const std::string& name, Table* out);  // coil, input, holding, ireg
-
 using SimClock = std::chrono::steady_clock;
 
 // Serial settings: what a device listens and answers at, or what the line currently runs at.

@@ -20,7 +20,7 @@ namespace modbus_rtu_driver {
 struct SimGenericConfig {
   SignalMapConfig map;
   struct Hole {
-    SignalTable table;
+    Table table;
     uint16_t from, to;  // inclusive
   };
   std::vector<Hole> holes;
@@ -50,11 +50,11 @@ class SimGeneric : public SimDevice {
                     SimClock::time_point now) override;
 
  private:
-  bool mapped(SignalTable table, uint16_t address) const;
+  bool mapped(Table table, uint16_t address) const;
 
   SimGenericConfig config_;
-  std::map<std::pair<SignalTable, uint16_t>, uint16_t> values_;
-  std::map<SignalTable, std::pair<uint16_t, uint16_t>> blocks_;  // first and last address
+  std::map<std::pair<Table, uint16_t>, uint16_t> values_;
+  std::map<Table, std::pair<uint16_t, uint16_t>> blocks_;  // first and last address
 };
 
 }  // namespace modbus_rtu_driver

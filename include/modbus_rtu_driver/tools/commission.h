@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/config/link_config.h"
+#include "modbus_rtu_driver/core/modbus/types.h"
 
 namespace modbus_rtu_driver {
 
@@ -37,7 +38,7 @@ struct CommissionCommand {
   // holds.
   std::vector<int> limits;
   // read / write / watch
-  std::string table;  // coils | discrete-inputs | holding | input-registers
+  Table table = Table::kCoil;
   int start = 0, count = 1;
   std::vector<uint16_t> values;
   bool multiple = false;  // write: FC15/FC16 even for one value

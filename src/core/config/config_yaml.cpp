@@ -32,6 +32,14 @@ std::string show(const YAML::Node& n) {
   return "nothing";
 }
 
+Table getTable(const YAML::Node& n, const std::string& key) {
+  const std::string text = get<std::string>(n, key, "a table name");
+  std::string problem;
+  const auto table = parseTableName(text, &problem);
+  if (!table) fail(key, problem);
+  return *table;
+}
+
 double getNumber(const YAML::Node& n, const std::string& key) {
   return get<double>(n, key, "a number");
 }

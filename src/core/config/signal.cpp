@@ -8,44 +8,8 @@
 
 namespace modbus_rtu_driver {
 
-const char* tableName(SignalTable t) {
-  switch (t) {
-    case SignalTable::kCoil:
-      return "coil";
-    case SignalTable::kDiscreteInput:
-      return "discrete_input";
-    case SignalTable::kHoldingRegister:
-      return "holding_register";
-    case SignalTable::kInputRegister:
-      return "input_register";
-  }
-  return "?";
-}
-
 const char* typeName(SignalType t) {
-  switch (t) {
-    case SignalType::kBool:
-      return "bool";
-    case SignalType::kUint16:
-      return "uint16";
-    case SignalType::kInt16:
-      return "int16";
-    case SignalType::kUint32:
-      return "uint32";
-    case SignalType::kInt32:
-      return "int32";
-    case SignalType::kFloat32:
-      return "float32";
-    case SignalType::kUint64:
-      return "uint64";
-    case SignalType::kInt64:
-      return "int64";
-  }
-  return "?";
-}
-
-bool isBitTable(SignalTable t) {
-  return t == SignalTable::kCoil || t == SignalTable::kDiscreteInput;
+  return nameIn(kSignalTypeNames, t).data();  // the names are literals: terminated
 }
 
 uint16_t wordsOf(SignalType t) {
@@ -101,18 +65,18 @@ double rawMax(SignalType t) {
 
 int SignalConfig::writeFunction() const {
   if (write_function != 0) return write_function;
-  if (table == SignalTable::kCoil) return 5;
+  if (table == Table::kCoil) return 5;
   return words() == 1 ? 6 : 16;
 }
 
 std::string writeFunctionProblem(const SignalConfig& s) {
   const int fc = s.writeFunction();
   const std::string given = std::to_string(fc);
-  if (s.table == SignalTable::kCoil) {
+  if (s.table == Table::kCoil) {
     if (fc == 5 || fc == 15) return {};
     return given + " is not a coil write (5 = write single coil, 15 = write multiple coils)";
   }
-  if (s.table != SignalTable::kHoldingRegister)
+  if (s.table != Table::kHoldingRegister)
     return std::string("a ") + tableName(s.table) + " cannot be written";
   if (fc == 16 || (fc == 6 && s.words() == 1)) return {};
   if (fc == 6)

@@ -30,16 +30,6 @@ std::string number(double v) {
   return s.str();
 }
 
-template <typename E>
-E choose(const YAML::Node& n, const std::string& key, const std::map<std::string, E>& choices) {
-  std::string list;
-  for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c.first;
-  const std::string text = get<std::string>(n, key, list.c_str());
-  auto it = choices.find(text);
-  if (it == choices.end()) fail(key, "'" + text + "' is not one of " + list);
-  return it->second;
-}
-
 double finite(const YAML::Node& n, const std::string& key) {
   const double v = getNumber(n, key);
   if (!std::isfinite(v)) fail(key, show(n) + " is not a finite number");
@@ -82,27 +72,14 @@ SignalConfig parseSignal(const YAML::Node& n, const std::string& where) {
   if (kReservedNames.count(s.name))
     fail(where + "/name", "'" + s.name + "' is taken by the device's own topics");
   const std::string at = where + "/";  // keys below: signals[i]/key
-  s.table = choose<SignalTable>(n["table"], at + "table",
-                                {{"coil", SignalTable::kCoil},
-                                 {"discrete_input", SignalTable::kDiscreteInput},
-                                 {"holding_register", SignalTable::kHoldingRegister},
-                                 {"input_register", SignalTable::kInputRegister}});
+  s.table = getTable(n["table"], at + "table");
   const int address = getInt(n["address"], at + "address");
   if (address < 0 || address > 0xFFFF)
     fail(at + "address", std::to_string(address) + " is outside 0-65535");
   s.address = static_cast<uint16_t>(address);
   const bool bits = isBitTable(s.table);
   s.type = bits ? SignalType::kBool : SignalType::kUint16;
-  if (n["type"])
-    s.type = choose<SignalType>(n["type"], at + "type",
-                                {{"bool", SignalType::kBool},
-                                 {"uint16", SignalType::kUint16},
-                                 {"int16", SignalType::kInt16},
-                                 {"uint32", SignalType::kUint32},
-                                 {"int32", SignalType::kInt32},
-                                 {"float32", SignalType::kFloat32},
-                                 {"uint64", SignalType::kUint64},
-                                 {"int64", SignalType::kInt64}});
+  if (n["type"]) s.type = getNamed(n["type"], at + "type", kSignalTypeNames);
   if (bits != (s.type == SignalType::kBool))
     fail(at + "type", std::string(typeName(s.type)) + " does not fit a " + tableName(s.table) +
                           (bits ? " (bits are bool)" : " (bool is for coils and discrete inputs)"));
@@ -111,8 +88,7 @@ SignalConfig parseSignal(const YAML::Node& n, const std::string& where) {
                              std::to_string(s.words()) + " registers of " + typeName(s.type));
   if (n["word_order"]) {
     if (s.words() < 2) fail(at + "word_order", "only for 32- and 64-bit types");
-    s.word_order = choose<WordOrder>(n["word_order"], at + "word_order",
-                                     {{"big", WordOrder::kBig}, {"little", WordOrder::kLittle}});
+    s.word_order = getNamed(n["word_order"], at + "word_order", kWordOrderNames);
   }
   for (const char* key : {"scale", "offset", "unit"})
     if (bits && n[key]) fail(at + key, std::string("not for bits (") + tableName(s.table) + ")");
@@ -123,7 +99,7 @@ SignalConfig parseSignal(const YAML::Node& n, const std::string& where) {
   if (n["offset"]) s.offset = finite(n["offset"], at + "offset");
   if (n["unit"]) s.unit = get<std::string>(n["unit"], at + "unit", "a unit's name");
   if (n["writable"]) s.writable = get<bool>(n["writable"], at + "writable", "true or false");
-  if (s.writable && s.table != SignalTable::kCoil && s.table != SignalTable::kHoldingRegister)
+  if (s.writable && s.table != Table::kCoil && s.table != Table::kHoldingRegister)
     fail(at + "writable", std::string("a ") + tableName(s.table) + " cannot be written");
   for (const char* key : {"min", "max"}) {
     if (!n[key]) continue;

@@ -10,8 +10,18 @@ namespace {
 
 using namespace config;
 
-const std::set<std::string> kSlaveKeys = {"slave_id",          "coils",           "discrete_inputs",
-                                          "holding_registers", "input_registers", "names"};
+// A table's size is keyed by the table's one name (coil: 64).
+const std::set<std::string> kSlaveKeys = {"slave_id",         "coil",           "discrete_input",
+                                          "holding_register", "input_register", "names"};
+
+// Keys of earlier versions (coils:, holding_registers:) are refused with the one name to use.
+void refuseFormerTableKeys(const YAML::Node& map, const std::string& where) {
+  for (const auto& kv : map) {
+    const std::string key = kv.first.as<std::string>();
+    if (auto table = formerTableName(key))
+      fail(where + key, std::string("the table is now named '") + tableName(*table) + "'");
+  }
+}
 
 uint16_t getTableSize(const YAML::Node& root, const char* key, uint16_t fallback) {
   if (!root[key]) return fallback;
@@ -45,6 +55,7 @@ void parseNames(const YAML::Node& n, const std::string& key, uint16_t size,
 void parseSlave(const YAML::Node& root, SlaveConfig* out) {
   if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
   // config_file: bus.launch sets it for every role (the master's templates start there).
+  refuseFormerTableKeys(root, "");
   checkKeys(root, "",
             with(with(kLinkKeys, {"role", "diagnostic_period", "config_file"}), kSlaveKeys));
   parseLink(root, &out->link);
@@ -57,16 +68,17 @@ void parseSlave(const YAML::Node& root, SlaveConfig* out) {
   out->slave_id = getInt(root["slave_id"], "slave_id");
   if (out->slave_id < 1 || out->slave_id > 247)
     fail("slave_id", std::to_string(out->slave_id) + " is outside 1-247");
-  out->coils = getTableSize(root, "coils", 64);
-  out->discrete_inputs = getTableSize(root, "discrete_inputs", 64);
-  out->holding_registers = getTableSize(root, "holding_registers", 64);
-  out->input_registers = getTableSize(root, "input_registers", 64);
+  out->coils = getTableSize(root, "coil", 64);
+  out->discrete_inputs = getTableSize(root, "discrete_input", 64);
+  out->holding_registers = getTableSize(root, "holding_register", 64);
+  out->input_registers = getTableSize(root, "input_register", 64);
   const YAML::Node names = root["names"];
   if (names) {
-    if (!names.IsMap()) fail("names", show(names) + " is not a map (coils, holding_registers)");
-    checkKeys(names, "names/", {"coils", "holding_registers"});
-    parseNames(names["coils"], "names/coils", out->coils, &out->coil_names);
-    parseNames(names["holding_registers"], "names/holding_registers", out->holding_registers,
+    if (!names.IsMap()) fail("names", show(names) + " is not a map (coil, holding_register)");
+    refuseFormerTableKeys(names, "names/");
+    checkKeys(names, "names/", {"coil", "holding_register"});
+    parseNames(names["coil"], "names/coil", out->coils, &out->coil_names);
+    parseNames(names["holding_register"], "names/holding_register", out->holding_registers,
                &out->holding_names);
   }
 }

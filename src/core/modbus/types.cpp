@@ -24,6 +24,39 @@ bool isReadFunction(FunctionCode fc) {
   return static_cast<uint8_t>(fc) <= 0x04;
 }
 
+const char* tableName(Table table) {
+  return nameIn(kTableNames, table).data();  // the table's names are literals: terminated
+}
+
+bool isBitTable(Table table) {
+  return table == Table::kCoil || table == Table::kDiscreteInput;
+}
+
+std::optional<Table> formerTableName(std::string_view name) {
+  // Spellings earlier versions took here and there; refused, but pointed at the one name.
+  // ("input" is not among them: it meant discrete inputs in one place, input registers in another.)
+  static constexpr NameTable<Table, 9> kFormerNames{{{Table::kCoil, "coils"},
+                                                     {Table::kDiscreteInput, "discrete_inputs"},
+                                                     {Table::kDiscreteInput, "discrete-inputs"},
+                                                     {Table::kDiscreteInput, "discrete"},
+                                                     {Table::kHoldingRegister, "holding_registers"},
+                                                     {Table::kHoldingRegister, "holding"},
+                                                     {Table::kInputRegister, "input_registers"},
+                                                     {Table::kInputRegister, "input-registers"},
+                                                     {Table::kInputRegister, "ireg"}}};
+  return valueIn(kFormerNames, name);
+}
+
+std::optional<Table> parseTableName(std::string_view name, std::string* error) {
+  if (auto table = valueIn(kTableNames, name)) return table;
+  if (error) {
+    *error = "'" + std::string(name) + "' is not one of " + namesIn(kTableNames);
+    if (auto former = formerTableName(name))
+      *error += " (the table is now named '" + std::string(tableName(*former)) + "')";
+  }
+  return std::nullopt;
+}
+
 bool isBitFunction(FunctionCode fc) {
   return fc == FunctionCode::kReadCoils || fc == FunctionCode::kReadDiscreteInputs ||
          fc == FunctionCode::kWriteSingleCoil || fc == FunctionCode::kWriteMultipleCoils;
@@ -85,6 +118,20 @@ Request make(uint8_t slave, FunctionCode fc, uint16_t address, uint16_t count) {
   return r;
 }
 }  // namespace
+
+Request Request::read(uint8_t s, Table table, uint16_t a, uint16_t n) {
+  switch (table) {
+    case Table::kCoil:
+      return readCoils(s, a, n);
+    case Table::kDiscreteInput:
+      return readDiscreteInputs(s, a, n);
+    case Table::kHoldingRegister:
+      return readHoldingRegisters(s, a, n);
+    case Table::kInputRegister:
+      break;
+  }
+  return readInputRegisters(s, a, n);
+}
 
 Request Request::readCoils(uint8_t s, uint16_t a, uint16_t n) {
   return make(s, FunctionCode::kReadCoils, a, n);

@@ -14,20 +14,6 @@ namespace {
 using Steady = std::chrono::steady_clock;
 }  // namespace
 
-const char* slaveTableName(SlaveTable t) {
-  switch (t) {
-    case SlaveTable::kCoils:
-      return "coils";
-    case SlaveTable::kDiscreteInputs:
-      return "discrete_inputs";
-    case SlaveTable::kHoldingRegisters:
-      return "holding_registers";
-    case SlaveTable::kInputRegisters:
-      return "input_registers";
-  }
-  return "?";
-}
-
 std::vector<uint8_t> registersToMacroBytes(const std::vector<uint16_t>& registers) {
   std::vector<uint8_t> bytes;
   for (uint16_t r : registers) {
@@ -44,29 +30,28 @@ SlaveServer::~SlaveServer() {
   stop();
 }
 
-uint16_t SlaveServer::tableSize(SlaveTable t) const {
+uint16_t SlaveServer::tableSize(Table t) const {
   switch (t) {
-    case SlaveTable::kCoils:
+    case Table::kCoil:
       return config_.coils;
-    case SlaveTable::kDiscreteInputs:
+    case Table::kDiscreteInput:
       return config_.discrete_inputs;
-    case SlaveTable::kHoldingRegisters:
+    case Table::kHoldingRegister:
       return config_.holding_registers;
-    case SlaveTable::kInputRegisters:
+    case Table::kInputRegister:
       return config_.input_registers;
   }
   return 0;
 }
 
-std::string SlaveServer::set(SlaveTable table, uint16_t address,
-                             const std::vector<uint16_t>& values) {
+std::string SlaveServer::set(Table table, uint16_t address, const std::vector<uint16_t>& values) {
   const uint16_t size = tableSize(table);
   if (values.empty()) return std::string("values: empty, give at least one value");
   if (static_cast<uint32_t>(address) + values.size() > size)
     return std::string("address: ") + std::to_string(address) + " with " +
-           std::to_string(values.size()) + " value(s) is outside " + slaveTableName(table) + " 0-" +
+           std::to_string(values.size()) + " value(s) is outside " + tableName(table) + " 0-" +
            std::to_string(static_cast<int>(size) - 1);
-  const bool bits = table == SlaveTable::kCoils || table == SlaveTable::kDiscreteInputs;
+  const bool bits = table == Table::kCoil || table == Table::kDiscreteInput;
   if (bits)
     for (uint16_t v : values)
       if (v > 1) return "values: coil and input states are 0 or 1";
@@ -122,16 +107,16 @@ void SlaveServer::applyChanges() {
     for (size_t i = 0; i < c.values.size(); ++i) {
       const size_t a = c.address + i;
       switch (c.table) {
-        case SlaveTable::kCoils:
+        case Table::kCoil:
           mapping_->tab_bits[a] = static_cast<uint8_t>(c.values[i]);
           break;
-        case SlaveTable::kDiscreteInputs:
+        case Table::kDiscreteInput:
           mapping_->tab_input_bits[a] = static_cast<uint8_t>(c.values[i]);
           break;
-        case SlaveTable::kHoldingRegisters:
+        case Table::kHoldingRegister:
           mapping_->tab_registers[a] = c.values[i];
           break;
-        case SlaveTable::kInputRegisters:
+        case Table::kInputRegister:
           mapping_->tab_input_registers[a] = c.values[i];
           break;
       }
@@ -200,40 +185,40 @@ uint8_t SlaveServer::predictException(const Bytes& f) const {
   // A known function whose layout does not add up (byte count vs quantity) is a bad value.
   if (!request) return isKnownFunction(f[1]) ? kIllegalDataValue : kIllegalFunction;
   const Request& r = *request;
-  SlaveTable table = SlaveTable::kCoils;
+  Table table = Table::kCoil;
   uint16_t max = 0;
   switch (r.function) {
     case FunctionCode::kReadCoils:
-      table = SlaveTable::kCoils;
+      table = Table::kCoil;
       max = MODBUS_MAX_READ_BITS;
       break;
     case FunctionCode::kReadDiscreteInputs:
-      table = SlaveTable::kDiscreteInputs;
+      table = Table::kDiscreteInput;
       max = MODBUS_MAX_READ_BITS;
       break;
     case FunctionCode::kReadHoldingRegisters:
-      table = SlaveTable::kHoldingRegisters;
+      table = Table::kHoldingRegister;
       max = MODBUS_MAX_READ_REGISTERS;
       break;
     case FunctionCode::kReadInputRegisters:
-      table = SlaveTable::kInputRegisters;
+      table = Table::kInputRegister;
       max = MODBUS_MAX_READ_REGISTERS;
       break;
     case FunctionCode::kWriteSingleCoil:
       if (r.values[0] > 1) return kIllegalDataValue;
-      table = SlaveTable::kCoils;
+      table = Table::kCoil;
       max = 1;
       break;
     case FunctionCode::kWriteSingleRegister:
-      table = SlaveTable::kHoldingRegisters;
+      table = Table::kHoldingRegister;
       max = 1;
       break;
     case FunctionCode::kWriteMultipleCoils:
-      table = SlaveTable::kCoils;
+      table = Table::kCoil;
       max = MODBUS_MAX_WRITE_BITS;
       break;
     case FunctionCode::kWriteMultipleRegisters:
-      table = SlaveTable::kHoldingRegisters;
+      table = Table::kHoldingRegister;
       max = MODBUS_MAX_WRITE_REGISTERS;
       break;
   }
@@ -281,7 +266,7 @@ void SlaveServer::serve(const Bytes& frame) {
   const auto request = decodeRequest(frame);
   if (exception || !request || isReadFunction(request->function) || !on_write_) return;
   SlaveWrite w;
-  w.table = isBitFunction(request->function) ? SlaveTable::kCoils : SlaveTable::kHoldingRegisters;
+  w.table = isBitFunction(request->function) ? Table::kCoil : Table::kHoldingRegister;
   w.address = request->address;
   w.values = request->values;
   w.broadcast = broadcast;

@@ -9,6 +9,8 @@
 #include <string>
 
 #include "modbus_rtu_driver/core/config/link_config.h"
+#include "modbus_rtu_driver/core/modbus/text.h"
+#include "modbus_rtu_driver/core/modbus/types.h"
 
 namespace modbus_rtu_driver {
 namespace config {
@@ -29,6 +31,17 @@ T get(const YAML::Node& n, const std::string& key, const char* expected) {
     fail(key, show(n) + " is not " + expected);
   }
 }
+
+// One of an enum's names (its NameTable); otherwise fails naming the key and the names.
+template <typename E, std::size_t N>
+E getNamed(const YAML::Node& n, const std::string& key, const NameTable<E, N>& names) {
+  const std::string list = namesIn(names);
+  const std::string text = get<std::string>(n, key, list.c_str());
+  if (auto value = valueIn(names, text)) return *value;
+  fail(key, "'" + text + "' is not one of " + list);
+}
+// A Modbus table by its one name; a spelling of earlier versions is refused with the name.
+Table getTable(const YAML::Node& n, const std::string& key);
 
 double getNumber(const YAML::Node& n, const std::string& key);
 int getInt(const YAML::Node& n, const std::string& key);  // decimal, or hex as 0x...

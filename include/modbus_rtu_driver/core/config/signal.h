@@ -11,17 +11,26 @@
 #include <string>
 #include <vector>
 
+#include "modbus_rtu_driver/core/modbus/types.h"
+
 namespace modbus_rtu_driver {
 
-enum class SignalTable { kCoil, kDiscreteInput, kHoldingRegister, kInputRegister };
 enum class SignalType { kBool, kUint16, kInt16, kUint32, kInt32, kFloat32, kUint64, kInt64 };
 // big: the most significant word at the lowest address (Modbus's usual order); little: the
 // least significant word first. Bytes inside a register are always big-endian (the protocol's).
 enum class WordOrder { kBig, kLittle };
+inline constexpr NameTable<SignalType, 8> kSignalTypeNames{{{SignalType::kBool, "bool"},
+                                                            {SignalType::kUint16, "uint16"},
+                                                            {SignalType::kInt16, "int16"},
+                                                            {SignalType::kUint32, "uint32"},
+                                                            {SignalType::kInt32, "int32"},
+                                                            {SignalType::kFloat32, "float32"},
+                                                            {SignalType::kUint64, "uint64"},
+                                                            {SignalType::kInt64, "int64"}}};
+inline constexpr NameTable<WordOrder, 2> kWordOrderNames{
+    {{WordOrder::kBig, "big"}, {WordOrder::kLittle, "little"}}};
 
-const char* tableName(SignalTable table);  // coil, discrete_input, holding_register, ...
 const char* typeName(SignalType type);
-bool isBitTable(SignalTable table);
 // Registers (or bits) one value of `type` takes.
 uint16_t wordsOf(SignalType type);
 // The raw values a type can hold (uint64/int64 as doubles: exact up to 2^53).
@@ -30,7 +39,7 @@ double rawMax(SignalType type);
 
 struct SignalConfig {
   std::string name;  // a ROS name: topic D/<name>
-  SignalTable table = SignalTable::kHoldingRegister;
+  Table table = Table::kHoldingRegister;
   uint16_t address = 0;
   SignalType type = SignalType::kUint16;
   WordOrder word_order = WordOrder::kBig;

@@ -3,10 +3,29 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "modbus_rtu_driver/core/modbus/text.h"
+
 namespace modbus_rtu_driver {
+
+// The four Modbus tables, with one name each wherever users name one: signals' `table`, the
+// slave role's table sizes and names, the simulator's get/set, the commissioning tool's --table.
+enum class Table { kCoil, kDiscreteInput, kHoldingRegister, kInputRegister };
+inline constexpr NameTable<Table, 4> kTableNames{{{Table::kCoil, "coil"},
+                                                  {Table::kDiscreteInput, "discrete_input"},
+                                                  {Table::kHoldingRegister, "holding_register"},
+                                                  {Table::kInputRegister, "input_register"}}};
+const char* tableName(Table table);
+bool isBitTable(Table table);  // coils and discrete inputs
+// A table by its name; otherwise nullopt and `error` says what the names are, with a hint when
+// `name` is one of the spellings earlier versions took ("holding", "coils", "input-registers").
+std::optional<Table> parseTableName(std::string_view name, std::string* error);
+// The table a spelling of earlier versions meant ("holding_registers" -> holding_register).
+std::optional<Table> formerTableName(std::string_view name);
 
 enum class FunctionCode : uint8_t {
   kReadCoils = 0x01,
@@ -61,6 +80,8 @@ struct Request {
   // retried after a lost reply, since the device may have acted on it (the caller reads back).
   bool repeatable = true;
 
+  // The read of `table` (FC01-FC04).
+  static Request read(uint8_t slave, Table table, uint16_t address, uint16_t count);
   static Request readCoils(uint8_t slave, uint16_t address, uint16_t count);
   static Request readDiscreteInputs(uint8_t slave, uint16_t address, uint16_t count);
   static Request readHoldingRegisters(uint8_t slave, uint16_t address, uint16_t count);

@@ -22,12 +22,9 @@ typedef struct _modbus_mapping_t modbus_mapping_t;  // NOLINT
 
 namespace modbus_rtu_driver {
 
-enum class SlaveTable { kCoils, kDiscreteInputs, kHoldingRegisters, kInputRegisters };
-const char* slaveTableName(SlaveTable table);
-
 // A write the master made (after it was applied and answered).
 struct SlaveWrite {
-  SlaveTable table = SlaveTable::kCoils;  // kCoils or kHoldingRegisters
+  Table table = Table::kCoil;  // kCoils or kHoldingRegisters
   uint16_t address = 0;
   std::vector<uint16_t> values;  // coil states 0/1 or register values
   bool broadcast = false;
@@ -63,7 +60,7 @@ class SlaveServer {
 
   // Sets values the master will read. Empty when accepted (applied before the next frame),
   // else a message naming the range.
-  std::string set(SlaveTable table, uint16_t address, const std::vector<uint16_t>& values);
+  std::string set(Table table, uint16_t address, const std::vector<uint16_t>& values);
   SlaveStats stats() const;
 
   // What the thread does with bytes from the line, callable without it (tests, fuzz target):
@@ -74,7 +71,7 @@ class SlaveServer {
 
  private:
   struct Change {
-    SlaveTable table;
+    Table table;
     uint16_t address;
     std::vector<uint16_t> values;
   };
@@ -84,7 +81,7 @@ class SlaveServer {
   void applyChanges();
   void serve(const Bytes& frame);
   uint8_t predictException(const Bytes& frame) const;
-  uint16_t tableSize(SlaveTable table) const;
+  uint16_t tableSize(Table table) const;
 
   SlaveConfig config_;
   WriteCallback on_write_;
