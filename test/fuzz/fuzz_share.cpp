@@ -4,6 +4,7 @@
 // and unit, the same function or its exception), the server closes the connection once the
 // client has finished, and every 500 inputs a valid request on a new connection still gets its
 // true answer.
+#include <cstdio>
 #include <cstdlib>
 
 #include "share_test_bus.h"
@@ -12,8 +13,12 @@ using namespace modbus_rtu_driver;
 
 namespace {
 
-void check(bool ok) {
-  if (!ok) std::abort();
+// Aborts (libFuzzer keeps the input) and says which invariant broke.
+#define check(ok) checkAt((ok), #ok, __LINE__)
+void checkAt(bool ok, const char* what, int line) {
+  if (ok) return;
+  std::fprintf(stderr, "fuzz_share.cpp:%d: invariant broken: %s\n", line, what);
+  std::abort();
 }
 
 ShareFixture& share() {

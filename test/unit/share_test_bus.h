@@ -148,14 +148,20 @@ inline std::vector<Bytes> mbapFramesIn(Bytes input) {
 }
 
 // Removes from `unanswered` the frame `reply` answers (its transaction id and unit, the same
-// function or its exception); false when it answers none of them.
+// function or its exception); false when it answers none of them. A frame whose function
+// equals the reply's is taken before one whose exception it could be: a client may send
+// function 0x86 itself (answered "illegal function", 0x86) beside an FC06 with the same
+// transaction id and unit, and the FC06's echo may come after it.
 inline bool takeAnswered(std::vector<Bytes>* unanswered, const Bytes& reply) {
   if (reply.size() < 8) return false;
-  for (auto q = unanswered->begin(); q != unanswered->end(); ++q) {
-    const bool same_function = reply[7] == (*q)[7] || reply[7] == ((*q)[7] | 0x80);
-    if (mbapTransaction(*q) == mbapTransaction(reply) && (*q)[6] == reply[6] && same_function) {
-      unanswered->erase(q);
-      return true;
+  for (const bool exception : {false, true}) {
+    for (auto q = unanswered->begin(); q != unanswered->end(); ++q) {
+      const uint8_t function = exception ? ((*q)[7] | 0x80) : (*q)[7];
+      if (mbapTransaction(*q) == mbapTransaction(reply) && (*q)[6] == reply[6] &&
+          reply[7] == function) {
+        unanswered->erase(q);
+        return true;
+      }
     }
   }
   return false;
