@@ -7,6 +7,7 @@
 #include "modbus_rtu_driver/core/config/config_yaml.h"
 #include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/core/config/slave_config.h"
+#include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/registry.h"
 
 namespace modbus_rtu_driver {
@@ -52,11 +53,8 @@ std::vector<T> perChannel(const YAML::Node& n, const std::string& key,
     const std::string channel = kv.first.as<std::string>();
     size_t i = 0;
     while (i < names.size() && names[i] != channel) ++i;
-    if (i == names.size()) {
-      std::string list;
-      for (const auto& nm : names) list += (list.empty() ? "" : ", ") + nm;
-      fail(key + "/" + channel, "no output channel of that name (outputs: " + list + ")");
-    }
+    if (i == names.size())
+      fail(key + "/" + channel, "no output channel of that name (outputs: " + join(names) + ")");
     values[i] = parse(kv.second, key + "/" + channel);
   }
   return values;
@@ -185,19 +183,19 @@ void checkDeviceKeys(const YAML::Node& n, const std::string& where) {
   const bool generic = type == "generic";
   const std::vector<std::string> types = knownDeviceTypes();
   const bool known_type = std::find(types.begin(), types.end(), type) != types.end();
-  std::string list;
+  std::vector<std::string> list;
   for (const auto& k : kDeviceKeys) {
     const bool signal_key =
         std::find(kSignalMapKeys.begin(), kSignalMapKeys.end(), k) != kSignalMapKeys.end();
     const bool common = k == "type" || k == "address" || k == "poll_rate" || k == "reply_delay";
     if (known_type && !common && signal_key != generic) continue;
-    list += (list.empty() ? "" : ", ") + k;
+    list.push_back(k);
   }
   for (const auto& kv : n) {
     const std::string key = kv.first.as<std::string>();
     if (!kDeviceKeys.count(key))
       fail(where + key,
-           "unknown key (known keys" + (known_type ? " of " + type : "") + ": " + list + ")");
+           "unknown key (known keys" + (known_type ? " of " + type : "") + ": " + join(list) + ")");
   }
 }
 
@@ -212,12 +210,7 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n,
   DeviceConfig d;
   d.name = name;
   if (!n["type"]) {
-    fail(
-        where + "type", "missing (one of " + [] {
-          std::string s;
-          for (const auto& t : knownDeviceTypes()) s += (s.empty() ? "" : ", ") + t;
-          return s;
-        }() + ")");
+    fail(where + "type", "missing (one of " + join(knownDeviceTypes()) + ")");
   }
   d.type = get<std::string>(n["type"], where + "type", "a device type");
   if (!n["address"]) fail(where + "address", "missing (the device's slave address, 1-255)");

@@ -4,6 +4,8 @@
 #include <map>
 #include <set>
 
+#include "modbus_rtu_driver/core/modbus/text.h"
+
 namespace modbus_rtu_driver {
 
 std::vector<std::string> withDefaults(const std::vector<std::string>& given, size_t n,
@@ -78,7 +80,7 @@ Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& chan
   // channel between two requested ones is never rewritten (a rewrite would cancel its flash
   // or fight its PWM on the board).
   const std::vector<CoilRun> runs = coilRuns(channels, states);
-  std::string written;  // the channels of the runs confirmed so far, for a partial failure
+  std::vector<uint8_t> written;  // the channels of the runs confirmed so far, for a partial failure
   Result last = Result::success();
   for (const CoilRun& run : runs) {
     std::vector<uint8_t> run_channels;
@@ -90,14 +92,16 @@ Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& chan
     if (!r.ok()) r = confirmCoils(bus, std::move(r), run_channels, run.states);
     if (!r.ok()) {
       if (!written.empty())
-        r.message += "; outputs " + written + " were written before, the others not";
+        r.message += "; outputs " +
+                     join(written, ", ", [](uint8_t c) { return std::to_string(c); }) +
+                     " were written before, the others not";
       return r;
     }
     // The snapshot takes the run when the whole array is known (from a poll, or from
     // confirmCoils reading every coil back).
     if (outputs_.size() == outputCount())
       for (size_t i = 0; i < run.states.size(); ++i) outputs_[run.first + i] = run.states[i];
-    for (uint8_t c : run_channels) written += (written.empty() ? "" : ", ") + std::to_string(c);
+    written.insert(written.end(), run_channels.begin(), run_channels.end());
     if (!r.message.empty()) last.message += (last.message.empty() ? "" : "; ") + r.message;
     last.values = r.values;
   }

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "modbus_rtu_driver/core/config/number_text.h"
+#include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/registry.h"
 
 namespace modbus_rtu_driver {
@@ -228,9 +229,9 @@ Result Ld58a08::writeOutputs(Transport& bus, const std::vector<uint8_t>& channel
                              const std::vector<bool>& states) {
   std::vector<uint8_t> stopped;
   auto list = [](const std::vector<uint8_t>& chs) {
-    std::string text = chs.size() == 1 ? "channel " : "channels ";
-    for (size_t i = 0; i < chs.size(); ++i) text += (i ? ", " : "") + std::to_string(chs[i]);
-    return text;
+    // uint8_t would print as a character through join's <<.
+    return (chs.size() == 1 ? "channel " : "channels ") +
+           join(chs, ", ", [](uint8_t c) { return std::to_string(c); });
   };
   auto stoppedNote = [&] { return "PWM on " + list(stopped) + " stopped first"; };
   for (uint8_t ch : channels) {

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "modbus_rtu_driver/core/modbus/text.h"
+
 namespace modbus_rtu_driver {
 
 Request ReadSpan::request(uint8_t slave) const {
@@ -19,10 +21,9 @@ Request ReadSpan::request(uint8_t slave) const {
 }
 
 std::string ReadSpan::describe(const std::vector<SignalConfig>& all) const {
-  std::string names;
-  for (size_t i : signals) names += (names.empty() ? "" : ", ") + all[i].name;
   return std::string(tableName(table)) + " " + std::to_string(address) + "-" +
-         std::to_string(address + count - 1) + " (" + names + ")";
+         std::to_string(address + count - 1) + " (" +
+         join(signals, ", ", [&all](size_t i) { return all[i].name; }) + ")";
 }
 
 ReadPlanner::ReadPlanner(std::vector<SignalConfig> signals, int max_gap)

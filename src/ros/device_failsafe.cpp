@@ -5,16 +5,17 @@
 #include <cstdio>
 
 #include "modbus_rtu_driver/core/config/number_text.h"
+#include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 
 namespace modbus_rtu_driver {
 
 namespace {
 
-std::string join(const std::vector<std::string>& names, const std::vector<uint8_t>& channels) {
-  std::string s;
-  for (uint8_t c : channels) s += (s.empty() ? "" : ", ") + names[c];
-  return s;
+// "a, b": the names of the channels.
+std::string channelNames(const std::vector<std::string>& names,
+                         const std::vector<uint8_t>& channels) {
+  return join(channels, ", ", [&names](uint8_t c) { return names[c]; });
 }
 
 std::future<Result> ready(Result r) {
@@ -110,7 +111,7 @@ void DeviceAdapter::checkRestart() {
     ++restarts_detected_;
     reason = verdict == FailsafeTracker::Verdict::kCameBack
                  ? "answered again after being offline"
-                 : "outputs " + join(device_->outputNames(), changed) +
+                 : "outputs " + channelNames(device_->outputNames(), changed) +
                        " changed with no command in between (power cycle?)";
     const OnRestart policy = failsafe_.config().on_restart;
     // With on_restart: leave, only the pending safe states are written: say so.
@@ -139,10 +140,10 @@ void DeviceAdapter::checkRestart() {
 void DeviceAdapter::checkDeadlines() {
   const auto expired = failsafe_.expiredCommands();
   if (!expired.empty())
-    applySafe(
-        "command_timeout",
-        "no command on " + join(device_->outputNames(), expired) + " within its command_timeout",
-        expired);
+    applySafe("command_timeout",
+              "no command on " + channelNames(device_->outputNames(), expired) +
+                  " within its command_timeout",
+              expired);
   if (heartbeat_ && heartbeat_->expired()) {
     const FailsafeConfig& fs = failsafe_.config();
     applySafe("heartbeat", "no message on " + fs.heartbeat_topic + " within " +
@@ -152,8 +153,10 @@ void DeviceAdapter::checkDeadlines() {
 
 void DeviceAdapter::report(const FailsafeEvent& e) {
   std::string text = e.trigger + " (" + e.reason + "): ";
+  std::vector<std::string> changes;
   for (size_t i = 0; i < e.channels.size(); ++i)
-    text += (i ? ", " : "") + e.channels[i] + (e.states[i] ? " on" : " off");
+    changes.push_back(e.channels[i] + (e.states[i] ? " on" : " off"));
+  text += join(changes);
   if (e.channels.empty()) text += e.action;
   text += e.confirmed ? "" : "; NOT confirmed: " + e.message;
   {
@@ -189,10 +192,11 @@ void DeviceAdapter::endFailsafeState() {
 void DeviceAdapter::diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const FailsafeConfig& fs = failsafe_.config();
   const auto names = device_->outputNames();
-  std::string safe;
+  std::vector<std::string> states;
   for (size_t i = 0; i < names.size(); ++i)
     if (fs.safeStateOf(i) != SafeState::kHold)
-      safe += (safe.empty() ? "" : ", ") + names[i] + " " + safeStateName(fs.safeStateOf(i));
+      states.push_back(names[i] + " " + safeStateName(fs.safeStateOf(i)));
+  const std::string safe = join(states);
   status.add("safe states", safe.empty() ? "none (every output holds)" : safe);
   status.add("on_restart", onRestartName(fs.on_restart));
   std::lock_guard<std::mutex> lock(failsafe_mutex_);

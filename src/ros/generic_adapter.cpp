@@ -13,6 +13,7 @@
 #include "modbus_rtu_driver/SetValue.h"
 #include "modbus_rtu_driver/SignalValues.h"
 #include "modbus_rtu_driver/core/bus/rate_meter.h"
+#include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
 
@@ -129,10 +130,8 @@ class GenericAdapter : public DeviceAdapter {
   // Only what a generic device has: no output safe states, no on_restart, no restart count.
   void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status) override {
     if (!hasSafeStates()) return;  // no fail-safe at all
-    std::string safe;
-    for (size_t i : generic().safeSignals())
-      safe += (safe.empty() ? "" : ", ") + describeSafeValue(i);
-    status.add("safe values", safe);
+    status.add("safe values", join(generic().safeSignals(), ", ",
+                                   [this](size_t i) { return describeSafeValue(i); }));
     const FailsafeConfig& fs = failsafeConfig();
     status.add("on_start", fs.on_start_safe ? "safe" : "keep");
     if (!fs.heartbeat_topic.empty())
@@ -234,14 +233,14 @@ class GenericAdapter : public DeviceAdapter {
   // The event in the log (stderr once ROS is down: at shutdown), the counters for
   // /diagnostics, and the node's ~failsafe topic.
   void report(const FailsafeEvent& e) {
-    std::string text = e.trigger + " (" + e.reason + "): ";
-    for (size_t k = 0; k < e.channels.size(); ++k) {
-      const auto i = static_cast<size_t>(
-          std::find_if(generic().signals().begin(), generic().signals().end(),
-                       [&](const SignalConfig& s) { return s.name == e.channels[k]; }) -
-          generic().signals().begin());
-      text += (k ? ", " : "") + describeSafeValue(i);
-    }
+    std::string text = e.trigger + " (" + e.reason +
+                       "): " + join(e.channels, ", ", [this](const std::string& name) {
+                         const auto i = static_cast<size_t>(
+                             std::find_if(generic().signals().begin(), generic().signals().end(),
+                                          [&](const SignalConfig& s) { return s.name == name; }) -
+                             generic().signals().begin());
+                         return describeSafeValue(i);
+                       });
     text += e.confirmed ? "" : "; NOT confirmed: " + e.message;
     {
       std::lock_guard<std::mutex> lock(failsafe_mutex_);
@@ -286,12 +285,13 @@ class GenericAdapter : public DeviceAdapter {
     }
     if (after_poll) publishLater(all_pub_, std::move(all));
     // Signals whose group was polled and whose last read failed.
-    std::string unread;
+    std::vector<std::string> unread_names;
     for (size_t g = 0; g < polled_.size(); ++g) {
       if (!polled_[g]) continue;
       for (size_t i : generic().groups()[g].signals)
-        if (!states[i].valid) unread += (unread.empty() ? "" : ", ") + signals[i].name;
+        if (!states[i].valid) unread_names.push_back(signals[i].name);
     }
+    const std::string unread = join(unread_names);
     std::lock_guard<std::mutex> lock(splits_mutex_);
     splits_ = generic().splits();
     unread_ = unread;

@@ -9,6 +9,8 @@
 #include <thread>
 #include <vector>
 
+#include "modbus_rtu_driver/core/modbus/text.h"
+
 namespace modbus_rtu_driver {
 
 namespace {
@@ -20,12 +22,6 @@ std::vector<std::string> words(const std::string& line) {
   std::vector<std::string> out;
   for (std::string w; in >> w;) out.push_back(w);
   return out;
-}
-
-std::string join(const std::vector<uint16_t>& v) {
-  std::string s;
-  for (uint16_t x : v) s += (s.empty() ? "" : " ") + std::to_string(x);
-  return s;
 }
 
 }  // namespace
@@ -174,7 +170,7 @@ bool Dm500Master::step(const std::string& line, std::string* why) {
       } else if (!r.ok()) {
         problem = r.message;
       } else if (check_values && r.values != expected) {
-        problem = "read " + join(r.values) + ", expected " + join(expected);
+        problem = "read " + join(r.values, " ") + ", expected " + join(expected, " ");
       }
       if (problem.empty()) return true;
       if (!waiting || Steady::now() >= deadline) {

@@ -42,24 +42,16 @@ void parseHoles(const YAML::Node& n, const std::string& key, SimGenericConfig* o
 
 const std::vector<std::string> kSimGenericKeys = {"holes", "max_read"};
 
-bool parseSimGeneric(const YAML::Node& entry, const std::string& where, const std::string& base_dir,
-                     SimGenericConfig* out, std::string* error) {
-  try {
-    out->map = parseSignalMap(entry, where, base_dir);
-    if (entry["holes"]) parseHoles(entry["holes"], where + "holes", out);
-    if (entry["max_read"]) {
-      const int n = config::getInt(entry["max_read"], where + "max_read");
-      if (n < 1 || n > kMaxReadBits)
-        config::fail(where + "max_read", std::to_string(n) + " is outside 1-2000");
-      out->max_read = static_cast<uint16_t>(n);
-    }
-    return true;
-  } catch (const config::ConfigError& e) {
-    *error = e.message;
-  } catch (const YAML::Exception& e) {
-    *error = where + ": " + e.what();
+void parseSimGeneric(const YAML::Node& entry, const std::string& where, const std::string& base_dir,
+                     SimGenericConfig* out) {
+  out->map = parseSignalMap(entry, where, base_dir);
+  if (entry["holes"]) parseHoles(entry["holes"], where + "holes", out);
+  if (entry["max_read"]) {
+    const int n = config::getInt(entry["max_read"], where + "max_read");
+    if (n < 1 || n > kMaxReadBits)
+      config::fail(where + "max_read", std::to_string(n) + " is outside 1-2000");
+    out->max_read = static_cast<uint16_t>(n);
   }
-  return false;
 }
 
 SimGeneric::SimGeneric(uint8_t address, SimLineSettings line, SimGenericConfig config)

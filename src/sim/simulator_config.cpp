@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include "modbus_rtu_driver/core/config/config_yaml.h"
 #include "modbus_rtu_driver/core/config/link_config.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
@@ -15,72 +16,56 @@ namespace modbus_rtu_driver {
 
 namespace {
 
-// A scalar of type T at `key`, or a message naming the key and what was there.
-template <typename T>
-bool scalar(const YAML::Node& node, const std::string& key, const char* what, T* out,
-            std::string* error) {
-  try {
-    if (!node.IsScalar()) throw YAML::Exception(node.Mark(), "");
-    *out = node.as<T>();
-    return true;
-  } catch (const YAML::Exception&) {
-    std::ostringstream text;
-    if (node.IsScalar())
-      text << "'" << node.Scalar() << "'";
-    else
-      text << "a " << (node.IsSequence() ? "list" : node.IsMap() ? "map" : "null");
-    *error = key + ": " + text.str() + " is not " + what;
-    return false;
-  }
-}
+using config::fail;
 
-bool onlyKeys(const YAML::Node& map, const std::set<std::string>& allowed, const std::string& where,
-              std::string* error) {
-  for (const auto& kv : map) {
-    const std::string key = kv.first.as<std::string>("");
-    if (allowed.count(key)) continue;
-    std::string list;
-    for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-    *error = where + key + ": unknown key (expected " + list + ")";
-    return false;
-  }
-  return true;
-}
-
-bool parseDevice(const YAML::Node& d, const std::string& where, const std::string& base_dir,
-                 SimulatorConfig::Entry* e, std::string* error) {
-  if (!d.IsMap()) {
-    *error = where + ": not a map {type: ..., address: ...}";
-    return false;
-  }
+// Throws config::ConfigError naming the key, as the node's parsers do (core/config/config_yaml.h).
+void parseDevice(const YAML::Node& d, const std::string& where, const std::string& base_dir,
+                 SimulatorConfig::Entry* e) {
+  if (!d.IsMap()) fail(where, "not a map {type: ..., address: ...}");
   const bool generic = d["type"] && d["type"].IsScalar() && d["type"].Scalar() == "generic";
   std::set<std::string> keys = {"type", "address"};
   if (generic) {  // the node's keys (core/config/signal.h), and the simulator's own (sim_generic.h)
     keys.insert(kSignalMapKeys.begin(), kSignalMapKeys.end());
     keys.insert(kSimGenericKeys.begin(), kSimGenericKeys.end());
   }
-  if (!onlyKeys(d, keys, where + "/", error)) return false;
-  if (generic && !parseSimGeneric(d, where + "/", base_dir, &e->generic, error)) return false;
-  if (!d["type"] || !d["address"]) {
-    *error = where + (d["type"] ? "/address" : "/type") + ": missing";
-    return false;
-  }
-  if (!scalar(d["type"], where + "/type", "a device type", &e->type, error) ||
-      !scalar(d["address"], where + "/address", "a number", &e->address, error))
-    return false;
+  config::checkKeys(d, where + "/", keys);
+  if (generic) parseSimGeneric(d, where + "/", base_dir, &e->generic);
+  if (!d["type"] || !d["address"]) fail(where + (d["type"] ? "/address" : "/type"), "missing");
+  e->type = config::get<std::string>(d["type"], where + "/type", "a device type");
+  e->address = config::getInt(d["address"], where + "/address");
   const DeviceDescriptor* type = simDeviceType(e->type);
-  if (!type) {
-    *error =
-        where + "/type: '" + e->type + "' is not a simulated type (" + simDeviceTypeNames() + ")";
-    return false;
-  }
+  if (!type)
+    fail(where + "/type",
+         "'" + e->type + "' is not a simulated type (" + simDeviceTypeNames() + ")");
   const int max = type->max_address;
-  if (e->address < 1 || e->address > max) {
-    *error = where + "/address: " + std::to_string(e->address) + " is outside 1-" +
-             std::to_string(max) + " for " + e->type;
-    return false;
+  if (e->address < 1 || e->address > max)
+    fail(where + "/address",
+         std::to_string(e->address) + " is outside 1-" + std::to_string(max) + " for " + e->type);
+}
+
+void parseRoot(const YAML::Node& root, const std::string& base_dir, SimulatorConfig* out) {
+  if (!root.IsMap())
+    throw config::ConfigError{"the file is not a map of baud, parity, pace and devices"};
+  config::checkKeys(root, "", {"baud", "parity", "pace", "devices"});
+  SimulatorConfig& c = *out;
+  if (root["baud"]) c.factory.baud = config::getInt(root["baud"], "baud");
+  if (!isStandardBaud(c.factory.baud))
+    fail("baud", std::to_string(c.factory.baud) + " is not a standard rate (1200-115200)");
+  if (root["parity"]) {
+    const std::string text =
+        config::get<std::string>(root["parity"], "parity", "none, even or odd");
+    Parity p;
+    if (!parseParity(text, &p)) fail("parity", "'" + text + "' is not none, even or odd");
+    c.factory.parity = parityLetter(p);
   }
-  return true;
+  if (root["pace"]) c.pace = config::get<bool>(root["pace"], "pace", "true or false");
+  if (!root["devices"] || !root["devices"].IsSequence())
+    fail("devices", "missing or not a list of {type, address}");
+  for (size_t i = 0; i < root["devices"].size(); ++i) {
+    SimulatorConfig::Entry e;
+    parseDevice(root["devices"][i], "devices[" + std::to_string(i) + "]", base_dir, &e);
+    c.devices.push_back(e);
+  }
 }
 
 }  // namespace
@@ -114,38 +99,15 @@ bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::st
     *error = std::string("not valid YAML: ") + e.what();
     return false;
   }
-  if (!root.IsMap()) {
-    *error = "the file is not a map of baud, parity, pace and devices";
-    return false;
-  }
-  if (!onlyKeys(root, {"baud", "parity", "pace", "devices"}, "", error)) return false;
   SimulatorConfig c;
-  if (root["baud"] && !scalar(root["baud"], "baud", "a number", &c.factory.baud, error))
+  try {
+    parseRoot(root, base_dir, &c);
+  } catch (const config::ConfigError& e) {
+    *error = e.message;
     return false;
-  if (!isStandardBaud(c.factory.baud)) {
-    *error = "baud: " + std::to_string(c.factory.baud) + " is not a standard rate (1200-115200)";
+  } catch (const YAML::Exception& e) {  // one the helpers do not turn into a ConfigError
+    *error = std::string("configuration: ") + e.what();
     return false;
-  }
-  if (root["parity"]) {
-    std::string text;
-    Parity p;
-    if (!scalar(root["parity"], "parity", "none, even or odd", &text, error)) return false;
-    if (!parseParity(text, &p)) {
-      *error = "parity: '" + text + "' is not none, even or odd";
-      return false;
-    }
-    c.factory.parity = parityLetter(p);
-  }
-  if (root["pace"] && !scalar(root["pace"], "pace", "true or false", &c.pace, error)) return false;
-  if (!root["devices"] || !root["devices"].IsSequence()) {
-    *error = "devices: missing or not a list of {type, address}";
-    return false;
-  }
-  for (size_t i = 0; i < root["devices"].size(); ++i) {
-    SimulatorConfig::Entry e;
-    if (!parseDevice(root["devices"][i], "devices[" + std::to_string(i) + "]", base_dir, &e, error))
-      return false;
-    c.devices.push_back(e);
   }
   *out = c;
   return true;

@@ -12,6 +12,7 @@
 #include <map>
 #include <sstream>
 
+#include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/commissioning.h"
 #include "modbus_rtu_driver/tools/commission.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
@@ -294,10 +295,9 @@ std::string baudsOf(const Commissioning& type, bool short_form) {
   const auto [lo, hi] = type.baudCodes();
   if (short_form && hi - lo > 2)
     return std::to_string(baudOfCode(lo)) + "-" + std::to_string(baudOfCode(hi));
-  std::string list;
-  for (int code = lo; code <= hi; ++code)
-    list += (code == lo ? "" : ", ") + std::to_string(baudOfCode(code));
-  return list;
+  std::vector<int> bauds;
+  for (int code = lo; code <= hi; ++code) bauds.push_back(baudOfCode(code));
+  return join(bauds);
 }
 
 // What --help says of a settings command's value and types, from the registered classes.
@@ -305,7 +305,7 @@ std::string rangeHelp(const SettingCommand& s) {
   const std::vector<CommissioningType> types = typesWith(s.feature);
   std::string text;
   auto each = [&types, &text](const std::function<std::string(const CommissioningType&)>& f) {
-    for (size_t i = 0; i < types.size(); ++i) text += (i ? ", " : "") + f(types[i]);
+    text += join(types, ", ", f);
   };
   switch (s.feature) {
     case BoardFeature::kAddress:
@@ -313,8 +313,8 @@ std::string rangeHelp(const SettingCommand& s) {
         return std::string(t.type->name) + " 1-" + std::to_string(t.type->max_address);
       });
       text += "; without --address ";
-      for (size_t i = 0; i < types.size(); ++i)
-        text += (i ? " / " : "") + types[i].commissioning->addressPath();
+      text += join(types, " / ",
+                   [](const CommissioningType& t) { return t.commissioning->addressPath(); });
       return text + ": board alone on the bus";
     case BoardFeature::kBaud:
       text = "a rate or a code: ";
@@ -508,10 +508,9 @@ struct Cli {
   }
   void addTyped(CLI::App* command, const SettingCommand& s) {
     const std::vector<CommissioningType> types = typesWith(s.feature);
-    std::string ranges;
-    for (const auto& t : types)
-      ranges += (ranges.empty() ? "" : ", ") + std::string(t.type->name) + " 1-" +
-                std::to_string(t.type->max_address);
+    const std::string ranges = join(types, ", ", [](const CommissioningType& t) {
+      return std::string(t.type->name) + " 1-" + std::to_string(t.type->max_address);
+    });
     command->add_option("--type", w.type, orList(namesOf(types)))
         ->type_name("T")
         ->check(typeFor(command->get_name(), s.feature));
@@ -716,10 +715,10 @@ void parseLimits(const Parsed& p, CommissionCommand& c) {
   const std::vector<LimitSpec> limits = type.limitList();
   c.limits.assign(limits.size(), -1);
   bool all = true, any = false;
-  std::string given_list;
+  const std::string given_list =
+      join(limits, ", ", [](const LimitSpec& l) { return limitOption(l.name) + " " + l.unit; });
   for (size_t i = 0; i < limits.size(); ++i) {
     const std::string option = limitOption(limits[i].name);
-    given_list += (i ? ", " : "") + option + " " + limits[i].unit;
     if (!p.has(option)) {
       all = false;
       continue;

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <variant>
 
+#include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/commissioning.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
 
@@ -242,16 +243,16 @@ class DeviceCommands {
   // "over-voltage 250.0 V, under-voltage 200.0 V, over-current 16.00 A"
   std::string limitsHuman(const std::vector<uint16_t>& regs) const {
     const std::vector<LimitSpec> limits = type_->limitList();
-    std::string text;
+    std::vector<std::string> items;
     for (size_t i = 0; i < limits.size() && i < regs.size(); ++i) {
       std::string name = limits[i].name;
       std::replace(name.begin(), name.end(), '_', '-');
       char value[32];
       std::snprintf(value, sizeof value, "%.*f", limits[i].decimals,
                     regs[i] / std::pow(10.0, limits[i].decimals));
-      text += (i ? ", " : "") + name + " " + value + " " + limits[i].unit;
+      items.push_back(name + " " + value + " " + limits[i].unit);
     }
-    return text;
+    return join(items);
   }
   Json limitsJson(const std::vector<uint16_t>& regs) const {
     const std::vector<LimitSpec> limits = type_->limitList();

@@ -3,6 +3,7 @@
 #include <set>
 
 #include "modbus_rtu_driver/core/link/make_transport.h"
+#include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/commissioning.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
 
@@ -137,16 +138,16 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
   }
   if (found.empty()) {
     // Where each type's boards are when new (their descriptors' factory settings).
-    std::string factory;
+    std::vector<std::string> boards;
     for (const CommissioningType& t : commissioningTypes()) {
       const FactorySettings& f = t.type->factory;
       if (!f.address || !f.baud) continue;
-      factory += (factory.empty() ? "" : ", ") + std::string(t.type->name) + " at " +
-                 std::to_string(f.address) + " " +
-                 lineName(f.baud, f.parity == 'E'   ? Parity::kEven
-                                  : f.parity == 'O' ? Parity::kOdd
-                                                    : Parity::kNone);
+      boards.push_back(std::string(t.type->name) + " at " + std::to_string(f.address) + " " +
+                       lineName(f.baud, f.parity == 'E'   ? Parity::kEven
+                                        : f.parity == 'O' ? Parity::kOdd
+                                                          : Parity::kNone));
     }
+    const std::string factory = join(boards);
     out.note(
         "nothing answered; check the wiring and --bauds/--parities, and give a board with a "
         "return delay a --timeout above it" +

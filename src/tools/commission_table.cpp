@@ -2,9 +2,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <sstream>
 #include <thread>
 
+#include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
 
 namespace modbus_rtu_driver {
@@ -50,10 +50,10 @@ class TableCommands {
   int read() {
     const Result r = s_.bus.execute(readRequest());
     if (!r.ok()) return s_.out.fail(r);
-    std::ostringstream human;
+    std::vector<std::string> lines;
     for (size_t i = 0; i < r.values.size(); ++i)
-      human << (i ? "\n" : "") << item(static_cast<int>(i)) << ": " << r.values[i];
-    s_.out.result(human.str(), fields().add("values", r.values));
+      lines.push_back(item(static_cast<int>(i)) + ": " + std::to_string(r.values[i]));
+    s_.out.result(join(lines, "\n"), fields().add("values", r.values));
     return kExitOk;
   }
 
@@ -90,19 +90,19 @@ class TableCommands {
 
   // Prints the values when they differ from `last` (all of them the first time).
   void report(double t, const std::vector<uint16_t>& values, const std::vector<uint16_t>& last) {
-    std::ostringstream human;
+    std::vector<std::string> human;
     std::vector<uint16_t> changed;
     char stamp[32];
     std::snprintf(stamp, sizeof stamp, "+%.2f s  ", t);
-    human << stamp;
     for (size_t i = 0; i < values.size(); ++i) {
       if (!last.empty() && values[i] == last[i]) continue;
-      human << (changed.empty() ? "" : ", ") << item(static_cast<int>(i)) << ": ";
-      if (!last.empty()) human << last[i] << " -> ";
-      human << values[i];
+      human.push_back(item(static_cast<int>(i)) + ": " +
+                      (last.empty() ? "" : std::to_string(last[i]) + " -> ") +
+                      std::to_string(values[i]));
       changed.push_back(static_cast<uint16_t>(c_.start + i));
     }
-    s_.out.event(human.str(), fields().add("t", t).add("values", values).add("changed", changed));
+    s_.out.event(stamp + join(human),
+                 fields().add("t", t).add("values", values).add("changed", changed));
   }
 
   int watch() {

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "modbus_rtu_driver/core/config/link_config.h"
+#include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/commissioning.h"
 #include "modbus_rtu_driver/tools/commission.h"
 
@@ -22,10 +23,8 @@ std::vector<CommissioningType> typesWith(BoardFeature feature) {
 }
 
 std::string namesWith(BoardFeature feature, const char* separator = "|") {
-  std::string out;
-  for (const CommissioningType& t : typesWith(feature))
-    out += (out.empty() ? "" : separator) + std::string(t.type->name);
-  return out;
+  return join(typesWith(feature), separator,
+              [](const CommissioningType& t) { return std::string(t.type->name); });
 }
 
 Parity parityOf(char letter) {
@@ -67,9 +66,9 @@ std::string settingsHelp() {
          "a code:";
     for (const auto& t : bauds) {
       const auto [lo, hi] = t.commissioning->baudCodes();
-      h << "\n      " << t.type->name << " " << lo << "-" << hi << " (";
-      for (int code = lo; code <= hi; ++code) h << (code == lo ? "" : ", ") << baudOfCode(code);
-      h << ")";
+      std::vector<int> rates;
+      for (int code = lo; code <= hi; ++code) rates.push_back(baudOfCode(code));
+      h << "\n      " << t.type->name << " " << lo << "-" << hi << " (" << join(rates) << ")";
     }
     h << "\n";
   }
@@ -88,11 +87,12 @@ std::string settingsHelp() {
     h << "  " << s.get << " --address A / " << s.set << " --address A " << s.value << "\n      "
       << (types.size() > 1 ? "--type " + namesWith(s.feature) + "; " : "");
     if (s.feature == BoardFeature::kReturnDelay)
-      for (size_t i = 0; i < types.size(); ++i)
-        h << (i ? ", " : "") << types[i].type->name << " 0-"
-          << types[i].commissioning->returnDelayStepMs() *
-                 types[i].commissioning->returnDelayMaxUnits()
-          << " ms in steps of " << types[i].commissioning->returnDelayStepMs() << " ms";
+      h << join(types, ", ", [](const CommissioningType& t) {
+        const int step = t.commissioning->returnDelayStepMs();
+        return std::string(t.type->name) + " 0-" +
+               std::to_string(step * t.commissioning->returnDelayMaxUnits()) + " ms in steps of " +
+               std::to_string(step) + " ms";
+      });
     else
       h << namesWith(s.feature, ", ");
     if (s.feature == BoardFeature::kPowerDownSave) h << ": power-down save of the PWM settings";
@@ -114,14 +114,15 @@ std::string settingsHelp() {
 std::string limitsHelp() {
   std::ostringstream h;
   for (const CommissioningType& t : typesWith(BoardFeature::kLimits)) {
-    std::string options, names;
+    std::string options;
+    std::vector<std::string> names;
     for (const LimitSpec& l : t.commissioning->limitList()) {
       std::string option = std::string("--") + l.name;
       std::replace(option.begin(), option.end(), '_', '-');
       options += " [" + option + " " + l.unit + "]";
-      names += (names.empty() ? "" : ", ") + option.substr(2);
+      names.push_back(option.substr(2));
     }
-    h << "  get-limits --address A                   (" << t.type->name << ": " << names
+    h << "  get-limits --address A                   (" << t.type->name << ": " << join(names)
       << ")\n  set-limits --address A" << options << "\n      (" << t.type->name
       << ") Limits not given stay as the device holds them (it is read first); read\n"
       << "      back after the write. The manual's rules, checked on the register values:\n"

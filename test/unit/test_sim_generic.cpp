@@ -53,10 +53,10 @@ TEST(SimGeneric, TheSameYamlAsTheNodes) {
             "devices[0]/signals[0]/table: missing");
   EXPECT_EQ(parseError("devices: [{type: generic, address: 7, holes: [], signals: [{name: a, "
                        "table: coil, address: 0}], colour: red}]"),
-            "devices[0]/colour: unknown key (expected address, holes, max_gap, max_read, "
+            "devices[0]/colour: unknown key (known keys: address, holes, max_gap, max_read, "
             "signals, template, type)");
   EXPECT_EQ(parseError("devices: [{type: lc_relay8, address: 7, holes: []}]"),
-            "devices[0]/holes: unknown key (expected address, type)");
+            "devices[0]/holes: unknown key (known keys: address, type)");
   EXPECT_EQ(parseError("devices: [{type: generic, address: 7, signals: [{name: a, table: coil, "
                        "address: 0}], holes: [{table: coils, from: 1}]}]"),
             "devices[0]/holes[0]/table: 'coils' is not one of coil, discrete_input, "

@@ -60,10 +60,14 @@ TEST(SimConfig, BadConfigsAreRefusedNamingTheKey) {
   const std::string devices = "devices: [{type: ld58a08, address: 1}]\n";
   EXPECT_EQ(configError("baud: 19200\nparity: even\npace: true\n" + devices), "accepted");
   EXPECT_EQ(configError("bauds: 9600\n" + devices),
-            "bauds: unknown key (expected baud, devices, pace, parity)");
+            "bauds: unknown key (known keys: baud, devices, pace, parity)");
   EXPECT_EQ(configError("baud: 9601\n" + devices),
             "baud: 9601 is not a standard rate (1200-115200)");
   EXPECT_EQ(configError("baud: fast\n" + devices), "baud: 'fast' is not a number");
+  // The node's helpers (core/config/config_yaml.h): a fraction is named as such, a list as a list.
+  EXPECT_EQ(configError("baud: 9600.5\n" + devices), "baud: '9600.5' is not a whole number");
+  EXPECT_EQ(configError("devices: [{type: lc_relay8, address: [1]}]"),
+            "devices[0]/address: a list is not a number");
   EXPECT_EQ(configError("parity: mark\n" + devices), "parity: 'mark' is not none, even or odd");
   EXPECT_EQ(configError("pace: maybe\n" + devices), "pace: 'maybe' is not true or false");
   EXPECT_EQ(configError("baud: 9600\n"), "devices: missing or not a list of {type, address}");
@@ -82,7 +86,7 @@ TEST(SimConfig, BadConfigsAreRefusedNamingTheKey) {
             "devices[0]/address: 'x' is not a number");
   EXPECT_EQ(configError("devices: [{type: lc_relay8}]"), "devices[0]/address: missing");
   EXPECT_EQ(configError("devices: [{type: lc_relay8, address: 1, baud: 4800}]"),
-            "devices[0]/baud: unknown key (expected address, type)");
+            "devices[0]/baud: unknown key (known keys: address, type)");
   EXPECT_EQ(configError("devices: [lc_relay8]"), "devices[0]: not a map {type: ..., address: ...}");
   EXPECT_EQ(configError("- 1\n- 2\n"), "the file is not a map of baud, parity, pace and devices");
   EXPECT_EQ(configError("devices: [").rfind("not valid YAML: ", 0), 0u);

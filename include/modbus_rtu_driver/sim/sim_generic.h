@@ -30,10 +30,11 @@ struct SimGenericConfig {
 // The simulator's keys of a generic device beside the node's (holes, max_read).
 extern const std::vector<std::string> kSimGenericKeys;
 
-// Reads `signals`, `template`, `max_gap`, `holes` and `max_read` of a simulator device entry; false
-// with a message naming the key. `base_dir`: where a relative template path starts.
-bool parseSimGeneric(const YAML::Node& entry, const std::string& where, const std::string& base_dir,
-                     SimGenericConfig* out, std::string* error);
+// Reads `signals`, `template`, `max_gap`, `holes` and `max_read` of a simulator device entry;
+// throws config::ConfigError naming the key (core/config/config_yaml.h), as the node's parsers do.
+// `base_dir`: where a relative template path starts.
+void parseSimGeneric(const YAML::Node& entry, const std::string& where, const std::string& base_dir,
+                     SimGenericConfig* out);
 
 class SimGeneric : public SimDevice {
  public:

@@ -3,6 +3,7 @@
 #include <cctype>
 
 #include "modbus_rtu_driver/core/config/number_text.h"
+#include "modbus_rtu_driver/core/modbus/text.h"
 
 namespace modbus_rtu_driver {
 namespace config {
@@ -57,11 +58,7 @@ void checkKeys(const YAML::Node& map, const std::string& where,
                const std::set<std::string>& known) {
   for (const auto& kv : map) {
     const std::string key = kv.first.as<std::string>();
-    if (!known.count(key)) {
-      std::string list;
-      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-      fail(where + key, "unknown key (known keys: " + list + ")");
-    }
+    if (!known.count(key)) fail(where + key, "unknown key (known keys: " + join(known) + ")");
   }
 }
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "modbus_rtu_driver/core/modbus/text.h"
+
 namespace modbus_rtu_driver {
 
 const char* parityName(Parity p) {
@@ -34,9 +36,7 @@ bool isStandardBaud(int b) {
 }
 
 std::string standardBaudList() {
-  std::string list;
-  for (int b : kStandardBauds) list += (list.empty() ? "" : ", ") + std::to_string(b);
-  return list;
+  return join(kStandardBauds);
 }
 
 char parityLetter(Parity parity) {

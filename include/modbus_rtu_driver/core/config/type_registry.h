@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/config/device_types.h"
+#include "modbus_rtu_driver/core/modbus/text.h"
 
 namespace modbus_rtu_driver {
 
@@ -52,9 +53,7 @@ class TypeRegistry {
   }
   // "generic, lc_relay8, ..." for an error message.
   std::string nameList() const {
-    std::string list;
-    for (const auto& kv : entries_) list += (list.empty() ? "" : ", ") + kv.first;
-    return list;
+    return join(entries_, ", ", [](const auto& kv) { return kv.first; });
   }
 
  private:
