@@ -128,13 +128,14 @@ bool parseSimulatorConfig(const std::string& yaml, SimulatorConfig* out, std::st
   }
   if (root["parity"]) {
     std::string text;
-    Parity p;
     if (!scalar(root["parity"], "parity", "none, even or odd", &text, error)) return false;
-    if (!parseParity(text, &p)) {
-      *error = "parity: '" + text + "' is not none, even or odd";
+    std::string problem;
+    const auto parity = parseParity(text, &problem);
+    if (!parity) {
+      *error = "parity: " + problem;
       return false;
     }
-    c.factory.parity = parityLetter(p);
+    c.factory.parity = *parity;
   }
   if (root["pace"] && !scalar(root["pace"], "pace", "true or false", &c.pace, error)) return false;
   if (!root["devices"] || !root["devices"].IsSequence()) {

@@ -143,9 +143,7 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
       if (!f.address || !f.baud) continue;
       factory += (factory.empty() ? "" : ", ") + std::string(t.type->name) + " at " +
                  std::to_string(f.address) + " " +
-                 lineName(f.baud, f.parity == 'E'   ? Parity::kEven
-                                  : f.parity == 'O' ? Parity::kOdd
-                                                    : Parity::kNone);
+                 lineName(f.baud, f.parity);
     }
     out.note(
         "nothing answered; check the wiring and --bauds/--parities, and give a board with a "
