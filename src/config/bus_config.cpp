@@ -80,8 +80,9 @@ void parseFailsafe(const YAML::Node& n, const std::string& where,
         n["safe_state"], where + "safe_state", names, SafeState::kHold,
         [](const YAML::Node& v, const std::string& key) {
           SafeState s;
-          const std::string text = get<std::string>(v, key, "off, on or hold");
-          if (!parseSafeState(text, &s)) fail(key, "'" + text + "' is not off, on or hold");
+          const std::string names = namesIn(kSafeStateNames);
+          const std::string text = get<std::string>(v, key, names.c_str());
+          if (!parseSafeState(text, &s)) fail(key, "'" + text + "' is not one of " + names);
           return s;
         });
   }
@@ -101,10 +102,7 @@ void parseFailsafe(const YAML::Node& n, const std::string& where,
     }
   }
   if (n["on_restart"]) {
-    const std::string text =
-        get<std::string>(n["on_restart"], where + "on_restart", "restore, safe or leave");
-    if (!parseOnRestart(text, &out->on_restart))
-      fail(where + "on_restart", "'" + text + "' is not restore, safe or leave");
+    out->on_restart = getNamed(n["on_restart"], where + "on_restart", kOnRestartNames);
   }
   if (n["on_start"]) {
     const std::string text = get<std::string>(n["on_start"], where + "on_start", "safe or keep");

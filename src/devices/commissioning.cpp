@@ -39,10 +39,9 @@ std::string baudCodeText(int code) {
 }
 
 std::string parityCodeText(int code) {
-  return code == 0   ? "none"
-         : code == 1 ? "even"
-         : code == 2 ? "odd"
-                     : "code " + std::to_string(code);
+  // The stored codes 0 none, 1 even, 2 odd are Parity's order (enum class Parity).
+  return code >= 0 && code <= 2 ? std::string(parityName(static_cast<Parity>(code)))
+                                : "code " + std::to_string(code);
 }
 
 // The defaults answer for a feature the type does not have: has() keeps the tool from asking.

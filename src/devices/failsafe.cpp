@@ -6,51 +6,18 @@
 namespace modbus_rtu_driver {
 
 bool parseSafeState(const std::string& text, SafeState* out) {
-  if (text == "off" || text == "false") {
-    *out = SafeState::kOff;
-  } else if (text == "on" || text == "true") {
-    *out = SafeState::kOn;
-  } else if (text == "hold") {
-    *out = SafeState::kHold;
-  } else {
-    return false;
-  }
-  return true;
+  // YAML 1.1 and rosparam turn a bare on/off into a boolean: its text is true/false.
+  const auto state = text == "true" ? SafeState::kOn : text == "false" ? SafeState::kOff : valueIn(kSafeStateNames, text);
+  if (state) *out = *state;
+  return state.has_value();
 }
 
 const char* safeStateName(SafeState state) {
-  switch (state) {
-    case SafeState::kOff:
-      return "off";
-    case SafeState::kOn:
-      return "on";
-    default:
-      return "hold";
-  }
-}
-
-bool parseOnRestart(const std::string& text, OnRestart* out) {
-  if (text == "leave") {
-    *out = OnRestart::kLeave;
-  } else if (text == "restore") {
-    *out = OnRestart::kRestore;
-  } else if (text == "safe") {
-    *out = OnRestart::kSafe;
-  } else {
-    return false;
-  }
-  return true;
+  return nameIn(kSafeStateNames, state).data();  // the names are literals: terminated
 }
 
 const char* onRestartName(OnRestart policy) {
-  switch (policy) {
-    case OnRestart::kRestore:
-      return "restore";
-    case OnRestart::kSafe:
-      return "safe";
-    default:
-      return "leave";
-  }
+  return nameIn(kOnRestartNames, policy).data();
 }
 
 bool FailsafeConfig::hasSafeStates() const {

@@ -69,7 +69,7 @@ bool makeDirs(const std::string& path) {
 
 }  // namespace
 
-bool PtyLink::open(const std::string& link, int baud, std::string* error, char parity) {
+bool PtyLink::open(const std::string& link, int baud, std::string* error, Parity parity) {
   auto fail = [&](const std::string& what) {
     if (error) *error = what + ": " + std::strerror(errno);
     close();
@@ -86,8 +86,8 @@ bool PtyLink::open(const std::string& link, int baud, std::string* error, char p
   cfmakeraw(&tio);
   cfsetispeed(&tio, speedOf(baud));
   cfsetospeed(&tio, speedOf(baud));
-  if (parity != 'N') {
-    tio.c_cflag |= PARENB | (parity == 'O' ? PARODD : 0);
+  if (parity != Parity::kNone) {
+    tio.c_cflag |= PARENB | (parity == Parity::kOdd ? PARODD : 0);
     tio.c_iflag |= INPCK;
   }
   tcsetattr(slave_fd_, TCSANOW, &tio);
@@ -118,7 +118,7 @@ SimLineSettings PtyLink::lineSettings() const {
   // Linux forces CS8 and clears PARENB on a pty; INPCK (parity checking, which libmodbus sets
   // for even and odd) and PARODD survive, so they tell the parity.
   const bool parity = (tio.c_cflag & PARENB) || (tio.c_iflag & INPCK);
-  l.parity = !parity ? 'N' : (tio.c_cflag & PARODD) ? 'O' : 'E';
+  l.parity = !parity ? Parity::kNone : (tio.c_cflag & PARODD) ? Parity::kOdd : Parity::kEven;
   const tcflag_t size = tio.c_cflag & CSIZE;
   l.data_bits = size == CS5 ? 5 : size == CS6 ? 6 : size == CS7 ? 7 : 8;
   l.stop_bits = (tio.c_cflag & CSTOPB) ? 2 : 1;

@@ -3,7 +3,7 @@
 namespace modbus_rtu_driver {
 
 int simBitsPerCharacter(const SimLineSettings& l) {
-  return 1 + l.data_bits + (l.parity == 'N' ? 0 : 1) + l.stop_bits;
+  return 1 + l.data_bits + (l.parity == Parity::kNone ? 0 : 1) + l.stop_bits;
 }
 
 double simCharacterTime(const SimLineSettings& l) {

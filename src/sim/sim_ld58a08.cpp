@@ -23,8 +23,9 @@ bool isPwmRegister(uint32_t r) {
 bool isSpecialRegister(uint32_t r) {
   return r == 0x0080 || (r >= 0x00FA && r <= 0x00FF);
 }
-char parityOfCode(uint16_t code) {
-  return code == 1 ? 'E' : code == 2 ? 'O' : 'N';
+// The manual's parity codes 0 none, 1 even, 2 odd are Parity's order (enum class Parity).
+Parity parityOfCode(uint16_t code) {
+  return code <= 2 ? static_cast<Parity>(code) : Parity::kNone;
 }
 
 }  // namespace
@@ -32,7 +33,7 @@ char parityOfCode(uint16_t code) {
 SimLd58a08::SimLd58a08(uint8_t address, SimLineSettings line) : SimDevice(address, line) {
   for (uint16_t i = 0; i < 8; ++i)
     if (kBauds[i] == line.baud) baud_code_ = i;
-  parity_code_ = line.parity == 'E' ? 1 : line.parity == 'O' ? 2 : 0;
+  parity_code_ = static_cast<uint16_t>(line.parity);
 }
 
 void SimLd58a08::setOutput(uint8_t ch, bool on) {
@@ -270,7 +271,7 @@ void SimLd58a08::saveState(YAML::Node& n) const {
   n["baud_code"] = baud_code_;
   n["parity_code"] = parity_code_;
   n["baud"] = line_.baud;
-  n["parity"] = std::string(1, line_.parity);
+  n["parity"] = parityName(line_.parity);
   n["return_delay"] = return_delay_;
   n["save"] = save_;
   if (save_)
@@ -284,7 +285,7 @@ void SimLd58a08::loadState(const YAML::Node& n, SimClock::time_point now) {
   baud_code_ = n["baud_code"].as<uint16_t>(baud_code_);
   parity_code_ = n["parity_code"].as<uint16_t>(parity_code_);
   line_.baud = n["baud"].as<int>(line_.baud);
-  line_.parity = n["parity"].as<std::string>(std::string(1, line_.parity)).c_str()[0];
+  line_.parity = parseParity(n["parity"].as<std::string>(""), nullptr).value_or(line_.parity);
   return_delay_ = n["return_delay"].as<uint16_t>(return_delay_);
   save_ = n["save"].as<uint16_t>(save_) ? 1 : 0;
   if (save_ && n["pwm"] && n["pwm"].IsSequence() && n["pwm"].size() == 24) {

@@ -52,11 +52,11 @@ void parseRoot(const YAML::Node& root, const std::string& base_dir, SimulatorCon
   if (!isStandardBaud(c.factory.baud))
     fail("baud", std::to_string(c.factory.baud) + " is not a standard rate (1200-115200)");
   if (root["parity"]) {
-    const std::string text =
-        config::get<std::string>(root["parity"], "parity", "none, even or odd");
-    Parity p;
-    if (!parseParity(text, &p)) fail("parity", "'" + text + "' is not none, even or odd");
-    c.factory.parity = parityLetter(p);
+    std::string problem;
+    const auto parity = parseParity(
+        config::get<std::string>(root["parity"], "parity", "none, even or odd"), &problem);
+    if (!parity) fail("parity", problem);
+    c.factory.parity = *parity;
   }
   if (root["pace"]) c.pace = config::get<bool>(root["pace"], "pace", "true or false");
   if (!root["devices"] || !root["devices"].IsSequence())

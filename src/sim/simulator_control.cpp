@@ -152,7 +152,7 @@ std::string Simulator::doCommand(const std::string& line) {
     for (size_t i = 0; i < devices_.size(); ++i) {
       const SimDevice& d = *devices_[i];
       out += " #" + std::to_string(i) + ":" + d.type() + ":" + std::to_string(d.address()) + ":" +
-             std::to_string(d.line().baud) + ":" + d.line().parity;
+             std::to_string(d.line().baud) + ":" + parityLetter(d.line().parity);
     }
     return out;
   }

@@ -6,7 +6,7 @@ SimulatorTcp::SimulatorTcp(const SimulatorConfig& config, const std::string& lin
   LinkConfig line;
   line.port = link;
   line.baud = config.factory.baud;
-  line.parity = parityOfLetter(config.factory.parity);
+  line.parity = config.factory.parity;
   line.stop_bits = config.factory.stop_bits;
   line.response_timeout = 0.5;
   link_ = std::make_unique<RtuLink>(line);

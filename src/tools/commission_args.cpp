@@ -163,31 +163,23 @@ CLI::Validator baudRate() {
       "1200-115200");
 }
 
-// Parity names as parseParity takes them, to the Parity's number.
-const std::map<std::string, int> kParityNames = {
-    {"none", static_cast<int>(Parity::kNone)}, {"N", static_cast<int>(Parity::kNone)},
-    {"even", static_cast<int>(Parity::kEven)}, {"E", static_cast<int>(Parity::kEven)},
-    {"odd", static_cast<int>(Parity::kOdd)},   {"O", static_cast<int>(Parity::kOdd)}};
-
-// One of kParityNames' names (not their numbers, which CLI::CheckedTransformer would also take).
+// A parity by its name (parseParity's check: a letter is refused with the name to write).
 CLI::Validator parityWords(const std::string& suffix = "") {
-  std::vector<std::string> names;
-  names.reserve(kParityNames.size());
-  for (const auto& kv : kParityNames) names.emplace_back(kv.first);
-  return refusing(CLI::IsMember(names),
-                  [suffix](const std::string& text) {
-                    return "'" + text + "' is not none, even or odd" + suffix;
-                  })
-      .description("none|even|odd");
+  return CLI::Validator(
+      [suffix](std::string& text) -> std::string {
+        std::string problem;
+        return parseParity(text, &problem) ? "" : problem + suffix;
+      },
+      "none|even|odd");
 }
 
 // The name, checked, as its Parity's number for CLI11 to convert.
 CLI::Validator parityOption() {
-  const CLI::Validator check = parityWords();
   return CLI::Validator(
-      [check](std::string& text) {
-        std::string problem = check(text);
-        if (problem.empty()) text = std::to_string(kParityNames.at(text));
+      [](std::string& text) -> std::string {
+        std::string problem;
+        const auto parity = parseParity(text, &problem);
+        if (parity) text = std::to_string(static_cast<int>(*parity));
         return problem;
       },
       "none|even|odd");
@@ -205,8 +197,9 @@ const CLI::Validator kBaudList(
 
 const CLI::Validator kParityList(
     [](std::string& text) -> std::string {
+      if (text == "all") return "";
       const CLI::Validator name = parityWords(" (or all)");
-      for (std::string p : splitList(text == "all" ? "none,even,odd" : text)) {
+      for (std::string p : splitList(text)) {
         std::string problem = name(p);
         if (!problem.empty()) return problem;
       }
@@ -443,9 +436,7 @@ struct Cli {
       CLI::Option* value = set->add_option("value", w.value, range)->type_name(s.value);
       // The settings whose words are the same for every type are checked here already.
       if (s.feature == BoardFeature::kParity)
-        value->check(refusing(
-            CLI::IsMember(std::vector<std::string>{"none", "even", "odd"}),
-            [](const std::string& text) { return "'" + text + "' is not none, even or odd"; }));
+        value->check(parityWords());
       if (s.feature == BoardFeature::kPowerDownSave)
         value->check(
             refusing(CLI::IsMember(std::vector<std::string>{"on", "off", "1", "0"}),
@@ -596,8 +587,11 @@ void parseScan(const Parsed& p, CommissionCommand& c) {
     c.bauds.push_back(static_cast<int>(v));
   }
   const std::string parities = p.has("--parities") ? w.parities : parityName(c.link.parity);
-  for (const std::string& name : splitList(parities == "all" ? "none,even,odd" : parities))
-    c.parities.push_back(static_cast<Parity>(kParityNames.at(name)));
+  if (parities == "all")
+    for (const auto& row : kParityNames) c.parities.push_back(row.value);
+  else
+    for (const std::string& name : splitList(parities))
+      c.parities.push_back(*parseParity(name, nullptr));
   if (c.addresses.empty() || c.bauds.empty() || c.parities.empty())
     bad("--addresses / --bauds / --parities: empty list");
   c.first_only = p.has("--first");
@@ -655,8 +649,9 @@ void parseDevice(const Parsed& p, CommissionCommand& c) {
     case BoardFeature::kBaud:
       c.new_value = baudCode(v, type);
       break;
-    case BoardFeature::kParity:  // the word was checked by CLI::IsMember
-      c.new_value = v == "even" ? 1 : v == "odd" ? 2 : 0;
+    case BoardFeature::kParity:  // the name was checked by parityWords
+      // The stored codes 0 none, 1 even, 2 odd are Parity's order (enum class Parity).
+      c.new_value = static_cast<int>(*parseParity(v, nullptr));
       break;
     case BoardFeature::kReturnDelay: {
       const int step = type.commissioning->returnDelayStepMs();

@@ -20,15 +20,8 @@ const char kPowerCycle[] = "It takes effect after the device is powered off and 
 
 // "address 1, 9600 baud, no parity" from the type's descriptor.
 std::string factoryText(const FactorySettings& f) {
-  const char* parity = f.parity == 'E'   ? "even parity"
-                       : f.parity == 'O' ? "odd parity"
-                                         : "no parity";
   return "address " + std::to_string(f.address) + ", " + std::to_string(f.baud) + " baud, " +
-         parity;
-}
-
-Parity parityOf(char letter) {
-  return letter == 'E' ? Parity::kEven : letter == 'O' ? Parity::kOdd : Parity::kNone;
+         (f.parity == Parity::kNone ? std::string("no") : parityName(f.parity)) + " parity";
 }
 
 // One setting of a board: what to say about it; the type's class reads and writes it.
@@ -233,7 +226,7 @@ class DeviceCommands {
     if (!r.ok()) return s_.out.fail(r, "factory reset " + where);
     const std::string after =
         "factory settings restored (address " + std::to_string(type.factory.address) + ", " +
-        lineName(type.factory.baud, parityOf(type.factory.parity)) +
+        lineName(type.factory.baud, type.factory.parity) +
         "); baud and parity take effect after the device is powered off and on.";
     s_.out.result(c_.type + " " + where + ": " + after,
                   Json().add("type", c_.type).add("note", after));

@@ -143,9 +143,7 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
       const FactorySettings& f = t.type->factory;
       if (!f.address || !f.baud) continue;
       boards.push_back(std::string(t.type->name) + " at " + std::to_string(f.address) + " " +
-                       lineName(f.baud, f.parity == 'E'   ? Parity::kEven
-                                        : f.parity == 'O' ? Parity::kOdd
-                                                          : Parity::kNone));
+                       lineName(f.baud, f.parity));
     }
     const std::string factory = join(boards);
     out.note(

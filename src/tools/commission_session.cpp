@@ -9,10 +9,6 @@
 
 namespace modbus_rtu_driver {
 
-std::string lineName(int baud, Parity parity) {
-  return std::to_string(baud) + " 8" + parityLetter(parity) + "1";
-}
-
 bool Session::confirm(const std::string& question) {
   if (cmd.yes) return true;
   out.err() << question << " [y/N] " << std::flush;

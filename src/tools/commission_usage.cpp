@@ -27,10 +27,6 @@ std::string namesWith(BoardFeature feature, const char* separator = "|") {
               [](const CommissioningType& t) { return std::string(t.type->name); });
 }
 
-Parity parityOf(char letter) {
-  return letter == 'E' ? Parity::kEven : letter == 'O' ? Parity::kOdd : Parity::kNone;
-}
-
 // The settings commands, one paragraph per command group, for the types registered.
 std::string settingsHelp() {
   std::ostringstream h;
@@ -140,7 +136,7 @@ std::string typesHelp() {
     h << "  " << t.type->name << ": addresses 1-" << t.type->max_address;
     if (f.address) h << ", factory address " << f.address;
     if (f.baud)
-      h << ", " << std::to_string(f.baud) << " 8" << parityLetter(parityOf(f.parity)) << "1";
+      h << ", " << lineName(f.baud, f.parity);
     if (t.commissioning->has(BoardFeature::kReturnDelay))
       h << ", return delay up to "
         << t.commissioning->returnDelayStepMs() * t.commissioning->returnDelayMaxUnits() << " ms";
@@ -166,8 +162,9 @@ Details (COMMAND --help lists a command's options):
   info --address A                         type and settings of the device at A
 )" + settingsHelp() +
          R"()" + limitsHelp() +
-         R"(  read --address A coils|discrete-inputs|holding|input-registers START [COUNT]
-  write --address A coils|holding START VALUE... [--multiple]
+         R"(  read --address A TABLE START [COUNT]    TABLE: coil, discrete_input, holding_register,
+                                           input_register
+  write --address A coil|holding_register START VALUE... [--multiple]
                                            FC05/FC06 for one value, FC15/FC16 for more
                                            (--multiple: FC15/FC16 always)
   watch --address A TABLE START [COUNT] [--interval S] [--count N]

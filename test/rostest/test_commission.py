@@ -253,7 +253,7 @@ class CommissionTest(unittest.TestCase):
             (["set-address", "--type", "ld58a08", "--address", "249", "5"], "--address: '249'"),
             (["set-baud", "--type", "ld58a08", "--address", "1", "9"], "neither a code 0-7"),
             (["set-baud", "--type", "lc_relay8", "--address", "255", "115200"], "code 2-4"),
-            (["set-parity", "--address", "1", "mark"], "parity: 'mark' is not none, even or odd"),
+            (["set-parity", "--address", "1", "mark"], "parity: 'mark' is not one of none, even, odd"),
             (["set-return-delay", "--address", "1", "1001"], "'1001' is outside 0-1000"),
             (["set-return-delay", "--address", "1", "100"], "not a multiple of 40 ms"),
             (["read", "--address", "1", "holding_register", "0", "126"], "count: '126' is outside 1-125"),
@@ -268,7 +268,7 @@ class CommissionTest(unittest.TestCase):
             self.assertEqual(out, "", args)
         code, out, _ = self.run_tool(["--json", "set-parity", "--address", "1", "mark"])
         self.assertEqual(json.loads(out), {"ok": False, "exit": BAD_ARGUMENTS,
-                                           "error": "parity: 'mark' is not none, even or odd"})
+                                           "error": "parity: 'mark' is not one of none, even, odd"})
         self.assertEqual(self.sim.frames_received(), before, "a refused command sent a frame")
 
     def test_exit_codes_tell_no_answer_refusal_and_bus_errors_apart(self):
@@ -376,10 +376,10 @@ class CommissionTest(unittest.TestCase):
         threading.Thread(target=lambda: [lines.put(l) for l in proc.stdout], daemon=True).start()
         try:
             first = lines.get(timeout=10)
-            self.assertIn("discrete-inputs 0: 0, discrete-inputs 1: 0", first)
+            self.assertIn("discrete_input 0: 0, discrete_input 1: 0", first)
             self.sim.control.set("255", "discrete_input", 1, 1)
             change = lines.get(timeout=10)
-            self.assertRegex(change, r"^\+[0-9.]+ s  discrete-inputs 1: 0 -> 1\n$")
+            self.assertRegex(change, r"^\+[0-9.]+ s  discrete_input 1: 0 -> 1\n$")
             time.sleep(0.3)  # several more polls: nothing changed, nothing printed
             self.assertTrue(lines.empty())
         finally:

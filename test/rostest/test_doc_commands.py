@@ -226,7 +226,7 @@ class DocCommandsTest(unittest.TestCase):
                  ok('"values"')),
                 # The board set to 7 above goes back to 255 first, where this example finds it.
                 ("rosrun modbus_rtu_driver modbus_rtu_commission --port /dev/ttyUSB0 watch --address 255",
-                 dict(streams("discrete-inputs 7: 0"), before=lambda: self.commission(
+                 dict(streams("discrete_input 7: 0"), before=lambda: self.commission(
                      link, "--yes", "set-address", "--type", "lc_relay8", "255"))),
                 ("rosrun modbus_rtu_driver modbus_rtu_commission --port /dev/ttyUSB0 get-limits",
                  ok("limits: over-voltage")),

@@ -145,7 +145,7 @@ TEST(CommissionArgs, SettingsOutsideTheManualsRangesAreRefused) {
             "baud: '115200' is neither a code 2-4 nor one of 4800, 9600, 19200 (lc_relay8)");
   EXPECT_NE(refusal({"set-baud", "--type", "lc_relay8", "--address", "1", "5"}), "");
   EXPECT_EQ(refusal({"set-parity", "--address", "1", "mark"}),
-            "parity: 'mark' is not none, even or odd");
+            "parity: 'mark' is not one of none, even, odd");
   EXPECT_EQ(refusal({"set-return-delay", "--address", "1", "1001"}),
             "return delay: '1001' is outside 0-1000");
   EXPECT_EQ(refusal({"set-return-delay", "--address", "1", "30"}),
@@ -186,12 +186,12 @@ TEST(CommissionArgs, LineAndScanOptionsAreChecked) {
   EXPECT_EQ(refusal({"scan"}, false), "--port: missing (the serial device, e.g. /dev/ttyUSB0)");
   EXPECT_EQ(refusal({"--baud", "9601", "scan"}),
             "--baud: '9601' is not one of 1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200");
-  EXPECT_EQ(refusal({"--parity", "mark", "scan"}), "--parity: 'mark' is not none, even or odd");
+  EXPECT_EQ(refusal({"--parity", "mark", "scan"}), "--parity: 'mark' is not one of none, even, odd");
   EXPECT_EQ(refusal({"--timeout", "0", "scan"}), "--timeout: '0' is outside 0.005-10 s");
   EXPECT_EQ(refusal({"--timeout", "1s", "scan"}), "--timeout: '1s' is outside 0.005-10 s");
   EXPECT_NE(refusal({"scan", "--bauds", "9600,9601"}).find("--bauds: '9601'"), std::string::npos);
   EXPECT_EQ(refusal({"scan", "--parities", "none,mark"}),
-            "--parities: 'mark' is not none, even or odd (or all)");
+            "--parities: 'mark' is not one of none, even, odd (or all)");
   EXPECT_EQ(refusal({"scan", "--from", "9", "--to", "3"}), "--to: '3' is outside 9-255");
   EXPECT_EQ(refusal({"scan", "--from", "0"}), "--from: '0' is outside 1-255");
   EXPECT_EQ(refusal({"scan", "--addresses", "1-5", "--to", "9"}),
@@ -294,11 +294,11 @@ TEST(CommissionArgs, TheFullScanDurationInTheHelpFollowsTheTimeouts) {
             std::string::npos);
 }
 
-// Each option is converted by CLI11 after its check: hex and the parity letters too, and
+// Each option is converted by CLI11 after its check: hex and the parity names too, and
 // "010" is ten with every CLI11 version (2.1 would read it as octal).
 TEST(CommissionArgs, OptionsAreConvertedOnceTheirCheckPassed) {
   CommissionCommand c =
-      parsed({"--parity", "E", "--baud", "0x4B00", "scan", "--from", "0x10", "--to", "016"});
+      parsed({"--parity", "even", "--baud", "0x4B00", "scan", "--from", "0x10", "--to", "016"});
   EXPECT_EQ(c.link.parity, Parity::kEven);
   EXPECT_EQ(c.link.baud, 19200);
   EXPECT_EQ(c.addresses, std::vector<int>{16});
@@ -307,10 +307,12 @@ TEST(CommissionArgs, OptionsAreConvertedOnceTheirCheckPassed) {
   EXPECT_DOUBLE_EQ(parsed({"--timeout", "0.25", "info", "--address", "7"}).link.response_timeout,
                    0.25);
   EXPECT_EQ(refusal({"info", "--address", "0x100"}), "--address: '0x100' is outside 1-255");
-  EXPECT_EQ(refusal({"--parity", "X", "scan"}), "--parity: 'X' is not none, even or odd");
-  EXPECT_EQ(refusal({"--parity", "1", "scan"}), "--parity: '1' is not none, even or odd");
+  EXPECT_EQ(refusal({"--parity", "X", "scan"}), "--parity: 'X' is not one of none, even, odd");
+  EXPECT_EQ(refusal({"--parity", "E", "scan"}),
+            "--parity: 'E' is not one of none, even, odd (write 'even')");
+  EXPECT_EQ(refusal({"--parity", "1", "scan"}), "--parity: '1' is not one of none, even, odd");
   EXPECT_EQ(refusal({"scan", "--parities", "even,2"}),
-            "--parities: '2' is not none, even or odd (or all)");
+            "--parities: '2' is not one of none, even, odd (or all)");
   EXPECT_EQ(refusal({"read", "--address", "1", "holding_register", "0", "0"}),
             "count: '0' is outside 1-125");
   EXPECT_EQ(refusal({"read", "--address", "1", "coil", "0", "many"}),

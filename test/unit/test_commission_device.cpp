@@ -319,7 +319,7 @@ TEST_F(CommissionOnScript, Ld58a08AddressReadRefusedHintsAtAnotherBoardType) {
 namespace {
 
 inline constexpr DeviceDescriptor kRelayTestType{
-    "relay_test", 100, 4, 0, {7, 19200, 'E'}, "test/unit/test_commission_device.cpp"};
+    "relay_test", 100, 4, 0, {7, 19200, Parity::kEven}, "test/unit/test_commission_device.cpp"};
 
 class RelayTestCommissioning : public Commissioning {
  public:

@@ -79,7 +79,7 @@ TEST(FailsafeConfig, BooleansFromRosparamAreOffAndOn) {
 
 TEST(FailsafeConfig, BadValuesAreRefusedWithTheKeyNamed) {
   EXPECT_EQ(errorOf(device("safe_state: maybe")),
-            "devices/relays/safe_state: 'maybe' is not off, on or hold");
+            "devices/relays/safe_state: 'maybe' is not one of off, on, hold");
   EXPECT_EQ(errorOf(device("safe_state: {pumpx: off}")),
             "devices/relays/safe_state/pumpx: no output channel of that name (outputs: out0, "
             "out1, out2, out3, out4, out5, out6, out7)");
@@ -92,7 +92,7 @@ TEST(FailsafeConfig, BadValuesAreRefusedWithTheKeyNamed) {
   EXPECT_NE(errorOf(device("safe_state: off, command_timeout: 0.01")).find("outside 0.05-3600"),
             std::string::npos);
   EXPECT_EQ(errorOf(device("on_restart: reboot")),
-            "devices/relays/on_restart: 'reboot' is not restore, safe or leave");
+            "devices/relays/on_restart: 'reboot' is not one of restore, safe, leave");
   EXPECT_EQ(errorOf(device("on_start: off")), "devices/relays/on_start: 'off' is not safe or keep");
   EXPECT_EQ(
       errorOf(device("heartbeat: {topic: x}")),

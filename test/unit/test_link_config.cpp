@@ -1,6 +1,9 @@
 // Line timing derived from the serial settings.
 #include <gtest/gtest.h>
 
+#include <yaml-cpp/yaml.h>
+
+#include "modbus_rtu_driver/core/config/config_yaml.h"
 #include "modbus_rtu_driver/core/config/link_config.h"
 
 using namespace modbus_rtu_driver;
@@ -51,13 +54,17 @@ TEST(LinkConfig, ResponseTimeoutIsSizedFromTheBaudUnlessSet) {
 }
 
 TEST(LinkConfig, Parity) {
-  Parity p;
-  EXPECT_TRUE(parseParity("even", &p));
-  EXPECT_EQ(p, Parity::kEven);
-  EXPECT_TRUE(parseParity("O", &p));
-  EXPECT_EQ(p, Parity::kOdd);
-  EXPECT_FALSE(parseParity("mark", &p));
-  EXPECT_STREQ(parityName(Parity::kNone), "none");
+  for (const auto& row : kParityNames) {
+    EXPECT_EQ(parseParity(row.name, nullptr), row.value);
+    EXPECT_EQ(parityName(row.value), row.name);
+  }
+  std::string error;
+  EXPECT_FALSE(parseParity("mark", &error));
+  EXPECT_EQ(error, "'mark' is not one of none, even, odd");
+  EXPECT_FALSE(parseParity("O", &error)) << "one name: the letter is the 8N1 notation's";
+  EXPECT_EQ(error, "'O' is not one of none, even, odd (write 'odd')");
+  EXPECT_EQ(parityLetter(Parity::kEven), 'E');
+  EXPECT_EQ(lineName(19200, Parity::kOdd), "19200 8O1");
 }
 
 TEST(LinkConfig, PortForms) {
@@ -95,4 +102,23 @@ TEST(LinkConfig, NetworkAllowanceIsRangeChecked) {
   EXPECT_NE(validateLinkConfig(c).find("network_allowance"), std::string::npos);
   c.network_allowance = 0;
   EXPECT_EQ(validateLinkConfig(c), "");
+}
+
+// Whole numbers in YAML: a value beyond int is refused before any cast (which would be
+// undefined behaviour), a fraction is refused, hex is read.
+TEST(ConfigYaml, WholeNumbers) {
+  auto errorOf = [](const char* text) {
+    try {
+      config::getInt(YAML::Load(text), "baud");
+    } catch (const config::ConfigError& e) {
+      return e.message;
+    }
+    return std::string();
+  };
+  EXPECT_EQ(config::getInt(YAML::Load("0x0156"), "address"), 0x0156);
+  EXPECT_EQ(config::getInt(YAML::Load("-7"), "offset"), -7);
+  EXPECT_EQ(errorOf("1e12"), "baud: '1e12' is too large");
+  EXPECT_EQ(errorOf("-3000000000"), "baud: '-3000000000' is too large");
+  EXPECT_EQ(errorOf(".nan"), "baud: '.nan' is too large");
+  EXPECT_EQ(errorOf("9600.5"), "baud: '9600.5' is not a whole number");
 }

@@ -265,15 +265,15 @@ TEST(SimLd58a08, BaudAndParityAreStoredAndTakenAtPowerOn) {
   EXPECT_EQ(ask(d, "01 06 00 FF 00 01 78 3A"), "01 06 00 FF 00 01 78 3A");
   EXPECT_EQ(regs(d, 0xFE, 2), (std::vector<uint16_t>{2, 1})) << "read back as stored";
   EXPECT_EQ(d.line().baud, 9600);
-  EXPECT_EQ(d.line().parity, 'N');
+  EXPECT_EQ(d.line().parity, Parity::kNone);
   d.powerCycle(SimClock::now());
   EXPECT_EQ(d.line().baud, 4800);
-  EXPECT_EQ(d.line().parity, 'E');
+  EXPECT_EQ(d.line().parity, Parity::kEven);
   // Parity over 2 is stored as written and becomes "none" at power-on (manual).
   ASSERT_EQ(d.write(Table::kHoldingRegister, 0xFF, {3}, SimClock::now()), 0);
   EXPECT_EQ(regs(d, 0xFF, 1)[0], 3);
   d.powerCycle(SimClock::now());
-  EXPECT_EQ(d.line().parity, 'N');
+  EXPECT_EQ(d.line().parity, Parity::kNone);
   EXPECT_EQ(regs(d, 0xFF, 1)[0], 0);
 }
 
@@ -296,7 +296,7 @@ TEST(SimLd58a08, FactoryResetKeepsPlainOutputsAndTheLineUntilPowerOn) {
     EXPECT_EQ(d.line().baud, 19200) << "the line changes at power-on: " << reset;
     d.powerCycle(t0);
     EXPECT_EQ(d.line().baud, 9600) << reset;
-    EXPECT_EQ(d.line().parity, 'N') << reset;
+    EXPECT_EQ(d.line().parity, Parity::kNone) << reset;
   }
 }
 

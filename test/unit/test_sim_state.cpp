@@ -52,7 +52,7 @@ TEST(SimConfig, TheShippedConfigLoads) {
   EXPECT_EQ(c.devices[0].type, "lc_relay8");
   EXPECT_EQ(c.devices[0].address, 8);  // not 255: the LD58A08 beside it answers 0xFF too
   EXPECT_EQ(c.factory.baud, 9600);
-  EXPECT_EQ(c.factory.parity, 'N');
+  EXPECT_EQ(c.factory.parity, Parity::kNone);
   EXPECT_FALSE(c.pace);
 }
 
@@ -68,7 +68,10 @@ TEST(SimConfig, BadConfigsAreRefusedNamingTheKey) {
   EXPECT_EQ(configError("baud: 9600.5\n" + devices), "baud: '9600.5' is not a whole number");
   EXPECT_EQ(configError("devices: [{type: lc_relay8, address: [1]}]"),
             "devices[0]/address: a list is not a number");
-  EXPECT_EQ(configError("parity: mark\n" + devices), "parity: 'mark' is not none, even or odd");
+  EXPECT_EQ(configError("parity: mark\n" + devices),
+            "parity: 'mark' is not one of none, even, odd");
+  EXPECT_EQ(configError("parity: E\n" + devices),
+            "parity: 'E' is not one of none, even, odd (write 'even')");
   EXPECT_EQ(configError("pace: maybe\n" + devices), "pace: 'maybe' is not true or false");
   EXPECT_EQ(configError("baud: 9600\n"), "devices: missing or not a list of {type, address}");
   EXPECT_EQ(

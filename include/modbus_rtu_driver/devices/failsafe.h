@@ -12,16 +12,20 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/bus/clock.h"
+#include "modbus_rtu_driver/core/modbus/text.h"
 
 namespace modbus_rtu_driver {
 
 enum class SafeState { kHold, kOff, kOn };
 enum class OnRestart { kLeave, kRestore, kSafe };
 
+inline constexpr NameTable<SafeState, 3> kSafeStateNames{
+    {{SafeState::kOff, "off"}, {SafeState::kOn, "on"}, {SafeState::kHold, "hold"}}};
+inline constexpr NameTable<OnRestart, 3> kOnRestartNames{
+    {{OnRestart::kRestore, "restore"}, {OnRestart::kSafe, "safe"}, {OnRestart::kLeave, "leave"}}};
 // "off", "on", "hold"; also true/false, which is what rosparam makes of a bare on/off.
 bool parseSafeState(const std::string& text, SafeState* out);
 const char* safeStateName(SafeState state);
-bool parseOnRestart(const std::string& text, OnRestart* out);
 const char* onRestartName(OnRestart policy);
 
 struct FailsafeConfig {

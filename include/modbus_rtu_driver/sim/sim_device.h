@@ -27,7 +27,7 @@ using SimClock = std::chrono::steady_clock;
 // Serial settings: what a device listens and answers at, or what the line currently runs at.
 struct SimLineSettings {
   int baud = 9600;
-  char parity = 'N';  // N, E, O
+  Parity parity = Parity::kNone;
   int data_bits = 8;  // the line's; every simulated device uses 8
   int stop_bits = 1;  // the line's; a receiver accepts 1 or 2
 };

@@ -43,6 +43,5 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
             bool err_is_terminal);
 
 // "9600 8N1"
-std::string lineName(int baud, Parity parity);
 
 }  // namespace modbus_rtu_driver

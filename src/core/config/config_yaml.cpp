@@ -1,6 +1,8 @@
 #include "modbus_rtu_driver/core/config/config_yaml.h"
 
 #include <cctype>
+#include <cmath>
+#include <limits>
 
 #include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/core/modbus/text.h"
@@ -50,7 +52,9 @@ int getInt(const YAML::Node& n, const std::string& key) {
   if (n.IsScalar() && n.Scalar().rfind("0x", 0) == 0 && YAML::convert<int>::decode(n, hex))
     return hex;
   const double v = getNumber(n, key);
-  if (v != static_cast<int>(v)) fail(key, show(n) + " is not a whole number");
+  // Range first: casting a double outside int's range is undefined behaviour.
+  if (!(std::fabs(v) <= std::numeric_limits<int>::max())) fail(key, show(n) + " is too large");
+  if (v != std::floor(v)) fail(key, show(n) + " is not a whole number");
   return static_cast<int>(v);
 }
 
@@ -73,7 +77,10 @@ void parseLink(const YAML::Node& root, LinkConfig* out) {
   if (root["baud"]) link.baud = getInt(root["baud"], "baud");
   if (root["parity"]) {
     const std::string p = get<std::string>(root["parity"], "parity", "none, even or odd");
-    if (!parseParity(p, &link.parity)) fail("parity", "'" + p + "' is not none, even or odd");
+    std::string problem;
+    const auto parity = parseParity(p, &problem);
+    if (!parity) fail("parity", problem);
+    link.parity = *parity;
   }
   if (root["data_bits"]) link.data_bits = getInt(root["data_bits"], "data_bits");
   if (root["stop_bits"]) link.stop_bits = getInt(root["stop_bits"], "stop_bits");
@@ -88,18 +95,8 @@ void parseLink(const YAML::Node& root, LinkConfig* out) {
   if (root["min_gap"]) link.min_gap = getNumber(root["min_gap"], "min_gap");
   if (root["low_latency"])
     link.low_latency = get<bool>(root["low_latency"], "low_latency", "true or false");
-  if (root["direction"]) {
-    const std::string d =
-        get<std::string>(root["direction"], "direction", "auto, rts_high, rts_low");
-    if (d == "auto")
-      link.direction = DirectionControl::kAuto;
-    else if (d == "rts_high")
-      link.direction = DirectionControl::kRtsHigh;
-    else if (d == "rts_low")
-      link.direction = DirectionControl::kRtsLow;
-    else
-      fail("direction", "'" + d + "' is not auto, rts_high or rts_low");
-  }
+  if (root["direction"])
+    link.direction = getNamed(root["direction"], "direction", kDirectionControlNames);
   const std::string link_problem = validateLinkConfig(link);
   if (!link_problem.empty()) throw ConfigError{link_problem};
 }

@@ -7,27 +7,17 @@
 namespace modbus_rtu_driver {
 
 const char* parityName(Parity p) {
-  switch (p) {
-    case Parity::kNone:
-      return "none";
-    case Parity::kEven:
-      return "even";
-    case Parity::kOdd:
-      return "odd";
-  }
-  return "?";
+  return nameIn(kParityNames, p).data();  // the names are literals: terminated
 }
 
-bool parseParity(const std::string& t, Parity* out) {
-  if (t == "none" || t == "N")
-    *out = Parity::kNone;
-  else if (t == "even" || t == "E")
-    *out = Parity::kEven;
-  else if (t == "odd" || t == "O")
-    *out = Parity::kOdd;
-  else
-    return false;
-  return true;
+std::optional<Parity> parseParity(std::string_view text, std::string* error) {
+  if (auto parity = valueIn(kParityNames, text)) return parity;
+  if (error) {
+    *error = "'" + std::string(text) + "' is not one of " + namesIn(kParityNames);
+    if (auto parity = valueIn(kParityLetters, text))
+      *error += std::string(" (write '") + parityName(*parity) + "')";
+  }
+  return std::nullopt;
 }
 
 bool isStandardBaud(int b) {
@@ -40,11 +30,11 @@ std::string standardBaudList() {
 }
 
 char parityLetter(Parity parity) {
-  return parity == Parity::kEven ? 'E' : parity == Parity::kOdd ? 'O' : 'N';
+  return nameIn(kParityLetters, parity)[0];
 }
 
-Parity parityOfLetter(char letter) {
-  return letter == 'E' ? Parity::kEven : letter == 'O' ? Parity::kOdd : Parity::kNone;
+std::string lineName(int baud, Parity parity) {
+  return std::to_string(baud) + " 8" + parityLetter(parity) + "1";
 }
 
 const char* portKindName(PortKind kind) {

@@ -8,12 +8,14 @@
 
 #include <cstddef>
 
+#include "modbus_rtu_driver/core/config/link_config.h"
+
 namespace modbus_rtu_driver {
 
 struct FactorySettings {  // 0 where the type has none of its own
   int address;
   int baud;
-  char parity;  // 'N', 'E', 'O'
+  Parity parity;
 };
 
 struct DeviceDescriptor {

@@ -2,12 +2,20 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
+#include <string_view>
+
+#include "modbus_rtu_driver/core/modbus/text.h"
 
 namespace modbus_rtu_driver {
 
-enum class Parity { kNone, kEven, kOdd };
+enum class Parity { kNone, kEven, kOdd };  // in this order: the LD58A08 stores them as 0-2
 enum class DirectionControl { kAuto, kRtsHigh, kRtsLow };  // RTS modes: level while sending
+inline constexpr NameTable<DirectionControl, 3> kDirectionControlNames{
+    {{DirectionControl::kAuto, "auto"},
+     {DirectionControl::kRtsHigh, "rts_high"},
+     {DirectionControl::kRtsLow, "rts_low"}}};
 
 struct LinkConfig {
   std::string port = "/dev/ttyUSB0";
@@ -49,11 +57,18 @@ constexpr double kTurnaroundAllowance = 0.05;
 // Empty when valid, else one message naming the field, the value and the allowed range.
 std::string validateLinkConfig(const LinkConfig& config);
 
+// Parity's one name in YAML and options; its letter only where a line is written 8N1 and for
+// libmodbus. Both from these tables.
+inline constexpr NameTable<Parity, 3> kParityNames{
+    {{Parity::kNone, "none"}, {Parity::kEven, "even"}, {Parity::kOdd, "odd"}}};
+inline constexpr NameTable<Parity, 3> kParityLetters{
+    {{Parity::kNone, "N"}, {Parity::kEven, "E"}, {Parity::kOdd, "O"}}};
 const char* parityName(Parity parity);  // "none", "even", "odd"
-bool parseParity(const std::string& text, Parity* out);
-// 'N', 'E', 'O': libmodbus's spelling, and the simulator's line settings'.
-char parityLetter(Parity parity);
-Parity parityOfLetter(char letter);  // anything but 'E' or 'O' is none
+// A parity by its name; otherwise nullopt and `error` lists the names (a letter is refused with
+// the name to write: "'E' is not one of none, even, odd (write 'even')").
+std::optional<Parity> parseParity(std::string_view text, std::string* error);
+char parityLetter(Parity parity);  // 'N', 'E', 'O'
+std::string lineName(int baud, Parity parity);  // "9600 8N1"
 
 // The standard rates, slowest first: every check, message and option takes them from here (the
 // LD58A08's baud codes 0-7 are these, in order).

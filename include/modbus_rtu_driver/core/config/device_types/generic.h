@@ -7,6 +7,6 @@
 namespace modbus_rtu_driver {
 
 inline constexpr DeviceDescriptor kGenericType{
-    "generic", 247, 0, 0, {0, 0, 'N'}, "docs/ros_api.md (generic devices)"};
+    "generic", 247, 0, 0, {0, 0, Parity::kNone}, "docs/ros_api.md (generic devices)"};
 
 }  // namespace modbus_rtu_driver

@@ -7,6 +7,6 @@
 namespace modbus_rtu_driver {
 
 inline constexpr DeviceDescriptor kLcRelay8Type{
-    "lc_relay8", 255, 8, 8, {255, 9600, 'N'}, "docs/devices/lc_relay8.md"};
+    "lc_relay8", 255, 8, 8, {255, 9600, Parity::kNone}, "docs/devices/lc_relay8.md"};
 
 }  // namespace modbus_rtu_driver

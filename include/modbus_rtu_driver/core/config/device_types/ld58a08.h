@@ -7,6 +7,6 @@
 namespace modbus_rtu_driver {
 
 inline constexpr DeviceDescriptor kLd58a08Type{
-    "ld58a08", 248, 8, 0, {1, 9600, 'N'}, "docs/devices/ld58a08.md", 0xFF};
+    "ld58a08", 248, 8, 0, {1, 9600, Parity::kNone}, "docs/devices/ld58a08.md", 0xFF};
 
 }  // namespace modbus_rtu_driver

@@ -7,6 +7,6 @@
 namespace modbus_rtu_driver {
 
 inline constexpr DeviceDescriptor kYespeedPduType{
-    "yespeed_pdu", 247, 8, 0, {1, 9600, 'N'}, "docs/devices/yespeed_pdu.md"};
+    "yespeed_pdu", 247, 8, 0, {1, 9600, Parity::kNone}, "docs/devices/yespeed_pdu.md"};
 
 }  // namespace modbus_rtu_driver
