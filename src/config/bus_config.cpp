@@ -76,15 +76,16 @@ void parseHeartbeat(const YAML::Node& n, const std::string& key, std::string* to
 void parseFailsafe(const YAML::Node& n, const std::string& where,
                    const std::vector<std::string>& names, FailsafeConfig* out) {
   if (n["safe_state"]) {
-    out->safe_state = perChannel<SafeState>(
-        n["safe_state"], where + "safe_state", names, SafeState::kHold,
-        [](const YAML::Node& v, const std::string& key) {
-          SafeState s;
-          const std::string names = namesIn(kSafeStateNames);
-          const std::string text = get<std::string>(v, key, names.c_str());
-          if (!parseSafeState(text, &s)) fail(key, "'" + text + "' is not one of " + names);
-          return s;
-        });
+    out->safe_state =
+        perChannel<SafeState>(n["safe_state"], where + "safe_state", names, SafeState::kHold,
+                              [](const YAML::Node& v, const std::string& key) {
+                                SafeState s;
+                                const std::string names = namesIn(kSafeStateNames);
+                                const std::string text = get<std::string>(v, key, names.c_str());
+                                if (!parseSafeState(text, &s))
+                                  fail(key, "'" + text + "' is not one of " + names);
+                                return s;
+                              });
   }
   if (n["command_timeout"]) {
     out->command_timeout =

@@ -7,7 +7,9 @@ namespace modbus_rtu_driver {
 
 bool parseSafeState(const std::string& text, SafeState* out) {
   // YAML 1.1 and rosparam turn a bare on/off into a boolean: its text is true/false.
-  const auto state = text == "true" ? SafeState::kOn : text == "false" ? SafeState::kOff : valueIn(kSafeStateNames, text);
+  const auto state = text == "true"    ? SafeState::kOn
+                     : text == "false" ? SafeState::kOff
+                                       : valueIn(kSafeStateNames, text);
   if (state) *out = *state;
   return state.has_value();
 }

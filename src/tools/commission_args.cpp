@@ -435,8 +435,7 @@ struct Cli {
       addTyped(set, s);
       CLI::Option* value = set->add_option("value", w.value, range)->type_name(s.value);
       // The settings whose words are the same for every type are checked here already.
-      if (s.feature == BoardFeature::kParity)
-        value->check(parityWords());
+      if (s.feature == BoardFeature::kParity) value->check(parityWords());
       if (s.feature == BoardFeature::kPowerDownSave)
         value->check(
             refusing(CLI::IsMember(std::vector<std::string>{"on", "off", "1", "0"}),

@@ -135,8 +135,7 @@ std::string typesHelp() {
     const FactorySettings& f = t.type->factory;
     h << "  " << t.type->name << ": addresses 1-" << t.type->max_address;
     if (f.address) h << ", factory address " << f.address;
-    if (f.baud)
-      h << ", " << lineName(f.baud, f.parity);
+    if (f.baud) h << ", " << lineName(f.baud, f.parity);
     if (t.commissioning->has(BoardFeature::kReturnDelay))
       h << ", return delay up to "
         << t.commissioning->returnDelayStepMs() * t.commissioning->returnDelayMaxUnits() << " ms";

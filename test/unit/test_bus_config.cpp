@@ -99,7 +99,7 @@ TEST(BusConfig, EachBadValueIsNamed) {
   const std::vector<BadCase> cases = {
       {"baud: 9600", "baud: 9601", {"baud", "9601", "115200"}},
       {"baud: 9600", "baud: fast", {"baud", "fast"}},
-      {"parity: none", "parity: mark", {"parity", "mark", "none, even or odd"}},
+      {"parity: none", "parity: mark", {"parity", "mark", "none, even, odd"}},
       {"data_bits: 8", "data_bits: 9", {"data_bits", "9"}},
       {"stop_bits: 1", "stop_bits: 3", {"stop_bits", "3"}},
       {"response_timeout: 0.5", "response_timeout: 0.0001", {"response_timeout"}},

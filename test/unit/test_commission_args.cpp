@@ -186,7 +186,8 @@ TEST(CommissionArgs, LineAndScanOptionsAreChecked) {
   EXPECT_EQ(refusal({"scan"}, false), "--port: missing (the serial device, e.g. /dev/ttyUSB0)");
   EXPECT_EQ(refusal({"--baud", "9601", "scan"}),
             "--baud: '9601' is not one of 1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200");
-  EXPECT_EQ(refusal({"--parity", "mark", "scan"}), "--parity: 'mark' is not one of none, even, odd");
+  EXPECT_EQ(refusal({"--parity", "mark", "scan"}),
+            "--parity: 'mark' is not one of none, even, odd");
   EXPECT_EQ(refusal({"--timeout", "0", "scan"}), "--timeout: '0' is outside 0.005-10 s");
   EXPECT_EQ(refusal({"--timeout", "1s", "scan"}), "--timeout: '1s' is outside 0.005-10 s");
   EXPECT_NE(refusal({"scan", "--bauds", "9600,9601"}).find("--bauds: '9601'"), std::string::npos);

@@ -1,6 +1,5 @@
 // Line timing derived from the serial settings.
 #include <gtest/gtest.h>
-
 #include <yaml-cpp/yaml.h>
 
 #include "modbus_rtu_driver/core/config/config_yaml.h"

@@ -334,5 +334,5 @@ TEST(SimLd58a08, StateRoundTripIsAPowerOnWithThatState) {
   EXPECT_EQ(coil(e, 5, t0 + 50ms), 1);
   e.powerCycle(t0);
   EXPECT_EQ(e.line().baud, 38400);
-  EXPECT_EQ(e.line().parity, 'O');
+  EXPECT_EQ(e.line().parity, Parity::kOdd);
 }

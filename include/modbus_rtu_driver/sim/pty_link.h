@@ -18,8 +18,7 @@ class PtyLink {
 
   // Creates the pty (raw, 8 data bits, 1 stop bit, at `baud` and `parity` N/E/O) and the link
   // (and its directory), replacing a stale link. False with a message.
-  bool open(const std::string& link, int baud, std::string* error,
-            Parity parity = Parity::kNone);
+  bool open(const std::string& link, int baud, std::string* error, Parity parity = Parity::kNone);
   void close();
   int fd() const { return master_fd_; }  // non-blocking master side
   // What the program on the other side set last (tcgetattr on the slave side we hold open).

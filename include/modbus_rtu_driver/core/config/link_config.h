@@ -67,7 +67,7 @@ const char* parityName(Parity parity);  // "none", "even", "odd"
 // A parity by its name; otherwise nullopt and `error` lists the names (a letter is refused with
 // the name to write: "'E' is not one of none, even, odd (write 'even')").
 std::optional<Parity> parseParity(std::string_view text, std::string* error);
-char parityLetter(Parity parity);  // 'N', 'E', 'O'
+char parityLetter(Parity parity);               // 'N', 'E', 'O'
 std::string lineName(int baud, Parity parity);  // "9600 8N1"
 
 // The standard rates, slowest first: every check, message and option takes them from here (the
