@@ -121,6 +121,7 @@ class DocCommandsTest(unittest.TestCase):
                 proc = up.Process(["bash", "-c", script], self.dir,
                                   "cmd%d" % len(os.listdir(self.dir)), env=self.env,
                                   cwd=up.REPO, stdin=expect.get("stdin"))
+                running.append(proc)  # stopped at the end even when a check below fails
                 what = "%s block %d: %s" % (doc, index, command)
                 if expect["kind"] == "exit0":
                     code = proc.wait_exit(120)
@@ -134,8 +135,6 @@ class DocCommandsTest(unittest.TestCase):
                     if expect["kind"] == "stream":
                         self.assertTrue(proc.running(), "%s ended:\n%s" % (what, proc.output()))
                         proc.stop()
-                    else:
-                        running.append(proc)
                 for text in expect["contains"]:
                     self.assertIn(text, proc.output(), what)
                 if "after" in expect:
