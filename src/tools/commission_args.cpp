@@ -609,12 +609,10 @@ int baudCode(const std::string& text, const CommissioningType& t) {
       " nor one of " + baudsOf(*t.commissioning, false) + " (" + t.type->name + ")");
 }
 
-// The settings commands: --type (needed only when more than one registered type has the
-// setting), --address in the type's range, and the new value in the board's units.
-void parseDevice(const Parsed& p, CommissionCommand& c) {
-  const std::string& cmd = c.command;
-  const SettingCommand& s = *settingCommand(cmd);
-  const std::vector<CommissioningType> types = typesWith(s.feature);
+// The registered type a settings command is for: --type (needed only when more than one
+// registered type has `feature`), checked against those that have it.
+CommissioningType chosenType(const Parsed& p, CommissionCommand& c, BoardFeature feature) {
+  const std::vector<CommissioningType> types = typesWith(feature);
   if (p.has("--type")) {
     c.type = p.w.type;  // checked by typeFor
   } else if (types.size() == 1) {
@@ -625,7 +623,15 @@ void parseDevice(const Parsed& p, CommissionCommand& c) {
   const auto it = std::find_if(types.begin(), types.end(),
                                [&c](const auto& t) { return c.type == t.type->name; });
   if (it == types.end()) bad("--type: '" + c.type + "' is not " + orList(namesOf(types)));
-  const CommissioningType& type = *it;
+  return *it;
+}
+
+// The settings commands: --type (needed only when more than one registered type has the
+// setting), --address in the type's range, and the new value in the board's units.
+void parseDevice(const Parsed& p, CommissionCommand& c) {
+  const std::string& cmd = c.command;
+  const SettingCommand& s = *settingCommand(cmd);
+  const CommissioningType type = chosenType(p, c, s.feature);
   const int max_address = type.type->max_address;
   if (p.has("--address")) {
     c.address = p.w.address;
@@ -689,19 +695,9 @@ std::string asOptions(std::string message, const std::vector<LimitSpec>& limits)
 // between them too. With fewer, the others are the device's own, and the rules are checked on
 // the merged set once they are read.
 void parseLimits(const Parsed& p, CommissionCommand& c) {
-  const std::vector<CommissioningType> types = typesWith(BoardFeature::kLimits);
-  if (p.has("--type")) {
-    c.type = p.w.type;  // checked by typeFor
-  } else if (types.size() == 1) {
-    c.type = types.front().type->name;
-  } else {
-    bad("--type: missing (" + orList(namesOf(types)) + ")");
-  }
-  const auto it = std::find_if(types.begin(), types.end(),
-                               [&c](const auto& t) { return c.type == t.type->name; });
-  if (it == types.end()) bad("--type: '" + c.type + "' is not " + orList(namesOf(types)));
-  const Commissioning& type = *it->commissioning;
-  const int max_address = it->type->max_address;
+  const CommissioningType chosen = chosenType(p, c, BoardFeature::kLimits);
+  const Commissioning& type = *chosen.commissioning;
+  const int max_address = chosen.type->max_address;
   if (!p.has("--address")) bad("--address: missing (1-" + std::to_string(max_address) + ")");
   c.address = p.w.address;
   checkIn("--address", c.address, 1, max_address);
