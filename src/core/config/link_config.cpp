@@ -38,15 +38,10 @@ std::string lineName(int baud, Parity parity) {
 }
 
 const char* portKindName(PortKind kind) {
-  switch (kind) {
-    case PortKind::kSerial:
-      return "serial RTU";
-    case PortKind::kModbusTcp:
-      return "Modbus TCP";
-    case PortKind::kRtuOverTcp:
-      return "RTU over TCP";
-  }
-  return "?";
+  static constexpr NameTable<PortKind, 3> kPortKindNames{{{PortKind::kSerial, "serial RTU"},
+                                                          {PortKind::kModbusTcp, "Modbus TCP"},
+                                                          {PortKind::kRtuOverTcp, "RTU over TCP"}}};
+  return nameIn(kPortKindNames, kind).data();  // the names are literals: terminated
 }
 
 bool parsePortAddress(const std::string& port, PortAddress* out, std::string* error) {

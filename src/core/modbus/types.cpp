@@ -63,24 +63,18 @@ bool isBitFunction(FunctionCode fc) {
 }
 
 const char* functionName(FunctionCode fc) {
-  switch (fc) {
-    case FunctionCode::kReadCoils:
-      return "read coils";
-    case FunctionCode::kReadDiscreteInputs:
-      return "read discrete inputs";
-    case FunctionCode::kReadHoldingRegisters:
-      return "read holding registers";
-    case FunctionCode::kReadInputRegisters:
-      return "read input registers";
-    case FunctionCode::kWriteSingleCoil:
-      return "write single coil";
-    case FunctionCode::kWriteSingleRegister:
-      return "write single register";
-    case FunctionCode::kWriteMultipleCoils:
-      return "write multiple coils";
-    case FunctionCode::kWriteMultipleRegisters:
-      return "write multiple registers";
-  }
+  // The Modbus specification's names of the functions this driver speaks.
+  static constexpr NameTable<FunctionCode, 8> kFunctionNames{
+      {{FunctionCode::kReadCoils, "read coils"},
+       {FunctionCode::kReadDiscreteInputs, "read discrete inputs"},
+       {FunctionCode::kReadHoldingRegisters, "read holding registers"},
+       {FunctionCode::kReadInputRegisters, "read input registers"},
+       {FunctionCode::kWriteSingleCoil, "write single coil"},
+       {FunctionCode::kWriteSingleRegister, "write single register"},
+       {FunctionCode::kWriteMultipleCoils, "write multiple coils"},
+       {FunctionCode::kWriteMultipleRegisters, "write multiple registers"}}};
+  for (const auto& row : kFunctionNames)
+    if (row.value == fc) return row.name.data();  // the names are literals: terminated
   return "unknown function";
 }
 
