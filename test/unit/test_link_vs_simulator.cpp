@@ -125,10 +125,11 @@ TEST_F(LinkVsSimulator, TimeoutAndCrcError) {
 }
 
 TEST_F(LinkVsSimulator, ReplyDelayIsCoveredByTheResponseTimeout) {
-  // LD58A08 return delay 5 x 40 ms = 200 ms, more than the link's 150 ms timeout.
-  ASSERT_TRUE(link_->execute(Request::writeSingleRegister(1, 0x00FC, 5)).ok());
+  // LD58A08 return delay 25 x 40 ms = 1 s, far beyond the link's 150 ms timeout: a machine
+  // busy enough to start the wait late still sees the timeout (5 x 40 ms once did not).
+  ASSERT_TRUE(link_->execute(Request::writeSingleRegister(1, 0x00FC, 25)).ok());
   EXPECT_EQ(link_->execute(Request::readCoils(1, 0, 8)).error, ErrorKind::kTimeout);
-  link_->setReplyDelay(1, 0.2);
+  link_->setReplyDelay(1, 1.0);
   const Result r = link_->execute(Request::readCoils(1, 0, 8));
   EXPECT_TRUE(r.ok()) << r.message;
 }
