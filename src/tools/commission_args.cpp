@@ -213,7 +213,7 @@ const CLI::Validator kTableName(
       std::string problem;
       return parseTableName(text, &problem) ? "" : problem;
     },
-    "TABLE");
+    join(kTableNames, "|", [](const Named<Table>& row) { return std::string(row.name); }));
 
 // --- the settings commands, and which registered types have them ---
 
