@@ -73,9 +73,8 @@ const char* functionName(FunctionCode fc) {
        {FunctionCode::kWriteSingleRegister, "write single register"},
        {FunctionCode::kWriteMultipleCoils, "write multiple coils"},
        {FunctionCode::kWriteMultipleRegisters, "write multiple registers"}}};
-  for (const auto& row : kFunctionNames)
-    if (row.value == fc) return row.name.data();  // the names are literals: terminated
-  return "unknown function";
+  const std::string_view name = nameIn(kFunctionNames, fc);  // "?" when not in the table
+  return name == "?" ? "unknown function" : name.data();     // literals: terminated
 }
 
 std::string exceptionName(uint8_t code) {
