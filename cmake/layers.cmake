@@ -16,7 +16,8 @@
 # The layers, each a library linked only on the ones below it; --no-undefined makes a call that
 # goes the wrong way a link error, and scripts/check_conventions.sh checks the includes:
 #   core (ROS-free; five libraries, one per folder of src/core: see below)
-#   <- devices (one class per device type, fail-safe policy) <- config (the bus node's YAML)
+#   <- devices (one class per device type) <- failsafe (channel intents) <- config (the bus
+#   node's YAML)
 #   <- ros (adapters, node).   sim and tools sit on core (tools also on devices).
 # The repository's root, without "cmake/..": the include path then reads as before (catkin_lint
 # reads the set(), the build the normalised path).
@@ -69,10 +70,16 @@ add_library(modbus_rtu_devices ${MODBUS_RTU_LIBRARY_TYPE} ${devices_sources})
 target_link_libraries(modbus_rtu_devices PUBLIC modbus_rtu_core)
 layer(modbus_rtu_devices)
 
+# Fail-safe: what each output channel should show and why (channel intents), ROS-free.
+layer_sources(failsafe_sources failsafe)
+add_library(modbus_rtu_failsafe ${MODBUS_RTU_LIBRARY_TYPE} ${failsafe_sources})
+target_link_libraries(modbus_rtu_failsafe PUBLIC modbus_rtu_devices)
+layer(modbus_rtu_failsafe)
+
 # The bus node's configuration: link, devices (checked against their type), fail-safe keys.
 layer_sources(config_sources config)
 add_library(modbus_rtu_config ${MODBUS_RTU_LIBRARY_TYPE} ${config_sources})
-target_link_libraries(modbus_rtu_config PUBLIC modbus_rtu_devices)
+target_link_libraries(modbus_rtu_config PUBLIC modbus_rtu_failsafe)
 layer(modbus_rtu_config)
 
 # Simulator (ROS-free): simulated devices, the line on a pty, fault injection, control socket.

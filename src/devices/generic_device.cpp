@@ -152,24 +152,31 @@ std::vector<size_t> GenericDevice::safeSignals() const {
   return out;
 }
 
-Result GenericDevice::writeSafeValues(Transport& bus) {
+Result GenericDevice::writeSafeValues(Transport& bus, bool* silent) {
   Result first = Result::success();
+  if (silent) *silent = false;
   for (size_t i : safeSignals()) {
-    const Result r = writeSafeValue(bus, i);
+    bool answered = true;
+    const Result r = writeSafeValue(bus, i, &answered);
     if (r.ok()) continue;
     if (first.ok()) first = r;
-    if (noProperAnswer(r.error)) break;  // silent: the others would only wait out their timeouts
+    if (!answered) {
+      if (silent) *silent = true;
+      break;  // silent: the others would only wait out their timeouts
+    }
   }
   return first;
 }
 
-Result GenericDevice::writeSafeValue(Transport& bus, size_t i) {
+Result GenericDevice::writeSafeValue(Transport& bus, size_t i, bool* answered) {
+  *answered = true;
   const SignalConfig& s = signals()[i];
   std::vector<uint16_t> words;
   const std::string problem = encodeWrite(i, *s.safe_value, &words);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
   Result w = writeSignal(bus, i, *s.safe_value);
   if (!w.ok()) {
+    *answered = !noProperAnswer(w.error);
     w.message = s.name + ": " + w.message;
     return w;
   }
@@ -178,6 +185,7 @@ Result GenericDevice::writeSafeValue(Transport& bus, size_t i) {
                            : Request::readHoldingRegisters(address(), s.address, s.words());
   Result now = bus.execute(back);
   if (!now.ok()) {
+    *answered = !noProperAnswer(now.error);
     now.message = s.name + ": written, but reading back failed: " + now.message;
     return now;
   }

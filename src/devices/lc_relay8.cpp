@@ -86,4 +86,21 @@ Result LcRelay8::setAddressAtZero(Transport& bus, uint8_t new_address) {
   return bus.execute(r);
 }
 
+std::vector<TimedIntent> LcRelay8::timedWrittenBy(const Request& request) const {
+  std::vector<TimedIntent> timed;
+  if (request.function != FunctionCode::kWriteMultipleRegisters) return timed;
+  for (uint8_t ch = 0; ch < kChannels; ++ch) {
+    const uint16_t mode = flashRegister(ch);
+    if (mode < request.address ||
+        static_cast<size_t>(mode) + 1 >= request.address + request.values.size())
+      continue;
+    const uint16_t kind = request.values[mode - request.address];
+    const uint16_t tenths = request.values[mode + 1 - request.address];
+    if ((kind != kFlashClose && kind != kFlashOpen) || tenths == 0) continue;
+    const bool close = kind == kFlashClose;  // closes (on) for the delay, then opens
+    timed.push_back(TimedIntent{ch, close, !close, tenths / 10.0});
+  }
+  return timed;
+}
+
 }  // namespace modbus_rtu_driver

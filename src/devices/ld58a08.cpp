@@ -318,4 +318,47 @@ Result Ld58a08::factoryReset(Transport& bus) {
   return bus.execute(Request::writeSingleRegister(address(), kFactoryResetRegister, 0));
 }
 
+TimedIntent Ld58a08::pwmIntent(const PwmSettings& s) {
+  TimedIntent t;
+  t.channel = s.channel;
+  t.after = false;
+  if (s.channel < 6) {
+    t.seconds = s.pulses == 0 ? -1.0 : s.pulses * s.period;
+  } else {
+    t.seconds = s.duration == 0.0 ? -1.0 : s.duration;
+  }
+  return t;
+}
+
+std::vector<TimedIntent> Ld58a08::timedWrittenBy(const Request& request) const {
+  std::vector<TimedIntent> timed;
+  if (request.function != FunctionCode::kWriteMultipleRegisters &&
+      request.function != FunctionCode::kWriteSingleRegister)
+    return timed;
+  const auto written = [&request](uint16_t reg) -> std::optional<uint16_t> {
+    if (reg < request.address || reg >= request.address + request.values.size()) return {};
+    return request.values[reg - request.address];
+  };
+  for (uint8_t ch = 0; ch < kChannels; ++ch) {
+    const auto enable = written(pwmRegister(ch) + 2);
+    if (!enable || *enable == 0) continue;  // not written, or a stop: the next poll shows it
+    TimedIntent t;
+    t.channel = ch;
+    t.after = false;
+    if (*enable == kContinuous) {
+      t.seconds = -1.0;
+    } else if (ch < 6) {
+      // Pulses of the period written with it, or of the one the board already has.
+      const double period =
+          written(pwmRegister(ch)).value_or(static_cast<uint16_t>(pwm_[ch].period * 10 + 0.5)) /
+          10.0;
+      t.seconds = *enable * period;
+    } else {
+      t.seconds = *enable / 10.0;  // output time in 0.1 s
+    }
+    timed.push_back(t);
+  }
+  return timed;
+}
+
 }  // namespace modbus_rtu_driver

@@ -45,6 +45,7 @@ void BusNode::startFailsafe() {
     watch(config_.heartbeat_topic, config_.heartbeat_timeout, bus_heartbeat_.get());
   }
   for (auto& a : adapters_) {
+    a->setBusHeartbeat(bus_heartbeat_.get(), config_.heartbeat_topic);
     a->setFailsafeSink([this](const FailsafeEvent& e) {
       postOrRun(rosPublishing(), [this, e] { publishShared(failsafe_pub_, e); });
     });
@@ -64,18 +65,31 @@ void BusNode::startFailsafe() {
 }
 
 void BusNode::checkDeadlines() {
+  // Devices that answer first: the bus runs the safe writes in the order they are queued, and a
+  // silent device's would hold the others' back by response_timeout x (retries + 1) per frame.
+  const std::vector<DeviceAdapter*> order = answeringFirst();
   if (bus_heartbeat_ && bus_heartbeat_->expired()) {
     const std::string reason = "no message on " + config_.heartbeat_topic + " within " +
                                numberText(config_.heartbeat_timeout) + " s";
-    for (auto& a : adapters_) a->applySafe("heartbeat", reason);
+    for (DeviceAdapter* a : order) a->applySafe("heartbeat", reason);
   }
-  for (auto& a : adapters_) a->checkDeadlines();
+  for (DeviceAdapter* a : order) a->checkDeadlines();
 }
 
-void BusNode::externalWrite(const Request& request) {
+std::vector<DeviceAdapter*> BusNode::answeringFirst() const {
+  std::vector<DeviceAdapter*> order;
+  for (const auto& a : adapters_) order.push_back(a.get());
+  std::stable_sort(order.begin(), order.end(), [this](DeviceAdapter* x, DeviceAdapter* y) {
+    return bus_->health(x->name()).consecutive_failures == 0 &&
+           bus_->health(y->name()).consecutive_failures > 0;
+  });
+  return order;
+}
+
+void BusNode::externalWrite(const Request& request, CommandSource source) {
   for (auto& a : adapters_)
     if (request.slave == kBroadcastAddress || a->address() == request.slave)
-      a->externalWrite(request);
+      a->externalWrite(request, source);
 }
 
 void BusNode::shutdown() {
@@ -91,16 +105,9 @@ void BusNode::shutdown() {
                                     std::chrono::duration<double>(config_.shutdown_timeout));
   // Devices that answer first: one that does not (its last transaction failed) would take
   // response_timeout x (retries + 1) per frame and leave the others' safe writes waiting.
-  std::vector<DeviceAdapter*> order;
-  for (auto& a : adapters_)
-    if (a->hasSafeStates()) order.push_back(a.get());
-  std::stable_sort(order.begin(), order.end(), [this](DeviceAdapter* x, DeviceAdapter* y) {
-    return bus_->health(x->name()).consecutive_failures == 0 &&
-           bus_->health(y->name()).consecutive_failures > 0;
-  });
   std::vector<std::pair<std::string, std::future<Result>>> pending;
-  for (DeviceAdapter* a : order)
-    pending.emplace_back(a->name(), a->applySafe("shutdown", "node stops"));
+  for (DeviceAdapter* a : answeringFirst())
+    if (a->hasSafeStates()) pending.emplace_back(a->name(), a->applySafe("shutdown", "node stops"));
   for (auto& [name, done] : pending) {
     // rosconsole has shut down with ROS: stderr is what the user sees now.
     if (done.wait_until(deadline) != std::future_status::ready) {
@@ -164,8 +171,9 @@ bool BusNode::start() {
   std::map<uint8_t, std::string> by_address;
   for (const DeviceConfig& dc : config_.devices)
     by_address[static_cast<uint8_t>(dc.address)] = dc.name;
-  raw_writes_ = std::make_unique<RawWrites>(nh_, *bus_, config_.allow_raw_writes, by_address,
-                                            [this](const Request& r) { externalWrite(r); });
+  raw_writes_ = std::make_unique<RawWrites>(
+      nh_, *bus_, config_.allow_raw_writes, by_address,
+      [this](const Request& r) { externalWrite(r, CommandSource::kRaw); });
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>();
   diagnostics_->setHardwareID(config_.link.port);
@@ -182,22 +190,27 @@ bool BusNode::start() {
   startFailsafe();
   bus_->start();
   // on_start: safe puts those outputs there before any command is taken (and before the first
-  // poll, so a restart is never seen in them).
-  for (auto& a : adapters_) {
-    if (!a->safeOnStart()) continue;
-    auto done = a->applySafe("start", "on_start: safe");
+  // poll, so a restart is never seen in them). All are queued at once; none has answered yet.
+  std::vector<std::pair<std::string, std::future<Result>>> starting;
+  for (auto& a : adapters_)
+    if (a->safeOnStart()) starting.emplace_back(a->name(), a->applySafe("start", "on_start: safe"));
+  for (auto& [name, done] : starting)
     if (done.wait_for(std::chrono::duration<double>(config_.shutdown_timeout + 5.0)) !=
         std::future_status::ready)
-      ROS_ERROR("%s: start-up safe states not confirmed in time", a->name().c_str());
-  }
+      ROS_ERROR("%s: start-up safe states not confirmed in time", name.c_str());
+  // The heartbeats count from here: no message could arrive while start() blocked on those
+  // writes (the spinner runs after it), so a live controller is not taken as lost at start.
+  if (bus_heartbeat_) bus_heartbeat_->feed();
+  for (auto& a : adapters_)
+    if (a->heartbeat()) a->heartbeat()->feed();
   for (auto& a : adapters_) {
     a->setPublishPolicy({config_.publish_on_change, config_.keep_alive});
     a->setPublishQueue(rosPublishing());
     a->start();
   }
   if (config_.share.enabled) {
-    share_ = std::make_unique<ShareBridge>(*bus_, config_,
-                                           [this](const Request& r) { externalWrite(r); });
+    share_ = std::make_unique<ShareBridge>(
+        *bus_, config_, [this](const Request& r) { externalWrite(r, CommandSource::kShare); });
     if (!share_->start(&error)) {
       ROS_FATAL("share: %s", error.c_str());
       return false;

@@ -90,12 +90,16 @@ Result DeviceAdapter::writeOutputs(const std::vector<uint8_t>& channels,
 Result DeviceAdapter::completeBatch(Transport& t,
                                     const std::shared_ptr<OutputBatch::Entry>& entry) {
   const bool sent = !entry->result;
+  if (sent) failsafe_.writeRan();
   Result w = batch_.complete(*device_, t, entry,
                              [this](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
-                               failsafe_.confirmed(chs, sts, FailsafeTracker::Writer::kUser);
+                               failsafe_.commanded(chs, sts, CommandSource::kUser);
                                endFailsafeState();
                              });
-  failsafe_.observeWrite(device_->outputs());
+  // Not confirmed: the caller was told it failed, yet the device may have acted. The next poll
+  // shows what the channels are (not a restart, not the caller's command).
+  if (sent && !w.ok())
+    for (uint8_t ch : entry->channels) failsafe_.adoptNextPoll(ch, CommandSource::kFound);
   if (sent && w.ok()) publishOutputs();
   return w;
 }

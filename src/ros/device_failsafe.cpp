@@ -28,26 +28,39 @@ std::future<Result> ready(Result r) {
 
 std::future<Result> DeviceAdapter::applySafe(const std::string& trigger, const std::string& reason,
                                              const std::vector<uint8_t>& only) {
-  const OutputTargets all = failsafe_.safeTargets();
+  // A trigger that lasts holds its channels safe on every restore until they are commanded
+  // again, even if this write does not get through; what the write sets is read from the holds
+  // when the bus gets to it, so a channel commanded in between is left as commanded.
+  const bool lasting = trigger == "heartbeat" || trigger == "command_timeout";
+  const auto since = failsafe_.clock().now();
   OutputTargets targets;
-  for (size_t i = 0; i < all.channels.size(); ++i) {
-    if (!only.empty() && std::find(only.begin(), only.end(), all.channels[i]) == only.end())
-      continue;
-    targets.channels.push_back(all.channels[i]);
-    targets.states.push_back(all.states[i]);
+  if (lasting) {
+    failsafe_.hold(only,
+                   trigger == "heartbeat" ? HoldTrigger::kHeartbeat : HoldTrigger::kCommandTimeout);
+    targets = failsafe_.heldTargets(only);
+  } else {
+    const OutputTargets all = failsafe_.safeTargets();
+    for (size_t i = 0; i < all.channels.size(); ++i) {
+      if (!only.empty() && std::find(only.begin(), only.end(), all.channels[i]) == only.end())
+        continue;
+      targets.channels.push_back(all.channels[i]);
+      targets.states.push_back(all.states[i]);
+    }
   }
   if (targets.empty()) return ready(Result::success());
-  // A trigger that lasts keeps these channels safe on every restore until a user commands them
-  // again, even if this write does not get through.
-  if (trigger == "heartbeat" || trigger == "command_timeout") failsafe_.holdSafe(targets.channels);
-  return bus_.submit(device_->name(), [this, targets, trigger, reason](Transport& t) {
-    return writeAndReport(t, targets, trigger, reason, "safe", true);
-  });
+  return bus_.submit(device_->name(),
+                     [this, lasting, only, targets, trigger, reason, since](Transport& t) {
+                       const OutputTargets now = lasting ? failsafe_.heldTargets(only) : targets;
+                       if (now.empty())
+                         return Result::success();  // commanded again before the bus got to it
+                       return writeAndReport(t, now, trigger, reason, "safe", since);
+                     });
 }
 
 Result DeviceAdapter::writeAndReport(Transport& t, const OutputTargets& targets,
                                      const std::string& trigger, const std::string& reason,
-                                     const std::string& action, bool holds_safe_states) {
+                                     const std::string& action,
+                                     std::optional<Clock::time_point> owe_since) {
   const auto names = device_->outputNames();
   FailsafeEvent e;
   e.header.stamp = ros::Time::now();
@@ -59,15 +72,14 @@ Result DeviceAdapter::writeAndReport(Transport& t, const OutputTargets& targets,
     e.channels.push_back(names[targets.channels[i]]);
     e.states.push_back(targets.states[i]);
   }
+  failsafe_.writeRan();
   Result w = device_->setOutputs(t, targets.channels, targets.states);
-  failsafe_.observeWrite(device_->outputs());
   if (w.ok()) {
     // Read back: the outputs as the device reports them now, not as the write's echo said.
     const Result back = device_->poll(t);
     if (!back.ok()) {
       w = Result::failure(back.error, "written, but reading back failed: " + back.message);
     } else {
-      failsafe_.observeWrite(device_->outputs());
       for (size_t i = 0; i < targets.channels.size(); ++i) {
         if (device_->outputs()[targets.channels[i]] == targets.states[i]) continue;
         w = Result::failure(ErrorKind::kMalformed, "read back: " + names[targets.channels[i]] +
@@ -79,17 +91,32 @@ Result DeviceAdapter::writeAndReport(Transport& t, const OutputTargets& targets,
   }
   if (w.ok()) {
     // A safe write is a command like any other: a restore writes it again.
-    failsafe_.confirmed(targets.channels, targets.states, FailsafeTracker::Writer::kFailsafe);
+    failsafe_.commanded(targets.channels, targets.states,
+                        action == "restore" ? CommandSource::kRestore : CommandSource::kSafe);
     publishOutputs();
     // A restore with no channel held safe put back what users had: no longer in a safe state.
-    if (action == "restore" && !failsafe_.anyHeldSafe()) endFailsafeState();
+    if (action == "restore" && !failsafe_.anyHeld()) endFailsafeState();
+  } else if (owe_since) {
+    // Owed per channel: written when the device answers again, unless commanded before that.
+    failsafe_.owe(targets, *owe_since, trigger);
   }
-  // A safe state not reached is tried again when the device answers again.
-  if (holds_safe_states) failsafe_.setSafePending(!w.ok());
   e.confirmed = w.ok();
   e.message = w.ok() ? "confirmed by reading the outputs back" : w.message;
   report(e);
   return w;
+}
+
+void DeviceAdapter::timedCommandDone(const TimedIntent& intent, const Result& result) {
+  if (result.ok()) {
+    failsafe_.timed(intent, CommandSource::kTimed);
+    endFailsafeState();
+    return;
+  }
+  // Not confirmed: it may run or not. Either level may show until its end, then its final one
+  // is what a poll finds (it is not taken as commanded: the caller was told it failed).
+  TimedIntent unsure = intent;
+  unsure.during.reset();
+  failsafe_.timed(unsure, CommandSource::kFound);
 }
 
 void DeviceAdapter::checkRestart() {
@@ -101,39 +128,39 @@ void DeviceAdapter::checkRestart() {
   const auto verdict = failsafe_.observePoll(device_->outputs(), timed, was_offline, &changed);
   // A share client or raw write changed outputs: "in their safe state" (which names the channels
   // the safe write set) is no longer true, as after a user's write.
-  if (failsafe_.tookExternalWrite()) endFailsafeState();
-  const bool pending = failsafe_.safePending();
-  if (verdict == FailsafeTracker::Verdict::kNormal && !pending) return;
+  if (failsafe_.tookAdoptedWrite()) endFailsafeState();
+  const bool owed = !failsafe_.owed().empty();
+  if (verdict == ChannelIntents::Verdict::kNormal && !owed) return;
   std::string reason = "the device answers again; its safe state was not reached before";
   std::string action = "safe";
-  if (verdict != FailsafeTracker::Verdict::kNormal) {
+  if (verdict != ChannelIntents::Verdict::kNormal) {
     std::lock_guard<std::mutex> lock(failsafe_mutex_);
     ++restarts_detected_;
-    reason = verdict == FailsafeTracker::Verdict::kCameBack
+    reason = verdict == ChannelIntents::Verdict::kCameBack
                  ? "answered again after being offline"
                  : "outputs " + channelNames(device_->outputNames(), changed) +
                        " changed with no command in between (power cycle?)";
     const OnRestart policy = failsafe_.config().on_restart;
-    // With on_restart: leave, only the pending safe states are written: say so.
-    action = pending && policy == OnRestart::kLeave ? "safe" : onRestartName(policy);
+    // With on_restart: leave, only the owed safe states are written: say so.
+    action = owed && policy == OnRestart::kLeave ? "safe" : onRestartName(policy);
   }
-  const OutputTargets targets = failsafe_.afterPollTargets(verdict);
-  if (targets.empty()) {
-    FailsafeEvent e;
-    e.header.stamp = ros::Time::now();
-    e.device = device_->name();
-    e.trigger = "restart";
-    e.reason = reason;
-    e.action = action;
-    e.confirmed = true;
-    e.message = "outputs left as they are";
-    report(e);
-    return;
-  }
-  // The pending safe states are in this write (afterPollTargets), as are on_restart: safe's.
-  const bool holds_safe_states = pending || action == "safe";
-  bus_.submit(device_->name(), [this, targets, reason, action, holds_safe_states](Transport& t) {
-    return writeAndReport(t, targets, "restart", reason, action, holds_safe_states);
+  // What to write is read when the write runs: a command confirmed before then is not undone.
+  bus_.submit(device_->name(), [this, verdict, reason, action](Transport& t) {
+    const OutputTargets targets = failsafe_.afterPollTargets(verdict);
+    if (targets.empty()) {
+      if (verdict == ChannelIntents::Verdict::kNormal) return Result::success();
+      FailsafeEvent e;
+      e.header.stamp = ros::Time::now();
+      e.device = device_->name();
+      e.trigger = "restart";
+      e.reason = reason;
+      e.action = action;
+      e.confirmed = true;
+      e.message = "outputs left as they are";
+      report(e);
+      return Result::success();
+    }
+    return writeAndReport(t, targets, "restart", reason, action, std::nullopt);
   });
 }
 
@@ -151,6 +178,12 @@ void DeviceAdapter::checkDeadlines() {
   }
 }
 
+std::string DeviceAdapter::lostHeartbeat() const {
+  if (bus_heartbeat_ && bus_heartbeat_->tripped()) return bus_heartbeat_topic_;
+  if (heartbeat_ && heartbeat_->tripped()) return failsafe_.config().heartbeat_topic;
+  return "";
+}
+
 void DeviceAdapter::report(const FailsafeEvent& e) {
   std::string text = e.trigger + " (" + e.reason + "): ";
   std::vector<std::string> changes;
@@ -163,12 +196,20 @@ void DeviceAdapter::report(const FailsafeEvent& e) {
     std::lock_guard<std::mutex> lock(failsafe_mutex_);
     ++failsafe_events_;
     last_failsafe_ = text;
-    if (!e.channels.empty() && e.action == "safe") failsafe_active_ = text;
+    if (!e.channels.empty() && e.action == "safe") {
+      failsafe_active_ = text;
+      failsafe_active_trigger_ = e.trigger;
+    }
   }
+  // A device with no fail-safe configured only notes a restart: nothing was written.
+  const bool note = e.channels.empty() && e.action == "leave" && !hasSafeStates();
   if (!ros::ok()) {
     // Shutting down: rosconsole is gone, and this is what the user must still see.
     std::fprintf(stderr, "[%s] %s: fail-safe %s\n", e.confirmed ? "WARN" : "ERROR",
                  device_->name().c_str(), text.c_str());
+  } else if (note) {
+    ROS_INFO("%s: restart detected (%s); on_restart: leave", device_->name().c_str(),
+             e.reason.c_str());
   } else if (e.confirmed) {
     ROS_WARN("%s: fail-safe %s", device_->name().c_str(), text.c_str());
   } else {
@@ -180,8 +221,14 @@ void DeviceAdapter::report(const FailsafeEvent& e) {
   if (failsafe_sink_) failsafe_sink_(e);
 }
 
-void DeviceAdapter::externalWrite(const Request& request) {
-  failsafe_.externalWrite(device_->outputsWrittenBy(request));
+void DeviceAdapter::externalWrite(const Request& request, CommandSource source) {
+  const OutputTargets set = device_->outputsWrittenBy(request);
+  if (!set.empty()) failsafe_.commanded(set.channels, set.states, source);
+  const std::vector<TimedIntent> timed = device_->timedWrittenBy(request);
+  for (const TimedIntent& t : timed) failsafe_.timed(t, source);
+  // Any other write (registers the type does not decode) shows at the next poll.
+  if (set.empty() && timed.empty() && !isBitFunction(request.function))
+    failsafe_.adoptChangesNextPoll(source);
 }
 
 void DeviceAdapter::endFailsafeState() {
@@ -199,13 +246,30 @@ void DeviceAdapter::diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper
   const std::string safe = join(states);
   status.add("safe states", safe.empty() ? "none (every output holds)" : safe);
   status.add("on_restart", onRestartName(fs.on_restart));
+  // The heartbeat's state, whatever was written since: a write while it is lost does not bring
+  // the controller back.
+  const std::string lost = lostHeartbeat();
+  if (bus_heartbeat_) status.add("bus heartbeat", bus_heartbeat_->tripped() ? "lost" : "alive");
+  if (heartbeat_) status.add("device heartbeat", heartbeat_->tripped() ? "lost" : "alive");
+  std::vector<std::string> held;
+  for (size_t i = 0; i < names.size(); ++i)
+    if (failsafe_.heldBy(static_cast<uint8_t>(i)) != 0) held.push_back(names[i]);
+  status.add("held safe until commanded", held.empty() ? "none" : join(held));
+  const OutputTargets owed = failsafe_.owed();
+  status.add("safe writes owed", owed.empty() ? "none" : channelNames(names, owed.channels));
   std::lock_guard<std::mutex> lock(failsafe_mutex_);
   status.add("restarts detected", restarts_detected_);
   status.add("fail-safe events", failsafe_events_);
   status.add("last fail-safe event", last_failsafe_.empty() ? "none" : last_failsafe_);
-  if (!failsafe_active_.empty())
+  if (!lost.empty()) {
+    status.mergeSummary(
+        diagnostic_msgs::DiagnosticStatus::WARN,
+        "heartbeat lost (no message on " + lost + "): outputs held in their safe state");
+  } else if (!failsafe_active_.empty() && failsafe_active_trigger_ != "heartbeat") {
+    // After a heartbeat loss the held channels are listed above; the heartbeat is back.
     status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN,
                         "outputs in their safe state after " + failsafe_active_);
+  }
 }
 
 }  // namespace modbus_rtu_driver

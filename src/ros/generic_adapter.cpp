@@ -219,10 +219,12 @@ class GenericAdapter : public DeviceAdapter {
       e.states.push_back(v != 0.0);
       e.values.push_back(v);
     }
-    const Result w = generic().writeSafeValues(t);
-    // Not reached because the device did not answer: tried again when it answers. A refusal
-    // is the device's answer, and retrying it on every poll would only repeat the event.
-    safe_pending_ = !w.ok() && noProperAnswer(w.error);
+    bool silent = false;
+    const Result w = generic().writeSafeValues(t, &silent);
+    // Not reached because the device did not answer: tried again when it answers. A refusal,
+    // or a value read back that differs, is the device's answer: reported, not retried (on
+    // every poll it would only repeat the event), and the other signals were still written.
+    safe_pending_ = silent;
     if (!pubs_.empty()) publishSignals(false);  // not before start() (on_start: safe)
     e.confirmed = w.ok();
     e.message = w.ok() ? "confirmed by reading the signals back" : w.message;

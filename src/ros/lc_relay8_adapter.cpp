@@ -30,9 +30,10 @@ class LcRelay8Adapter : public DeviceAdapter {
     const bool state = req.state;
     const double duration = req.duration;
     const Result r = runOnBus([this, channel, state, duration](Transport& t) {
-      markSelfTimed(channel);  // the board switches it back by itself
+      timedCommandSending();
       Result w = board().pulse(t, channel, state, duration);
-      if (w.ok()) timedCommandConfirmed(channel);
+      // Flash-close: on for `duration`, then off by itself; flash-open the other way round.
+      timedCommandDone(TimedIntent{channel, state, !state, duration}, w);
       // The board changed the output by itself: read it back so the topics show it now.
       if (w.ok() && board().poll(t).ok()) publishOutputs();
       return w;

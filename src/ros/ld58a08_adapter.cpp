@@ -68,9 +68,11 @@ class Ld58a08Adapter : public DeviceAdapter {
       return true;
     }
     const Result r = runOnBus([this, s](Transport& t) {
-      markSelfTimed(s.channel);  // the PWM drives the output from now on
+      timedCommandSending();
       Result w = board().setPwm(t, s);
-      if (w.ok()) timedCommandConfirmed(s.channel);
+      // The PWM drives the output from now on: for a burst or a timed run until its end, then
+      // off; a continuous run until stopped.
+      timedCommandDone(Ld58a08::pwmIntent(s), w);
       if (w.ok() && board().readPwm(t).ok()) publishPwm();
       return w;
     });
@@ -88,7 +90,9 @@ class Ld58a08Adapter : public DeviceAdapter {
     }
     const uint8_t channel = req.channel;
     const Result r = runOnBus([this, channel](Transport& t) {
+      timedCommandSending();
       Result w = board().stopPwm(t, channel);
+      if (w.ok()) timedCommandStopped(channel);
       if (w.ok() && board().readPwm(t).ok()) publishPwm();
       return w;
     });

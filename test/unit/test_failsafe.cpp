@@ -1,6 +1,6 @@
-// The fail-safe policy (ROS-free): configuration rules, restart detection, the dead man's
-// deadlines and the heartbeat watchdog on a manual clock, and what a safe write sends (scripted
-// transport, byte exact).
+// The fail-safe configuration (ROS-free): its rules, the heartbeat watchdog on a manual clock,
+// and what a safe write sends (scripted transport, byte exact). What each channel should show is
+// in test_channel_intents.cpp.
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
@@ -8,6 +8,7 @@
 #include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/failsafe/channel_intents.h"
 #include "scripted_transport.h"
 
 using namespace modbus_rtu_driver;
@@ -107,87 +108,13 @@ TEST(FailsafeConfig, BadValuesAreRefusedWithTheKeyNamed) {
             std::string::npos);
 }
 
-TEST(FailsafeTracker, SafeTargetsLeaveHoldChannelsAlone) {
+TEST(ChannelIntents, SafeTargetsLeaveHoldChannelsAlone) {
   FailsafeConfig c;
   c.safe_state = {SafeState::kOff, SafeState::kHold, SafeState::kOn};
-  FailsafeTracker t(c, 3);
+  ChannelIntents t(c, 3);
   const OutputTargets s = t.safeTargets();
   EXPECT_EQ(s.channels, (std::vector<uint8_t>{0, 2}));
   EXPECT_EQ(s.states, (std::vector<bool>{false, true}));
-}
-
-TEST(FailsafeTracker, APollThatDiffersWithNoCommandIsARestart) {
-  FailsafeTracker t(FailsafeConfig{}, 4);
-  std::vector<uint8_t> changed;
-  // The first poll only learns the states.
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({true, false, true, false}, {}, false, &changed),
-            FailsafeTracker::Verdict::kNormal);
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({true, false, true, false}, {}, false, &changed),
-            FailsafeTracker::Verdict::kNormal);
-  // A confirmed write moves the expectation: no restart.
-  t.confirmed({1}, {true}, FailsafeTracker::Writer::kUser);
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({true, true, true, false}, {}, false, &changed),
-            FailsafeTracker::Verdict::kNormal);
-  // A power cycle turns everything off.
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({false, false, false, false}, {}, false, &changed),
-            FailsafeTracker::Verdict::kOutputsChanged);
-  EXPECT_EQ(changed, (std::vector<uint8_t>{0, 1, 2}));
-  // Back after being offline is a restart whatever the states.
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({false, false, false, false}, {}, true, &changed),
-            FailsafeTracker::Verdict::kCameBack);
-  // What a restore writes: what users commanded (channel 1 on).
-  const OutputTargets r = t.restoreTargets();
-  EXPECT_EQ(r.channels, (std::vector<uint8_t>{1}));
-  EXPECT_EQ(r.states, (std::vector<bool>{true}));
-}
-
-TEST(FailsafeTracker, ChannelsTheDeviceTimesItselfAreNotCompared) {
-  FailsafeTracker t(FailsafeConfig{}, 2);
-  t.pollStarting();  // as the adapter does before every poll
-  t.observePoll({false, false}, {}, false, nullptr);
-  t.selfTimed(0);    // an LC flash on channel 0
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({true, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({false, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
-  // A running PWM as the device reports it.
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({false, true}, {false, true}, false, nullptr),
-            FailsafeTracker::Verdict::kNormal);
-  // A plain write settles channel 0 again: it is compared from then on.
-  t.confirmed({0}, {true}, FailsafeTracker::Writer::kUser);
-  std::vector<uint8_t> changed;
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({false, true}, {false, true}, false, &changed),
-            FailsafeTracker::Verdict::kOutputsChanged);
-  EXPECT_EQ(changed, (std::vector<uint8_t>{0}));
-}
-
-TEST(FailsafeTracker, TheDeadMansDeadlineOnAManualClock) {
-  ManualClock clock;
-  FailsafeConfig c;
-  c.safe_state = {SafeState::kOff, SafeState::kOff};
-  c.command_timeout = {1.0, 0.0};
-  FailsafeTracker t(c, 2, clock);
-  t.commandReceived(0, true);
-  t.commandReceived(1, true);  // no timeout on channel 1
-  clock.advance(999ms);
-  EXPECT_TRUE(t.expiredCommands().empty());
-  t.commandReceived(0, true);  // renewed
-  clock.advance(999ms);
-  EXPECT_TRUE(t.expiredCommands().empty());
-  clock.advance(1ms);
-  EXPECT_EQ(t.expiredCommands(), (std::vector<uint8_t>{0}));
-  EXPECT_TRUE(t.expiredCommands().empty());  // once
-  t.commandReceived(0, true);
-  t.commandReceived(0, false);  // off ends it
-  clock.advance(5s);
-  EXPECT_TRUE(t.expiredCommands().empty());
 }
 
 TEST(Watchdog, ExpiresOnceAndIsReArmedByAFeed) {
@@ -211,7 +138,7 @@ TEST(Watchdog, ExpiresOnceAndIsReArmedByAFeed) {
 }
 
 // What the safe write of an LC board sends: pump and valve off, lamp on (FC15 over 0-2).
-TEST(FailsafeTracker, TheSafeWriteIsOneFrame) {
+TEST(ChannelIntents, TheSafeWriteIsOneFrame) {
   DeviceConfig dc;
   dc.name = "relays";
   dc.type = "lc_relay8";
@@ -219,7 +146,7 @@ TEST(FailsafeTracker, TheSafeWriteIsOneFrame) {
   LcRelay8 board(dc);
   FailsafeConfig c;
   c.safe_state = {SafeState::kOff, SafeState::kOff, SafeState::kOn};
-  FailsafeTracker t(c, 8);
+  ChannelIntents t(c, 8);
   const OutputTargets s = t.safeTargets();
   ScriptedTransport bus;
   bus.expectEcho(toHex(encodeRequest(Request::writeMultipleCoils(255, 0, {false, false, true}))));
@@ -229,87 +156,12 @@ TEST(FailsafeTracker, TheSafeWriteIsOneFrame) {
 }
 
 // Issue #24 item 2: a safe write is a command like any other; a restore writes it again.
-TEST(FailsafeTracker, RestoreWritesWhatTheFailsafeConfirmedToo) {
-  FailsafeConfig config;
-  config.safe_state = {SafeState::kOff, SafeState::kHold, SafeState::kOn};
-  FailsafeTracker t(config, 3);
-  t.confirmed({0, 2}, {false, true}, FailsafeTracker::Writer::kFailsafe);  // on_start: safe
-  const OutputTargets r = t.restoreTargets();
-  EXPECT_EQ(r.channels, (std::vector<uint8_t>{0, 2}));
-  EXPECT_EQ(r.states, (std::vector<bool>{false, true}));
-}
-
 // Issue #24 item 1: while a lasting trigger holds a channel safe, a restore keeps it safe, even
 // when the safe write itself never got through; a user's command ends the hold.
-TEST(FailsafeTracker, ARestoreKeepsHeldChannelsSafeUntilCommandedAgain) {
-  FailsafeConfig config;
-  config.safe_state = {SafeState::kOff, SafeState::kHold, SafeState::kOn};
-  FailsafeTracker t(config, 3);
-  t.confirmed({0, 1, 2}, {true, true, false}, FailsafeTracker::Writer::kUser);
-  t.holdSafe({0, 1, 2});  // heartbeat lost; the safe write was not confirmed
-  EXPECT_TRUE(t.anyHeldSafe());
-  OutputTargets r = t.restoreTargets();
-  EXPECT_EQ(r.channels, (std::vector<uint8_t>{0, 1, 2}));
-  EXPECT_EQ(r.states, (std::vector<bool>{false, true, true}));    // 1 holds: the user's state
-  t.confirmed({2}, {false}, FailsafeTracker::Writer::kFailsafe);  // a restore: still held
-  EXPECT_TRUE(t.restoreTargets().states[2]);
-  t.confirmed({0, 2}, {true, false}, FailsafeTracker::Writer::kUser);  // commanded again
-  EXPECT_FALSE(t.anyHeldSafe());
-  r = t.restoreTargets();
-  EXPECT_EQ(r.states, (std::vector<bool>{true, true, false}));
-}
-
 // Issue #24 item 3: a write the node carried for a share client, confirmed by the reply, is
 // taken as a command at the next poll, not as a power cycle; a restore writes it again.
-TEST(FailsafeTracker, AnExternalWriteIsNotARestart) {
-  FailsafeConfig config;
-  config.safe_state = {SafeState::kOff, SafeState::kOff};
-  FailsafeTracker t(config, 2);
-  std::vector<uint8_t> changed;
-  t.pollStarting();  // as the adapter does before every poll
-  t.observePoll({false, false}, {}, false, &changed);
-  t.confirmed({0}, {false}, FailsafeTracker::Writer::kUser);
-  t.holdSafe({1});
-  t.externalWrite(OutputTargets{});  // a write through registers: seen at the next poll
-  t.pollStarting();                  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({false, true}, {}, false, &changed), FailsafeTracker::Verdict::kNormal);
-  EXPECT_TRUE(changed.empty());
-  EXPECT_FALSE(t.anyHeldSafe());  // the client's write is a new command
-  const OutputTargets r = t.restoreTargets();
-  EXPECT_EQ(r.channels, (std::vector<uint8_t>{0, 1}));
-  EXPECT_EQ(r.states, (std::vector<bool>{false, true}));
-  // Only the next poll: a later change with no write is a restart again.
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({false, false}, {}, false, &changed),
-            FailsafeTracker::Verdict::kOutputsChanged);
-}
-
 // Found by the scenario test (seed 354232319): a share client's FC05 that sets an output to the
 // state it already had changes nothing a poll can see, yet it is a command a restore writes again.
-TEST(FailsafeTracker, AClientsCoilWriteIsRestoredEvenWhenItChangedNothing) {
-  FailsafeConfig config;
-  config.safe_state = {SafeState::kOff, SafeState::kHold};
-  config.on_restart = OnRestart::kRestore;
-  FailsafeTracker t(config, 2);
-  t.pollStarting();                                  // as the adapter does before every poll
-  t.observePoll({false, true}, {}, false, nullptr);  // read at start, never commanded
-  EXPECT_TRUE(t.restoreTargets().empty());
-  DeviceConfig board;
-  board.address = 255;
-  const LcRelay8 relays(board);
-  t.externalWrite(relays.outputsWrittenBy(Request::writeSingleCoil(255, 1, true)));
-  EXPECT_TRUE(t.tookExternalWrite());
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({false, true}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
-  // The board power-cycles: everything off, and the restore writes the client's command again.
-  t.pollStarting();  // as the adapter does before every poll
-  EXPECT_EQ(t.observePoll({false, false}, {}, false, nullptr),
-            FailsafeTracker::Verdict::kOutputsChanged);
-  const OutputTargets r = t.afterPollTargets(FailsafeTracker::Verdict::kOutputsChanged);
-  EXPECT_EQ(r.channels, (std::vector<uint8_t>{1}));
-  EXPECT_EQ(r.states, (std::vector<bool>{true}));
-}
-
 TEST(Device, OutputsWrittenByACoilWrite) {
   DeviceConfig board;
   board.address = 255;
@@ -326,61 +178,7 @@ TEST(Device, OutputsWrittenByACoilWrite) {
 
 // Found by the scenario test (seed 354232319): a device that comes back while a safe write is
 // pending gets the restore of its other channels too, the pending safe states over it.
-TEST(FailsafeTracker, AfterPollARestoreIsNotSkippedForAPendingSafeWrite) {
-  FailsafeConfig config;
-  config.safe_state = {SafeState::kOff, SafeState::kHold, SafeState::kOn};
-  config.on_restart = OnRestart::kRestore;
-  FailsafeTracker t(config, 3);
-  t.confirmed({0, 1, 2}, {true, true, false}, FailsafeTracker::Writer::kUser);
-  t.setSafePending(true);  // the safe write found the device offline
-  const OutputTargets r = t.afterPollTargets(FailsafeTracker::Verdict::kCameBack);
-  EXPECT_EQ(r.channels, (std::vector<uint8_t>{0, 1, 2}));
-  EXPECT_EQ(r.states, (std::vector<bool>{false, true, true}));
-  // Still online (the safe write failed for another reason): the safe states only.
-  const OutputTargets s = t.afterPollTargets(FailsafeTracker::Verdict::kNormal);
-  EXPECT_EQ(s.channels, (std::vector<uint8_t>{0, 2}));
-  t.setSafePending(false);
-  EXPECT_TRUE(t.afterPollTargets(FailsafeTracker::Verdict::kNormal).empty());
-}
-
-TEST(FailsafeTracker, AfterPollEachOnRestartPolicy) {
-  const auto after = [](OnRestart policy) {
-    FailsafeConfig config;
-    config.safe_state = {SafeState::kOff, SafeState::kOn};
-    config.on_restart = policy;
-    FailsafeTracker t(config, 2);
-    t.confirmed({0, 1}, {true, false}, FailsafeTracker::Writer::kUser);
-    return t.afterPollTargets(FailsafeTracker::Verdict::kOutputsChanged).states;
-  };
-  EXPECT_EQ(after(OnRestart::kRestore), (std::vector<bool>{true, false}));
-  EXPECT_EQ(after(OnRestart::kSafe), (std::vector<bool>{false, true}));
-  EXPECT_TRUE(after(OnRestart::kLeave).empty());
-}
-
 // Found by the scenario test (seed 1268616613): a share client's write ran between the
 // transactions of a poll (they go ahead of each one), so the coils that poll had read were
 // older than the write. Taken as the client's command, they made the next poll look like a
 // restart, and the restore undid the client's write.
-TEST(FailsafeTracker, APollThatAWriteRanInsideIsNotCompared) {
-  FailsafeConfig config;
-  config.safe_state = {SafeState::kOff, SafeState::kHold};
-  config.on_restart = OnRestart::kRestore;
-  FailsafeTracker t(config, 2);
-  t.pollStarting();
-  t.observePoll({false, true}, {}, false, nullptr);
-  OutputTargets set;
-  set.channels = {1};
-  set.states = {false};
-  t.pollStarting();
-  t.externalWrite(set);  // between the poll's coil read and its end
-  EXPECT_EQ(t.observePoll({false, true}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
-  t.pollStarting();
-  EXPECT_EQ(t.observePoll({false, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
-  EXPECT_EQ(t.restoreTargets().states, (std::vector<bool>{false}));
-  // A user's write inside a poll: the same.
-  t.pollStarting();
-  t.confirmed({0}, {true}, FailsafeTracker::Writer::kUser);
-  EXPECT_EQ(t.observePoll({false, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
-  t.pollStarting();
-  EXPECT_EQ(t.observePoll({true, false}, {}, false, nullptr), FailsafeTracker::Verdict::kNormal);
-}

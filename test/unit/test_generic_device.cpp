@@ -449,10 +449,24 @@ TEST(GenericDevice, SafeValuesAreWrittenAndReadBack) {
   EXPECT_EQ(refused.message.rfind("speed: ", 0), 0u) << refused.message;
   EXPECT_SCRIPT_DONE(bus);
 
+  // Issue #32 item 10: a value the device does not keep (read back 0, not -2.5) is its answer:
+  // the coil is still written, and the device is not taken as silent (nothing to retry).
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleRegister(5, 10, 0xFFE7))));
+  expectRead(bus, Request::readHoldingRegisters(5, 10, 1), {0});
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(5, 3, false))));
+  expectRead(bus, Request::readCoils(5, 3, 1), {0});
+  bool silent = true;
+  const Result not_kept = d.writeSafeValues(bus, &silent);
+  EXPECT_FALSE(not_kept.ok());
+  EXPECT_FALSE(silent);
+  EXPECT_NE(not_kept.message.find("speed is 0"), std::string::npos) << not_kept.message;
+  EXPECT_SCRIPT_DONE(bus);
+
   // Silence (the write, and the read-back that tells whether it was done): the coil is not
   // tried.
   bus.expect(toHex(encodeRequest(Request::writeSingleRegister(5, 10, 0xFFE7))));
   bus.expect(toHex(encodeRequest(Request::readHoldingRegisters(5, 10, 1))));
-  EXPECT_EQ(d.writeSafeValues(bus).error, ErrorKind::kTimeout);
+  EXPECT_EQ(d.writeSafeValues(bus, &silent).error, ErrorKind::kTimeout);
+  EXPECT_TRUE(silent);
   EXPECT_SCRIPT_DONE(bus);
 }

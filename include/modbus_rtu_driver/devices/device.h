@@ -86,6 +86,13 @@ class Device {
   // the coils 0..outputCount()-1, which are the outputs of every fixed-function type. What other
   // writes do (a flash or PWM through registers) shows at the next poll.
   OutputTargets outputsWrittenBy(const Request& request) const;
+  // The timed commands a client's confirmed register write started (an LC flash, an LD58A08 PWM
+  // run), as the type decodes them; none for a type without any, or a write it cannot decode
+  // (the fail-safe then takes what the next poll shows as commanded).
+  virtual std::vector<TimedIntent> timedWrittenBy(const Request& request) const {
+    (void)request;
+    return {};
+  }
 
   // Last confirmed states (from a poll or a confirmed write); empty until known.
   const std::vector<bool>& outputs() const { return outputs_; }

@@ -62,7 +62,9 @@ class GenericDevice : public Device {
   // write's echo), in order. A refusal does not stop the others; a device that does not answer
   // does (the rest would only wait out their timeouts). The Result is the first failure, its
   // message naming the signal; the states hold what was read back.
-  Result writeSafeValues(Transport& bus);
+  // `silent` (when given): whether the device stopped answering, so that the rest were not
+  // tried; a value it refused or did not keep (read back differs) does not stop the others.
+  Result writeSafeValues(Transport& bus, bool* silent = nullptr);
 
   // Merged spans split after exception 02 or 03, in words (diagnostics).
   const std::vector<std::string>& splits() const { return planner_.splits(); }
@@ -78,7 +80,8 @@ class GenericDevice : public Device {
   // The write of `words` (encodeWrite's) with the signal's write function.
   Request writeRequest(const SignalConfig& s, const std::vector<uint16_t>& words) const;
   void setFromWords(size_t signal, const uint16_t* words);
-  Result writeSafeValue(Transport& bus, size_t signal);
+  // `answered`: the device answered every transaction (a refusal or a value not kept included).
+  Result writeSafeValue(Transport& bus, size_t signal, bool* answered);
 
   ReadPlanner planner_;
   std::vector<PollGroup> groups_;

@@ -32,6 +32,8 @@ class LcRelay8 : public Device {
   static std::string validatePulse(uint8_t channel, double duration);
   // state true = flash-close (on for duration, then off); false = flash-open.
   Result pulse(Transport& bus, uint8_t channel, bool state, double duration);
+  // A client's FC16 over a relay's mode and delay registers: that relay's flash.
+  std::vector<TimedIntent> timedWrittenBy(const Request& request) const override;
 
   Result readBaudCode(Transport& bus, uint16_t* code);
   Result writeBaudCode(Transport& bus, uint16_t code);  // 2, 3, 4 = 4800, 9600, 19200

@@ -77,6 +77,11 @@ class Ld58a08 : public Device {
   static std::string validatePwm(const PwmSettings& settings);
   // One FC16 write of the channel's three registers.
   Result setPwm(Transport& bus, const PwmSettings& settings);
+  // What a PWM run does to its output: the device drives it until the burst or the timed run
+  // ends, then it is off; a continuous run has no end.
+  static TimedIntent pwmIntent(const PwmSettings& settings);
+  // A client's write of a channel's enable register (0x00n2) that starts a run.
+  std::vector<TimedIntent> timedWrittenBy(const Request& request) const override;
   // Writes 0 to the channel's enable register (0x00n2); a lost reply is confirmed by reading
   // the channel back.
   Result stopPwm(Transport& bus, uint8_t channel);

@@ -40,7 +40,10 @@ class BusNode {
   void startFailsafe();
   void checkDeadlines();
   // Bus thread: a share client's or raw write to `slave` (0: every device) was confirmed.
-  void externalWrite(const Request& request);
+  void externalWrite(const Request& request, CommandSource source);
+  // The adapters, those whose last transaction succeeded first (a silent device's safe write
+  // costs response_timeout x (retries + 1) per frame: it goes last).
+  std::vector<DeviceAdapter*> answeringFirst() const;
   uint64_t recentLineErrors(const LinkStats& stats);
   // realtime_priority and lock_memory: asked for here, their outcome shown in the diagnostics.
   BusScheduler::Options schedulingOptions();

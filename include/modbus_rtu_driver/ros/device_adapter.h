@@ -25,6 +25,7 @@
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/devices/output_batch.h"
+#include "modbus_rtu_driver/failsafe/channel_intents.h"
 #include "modbus_rtu_driver/ros/digital_states_publisher.h"
 #include "modbus_rtu_driver/ros/publish_shared.h"
 
@@ -62,7 +63,12 @@ class DeviceAdapter {
                                         const std::vector<uint8_t>& only = {});
   // Bus thread: a write to this device that the node carried for someone else (a share
   // client, a raw write) was confirmed by its reply; the fail-safe takes it as a command.
-  void externalWrite(const Request& request);
+  void externalWrite(const Request& request, CommandSource source);
+  // The bus-wide heartbeat (none: nullptr), for /diagnostics; before start().
+  void setBusHeartbeat(const Watchdog* heartbeat, std::string topic) {
+    bus_heartbeat_ = heartbeat;
+    bus_heartbeat_topic_ = std::move(topic);
+  }
   // Timer (any thread): command deadlines that passed, this device's heartbeat.
   void checkDeadlines();
   // Whether the device has any safe state, and whether start-up puts it there.
@@ -95,12 +101,16 @@ class DeviceAdapter {
   void publishLater(const ros::Publisher& publisher, Message message) {
     publishLater([publisher, m = std::move(message)] { publishShared(publisher, m); });
   }
-  // A PWM run or a flash started on `channel`: the device changes it by itself.
-  void markSelfTimed(uint8_t channel) { failsafe_.selfTimed(channel); }
-  // Bus thread: the device confirmed that timed command on `channel`: a user's command like a
-  // write, it ends the fail-safe's hold there and the "in their safe state" claim.
-  void timedCommandConfirmed(uint8_t channel) {
-    failsafe_.release(channel);
+  // Bus thread, around a timed command (a flash, a PWM run): before it is sent, and with its
+  // outcome. Confirmed, it is a user's command like a write (it ends the fail-safe's hold there
+  // and the "in their safe state" claim) whose end and final level the fail-safe knows; not
+  // confirmed, the channel may run it or not, so a poll may show either level until its end.
+  void timedCommandSending() { failsafe_.writeRan(); }
+  void timedCommandDone(const TimedIntent& intent, const Result& result);
+  // A PWM run stopped (confirmed): the output shows the channel's coil again; the next poll
+  // says which level that is.
+  void timedCommandStopped(uint8_t channel) {
+    failsafe_.adoptNextPoll(channel, CommandSource::kTimed);
     endFailsafeState();
   }
   // Whether the last poll failed with the device now offline (its states are stale).
@@ -128,22 +138,29 @@ class DeviceAdapter {
   // Bus thread: writes `targets`, reads back, reports (trigger, reason, action). With
   // `holds_safe_states` (the write carries safe states), the safe states stay pending, to be
   // tried again when the device answers again, until such a write is confirmed.
+  // `owe_since`: the write carries a trigger's safe states (fired then), owed per channel when
+  // it does not get through.
   Result writeAndReport(Transport& t, const OutputTargets& targets, const std::string& trigger,
                         const std::string& reason, const std::string& action,
-                        bool holds_safe_states);
+                        std::optional<Clock::time_point> owe_since);
+  // Whether a heartbeat this device obeys is lost now, and which (for /diagnostics).
+  std::string lostHeartbeat() const;
   void report(const FailsafeEvent& event);
   // A user's confirmed write ends the fail-safe state shown in /diagnostics.
   void endFailsafeState();
   virtual void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status);
 
-  FailsafeTracker failsafe_;
+  ChannelIntents failsafe_;
   std::unique_ptr<Watchdog> heartbeat_;
+  const Watchdog* bus_heartbeat_ = nullptr;
+  std::string bus_heartbeat_topic_;
   EventSink failsafe_sink_;
   ros::Publisher failsafe_pub_;  // ~<device>/failsafe, latched: this device's newest event
   std::mutex failsafe_mutex_;    // the two below
   uint64_t restarts_detected_ = 0, failsafe_events_ = 0;
-  std::string last_failsafe_;    // the newest event in words
-  std::string failsafe_active_;  // set by a safe write, cleared by a user's write
+  std::string last_failsafe_;            // the newest event in words
+  std::string failsafe_active_;          // set by a safe write, cleared by a user's write
+  std::string failsafe_active_trigger_;  // the trigger of that safe write
 
   TaskQueue* publish_queue_ = nullptr;
   // Touched on the publishing thread only (through publishLater), once start() made them.

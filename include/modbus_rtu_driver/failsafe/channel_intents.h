@@ -1,0 +1,149 @@
+// What each output channel of one device should show, and why (ROS-free): the newest command
+// the device confirmed on it and where it came from, timed commands with their end and final
+// level, which triggers hold it safe, and the safe writes still owed to it. One question,
+// expected(channel, t), serves both the writes after a restart (restore) and the question whether
+// a changed output is a restart, a timed command ending or a PWM toggling. docs/failsafe.md is
+// the spec ("One intent per channel").
+//
+// Thread safety: every method locks; the bus thread reports confirmed writes and polls, the
+// timers report triggers and commands.
+#pragma once
+
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "modbus_rtu_driver/core/bus/clock.h"
+#include "modbus_rtu_driver/devices/failsafe.h"
+
+namespace modbus_rtu_driver {
+
+// Who gave a channel its newest intent.
+enum class CommandSource {
+  kFound,    // the state the node found at its start (first good poll), or adopted from a poll
+  kUser,     // a service or command topic (C/set, C/command, set_outputs)
+  kShare,    // a share client's write, decoded per device type
+  kRaw,      // write_coils / write_registers
+  kTimed,    // pulse / flash / PWM run started by a service
+  kRestore,  // on_restart: restore wrote it
+  kSafe,     // a safe write (a trigger, on_restart: safe)
+};
+const char* commandSourceName(CommandSource source);
+
+// Triggers that hold channels in their safe state until they are commanded again.
+enum class HoldTrigger : uint8_t { kHeartbeat = 1, kCommandTimeout = 2 };
+
+// What a poll at time t may show on a channel.
+struct Expectation {
+  enum class Kind { kAny, kLevel, kEither } kind = Kind::kAny;
+  bool level = false;  // kLevel: the level; kEither: the level it settles on (a timed end)
+};
+
+class ChannelIntents {
+ public:
+  // How near a timed command's end a poll may show either level: the device's timer starts
+  // when the frame arrives, the node's when the reply does, and polls come between.
+  static constexpr double kEndSlackSeconds = 0.5;
+  static constexpr double kEndSlackFraction = 0.02;
+
+  ChannelIntents(FailsafeConfig config, size_t channels, Clock& clock = Clock::steady());
+
+  const FailsafeConfig& config() const { return config_; }
+  size_t channels() const { return channels_; }
+  // Channels with a safe state other than hold, and that state.
+  OutputTargets safeTargets() const;
+
+  // --- confirmed writes (bus thread, right after the device confirmed them) ---
+  // Plain levels. A user's, share client's or raw write ends every hold on those channels and
+  // drops a safe write still owed to them; a restore or safe write does neither of the first
+  // (it is the fail-safe's own) but pays what it owed.
+  void commanded(const std::vector<uint8_t>& channels, const std::vector<bool>& levels,
+                 CommandSource source);
+  // A timed command (flash, pulse burst, PWM run): ends holds, drops owed writes.
+  void timed(const TimedIntent& intent, CommandSource source);
+  // A write whose effect on `channel` the node cannot decode (a register write of a share
+  // client or raw write, a PWM stopped): the next poll's level is taken as commanded.
+  void adoptNextPoll(uint8_t channel, CommandSource source);
+  // A confirmed write the node cannot decode per channel (a share client's or raw register
+  // write): the next compared poll takes every channel that differs as commanded by `source`,
+  // not as a restart.
+  void adoptChangesNextPoll(CommandSource source);
+  // A write that may have changed outputs ran (confirmed or not): the running poll's reads may
+  // predate it, so that poll is not compared.
+  void writeRan();
+
+  // --- triggers (any thread) ---
+  // A lasting trigger (heartbeat lost, command timeout) fired at `at`: the channels (all with a
+  // safe state when `channels` is empty) are held safe until commanded again.
+  void hold(const std::vector<uint8_t>& channels, HoldTrigger trigger);
+  // Channels held safe now, and their states: what a heartbeat's or dead man's write writes
+  // when the bus gets to it (a channel commanded since the trigger is no longer held).
+  OutputTargets heldTargets(const std::vector<uint8_t>& only) const;
+  bool anyHeld() const;
+  uint8_t heldBy(uint8_t channel) const;  // HoldTrigger bits
+
+  // A safe write (trigger time `since`) that did not get through: owed per channel, written when
+  // the device answers again, unless the channel is commanded after `since`.
+  void owe(const OutputTargets& targets, Clock::time_point since, const std::string& trigger);
+  OutputTargets owed() const;
+  std::string owedTrigger() const;  // the trigger of the oldest owed write, or ""
+
+  // --- polls (bus thread) ---
+  enum class Verdict { kNormal, kCameBack, kOutputsChanged };
+  void pollStarting();
+  // `self_timed[i]`: the device reports channel i as driven by itself now (a running PWM).
+  // A channel with no intent yet takes the level found as its intent (kFound).
+  Verdict observePoll(const std::vector<bool>& outputs, const std::vector<bool>& self_timed,
+                      bool was_offline, std::vector<uint8_t>* changed);
+  // Whether the last poll adopted a write the node carried for someone else (asked once).
+  bool tookAdoptedWrite();
+
+  // What a poll at `t` may show on `channel` (docs/failsafe.md, "What the board should show").
+  Expectation expected(uint8_t channel, Clock::time_point t) const;
+  // What to write after a poll with `verdict`, computed when the write runs (so a command
+  // confirmed in between is not undone): on a restart, on_restart's targets (restore: every
+  // channel's expected level; safe: the safe states); and every owed safe write, over them.
+  OutputTargets afterPollTargets(Verdict verdict) const;
+
+  // --- the dead man of command topics (any thread) ---
+  void commandReceived(uint8_t channel, bool state);
+  std::vector<uint8_t> expiredCommands();
+
+  Clock& clock() const { return clock_; }
+
+ private:
+  struct Intent {
+    CommandSource source = CommandSource::kFound;
+    Clock::time_point at{};
+    bool level = false;                     // steady level; after `ends` for a timed one
+    std::optional<bool> during;             // a timed command's level until `ends` (none: any)
+    std::optional<Clock::time_point> ends;  // a timed command's end
+    bool driven = false;                    // the device drives it with no known end
+    bool adopt = false;                     // the next poll's level is the intent
+  };
+  struct Owed {
+    bool level = false;
+    Clock::time_point since{};
+    std::string trigger;
+  };
+  bool userSource(CommandSource source) const;
+  void newCommand(uint8_t channel, CommandSource source);
+  Expectation expectedLocked(uint8_t channel, Clock::time_point t) const;
+
+  FailsafeConfig config_;
+  size_t channels_;
+  Clock& clock_;
+  mutable std::mutex mutex_;
+  std::vector<std::optional<Intent>> intent_;
+  std::vector<uint8_t> held_;  // HoldTrigger bits
+  std::vector<Clock::time_point> held_since_;
+  std::vector<std::optional<Owed>> owed_;
+  std::vector<std::optional<Clock::time_point>> command_deadline_;
+  bool write_during_poll_ = false;
+  bool took_adopted_ = false;
+  std::optional<CommandSource> adopt_changes_;  // adoptChangesNextPoll
+};
+
+}  // namespace modbus_rtu_driver

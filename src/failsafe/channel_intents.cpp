@@ -1,0 +1,372 @@
+#include "modbus_rtu_driver/failsafe/channel_intents.h"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+
+#include "modbus_rtu_driver/core/modbus/text.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+constexpr NameTable<CommandSource, 7> kCommandSourceNames{{{CommandSource::kFound, "found"},
+                                                           {CommandSource::kUser, "user"},
+                                                           {CommandSource::kShare, "share"},
+                                                           {CommandSource::kRaw, "raw write"},
+                                                           {CommandSource::kTimed, "timed"},
+                                                           {CommandSource::kRestore, "restore"},
+                                                           {CommandSource::kSafe, "safe"}}};
+
+Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+
+}  // namespace
+
+const char* commandSourceName(CommandSource source) {
+  return nameIn(kCommandSourceNames, source).data();  // literals: terminated
+}
+
+ChannelIntents::ChannelIntents(FailsafeConfig config, size_t channels, Clock& clock)
+    : config_(std::move(config)),
+      channels_(channels),
+      clock_(clock),
+      intent_(channels),
+      held_(channels, 0),
+      held_since_(channels),
+      owed_(channels),
+      command_deadline_(channels) {}
+
+OutputTargets ChannelIntents::safeTargets() const {
+  OutputTargets t;
+  for (size_t i = 0; i < channels_; ++i) {
+    const SafeState s = config_.safeStateOf(i);
+    if (s == SafeState::kHold) continue;
+    t.channels.push_back(static_cast<uint8_t>(i));
+    t.states.push_back(s == SafeState::kOn);
+  }
+  return t;
+}
+
+// A command from outside the fail-safe (a user, a share client, a raw write, a timed command)
+// ends the holds on its channel and cancels what the fail-safe still owed it: the newest command
+// wins. The fail-safe's own writes (restore, safe) pay what they owed and hold nothing.
+bool ChannelIntents::userSource(CommandSource source) const {
+  return source != CommandSource::kRestore && source != CommandSource::kSafe &&
+         source != CommandSource::kFound;
+}
+
+void ChannelIntents::newCommand(uint8_t channel, CommandSource source) {
+  write_during_poll_ = true;
+  if (source == CommandSource::kFound) return;  // an outcome unknown: nothing paid or ended
+  owed_[channel].reset();
+  if (userSource(source)) held_[channel] = 0;
+}
+
+void ChannelIntents::commanded(const std::vector<uint8_t>& channels,
+                               const std::vector<bool>& levels, CommandSource source) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto now = clock_.now();
+  for (size_t i = 0; i < channels.size() && i < levels.size(); ++i) {
+    const uint8_t ch = channels[i];
+    if (ch >= channels_) continue;
+    Intent in;
+    in.source = source;
+    in.at = now;
+    in.level = levels[i];
+    intent_[ch] = in;
+    newCommand(ch, source);
+  }
+}
+
+void ChannelIntents::timed(const TimedIntent& timed, CommandSource source) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (timed.channel >= channels_) return;
+  const auto now = clock_.now();
+  Intent in;
+  in.source = source;
+  in.at = now;
+  in.level = timed.after;
+  in.during = timed.during;
+  if (timed.seconds < 0) {
+    in.driven = true;
+  } else {
+    in.ends = now + seconds(timed.seconds);
+  }
+  intent_[timed.channel] = in;
+  newCommand(timed.channel, source);
+}
+
+void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (channel >= channels_) return;
+  const auto now = clock_.now();
+  Intent in;
+  in.source = source;
+  in.at = now;
+  in.adopt = true;
+  if (intent_[channel]) in.level = intent_[channel]->level;
+  intent_[channel] = in;
+  newCommand(channel, source);
+}
+
+void ChannelIntents::adoptChangesNextPoll(CommandSource source) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  adopt_changes_ = source;
+  write_during_poll_ = true;
+}
+
+void ChannelIntents::writeRan() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  write_during_poll_ = true;
+}
+
+void ChannelIntents::hold(const std::vector<uint8_t>& channels, HoldTrigger trigger) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto now = clock_.now();
+  const auto holdOne = [&](size_t ch) {
+    if (ch >= channels_ || config_.safeStateOf(ch) == SafeState::kHold) return;
+    if (held_[ch] == 0) held_since_[ch] = now;
+    held_[ch] |= static_cast<uint8_t>(trigger);
+  };
+  if (channels.empty()) {
+    for (size_t ch = 0; ch < channels_; ++ch) holdOne(ch);
+  } else {
+    for (uint8_t ch : channels) holdOne(ch);
+  }
+}
+
+OutputTargets ChannelIntents::heldTargets(const std::vector<uint8_t>& only) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  OutputTargets t;
+  for (size_t ch = 0; ch < channels_; ++ch) {
+    if (held_[ch] == 0) continue;
+    if (!only.empty() && std::find(only.begin(), only.end(), ch) == only.end()) continue;
+    t.channels.push_back(static_cast<uint8_t>(ch));
+    t.states.push_back(config_.safeStateOf(ch) == SafeState::kOn);
+  }
+  return t;
+}
+
+bool ChannelIntents::anyHeld() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (uint8_t h : held_)
+    if (h != 0) return true;
+  return false;
+}
+
+uint8_t ChannelIntents::heldBy(uint8_t channel) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return channel < channels_ ? held_[channel] : 0;
+}
+
+void ChannelIntents::owe(const OutputTargets& targets, Clock::time_point since,
+                         const std::string& trigger) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (size_t i = 0; i < targets.channels.size() && i < targets.states.size(); ++i) {
+    const uint8_t ch = targets.channels[i];
+    if (ch >= channels_) continue;
+    // A command confirmed after the trigger is newer: the trigger no longer speaks for it.
+    const auto& in = intent_[ch];
+    if (in && userSource(in->source) && in->at > since) continue;
+    owed_[ch] = Owed{targets.states[i], since, trigger};
+  }
+}
+
+OutputTargets ChannelIntents::owed() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  OutputTargets t;
+  for (size_t ch = 0; ch < channels_; ++ch) {
+    if (!owed_[ch]) continue;
+    t.channels.push_back(static_cast<uint8_t>(ch));
+    t.states.push_back(owed_[ch]->level);
+  }
+  return t;
+}
+
+std::string ChannelIntents::owedTrigger() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const Owed* oldest = nullptr;
+  for (const auto& o : owed_)
+    if (o && (!oldest || o->since < oldest->since)) oldest = &*o;
+  return oldest ? oldest->trigger : std::string();
+}
+
+void ChannelIntents::pollStarting() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  write_during_poll_ = false;
+}
+
+Expectation ChannelIntents::expected(uint8_t channel, Clock::time_point t) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return expectedLocked(channel, t);
+}
+
+Expectation ChannelIntents::expectedLocked(uint8_t channel, Clock::time_point t) const {
+  Expectation e;
+  if (channel >= channels_ || !intent_[channel]) return e;
+  const Intent& in = *intent_[channel];
+  if (in.adopt || in.driven) return e;
+  e.level = in.level;
+  if (!in.ends) {
+    e.kind = Expectation::Kind::kLevel;
+    return e;
+  }
+  const auto slack = seconds(kEndSlackSeconds) + std::chrono::duration_cast<Clock::duration>(
+                                                     (*in.ends - in.at) * kEndSlackFraction);
+  if (t < *in.ends - slack) {
+    if (!in.during) return Expectation{};  // the device switches it by itself meanwhile
+    e.kind = Expectation::Kind::kLevel;
+    e.level = *in.during;
+  } else if (t <= *in.ends + slack) {
+    e.kind = Expectation::Kind::kEither;
+  } else {
+    e.kind = Expectation::Kind::kLevel;
+  }
+  return e;
+}
+
+ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& outputs,
+                                                    const std::vector<bool>& self_timed,
+                                                    bool was_offline,
+                                                    std::vector<uint8_t>* changed) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (changed) changed->clear();
+  if (write_during_poll_) {
+    // What it read may predate that write: neither a restart nor an intent to adopt.
+    write_during_poll_ = false;
+    return was_offline ? Verdict::kCameBack : Verdict::kNormal;
+  }
+  const auto now = clock_.now();
+  bool differs = false;
+  for (size_t ch = 0; ch < channels_ && ch < outputs.size(); ++ch) {
+    auto& in = intent_[ch];
+    if (!in) {
+      // Found at the node's start (or never commanded): that is what a restore puts back.
+      Intent found;
+      found.at = now;
+      found.level = outputs[ch];
+      in = found;
+      continue;
+    }
+    if (in->adopt) {
+      in->adopt = false;
+      in->level = outputs[ch];
+      if (in->source == CommandSource::kShare || in->source == CommandSource::kRaw)
+        took_adopted_ = true;
+      continue;
+    }
+    if (ch < self_timed.size() && self_timed[ch]) continue;  // the device's PWM drives it
+    const Expectation e = expectedLocked(static_cast<uint8_t>(ch), now);
+    if (e.kind == Expectation::Kind::kAny) continue;
+    if (e.kind == Expectation::Kind::kEither) {
+      if (outputs[ch] == e.level) in->ends.reset();  // the timed command ended: settled
+      continue;
+    }
+    if (in->ends && now > *in->ends) in->ends.reset();  // ended and shown: a steady level now
+    if (outputs[ch] == e.level) continue;
+    if (adopt_changes_) {
+      // Someone else's confirmed register write (a flash, a PWM through registers): a command.
+      Intent adopted;
+      adopted.source = *adopt_changes_;
+      adopted.at = now;
+      adopted.level = outputs[ch];
+      in = adopted;
+      held_[ch] = 0;
+      owed_[ch].reset();
+      took_adopted_ = true;
+      continue;
+    }
+    differs = true;
+    if (changed) changed->push_back(static_cast<uint8_t>(ch));
+    // What on_restart will not write back is taken as it is now, so the next poll does not
+    // count the same restart again.
+    const bool rewritten =
+        config_.on_restart == OnRestart::kRestore ||
+        (config_.on_restart == OnRestart::kSafe && config_.safeStateOf(ch) != SafeState::kHold);
+    if (!rewritten && !owed_[ch]) {
+      Intent found;
+      found.at = now;
+      found.level = outputs[ch];
+      in = found;
+    }
+  }
+  adopt_changes_.reset();
+  if (was_offline) return Verdict::kCameBack;
+  return differs ? Verdict::kOutputsChanged : Verdict::kNormal;
+}
+
+bool ChannelIntents::tookAdoptedWrite() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const bool took = took_adopted_;
+  took_adopted_ = false;
+  return took;
+}
+
+OutputTargets ChannelIntents::afterPollTargets(Verdict verdict) const {
+  std::map<uint8_t, bool> by_channel;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto now = clock_.now();
+    if (verdict != Verdict::kNormal && config_.on_restart == OnRestart::kRestore) {
+      for (size_t ch = 0; ch < channels_; ++ch) {
+        const auto c = static_cast<uint8_t>(ch);
+        if (held_[ch] != 0) {
+          by_channel[c] = config_.safeStateOf(ch) == SafeState::kOn;
+          continue;
+        }
+        if (!intent_[ch]) continue;
+        const Intent& in = *intent_[ch];
+        // A timed command a restart interrupted is not started again (that would repeat
+        // something that started): its final level is restored. A run the device drives with
+        // no end is not restored (docs/failsafe.md, "What restore writes").
+        if (in.driven || in.adopt) continue;
+        if (in.ends) {
+          by_channel[c] = in.level;
+          continue;
+        }
+        const Expectation e = expectedLocked(c, now);
+        if (e.kind != Expectation::Kind::kAny) by_channel[c] = e.level;
+      }
+    }
+    for (size_t ch = 0; ch < channels_; ++ch)
+      if (owed_[ch]) by_channel[static_cast<uint8_t>(ch)] = owed_[ch]->level;
+  }
+  if (verdict != Verdict::kNormal && config_.on_restart == OnRestart::kSafe) {
+    const OutputTargets safe = safeTargets();
+    for (size_t i = 0; i < safe.channels.size(); ++i)
+      by_channel.emplace(safe.channels[i], safe.states[i]);  // owed states stay over them
+  }
+  OutputTargets t;
+  for (const auto& [channel, state] : by_channel) {
+    t.channels.push_back(channel);
+    t.states.push_back(state);
+  }
+  return t;
+}
+
+void ChannelIntents::commandReceived(uint8_t channel, bool state) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (channel >= channels_) return;
+  const double timeout = config_.commandTimeoutOf(channel);
+  if (state && timeout > 0) {
+    command_deadline_[channel] = clock_.now() + seconds(timeout);
+  } else {
+    command_deadline_[channel].reset();
+  }
+}
+
+std::vector<uint8_t> ChannelIntents::expiredCommands() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<uint8_t> expired;
+  const auto now = clock_.now();
+  for (size_t i = 0; i < channels_; ++i) {
+    if (!command_deadline_[i] || now < *command_deadline_[i]) continue;
+    command_deadline_[i].reset();
+    expired.push_back(static_cast<uint8_t>(i));
+  }
+  return expired;
+}
+
+}  // namespace modbus_rtu_driver

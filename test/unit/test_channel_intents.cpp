@@ -1,0 +1,313 @@
+// What each output channel should show, and why (failsafe/channel_intents.h), on a manual
+// clock: restart detection, what restore and the safe writes write, holds, owed writes, timed
+// commands and the dead man. Each test names the line of docs/failsafe.md it checks; the
+// "item N" tests are issue #32's reproductions, made at the module's level.
+#include <gtest/gtest.h>
+
+#include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/failsafe/channel_intents.h"
+
+using namespace modbus_rtu_driver;
+using namespace std::chrono_literals;
+using Verdict = ChannelIntents::Verdict;
+
+namespace {
+
+FailsafeConfig relays(OnRestart policy) {
+  FailsafeConfig c;  // pump, valve, lamp, fan
+  c.safe_state = {SafeState::kOff, SafeState::kOff, SafeState::kOn, SafeState::kHold};
+  c.on_restart = policy;
+  return c;
+}
+
+Verdict poll(ChannelIntents& t, const std::vector<bool>& outputs, bool was_offline = false,
+             std::vector<uint8_t>* changed = nullptr) {
+  t.pollStarting();  // as the adapter does before every poll
+  return t.observePoll(outputs, {}, was_offline, changed);
+}
+
+std::vector<bool> statesOf(const OutputTargets& t, size_t n) {
+  std::vector<bool> s(n, false);
+  for (size_t i = 0; i < t.channels.size(); ++i) s[t.channels[i]] = t.states[i];
+  return s;
+}
+
+}  // namespace
+
+// "a poll shows outputs that changed with no command in between (a power cycle drops relays)"
+TEST(ChannelIntents, APollThatDiffersWithNoCommandIsARestart) {
+  ManualClock clock;
+  ChannelIntents t(FailsafeConfig{}, 4, clock);
+  std::vector<uint8_t> changed;
+  EXPECT_EQ(poll(t, {true, false, true, false}), Verdict::kNormal);  // found at start
+  EXPECT_EQ(poll(t, {true, false, true, false}), Verdict::kNormal);
+  t.commanded({1}, {true}, CommandSource::kUser);
+  EXPECT_EQ(poll(t, {true, true, true, false}), Verdict::kNormal);
+  EXPECT_EQ(poll(t, {false, false, false, false}, false, &changed), Verdict::kOutputsChanged);
+  EXPECT_EQ(changed, (std::vector<uint8_t>{0, 1, 2}));
+  EXPECT_EQ(poll(t, {false, false, false, false}, true), Verdict::kCameBack);
+}
+
+// Item 7: "restore writes the last state the node confirmed on each channel", and the states it
+// found at its start (a fan kept on from the previous node).
+TEST(ChannelIntents, Item7RestorePutsBackWhatTheNodeFoundAtItsStart) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, false, true});  // the fan is on, from before the node started
+  t.commanded({0}, {true}, CommandSource::kUser);
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kOutputsChanged);  // power cycle
+  const OutputTargets r = t.afterPollTargets(Verdict::kOutputsChanged);
+  EXPECT_EQ(r.channels, (std::vector<uint8_t>{0, 1, 2, 3}));
+  EXPECT_EQ(r.states, (std::vector<bool>{true, false, false, true}));
+}
+
+// Item 1: a failed dead-man write is owed on its channel only.
+TEST(ChannelIntents, Item1AFailedDeadManWriteIsOwedOnItsChannelOnly) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kLeave), 4, clock);
+  poll(t, {false, false, false, false});
+  t.commanded({0, 1, 2}, {true, true, false}, CommandSource::kUser);
+  const auto since = clock.now();
+  t.hold({0}, HoldTrigger::kCommandTimeout);
+  const OutputTargets held = t.heldTargets({0});
+  EXPECT_EQ(held.channels, (std::vector<uint8_t>{0}));
+  t.owe(held, since, "command_timeout");  // the board was silent
+  clock.advance(2s);
+  // It answers again: pump off only; valve and lamp stay as commanded.
+  const OutputTargets w = t.afterPollTargets(poll(t, {true, true, false, false}, true));
+  EXPECT_EQ(w.channels, (std::vector<uint8_t>{0}));
+  EXPECT_EQ(w.states, (std::vector<bool>{false}));
+  // With on_restart: restore: the pump off over the restore of the others.
+  ChannelIntents r(relays(OnRestart::kRestore), 4, clock);
+  poll(r, {false, false, false, false});
+  r.commanded({0, 1, 2}, {true, true, false}, CommandSource::kUser);
+  r.hold({0}, HoldTrigger::kCommandTimeout);
+  r.owe(r.heldTargets({0}), clock.now(), "command_timeout");
+  EXPECT_EQ(statesOf(r.afterPollTargets(Verdict::kCameBack), 4),
+            (std::vector<bool>{false, true, false, false}));
+}
+
+// Item 2: a later dead-man write that succeeds pays its own channel, not the heartbeat's.
+TEST(ChannelIntents, Item2ADeadManWritePaysOnlyItsOwnChannel) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kLeave), 4, clock);
+  poll(t, {false, false, false, false});
+  t.commanded({0, 2}, {true, false}, CommandSource::kUser);
+  const auto lost = clock.now();
+  t.hold({}, HoldTrigger::kHeartbeat);  // the heartbeat is lost while the board is silent
+  t.owe(t.heldTargets({}), lost, "heartbeat");
+  clock.advance(1s);
+  t.commanded({0}, {false}, CommandSource::kSafe);  // a dead-man write on the pump succeeds
+  const OutputTargets owed = t.owed();
+  EXPECT_EQ(owed.channels, (std::vector<uint8_t>{1, 2}));  // valve off, lamp on still owed
+  EXPECT_EQ(owed.states, (std::vector<bool>{false, true}));
+  EXPECT_TRUE(t.anyHeld());
+}
+
+// Item 3: "the newest command wins": a safe write owed from before a confirmed command is not
+// written over it.
+TEST(ChannelIntents, Item3AnOwedSafeWriteDoesNotUndoANewerCommand) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, false, false});
+  t.commanded({0}, {true}, CommandSource::kUser);
+  const auto lost = clock.now();
+  t.hold({}, HoldTrigger::kHeartbeat);
+  t.owe(t.heldTargets({}), lost, "heartbeat");
+  clock.advance(30ms);
+  t.commanded({0}, {true}, CommandSource::kUser);  // pump/set true answers success
+  EXPECT_EQ(t.heldBy(0), 0);
+  const OutputTargets w = t.afterPollTargets(Verdict::kCameBack);
+  EXPECT_TRUE(statesOf(w, 4)[0]) << "the restart write switched the pump off again";
+  // The same for a share client's FC05 during the heartbeat loss.
+  t.commanded({1}, {true}, CommandSource::kShare);
+  EXPECT_TRUE(statesOf(t.afterPollTargets(Verdict::kCameBack), 4)[1]);
+  // A safe write that fails after the command was confirmed owes nothing on that channel.
+  t.owe(OutputTargets{{0}, {false}}, lost, "heartbeat");
+  const OutputTargets owed = t.owed();
+  EXPECT_EQ(std::count(owed.channels.begin(), owed.channels.end(), 0), 0);
+}
+
+// Item 4: "a timed command a restart interrupted is not started again: restore writes its final
+// level" (LC flash-close on out4 that was on before it).
+TEST(ChannelIntents, Item4RestoreWritesAFlashsFinalLevelNotTheStateBeforeIt) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, false, false});
+  t.commanded({3}, {true}, CommandSource::kUser);
+  t.timed(TimedIntent{3, true, false, 6.0}, CommandSource::kTimed);  // flash-close 6 s
+  clock.advance(1s);
+  EXPECT_EQ(poll(t, {false, false, false, true}), Verdict::kNormal);
+  clock.advance(1s);
+  // Silent for 2.5 s, then back: the restore writes out4 off (the flash's end), not on.
+  const OutputTargets w = t.afterPollTargets(poll(t, {false, false, false, true}, true));
+  EXPECT_EQ(statesOf(w, 4)[3], false);
+  EXPECT_EQ(std::count(w.channels.begin(), w.channels.end(), 3), 1);
+}
+
+// Item 4 (LD58A08): out0 on, a 3-pulse burst that ends off, then a power cycle.
+TEST(ChannelIntents, Item4RestoreAfterAPwmBurstWritesItsFinalLevel) {
+  ManualClock clock;
+  FailsafeConfig config;
+  config.on_restart = OnRestart::kRestore;
+  ChannelIntents t(config, 8, clock);
+  poll(t, std::vector<bool>(8, false));
+  t.commanded({0}, {true}, CommandSource::kUser);
+  PwmSettings s;
+  s.channel = 0;
+  s.period = 1.0;
+  s.on_time = 0.5;
+  s.pulses = 3;
+  t.timed(Ld58a08::pwmIntent(s), CommandSource::kTimed);
+  clock.advance(1500ms);
+  EXPECT_EQ(poll(t, std::vector<bool>(8, false)), Verdict::kNormal);  // toggling: any level
+  clock.advance(5s);
+  EXPECT_EQ(poll(t, std::vector<bool>(8, false)), Verdict::kNormal);  // ended off
+  const OutputTargets w = t.afterPollTargets(Verdict::kCameBack);
+  EXPECT_FALSE(statesOf(w, 8)[0]);
+}
+
+// Item 5: a share client's FC16 flash is decoded per device type: its end is not a restart.
+TEST(ChannelIntents, Item5AShareFlashThroughRegistersEndsWithoutARestart) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kSafe), 8, clock);
+  poll(t, std::vector<bool>(8, false));
+  DeviceConfig dc;
+  dc.address = 8;
+  const LcRelay8 board(dc);
+  const Request flash = Request::writeMultipleRegisters(8, LcRelay8::flashRegister(0),
+                                                        {LcRelay8::kFlashClose, 20});  // 2.0 s
+  const std::vector<TimedIntent> decoded = board.timedWrittenBy(flash);
+  ASSERT_EQ(decoded.size(), 1u);
+  t.timed(decoded[0], CommandSource::kShare);
+  std::vector<bool> on(8, false);
+  on[0] = true;
+  clock.advance(1s);
+  EXPECT_EQ(poll(t, on), Verdict::kNormal);
+  clock.advance(1500ms);  // the flash ended
+  EXPECT_EQ(poll(t, std::vector<bool>(8, false)), Verdict::kNormal);
+  clock.advance(10s);
+  EXPECT_EQ(poll(t, std::vector<bool>(8, false)), Verdict::kNormal);
+  // An LD58A08 PWM started through its registers is the device's to drive.
+  Ld58a08 ld(dc);
+  const auto pwm = ld.timedWrittenBy(
+      Request::writeMultipleRegisters(8, Ld58a08::pwmRegister(2), {10, 5, 0xFFFF}));
+  ASSERT_EQ(pwm.size(), 1u);
+  EXPECT_EQ(pwm[0].channel, 2);
+  EXPECT_LT(pwm[0].seconds, 0);
+}
+
+// "a channel that a heartbeat loss or command timeout put safe stays safe on every restore until
+// it is commanded again"
+TEST(ChannelIntents, ARestoreKeepsHeldChannelsSafeUntilCommandedAgain) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  t.commanded({0, 1, 2, 3}, {true, true, false, true}, CommandSource::kUser);
+  t.hold({}, HoldTrigger::kHeartbeat);
+  EXPECT_EQ(statesOf(t.afterPollTargets(Verdict::kCameBack), 4),
+            (std::vector<bool>{false, false, true, true}));
+  t.commanded({2}, {true}, CommandSource::kRestore);  // the fail-safe's own: still held
+  EXPECT_TRUE(t.anyHeld());
+  t.commanded({0, 1, 2}, {true, true, false}, CommandSource::kUser);  // commanded again
+  EXPECT_FALSE(t.anyHeld());
+  EXPECT_EQ(statesOf(t.afterPollTargets(Verdict::kCameBack), 4),
+            (std::vector<bool>{true, true, false, true}));
+}
+
+// "what any other write changed (a flash or PWM through registers) is taken as commanded at the
+// next poll: no restart is seen, nothing is reverted, and a later restore writes them again"
+TEST(ChannelIntents, AnUndecodedRegisterWriteIsTakenAsCommandedAtTheNextPoll) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, false, false});
+  t.hold({1}, HoldTrigger::kHeartbeat);
+  t.adoptChangesNextPoll(CommandSource::kShare);
+  std::vector<uint8_t> changed;
+  EXPECT_EQ(poll(t, {false, true, false, false}, false, &changed), Verdict::kNormal);
+  EXPECT_TRUE(changed.empty());
+  EXPECT_TRUE(t.tookAdoptedWrite());
+  EXPECT_FALSE(t.anyHeld());
+  EXPECT_TRUE(statesOf(t.afterPollTargets(Verdict::kCameBack), 4)[1]);
+  // Only the next poll: a later change with no write is a restart again.
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kOutputsChanged);
+}
+
+// Found by the scenario test (seed 1268616613): a poll that a write ran inside is not compared.
+TEST(ChannelIntents, APollThatAWriteRanInsideIsNotCompared) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 2, clock);
+  poll(t, {false, true});
+  t.pollStarting();
+  t.commanded({1}, {false}, CommandSource::kShare);  // between the poll's reads and its end
+  EXPECT_EQ(t.observePoll({false, true}, {}, false, nullptr), Verdict::kNormal);
+  EXPECT_EQ(poll(t, {false, false}), Verdict::kNormal);
+}
+
+// "Channels that the device switches by itself (a running PWM, an LC flash) are not compared"
+// until the run ends; a poll near a timed command's end may show either level.
+TEST(ChannelIntents, TimedChannelsAreComparedWithTheirLevelAndEnd) {
+  ManualClock clock;
+  ChannelIntents t(FailsafeConfig{}, 2, clock);
+  poll(t, {false, false});
+  t.timed(TimedIntent{0, true, false, 10.0}, CommandSource::kTimed);
+  clock.advance(5s);
+  EXPECT_EQ(poll(t, {true, false}), Verdict::kNormal);
+  EXPECT_EQ(poll(t, {false, false}), Verdict::kOutputsChanged);  // off halfway: power cycle
+  t.timed(TimedIntent{0, true, false, 10.0}, CommandSource::kTimed);
+  clock.advance(9800ms);  // within the end's slack: either level
+  EXPECT_EQ(poll(t, {false, false}), Verdict::kNormal);
+  clock.advance(60s);
+  EXPECT_EQ(poll(t, {false, false}), Verdict::kNormal);
+  EXPECT_EQ(poll(t, {true, false}), Verdict::kOutputsChanged);  // settled off: on is a change
+  // A continuous PWM run: any level, as long as it runs.
+  t.timed(TimedIntent{1, std::nullopt, false, -1.0}, CommandSource::kTimed);
+  EXPECT_EQ(poll(t, {true, true}), Verdict::kNormal);
+  EXPECT_EQ(poll(t, {true, false}), Verdict::kNormal);
+}
+
+TEST(ChannelIntents, AfterPollEachOnRestartPolicy) {
+  const auto after = [](OnRestart policy) {
+    ManualClock clock;
+    FailsafeConfig config;
+    config.safe_state = {SafeState::kOff, SafeState::kOn};
+    config.on_restart = policy;
+    ChannelIntents t(config, 2, clock);
+    t.commanded({0, 1}, {true, false}, CommandSource::kUser);
+    return t.afterPollTargets(Verdict::kOutputsChanged).states;
+  };
+  EXPECT_EQ(after(OnRestart::kRestore), (std::vector<bool>{true, false}));
+  EXPECT_EQ(after(OnRestart::kSafe), (std::vector<bool>{false, true}));
+  EXPECT_TRUE(after(OnRestart::kLeave).empty());
+}
+
+// With on_restart: leave a restart is counted once: the changed levels are taken as they are.
+TEST(ChannelIntents, LeaveCountsOneRestartNotOneEveryPoll) {
+  ManualClock clock;
+  ChannelIntents t(FailsafeConfig{}, 2, clock);
+  poll(t, {true, true});
+  EXPECT_EQ(poll(t, {false, true}), Verdict::kOutputsChanged);
+  EXPECT_EQ(poll(t, {false, true}), Verdict::kNormal);
+}
+
+TEST(ChannelIntents, TheDeadMansDeadlineOnAManualClock) {
+  ManualClock clock;
+  FailsafeConfig c;
+  c.safe_state = {SafeState::kOff, SafeState::kOff};
+  c.command_timeout = {1.0, 0.0};
+  ChannelIntents t(c, 2, clock);
+  t.commandReceived(0, true);
+  t.commandReceived(1, true);  // no timeout on channel 1
+  clock.advance(999ms);
+  EXPECT_TRUE(t.expiredCommands().empty());
+  t.commandReceived(0, true);  // renewed
+  clock.advance(999ms);
+  EXPECT_TRUE(t.expiredCommands().empty());
+  clock.advance(1ms);
+  EXPECT_EQ(t.expiredCommands(), (std::vector<uint8_t>{0}));
+  EXPECT_TRUE(t.expiredCommands().empty());  // once
+  t.commandReceived(0, true);
+  t.commandReceived(0, false);  // off ends it
+  clock.advance(5s);
+  EXPECT_TRUE(t.expiredCommands().empty());
+}
