@@ -25,4 +25,15 @@ bool FailsafeConfig::hasSafeStates() const {
   return false;
 }
 
+OutputTargets FailsafeConfig::safeTargets(size_t channels) const {
+  OutputTargets t;
+  for (size_t i = 0; i < channels; ++i) {
+    const SafeState s = safeStateOf(i);
+    if (s == SafeState::kHold) continue;
+    t.channels.push_back(static_cast<uint8_t>(i));
+    t.states.push_back(s == SafeState::kOn);
+  }
+  return t;
+}
+
 }  // namespace modbus_rtu_driver

@@ -39,14 +39,7 @@ ChannelIntents::ChannelIntents(FailsafeConfig config, size_t channels, Clock& cl
       command_deadline_(channels) {}
 
 OutputTargets ChannelIntents::safeTargets() const {
-  OutputTargets t;
-  for (size_t i = 0; i < channels_; ++i) {
-    const SafeState s = config_.safeStateOf(i);
-    if (s == SafeState::kHold) continue;
-    t.channels.push_back(static_cast<uint8_t>(i));
-    t.states.push_back(s == SafeState::kOn);
-  }
-  return t;
+  return config_.safeTargets(channels_);
 }
 
 // A command from outside the fail-safe (a user, a share client, a raw write, a timed command)
@@ -344,6 +337,28 @@ OutputTargets ChannelIntents::afterPollTargets(Verdict verdict) const {
     t.states.push_back(state);
   }
   return t;
+}
+
+std::vector<TimedIntent> ChannelIntents::runningTimed() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<TimedIntent> running;
+  const auto now = clock_.now();
+  for (size_t ch = 0; ch < channels_; ++ch) {
+    const auto& in = intent_[ch];
+    if (!in || (!in->driven && !in->ends) || (in->ends && *in->ends <= now)) continue;
+    TimedIntent t;
+    t.channel = static_cast<uint8_t>(ch);
+    t.during = in->during;
+    t.after = in->level;
+    t.seconds = in->ends ? std::chrono::duration<double>(*in->ends - now).count() : -1.0;
+    running.push_back(t);
+  }
+  return running;
+}
+
+void ChannelIntents::resumeTimed(const std::vector<TimedIntent>& running) {
+  // Not a command of this node's: nothing held is ended, nothing owed is paid (kFound).
+  for (const TimedIntent& t : running) timed(t, CommandSource::kFound);
 }
 
 void ChannelIntents::commandReceived(uint8_t channel, bool state) {

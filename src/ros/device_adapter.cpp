@@ -2,20 +2,19 @@
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
 
+#include <cstdio>
+
 #include "modbus_rtu_driver/core/config/number_text.h"
 
 namespace modbus_rtu_driver {
 
 DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
                              const ros::NodeHandle& node)
-    : device_(std::move(device)),
-      bus_(bus),
-      nh_(node, device_->name()),
-      failsafe_(device_->config().failsafe, device_->outputCount()) {
-  const FailsafeConfig& fs = failsafe_.config();
-  if (!fs.heartbeat_topic.empty()) heartbeat_ = std::make_unique<Watchdog>(fs.heartbeat_timeout);
+    : device_(std::move(device)), bus_(bus), nh_(node, device_->name()), failsafe_(*device_, bus) {
   // Here, not in start(): the start-up safe states are reported before start().
   if (device_->outputCount() > 0) failsafe_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 1, true);
+  failsafe_.setReportSink([this](const FailsafeReport& r) { report(r); });
+  failsafe_.setOutputsWritten([this] { publishOutputs(); });
 }
 
 void DeviceAdapter::start() {
@@ -63,7 +62,7 @@ void DeviceAdapter::onPoll(const Result& result) {
       publishLater([this, states = device_->inputs(), stamp = ros::Time::now()] {
         inputs_->publish(states, stamp);
       });
-    checkRestart();
+    failsafe_.afterPoll();
   } else if (offline()) {
     publishLater([this] {
       if (outputs_) outputs_->markStale();
@@ -90,16 +89,12 @@ Result DeviceAdapter::writeOutputs(const std::vector<uint8_t>& channels,
 Result DeviceAdapter::completeBatch(Transport& t,
                                     const std::shared_ptr<OutputBatch::Entry>& entry) {
   const bool sent = !entry->result;
-  if (sent) failsafe_.writeRan();
+  if (sent) failsafe_.userWriteSending();
   Result w = batch_.complete(*device_, t, entry,
                              [this](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
-                               failsafe_.commanded(chs, sts, CommandSource::kUser);
-                               endFailsafeState();
+                               failsafe_.userWriteConfirmed(chs, sts);
                              });
-  // Not confirmed: the caller was told it failed, yet the device may have acted. The next poll
-  // shows what the channels are (not a restart, not the caller's command).
-  if (sent && !w.ok())
-    for (uint8_t ch : entry->channels) failsafe_.adoptNextPoll(ch, CommandSource::kFound);
+  if (sent && !w.ok()) failsafe_.userWriteNotConfirmed(entry->channels, w);
   if (sent && w.ok()) publishOutputs();
   return w;
 }
@@ -218,6 +213,51 @@ void DeviceAdapter::diagnosePollRate(diagnostic_updater::DiagnosticStatusWrapper
                                      const DeviceHealth& health) {
   status.add("poll rate configured [Hz]", device_->config().poll_rate);
   status.add("poll rate achieved [Hz]", health.achieved_poll_rate);
+}
+
+// The fail-safe's report: the log (stderr once ROS is down: at shutdown, rosconsole is gone and
+// this is what the user must still see), ~<device>/failsafe (this device's newest event, for
+// late subscribers) and the node's ~failsafe (every device's events).
+void DeviceAdapter::report(const FailsafeReport& r) {
+  const std::string text = r.text();
+  if (!ros::ok()) {
+    std::fprintf(stderr, "[%s] %s: fail-safe %s\n", r.confirmed ? "WARN" : "ERROR",
+                 device_->name().c_str(), text.c_str());
+  } else if (r.note_only) {
+    ROS_INFO("%s: restart detected (%s); on_restart: leave", device_->name().c_str(),
+             r.reason.c_str());
+  } else if (r.confirmed) {
+    ROS_WARN("%s: fail-safe %s", device_->name().c_str(), text.c_str());
+  } else {
+    ROS_ERROR("%s: fail-safe %s", device_->name().c_str(), text.c_str());
+  }
+  FailsafeEvent e;
+  e.header.stamp = ros::Time::now();
+  e.device = r.device;
+  e.trigger = r.trigger;
+  e.reason = r.reason;
+  e.action = r.action;
+  e.channels = r.channels;
+  e.states.assign(r.states.begin(), r.states.end());
+  e.confirmed = r.confirmed;
+  e.message = r.message;
+  if (failsafe_pub_) publishLater(failsafe_pub_, e);
+  if (failsafe_sink_) failsafe_sink_(e);
+}
+
+void DeviceAdapter::diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const FailsafeStatus s = failsafe_.status();
+  status.add("safe states", s.safe_states);
+  status.add("on_restart", s.on_restart);
+  if (s.bus_heartbeat_lost) status.add("bus heartbeat", *s.bus_heartbeat_lost ? "lost" : "alive");
+  if (s.device_heartbeat_lost)
+    status.add("device heartbeat", *s.device_heartbeat_lost ? "lost" : "alive");
+  status.add("held safe until commanded", s.held);
+  status.add("safe writes owed", s.owed);
+  status.add("restarts detected", s.restarts_detected);
+  status.add("fail-safe events", s.events);
+  status.add("last fail-safe event", s.last_event);
+  if (!s.warn.empty()) status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN, s.warn);
 }
 
 }  // namespace modbus_rtu_driver

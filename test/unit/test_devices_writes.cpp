@@ -108,8 +108,7 @@ TEST(LcRelay8Writes, ASafeStateMapWithHoldBetweenWritesOnlyTheSafeChannels) {
   FailsafeConfig fs;
   fs.safe_state = {SafeState::kOff, SafeState::kHold, SafeState::kOff,  SafeState::kHold,
                    SafeState::kOn,  SafeState::kOn,   SafeState::kHold, SafeState::kHold};
-  FailsafeTracker tracker(fs, LcRelay8::kChannels);
-  const OutputTargets safe = tracker.safeTargets();
+  const OutputTargets safe = fs.safeTargets(LcRelay8::kChannels);
   LcRelay8 board(config("lc_relay8", 3));
   ScriptedTransport bus;
   expectAnswered(bus, Request::writeSingleCoil(3, 0, false));

@@ -24,6 +24,13 @@ bool parseSafeState(const std::string& text, SafeState* out);
 const char* safeStateName(SafeState state);
 const char* onRestartName(OnRestart policy);
 
+// Outputs to write: channels[i] to states[i].
+struct OutputTargets {
+  std::vector<uint8_t> channels;
+  std::vector<bool> states;
+  bool empty() const { return channels.empty(); }
+};
+
 struct FailsafeConfig {
   std::vector<SafeState> safe_state;    // per output channel; empty = every channel holds
   std::vector<double> command_timeout;  // s per output channel; empty or 0 = no dead man
@@ -39,13 +46,8 @@ struct FailsafeConfig {
     return channel < command_timeout.size() ? command_timeout[channel] : 0.0;
   }
   bool hasSafeStates() const;
-};
-
-// Outputs to write: channels[i] to states[i].
-struct OutputTargets {
-  std::vector<uint8_t> channels;
-  std::vector<bool> states;
-  bool empty() const { return channels.empty(); }
+  // The channels (of `channels`) with a safe state other than hold, and that state.
+  OutputTargets safeTargets(size_t channels) const;
 };
 
 // A timed command on one output channel, as its device type decodes it: `during` from when the

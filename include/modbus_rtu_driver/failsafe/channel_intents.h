@@ -107,6 +107,13 @@ class ChannelIntents {
   // channel's expected level; safe: the safe states); and every owed safe write, over them.
   OutputTargets afterPollTargets(Verdict verdict) const;
 
+  // --- timed commands across a node's restart ---
+  // The timed commands not ended at `now`, with the seconds left (< 0: no end), for the next
+  // node to resume if this one is killed (a flash's end is then not taken for a restart).
+  std::vector<TimedIntent> runningTimed() const;
+  // Resumes a previous node's timed commands (before the first poll): compared like its own.
+  void resumeTimed(const std::vector<TimedIntent>& running);
+
   // --- the dead man of command topics (any thread) ---
   void commandReceived(uint8_t channel, bool state);
   std::vector<uint8_t> expiredCommands();

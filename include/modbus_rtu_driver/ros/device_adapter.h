@@ -25,7 +25,7 @@
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/devices/output_batch.h"
-#include "modbus_rtu_driver/failsafe/channel_intents.h"
+#include "modbus_rtu_driver/failsafe/device_failsafe.h"
 #include "modbus_rtu_driver/ros/digital_states_publisher.h"
 #include "modbus_rtu_driver/ros/publish_shared.h"
 
@@ -52,29 +52,36 @@ class DeviceAdapter {
   const std::string& name() const { return device_->name(); }
   uint8_t address() const { return device_->address(); }
 
-  // Fail-safe (device_failsafe.cpp). Where events go (the node's latched ~failsafe topic).
+  // Fail-safe: the decisions are DeviceFailsafe's (failsafe/device_failsafe.h); the adapter
+  // hands it the triggers and publishes its reports. Where events go (the node's latched
+  // ~failsafe topic).
   using EventSink = std::function<void(const FailsafeEvent&)>;
   virtual void setFailsafeSink(EventSink sink) { failsafe_sink_ = std::move(sink); }
   // Puts the channels with a safe state there (only those in `only`, when given), confirmed by
-  // reading the outputs back, and reports the event. Runs on the bus thread; the future holds
-  // the outcome. Nothing to do: a ready success.
+  // reading the outputs back, and reports the event. The future holds the outcome.
   // Virtual: a generic device writes its signals' safe values instead (generic_adapter.cpp).
   virtual std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
-                                        const std::vector<uint8_t>& only = {});
+                                        const std::vector<uint8_t>& only = {}) {
+    return failsafe_.applySafe(trigger, reason, only);
+  }
   // Bus thread: a write to this device that the node carried for someone else (a share
   // client, a raw write) was confirmed by its reply; the fail-safe takes it as a command.
-  void externalWrite(const Request& request, CommandSource source);
+  void externalWrite(const Request& request, CommandSource source) {
+    failsafe_.externalWrite(request, source);
+  }
   // The bus-wide heartbeat (none: nullptr), for /diagnostics; before start().
   void setBusHeartbeat(const Watchdog* heartbeat, std::string topic) {
-    bus_heartbeat_ = heartbeat;
-    bus_heartbeat_topic_ = std::move(topic);
+    failsafe_.setBusHeartbeat(heartbeat, std::move(topic));
   }
   // Timer (any thread): command deadlines that passed, this device's heartbeat.
-  void checkDeadlines();
+  // Through applySafe: a generic device writes its safe values.
+  void checkDeadlines() {
+    for (const auto& f : failsafe_.firedTriggers()) applySafe(f.trigger, f.reason, f.only);
+  }
   // Whether the device has any safe state, and whether start-up puts it there.
-  virtual bool hasSafeStates() const { return failsafe_.config().hasSafeStates(); }
+  virtual bool hasSafeStates() const { return failsafe_.hasSafeStates(); }
   bool safeOnStart() const { return failsafe_.config().on_start_safe && hasSafeStates(); }
-  Watchdog* heartbeat() { return heartbeat_.get(); }
+  Watchdog* heartbeat() { return failsafe_.heartbeat(); }
   const FailsafeConfig& failsafeConfig() const { return failsafe_.config(); }
 
  protected:
@@ -105,14 +112,12 @@ class DeviceAdapter {
   // outcome. Confirmed, it is a user's command like a write (it ends the fail-safe's hold there
   // and the "in their safe state" claim) whose end and final level the fail-safe knows; not
   // confirmed, the channel may run it or not, so a poll may show either level until its end.
-  void timedCommandSending() { failsafe_.writeRan(); }
-  void timedCommandDone(const TimedIntent& intent, const Result& result);
-  // A PWM run stopped (confirmed): the output shows the channel's coil again; the next poll
-  // says which level that is.
-  void timedCommandStopped(uint8_t channel) {
-    failsafe_.adoptNextPoll(channel, CommandSource::kTimed);
-    endFailsafeState();
+  void timedCommandSending() { failsafe_.timedCommandSending(); }
+  void timedCommandDone(const TimedIntent& intent, const Result& result) {
+    failsafe_.timedCommandDone(intent, result);
   }
+  // A PWM run stopped (confirmed): the output shows the channel's coil again.
+  void timedCommandStopped(uint8_t channel) { failsafe_.timedCommandStopped(channel); }
   // Whether the last poll failed with the device now offline (its states are stale).
   bool offline() const { return !bus_.health(device_->name()).online; }
   // Service writes of outputs: checked, then merged with others queued for this device.
@@ -133,34 +138,13 @@ class DeviceAdapter {
   bool onSetOutputs(SetOutputs::Request& req, SetOutputs::Response& res);
   void onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& msg);
   void logOnlineChange(const DeviceHealth& health);
-  // Bus thread, after a good poll: restart detection and on_restart.
-  void checkRestart();
-  // Bus thread: writes `targets`, reads back, reports (trigger, reason, action). With
-  // `holds_safe_states` (the write carries safe states), the safe states stay pending, to be
-  // tried again when the device answers again, until such a write is confirmed.
-  // `owe_since`: the write carries a trigger's safe states (fired then), owed per channel when
-  // it does not get through.
-  Result writeAndReport(Transport& t, const OutputTargets& targets, const std::string& trigger,
-                        const std::string& reason, const std::string& action,
-                        std::optional<Clock::time_point> owe_since);
-  // Whether a heartbeat this device obeys is lost now, and which (for /diagnostics).
-  std::string lostHeartbeat() const;
-  void report(const FailsafeEvent& event);
-  // A user's confirmed write ends the fail-safe state shown in /diagnostics.
-  void endFailsafeState();
+  // A report of the fail-safe's: logged, on ~<device>/failsafe and the node's ~failsafe.
+  void report(const FailsafeReport& report);
   virtual void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status);
 
-  ChannelIntents failsafe_;
-  std::unique_ptr<Watchdog> heartbeat_;
-  const Watchdog* bus_heartbeat_ = nullptr;
-  std::string bus_heartbeat_topic_;
+  DeviceFailsafe failsafe_;
   EventSink failsafe_sink_;
   ros::Publisher failsafe_pub_;  // ~<device>/failsafe, latched: this device's newest event
-  std::mutex failsafe_mutex_;    // the two below
-  uint64_t restarts_detected_ = 0, failsafe_events_ = 0;
-  std::string last_failsafe_;            // the newest event in words
-  std::string failsafe_active_;          // set by a safe write, cleared by a user's write
-  std::string failsafe_active_trigger_;  // the trigger of that safe write
 
   TaskQueue* publish_queue_ = nullptr;
   // Touched on the publishing thread only (through publishLater), once start() made them.

@@ -1,0 +1,135 @@
+// One device's fail-safe, ROS-free: it decides when and what to write (safe states, restores,
+// owed safe writes), writes through the bus thread and confirms by reading back, and reports
+// what it did. The ROS adapter only turns messages into calls (a command, a heartbeat, a share
+// client's write) and publishes the reports. docs/failsafe.md is the spec.
+//
+// Threads: the trigger calls (applySafe, checkDeadlines, commandReceived) come from any thread;
+// the calls marked "bus thread" run in bus jobs or poll callbacks (BusScheduler).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <future>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/core/bus/clock.h"
+#include "modbus_rtu_driver/core/bus/watchdog.h"
+#include "modbus_rtu_driver/devices/device.h"
+#include "modbus_rtu_driver/failsafe/channel_intents.h"
+
+namespace modbus_rtu_driver {
+
+// What the fail-safe did, as ~failsafe publishes it (ROS-free).
+struct FailsafeReport {
+  std::string device, trigger, reason, action, message;
+  std::vector<std::string> channels;
+  std::vector<bool> states;
+  bool confirmed = false;
+  // A restart on a device with no fail-safe: nothing was written, only noted (log INFO).
+  bool note_only = false;
+  // "trigger (reason): pump off, lamp on[; NOT confirmed: why]"
+  std::string text() const;
+};
+
+// The fail-safe's side of a device's /diagnostics.
+struct FailsafeStatus {
+  std::string safe_states;     // "pump off, lamp on" or "none (every output holds)"
+  std::string on_restart;      // restore | safe | leave
+  std::string lost_heartbeat;  // the topic of a heartbeat lost now, or ""
+  std::optional<bool> bus_heartbeat_lost, device_heartbeat_lost;  // none: not configured
+  std::string held;  // channels held safe until commanded, or "none"
+  std::string owed;  // channels with a safe write owed, or "none"
+  uint64_t restarts_detected = 0, events = 0;
+  std::string last_event;  // the newest report in words, or "none"
+  std::string warn;        // the WARN summary it asks for, or ""
+};
+
+class DeviceFailsafe {
+ public:
+  using ReportSink = std::function<void(const FailsafeReport&)>;
+
+  DeviceFailsafe(Device& device, BusScheduler& bus, Clock& clock = Clock::steady());
+  DeviceFailsafe(const DeviceFailsafe&) = delete;
+  DeviceFailsafe& operator=(const DeviceFailsafe&) = delete;
+
+  // Where reports go, and what to run when a write of its own changed the outputs (the
+  // adapter publishes them); before the bus runs.
+  void setReportSink(ReportSink sink) { sink_ = std::move(sink); }
+  void setOutputsWritten(std::function<void()> written) { outputs_written_ = std::move(written); }
+  // The bus-wide heartbeat (none: nullptr), for the status.
+  void setBusHeartbeat(const Watchdog* heartbeat, std::string topic);
+
+  const FailsafeConfig& config() const { return intents_.config(); }
+  ChannelIntents& intents() { return intents_; }
+  Watchdog* heartbeat() { return heartbeat_.get(); }  // this device's own, or nullptr
+  bool hasSafeStates() const { return config().hasSafeStates(); }
+
+  // --- triggers (any thread) ---
+  // Puts the channels with a safe state there (only those in `only`, when given), confirmed by
+  // reading back, and reports it. `trigger`: heartbeat and command_timeout hold the channels
+  // safe until commanded again; start and shutdown do not. The future holds the outcome (a
+  // ready success when there is nothing to write).
+  std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
+                                const std::vector<uint8_t>& only = {});
+  // A trigger that fired: what applySafe takes.
+  struct Fired {
+    std::string trigger, reason;
+    std::vector<uint8_t> only;
+  };
+  // Command deadlines that passed, and this device's own heartbeat (each returned once).
+  std::vector<Fired> firedTriggers();
+  // applySafe for each of firedTriggers().
+  void checkDeadlines();
+  // A command topic's message on `channel` (the dead man's deadline).
+  void commandReceived(uint8_t channel, bool state) { intents_.commandReceived(channel, state); }
+
+  // --- the bus thread ---
+  void pollStarting() { intents_.pollStarting(); }
+  // After a good poll: restart detection, then on_restart's write and the owed safe writes.
+  void afterPoll();
+  // A user's output write is about to be sent / was confirmed / was not confirmed.
+  void userWriteSending() { intents_.writeRan(); }
+  void userWriteConfirmed(const std::vector<uint8_t>& channels, const std::vector<bool>& states);
+  void userWriteNotConfirmed(const std::vector<uint8_t>& channels, const Result& result);
+  // Around a timed command (flash, pulse, PWM run), and a PWM run stopped.
+  void timedCommandSending() { intents_.writeRan(); }
+  void timedCommandDone(const TimedIntent& intent, const Result& result);
+  void timedCommandStopped(uint8_t channel);
+  // A write the node carried for someone else (a share client, a raw write), confirmed.
+  void externalWrite(const Request& request, CommandSource source);
+
+  FailsafeStatus status() const;
+
+ private:
+  // Writes `targets`, reads back, reports. `owe_since`: the write carries a trigger's safe
+  // states (fired then), owed per channel when it does not get through.
+  Result writeAndReport(Transport& t, const OutputTargets& targets, const std::string& trigger,
+                        const std::string& reason, const std::string& action,
+                        std::optional<Clock::time_point> owe_since);
+  void report(FailsafeReport r);
+  void endSafeState();  // a user's confirmed command: no longer "in their safe state"
+  std::string lostHeartbeat() const;
+  std::string channelNames(const std::vector<uint8_t>& channels) const;
+
+  Device& device_;
+  BusScheduler& bus_;
+  ChannelIntents intents_;
+  std::unique_ptr<Watchdog> heartbeat_;
+  const Watchdog* bus_heartbeat_ = nullptr;
+  std::string bus_heartbeat_topic_;
+  ReportSink sink_;
+  std::function<void()> outputs_written_;
+
+  mutable std::mutex mutex_;  // the counters and texts below
+  uint64_t restarts_detected_ = 0, events_ = 0;
+  std::string last_event_;
+  std::string active_;          // set by a safe write, cleared by a user's confirmed command
+  std::string active_trigger_;  // the trigger of that safe write
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,296 @@
+#include "modbus_rtu_driver/failsafe/device_failsafe.h"
+
+#include <algorithm>
+
+#include "modbus_rtu_driver/core/config/number_text.h"
+#include "modbus_rtu_driver/core/modbus/text.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+std::future<Result> ready(Result r) {
+  std::promise<Result> p;
+  p.set_value(std::move(r));
+  return p.get_future();
+}
+
+}  // namespace
+
+std::string FailsafeReport::text() const {
+  std::string t = trigger + " (" + reason + "): ";
+  std::vector<std::string> changes;
+  for (size_t i = 0; i < channels.size() && i < states.size(); ++i)
+    changes.push_back(channels[i] + (states[i] ? " on" : " off"));
+  t += join(changes);
+  if (channels.empty()) t += action;
+  if (!confirmed) t += "; NOT confirmed: " + message;
+  return t;
+}
+
+DeviceFailsafe::DeviceFailsafe(Device& device, BusScheduler& bus, Clock& clock)
+    : device_(device), bus_(bus), intents_(device.config().failsafe, device.outputCount(), clock) {
+  const FailsafeConfig& fs = intents_.config();
+  if (!fs.heartbeat_topic.empty())
+    heartbeat_ = std::make_unique<Watchdog>(fs.heartbeat_timeout, clock);
+}
+
+void DeviceFailsafe::setBusHeartbeat(const Watchdog* heartbeat, std::string topic) {
+  bus_heartbeat_ = heartbeat;
+  bus_heartbeat_topic_ = std::move(topic);
+}
+
+std::string DeviceFailsafe::channelNames(const std::vector<uint8_t>& channels) const {
+  const auto names = device_.outputNames();
+  return join(channels, ", ", [&names](uint8_t c) { return names[c]; });
+}
+
+std::future<Result> DeviceFailsafe::applySafe(const std::string& trigger, const std::string& reason,
+                                              const std::vector<uint8_t>& only) {
+  // A trigger that lasts holds its channels safe on every restore until they are commanded
+  // again, even if this write does not get through; what the write sets is read from the holds
+  // when the bus gets to it, so a channel commanded in between is left as commanded.
+  const bool lasting = trigger == "heartbeat" || trigger == "command_timeout";
+  const auto since = intents_.clock().now();
+  OutputTargets targets;
+  if (lasting) {
+    intents_.hold(only,
+                  trigger == "heartbeat" ? HoldTrigger::kHeartbeat : HoldTrigger::kCommandTimeout);
+    targets = intents_.heldTargets(only);
+  } else {
+    const OutputTargets all = intents_.safeTargets();
+    for (size_t i = 0; i < all.channels.size(); ++i) {
+      if (!only.empty() && std::find(only.begin(), only.end(), all.channels[i]) == only.end())
+        continue;
+      targets.channels.push_back(all.channels[i]);
+      targets.states.push_back(all.states[i]);
+    }
+  }
+  if (targets.empty()) return ready(Result::success());
+  return bus_.submit(device_.name(),
+                     [this, lasting, only, targets, trigger, reason, since](Transport& t) {
+                       const OutputTargets now = lasting ? intents_.heldTargets(only) : targets;
+                       if (now.empty())
+                         return Result::success();  // commanded again before the bus got to it
+                       return writeAndReport(t, now, trigger, reason, "safe", since);
+                     });
+}
+
+Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets,
+                                      const std::string& trigger, const std::string& reason,
+                                      const std::string& action,
+                                      std::optional<Clock::time_point> owe_since) {
+  const auto names = device_.outputNames();
+  FailsafeReport r;
+  r.device = device_.name();
+  r.trigger = trigger;
+  r.reason = reason;
+  r.action = action;
+  for (size_t i = 0; i < targets.channels.size(); ++i) {
+    r.channels.push_back(names[targets.channels[i]]);
+    r.states.push_back(targets.states[i]);
+  }
+  intents_.writeRan();
+  Result w = device_.setOutputs(t, targets.channels, targets.states);
+  if (w.ok()) {
+    // Read back: the outputs as the device reports them now, not as the write's echo said.
+    const Result back = device_.poll(t);
+    if (!back.ok()) {
+      w = Result::failure(back.error, "written, but reading back failed: " + back.message);
+    } else {
+      for (size_t i = 0; i < targets.channels.size(); ++i) {
+        if (device_.outputs()[targets.channels[i]] == targets.states[i]) continue;
+        w = Result::failure(ErrorKind::kMalformed, "read back: " + names[targets.channels[i]] +
+                                                       " is still " +
+                                                       (targets.states[i] ? "off" : "on"));
+        break;
+      }
+    }
+  }
+  if (w.ok()) {
+    // A safe write is a command like any other: a restore writes it again.
+    intents_.commanded(targets.channels, targets.states,
+                       action == "restore" ? CommandSource::kRestore : CommandSource::kSafe);
+    if (outputs_written_) outputs_written_();
+    // A restore with no channel held safe put back what users had: no longer in a safe state.
+    if (action == "restore" && !intents_.anyHeld()) endSafeState();
+  } else if (owe_since) {
+    // Owed per channel: written when the device answers again, unless commanded before that.
+    intents_.owe(targets, *owe_since, trigger);
+  }
+  r.confirmed = w.ok();
+  r.message = w.ok() ? "confirmed by reading the outputs back" : w.message;
+  report(std::move(r));
+  return w;
+}
+
+void DeviceFailsafe::afterPoll() {
+  // The scheduler records this poll after this callback: health still says how it was before.
+  const bool was_offline = !bus_.health(device_.name()).online;
+  std::vector<bool> timed(device_.outputCount());
+  for (size_t i = 0; i < timed.size(); ++i) timed[i] = device_.outputSelfTimed(i);
+  std::vector<uint8_t> changed;
+  const auto verdict = intents_.observePoll(device_.outputs(), timed, was_offline, &changed);
+  // A share client or raw write changed outputs: "in their safe state" (which names the channels
+  // the safe write set) is no longer true, as after a user's write.
+  if (intents_.tookAdoptedWrite()) endSafeState();
+  const bool owed = !intents_.owed().empty();
+  if (verdict == ChannelIntents::Verdict::kNormal && !owed) return;
+  std::string reason = "the device answers again; its safe state was not reached before";
+  std::string action = "safe";
+  if (verdict != ChannelIntents::Verdict::kNormal) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++restarts_detected_;
+    }
+    reason = verdict == ChannelIntents::Verdict::kCameBack
+                 ? "answered again after being offline"
+                 : "outputs " + channelNames(changed) +
+                       " changed with no command in between (power cycle?)";
+    const OnRestart policy = config().on_restart;
+    // With on_restart: leave, only the owed safe states are written: say so.
+    action = owed && policy == OnRestart::kLeave ? "safe" : onRestartName(policy);
+  }
+  // What to write is read when the write runs: a command confirmed before then is not undone.
+  bus_.submit(device_.name(), [this, verdict, reason, action](Transport& t) {
+    const OutputTargets targets = intents_.afterPollTargets(verdict);
+    if (!targets.empty()) return writeAndReport(t, targets, "restart", reason, action, {});
+    if (verdict == ChannelIntents::Verdict::kNormal) return Result::success();
+    FailsafeReport r;
+    r.device = device_.name();
+    r.trigger = "restart";
+    r.reason = reason;
+    r.action = action;
+    r.confirmed = true;
+    r.message = "outputs left as they are";
+    r.note_only = action == "leave" && !hasSafeStates();
+    report(std::move(r));
+    return Result::success();
+  });
+}
+
+std::vector<DeviceFailsafe::Fired> DeviceFailsafe::firedTriggers() {
+  std::vector<Fired> fired;
+  const auto expired = intents_.expiredCommands();
+  if (!expired.empty())
+    fired.push_back({"command_timeout",
+                     "no command on " + channelNames(expired) + " within its command_timeout",
+                     expired});
+  if (heartbeat_ && heartbeat_->expired()) {
+    const FailsafeConfig& fs = config();
+    fired.push_back({"heartbeat",
+                     "no message on " + fs.heartbeat_topic + " within " +
+                         numberText(fs.heartbeat_timeout) + " s",
+                     {}});
+  }
+  return fired;
+}
+
+void DeviceFailsafe::checkDeadlines() {
+  for (const Fired& f : firedTriggers()) applySafe(f.trigger, f.reason, f.only);
+}
+
+void DeviceFailsafe::userWriteConfirmed(const std::vector<uint8_t>& channels,
+                                        const std::vector<bool>& states) {
+  intents_.commanded(channels, states, CommandSource::kUser);
+  endSafeState();
+}
+
+void DeviceFailsafe::userWriteNotConfirmed(const std::vector<uint8_t>& channels,
+                                           const Result& result) {
+  // Refused, or never sent (port not open): nothing changed. Its answer lost: the caller was
+  // told it failed, yet the device may have acted; the next poll shows what the channels are
+  // (not a restart, not the caller's command).
+  if (!answerLost(result.error)) return;
+  for (uint8_t ch : channels) intents_.adoptNextPoll(ch, CommandSource::kFound);
+}
+
+void DeviceFailsafe::timedCommandDone(const TimedIntent& intent, const Result& result) {
+  if (result.ok()) {
+    intents_.timed(intent, CommandSource::kTimed);
+    endSafeState();
+    return;
+  }
+  // Not confirmed: it may run or not. Either level may show until its end, then its final one
+  // is what a poll finds (it is not taken as commanded: the caller was told it failed).
+  TimedIntent unsure = intent;
+  unsure.during.reset();
+  intents_.timed(unsure, CommandSource::kFound);
+}
+
+void DeviceFailsafe::timedCommandStopped(uint8_t channel) {
+  // The output shows the channel's coil again: the next poll says which level that is.
+  intents_.adoptNextPoll(channel, CommandSource::kTimed);
+  endSafeState();
+}
+
+void DeviceFailsafe::externalWrite(const Request& request, CommandSource source) {
+  const OutputTargets set = device_.outputsWrittenBy(request);
+  if (!set.empty()) intents_.commanded(set.channels, set.states, source);
+  const std::vector<TimedIntent> timed = device_.timedWrittenBy(request);
+  for (const TimedIntent& t : timed) intents_.timed(t, source);
+  if (!set.empty() || !timed.empty()) endSafeState();
+  // Any other write (registers the type does not decode) shows at the next poll.
+  if (set.empty() && timed.empty() && !isBitFunction(request.function))
+    intents_.adoptChangesNextPoll(source);
+}
+
+void DeviceFailsafe::report(FailsafeReport r) {
+  const std::string text = r.text();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++events_;
+    last_event_ = text;
+    if (!r.channels.empty() && r.action == "safe") {
+      active_ = text;
+      active_trigger_ = r.trigger;
+    }
+  }
+  if (sink_) sink_(r);
+}
+
+void DeviceFailsafe::endSafeState() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  active_.clear();
+}
+
+std::string DeviceFailsafe::lostHeartbeat() const {
+  if (bus_heartbeat_ && bus_heartbeat_->tripped()) return bus_heartbeat_topic_;
+  if (heartbeat_ && heartbeat_->tripped()) return config().heartbeat_topic;
+  return "";
+}
+
+FailsafeStatus DeviceFailsafe::status() const {
+  FailsafeStatus s;
+  const FailsafeConfig& fs = config();
+  const auto names = device_.outputNames();
+  std::vector<std::string> states, held;
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (fs.safeStateOf(i) != SafeState::kHold)
+      states.push_back(names[i] + " " + safeStateName(fs.safeStateOf(i)));
+    if (intents_.heldBy(static_cast<uint8_t>(i)) != 0) held.push_back(names[i]);
+  }
+  s.safe_states = states.empty() ? "none (every output holds)" : join(states);
+  s.on_restart = onRestartName(fs.on_restart);
+  s.lost_heartbeat = lostHeartbeat();
+  if (bus_heartbeat_) s.bus_heartbeat_lost = bus_heartbeat_->tripped();
+  if (heartbeat_) s.device_heartbeat_lost = heartbeat_->tripped();
+  s.held = held.empty() ? "none" : join(held);
+  const OutputTargets owed = intents_.owed();
+  s.owed = owed.empty() ? "none" : channelNames(owed.channels);
+  std::lock_guard<std::mutex> lock(mutex_);
+  s.restarts_detected = restarts_detected_;
+  s.events = events_;
+  s.last_event = last_event_.empty() ? "none" : last_event_;
+  // While a heartbeat is lost the controller is gone, whatever was written since; after it is
+  // back the held channels are listed, and only the other triggers keep a WARN.
+  if (!s.lost_heartbeat.empty()) {
+    s.warn =
+        "heartbeat lost (no message on " + s.lost_heartbeat + "): outputs held in their safe state";
+  } else if (!active_.empty() && active_trigger_ != "heartbeat") {
+    s.warn = "outputs in their safe state after " + active_;
+  }
+  return s;
+}
+
+}  // namespace modbus_rtu_driver
