@@ -18,9 +18,14 @@ import time
 import node_bench
 
 
+# The LC board of node_bench's bus (its address there, not its factory 255: the share answers
+# exception 0B for a unit no device of the bus has).
+RELAYS_UNIT = 8
+
+
 def request(sock, transaction):
-    """One FC01 read of 8 coils at unit 255; returns the reply's PDU (raises on a bad one)."""
-    sock.sendall(struct.pack(">HHHBBHH", transaction, 0, 6, 255, 1, 0, 8))
+    """One FC01 read of 8 coils at RELAYS_UNIT; returns the reply's PDU (raises on a bad one)."""
+    sock.sendall(struct.pack(">HHHBBHH", transaction, 0, 6, RELAYS_UNIT, 1, 0, 8))
     reply = b""
     while len(reply) < 6 or len(reply) < 6 + struct.unpack(">H", reply[4:6])[0]:
         chunk = sock.recv(260)

@@ -114,6 +114,7 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
     if (outputs_written_) outputs_written_();
     // A restore with no channel held safe put back what users had: no longer in a safe state.
     if (action == "restore" && !intents_.anyHeld()) endSafeState();
+    timedMaybeChanged();
   } else if (owe_since) {
     // Owed per channel: written when the device answers again, unless commanded before that.
     intents_.owe(targets, *owe_since, trigger);
@@ -194,6 +195,7 @@ void DeviceFailsafe::userWriteConfirmed(const std::vector<uint8_t>& channels,
                                         const std::vector<bool>& states) {
   intents_.commanded(channels, states, CommandSource::kUser);
   endSafeState();
+  timedMaybeChanged();  // a plain write replaces a timed command
 }
 
 void DeviceFailsafe::userWriteNotConfirmed(const std::vector<uint8_t>& channels,
@@ -209,6 +211,7 @@ void DeviceFailsafe::timedCommandDone(const TimedIntent& intent, const Result& r
   if (result.ok()) {
     intents_.timed(intent, CommandSource::kTimed);
     endSafeState();
+    timedMaybeChanged();
     return;
   }
   // Not confirmed: it may run or not. Either level may show until its end, then its final one
@@ -216,12 +219,14 @@ void DeviceFailsafe::timedCommandDone(const TimedIntent& intent, const Result& r
   TimedIntent unsure = intent;
   unsure.during.reset();
   intents_.timed(unsure, CommandSource::kFound);
+  timedMaybeChanged();
 }
 
 void DeviceFailsafe::timedCommandStopped(uint8_t channel) {
   // The output shows the channel's coil again: the next poll says which level that is.
   intents_.adoptNextPoll(channel, CommandSource::kTimed);
   endSafeState();
+  timedMaybeChanged();
 }
 
 void DeviceFailsafe::externalWrite(const Request& request, CommandSource source) {
@@ -233,6 +238,14 @@ void DeviceFailsafe::externalWrite(const Request& request, CommandSource source)
   // Any other write (registers the type does not decode) shows at the next poll.
   if (set.empty() && timed.empty() && !isBitFunction(request.function))
     intents_.adoptChangesNextPoll(source);
+  timedMaybeChanged();
+}
+
+void DeviceFailsafe::timedMaybeChanged() {
+  const std::vector<TimedIntent> running = intents_.runningTimed();
+  if (running.empty() && !timed_told_) return;  // none before, none now: nothing to tell
+  timed_told_ = !running.empty();
+  if (timed_changed_) timed_changed_(running);
 }
 
 void DeviceFailsafe::report(FailsafeReport r) {

@@ -143,7 +143,11 @@ bool BusNode::start() {
     return false;
   }
   std::string error;
-  if (!parseBusConfig(toYaml(params), &config_, &error)) {
+  YAML::Node root = toYaml(params);
+  // Not configuration: the running timed commands the node keeps for its next start
+  // (DeviceAdapter::keepTimedCommands).
+  root.remove("running_timed");
+  if (!parseBusConfig(root, &config_, &error)) {
     ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());
     return false;
   }

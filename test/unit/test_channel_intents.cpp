@@ -311,3 +311,31 @@ TEST(ChannelIntents, TheDeadMansDeadlineOnAManualClock) {
   clock.advance(5s);
   EXPECT_TRUE(t.expiredCommands().empty());
 }
+
+// Item 6: "the next node ... resumes them before its first poll": a node killed during a flash
+// hands its running timed commands to the next one, which does not take the end for a restart.
+TEST(ChannelIntents, Item6TheNextNodeResumesAKilledNodesFlash) {
+  ManualClock clock;
+  ChannelIntents killed(relays(OnRestart::kSafe), 4, clock);
+  poll(killed, {false, false, false, false});
+  killed.commanded({0}, {true}, CommandSource::kUser);
+  killed.timed(TimedIntent{3, true, false, 5.0}, CommandSource::kTimed);  // flash-close 5 s
+  clock.advance(1s);
+  const std::vector<TimedIntent> running = killed.runningTimed();
+  ASSERT_EQ(running.size(), 1u);
+  EXPECT_EQ(running[0].channel, 3);
+  EXPECT_NEAR(running[0].seconds, 4.0, 1e-9);
+
+  ChannelIntents next(relays(OnRestart::kSafe), 4, clock);
+  next.resumeTimed(running);
+  EXPECT_EQ(poll(next, {true, false, false, true}), Verdict::kNormal);  // during the flash
+  clock.advance(5s);
+  EXPECT_EQ(poll(next, {true, false, false, false}), Verdict::kNormal);  // its end
+  EXPECT_TRUE(next.runningTimed().empty());
+  // Without the handover the same end is a restart: what the node could not tell apart.
+  ManualClock clock2;
+  ChannelIntents blind(relays(OnRestart::kSafe), 4, clock2);
+  poll(blind, {true, false, false, true});
+  clock2.advance(5s);
+  EXPECT_EQ(poll(blind, {true, false, false, false}), Verdict::kOutputsChanged);
+}

@@ -61,6 +61,14 @@ class DeviceFailsafe {
   // adapter publishes them); before the bus runs.
   void setReportSink(ReportSink sink) { sink_ = std::move(sink); }
   void setOutputsWritten(std::function<void()> written) { outputs_written_ = std::move(written); }
+  // The timed commands running now (flashes, bursts, PWM runs; seconds left), each time that
+  // changes: the ROS layer keeps them for the next node's start, so that a node killed during a
+  // flash does not take its end for a restart (issue #32 item 6).
+  void setTimedChanged(std::function<void(const std::vector<TimedIntent>&)> changed) {
+    timed_changed_ = std::move(changed);
+  }
+  // A previous node's timed commands (seconds left), before the first poll.
+  void resumeTimed(const std::vector<TimedIntent>& running) { intents_.resumeTimed(running); }
   // The bus-wide heartbeat (none: nullptr), for the status.
   void setBusHeartbeat(const Watchdog* heartbeat, std::string topic);
 
@@ -112,7 +120,8 @@ class DeviceFailsafe {
                         const std::string& reason, const std::string& action,
                         std::optional<Clock::time_point> owe_since);
   void report(FailsafeReport r);
-  void endSafeState();  // a user's confirmed command: no longer "in their safe state"
+  void endSafeState();       // a user's confirmed command: no longer "in their safe state"
+  void timedMaybeChanged();  // tells timed_changed_ when timed commands run or did
   std::string lostHeartbeat() const;
   std::string channelNames(const std::vector<uint8_t>& channels) const;
 
@@ -124,6 +133,8 @@ class DeviceFailsafe {
   std::string bus_heartbeat_topic_;
   ReportSink sink_;
   std::function<void()> outputs_written_;
+  std::function<void(const std::vector<TimedIntent>&)> timed_changed_;
+  bool timed_told_ = false;  // the last list told was not empty (bus thread)
 
   mutable std::mutex mutex_;  // the counters and texts below
   uint64_t restarts_detected_ = 0, events_ = 0;

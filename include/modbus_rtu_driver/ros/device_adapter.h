@@ -143,6 +143,7 @@ class DeviceAdapter {
   virtual void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   DeviceFailsafe failsafe_;
+  void keepTimedCommands(const ros::NodeHandle& node);
   EventSink failsafe_sink_;
   ros::Publisher failsafe_pub_;  // ~<device>/failsafe, latched: this device's newest event
 
