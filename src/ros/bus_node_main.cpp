@@ -3,6 +3,7 @@
 #include <ros/ros.h>
 
 #include <csignal>
+#include <cstdio>
 
 #include "modbus_rtu_driver/ros/bus_node.h"
 #include "modbus_rtu_driver/ros/slave_node.h"
@@ -21,6 +22,9 @@ int run(const ros::NodeHandle& nh) {
 }
 
 int main(int argc, char** argv) {
+  // rosconsole writes INFO to stdout: line-buffered, so "back online" reaches a log file when
+  // it happens, not at exit, when roslaunch's output goes to a file.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   ros::init(argc, argv, "modbus_rtu_bus");
   // roscpp handles SIGINT; SIGTERM (systemd, docker stop, kill) must end as cleanly.
   std::signal(SIGTERM, [](int) { ros::requestShutdown(); });

@@ -147,6 +147,19 @@ class LaunchFilesTest(unittest.TestCase):
                       devices, os.path.join(up.REPO, "config"),
                       up.simulator_config_for(example, self.dir), link)
 
+    def test_bus_launch_respawn_wins_over_required(self):
+        # roslaunch refuses a node that is both required and respawned: respawn:=true must
+        # turn required off (issue #33 item 4; docs/failsafe.md, "node killed").
+        import roslaunch.config
+        import roslaunch.xmlloader
+        path = os.path.join(up.REPO, "launch", "bus.launch")
+        for argv, respawn, required in (([], False, True), (["respawn:=true"], True, False)):
+            config = roslaunch.config.ROSLaunchConfig()
+            roslaunch.xmlloader.XmlLoader().load(path, config, argv=argv, verbose=False)
+            node = next(n for n in config.nodes if n.type == "modbus_rtu_bus")
+            self.assertEqual((node.respawn, node.required), (respawn, required), argv)
+            self.assertEqual(node.respawn_delay, 1.0)
+
     def test_relaunch_keeps_nothing_of_the_previous_file(self):
         """bus.launch twice on one master: a fixed typo is not reported again, a removed
         share: is gone (its port closed), both on the parameter server and in the node."""
