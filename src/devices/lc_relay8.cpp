@@ -33,9 +33,11 @@ std::string LcRelay8::pulseTenths(uint8_t channel, double duration, uint16_t* te
   // would be written: 0x0001-0xFFFF.
   const double units = duration * 10.0;
   const double nearest = std::isfinite(units) ? std::round(units) : -1;
-  if (nearest < 1 || nearest > 65535 || std::fabs(units - nearest) > 1e-3 + 1e-9 * nearest) {
-    return "duration: " + numberText(duration) + " s is outside 0.1-6553.5 s in steps of 0.1 s";
-  }
+  if (nearest < 1 || nearest > 65535)
+    return "duration: " + numberText(duration) + " s is outside 0.1-6553.5 s";
+  if (std::fabs(units - nearest) > 1e-3 + 1e-9 * nearest)
+    return "duration: " + numberText(duration) +
+           " s is not a multiple of the 0.1 s step (0.1-6553.5 s in steps of 0.1 s)";
   if (tenths) *tenths = static_cast<uint16_t>(nearest);
   return {};
 }

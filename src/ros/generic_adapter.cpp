@@ -13,6 +13,7 @@
 #include "modbus_rtu_driver/SetValue.h"
 #include "modbus_rtu_driver/SignalValues.h"
 #include "modbus_rtu_driver/core/bus/rate_meter.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
@@ -61,13 +62,14 @@ class GenericAdapter : public DeviceAdapter {
               const double written =
                   words.empty() ? req.value
                                 : sc.toValue(decodeRaw(sc.type, sc.word_order, words.data()));
-              std::ostringstream what;
-              what << sc.name << " set to " << req.value;
+              // In the signal's unit, both numbers ("set to 1.04 A (written as 1 A)").
+              const std::string unit = sc.unit.empty() ? "" : " " + sc.unit;
+              std::string what = sc.name + " set to " + numberText(req.value) + unit;
               // Integer registers hold steps of `scale`, float32 has 24 bits: say what it is.
               if (r.ok() &&
                   std::abs(written - req.value) > 1e-9 * std::max(1.0, std::abs(req.value)))
-                what << " (written as " << written << ")";
-              res.message = answer(r, what.str());
+                what += " (written as " + numberText(written) + unit + ")";
+              res.message = answer(r, what);
               return true;
             }));
     }

@@ -623,6 +623,17 @@ TEST(LcRelay8, FlashTimeIsCheckedOnTheTenthsWritten) {
   EXPECT_SCRIPT_DONE(bus);
 }
 
+// Issue #33 item 5: 1.25 s is inside the range; what it breaks is the 0.1 s step, and the
+// answer says which rule.
+TEST(LcRelay8, APulseOffTheStepIsRefusedForTheStepNotTheRange) {
+  EXPECT_EQ(LcRelay8::validatePulse(0, 1.25),
+            "duration: 1.25 s is not a multiple of the 0.1 s step (0.1-6553.5 s in steps of "
+            "0.1 s)");
+  EXPECT_EQ(LcRelay8::validatePulse(0, 0.04), "duration: 0.04 s is outside 0.1-6553.5 s");
+  EXPECT_EQ(LcRelay8::validatePulse(0, 6600), "duration: 6600 s is outside 0.1-6553.5 s");
+  EXPECT_EQ(LcRelay8::validatePulse(0, -std::nan("")), "duration: nan s is outside 0.1-6553.5 s");
+}
+
 TEST(Registry, TypesAddressesAndNames) {
   // Each type's own file registered it (core/config/type_registry.h); listed alphabetically. A new
   // type joins the list without an edit here.

@@ -365,6 +365,9 @@ TEST(GenericDevice, MinMaxAreCheckedOnTheRoundedValue) {
             "flow: 95 l/h would be written as 100 l/h (raw 10), outside 12 to 95 l/h");
   EXPECT_EQ(d.writeSignal(bus, 0, 14).message,
             "flow: 14 l/h would be written as 10 l/h (raw 1), outside 12 to 95 l/h");
+  // A `.nan` comes back as "nan", never "-nan" (issue #33 item 5).
+  EXPECT_EQ(d.writeSignal(bus, 0, -std::nan("")).message.find("-nan"), std::string::npos);
+  EXPECT_NE(d.writeSignal(bus, 0, -std::nan("")).message.find("nan"), std::string::npos);
   EXPECT_EQ(bus.executed(), 0);
   std::vector<uint16_t> words;
   EXPECT_EQ(d.encodeWrite(0, 90, &words), "");

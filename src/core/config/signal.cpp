@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "modbus_rtu_driver/core/config/number_text.h"
+
 namespace modbus_rtu_driver {
 
 const char* typeName(SignalType t) {
@@ -89,10 +91,9 @@ std::string writeFunctionProblem(const SignalConfig& s) {
 
 namespace {
 
+// "nan", never "-nan" (a `.nan` in YAML or a service field comes back as the user wrote it).
 std::string number(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
+  return numberText(v);
 }
 
 // The value a raw number becomes on the device (float32 keeps only its 24 bits).
