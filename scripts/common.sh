@@ -104,6 +104,7 @@ build_workspace() {
   mkdir -p "$WS/src"
   [ -L "$WS/src/modbus_rtu_driver" ] || ln -sfn "$REPO" "$WS/src/modbus_rtu_driver"
   (cd "$WS" && catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_EXPORT_COMPILE_COMMANDS=ON \
     -DCATKIN_ENABLE_TESTING=ON -j"$(nproc)" "$@")
   set +u
   # shellcheck disable=SC1091

@@ -26,7 +26,10 @@ DEPS_RESULTS=$WS/build/test_results/dependencies
 # The sanitizer and fuzz builds run at the lowest CPU priority while the tests below run: the
 # tests mostly wait on the line, and this halves the wall time of the whole command.
 (nice -n 19 "$REPO/scripts/sanitized_tests.sh" --build-only
-  nice -n 19 "$REPO/scripts/fuzz.sh" --build-only) >"$WS/background_builds.log" 2>&1 &
+  nice -n 19 "$REPO/scripts/fuzz.sh" --build-only
+  # clang-tidy on the C++ files changed lately (the whole pass does not fit in this command).
+  TIDY_COMMITS=${TIDY_COMMITS:-3} nice -n 19 "$REPO/scripts/tidy.sh" --changed \
+    "$WS/build/test_results/tidy") >"$WS/background_builds.log" 2>&1 &
 background_builds=$!
 # -j1: rostests each start their own master and must not run in parallel.
 catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests 2>&1 | tee "$WS/run_tests.log" |
@@ -43,4 +46,4 @@ wait $background_builds || true
 # Each step above writes its results into a folder of its own; one that wrote nothing failed.
 exec /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$WS/build/test_results" \
   --expect modbus_rtu_driver --expect dependencies --expect sanitizers --expect fuzz \
-  --expect conventions --expect install
+  --expect conventions --expect install --expect tidy

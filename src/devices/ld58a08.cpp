@@ -350,7 +350,8 @@ std::vector<TimedIntent> Ld58a08::timedWrittenBy(const Request& request) const {
     } else if (ch < 6) {
       // Pulses of the period written with it, or of the one the board already has.
       const double period =
-          written(pwmRegister(ch)).value_or(static_cast<uint16_t>(pwm_[ch].period * 10 + 0.5)) /
+          written(pwmRegister(ch))
+              .value_or(static_cast<uint16_t>(std::lround(pwm_[ch].period * 10))) /
           10.0;
       t.seconds = *enable * period;
     } else {

@@ -121,7 +121,7 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
   }
   r.confirmed = w.ok();
   r.message = w.ok() ? "confirmed by reading the outputs back" : w.message;
-  report(std::move(r));
+  report(r);
   return w;
 }
 
@@ -165,7 +165,7 @@ void DeviceFailsafe::afterPoll() {
     r.confirmed = true;
     r.message = "outputs left as they are";
     r.note_only = action == "leave" && !hasSafeStates();
-    report(std::move(r));
+    report(r);
     return Result::success();
   });
 }
@@ -248,7 +248,7 @@ void DeviceFailsafe::timedMaybeChanged() {
   if (timed_changed_) timed_changed_(running);
 }
 
-void DeviceFailsafe::report(FailsafeReport r) {
+void DeviceFailsafe::report(const FailsafeReport& r) {
   const std::string text = r.text();
   {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -222,7 +222,7 @@ class GenericAdapter : public DeviceAdapter {
       e.values.push_back(v);
     }
     bool silent = false;
-    const Result w = generic().writeSafeValues(t, &silent);
+    Result w = generic().writeSafeValues(t, &silent);
     // Not reached because the device did not answer: tried again when it answers. A refusal,
     // or a value read back that differs, is the device's answer: reported, not retried (on
     // every poll it would only repeat the event), and the other signals were still written.

@@ -659,7 +659,8 @@ void parseDevice(const Parsed& p, CommissionCommand& c) {
       c.new_value = static_cast<int>(*parseParity(v, nullptr));
       break;
     case BoardFeature::kReturnDelay: {
-      const int step = type.commissioning->returnDelayStepMs();
+      // A type with a return delay has a step of at least 1 ms (a 0 would divide by zero).
+      const int step = std::max(1, type.commissioning->returnDelayStepMs());
       const int max_ms = step * type.commissioning->returnDelayMaxUnits();
       const int ms = intIn(s.label, v, 0, max_ms);
       if (ms % step)

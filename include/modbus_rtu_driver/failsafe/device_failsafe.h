@@ -119,7 +119,7 @@ class DeviceFailsafe {
   Result writeAndReport(Transport& t, const OutputTargets& targets, const std::string& trigger,
                         const std::string& reason, const std::string& action,
                         std::optional<Clock::time_point> owe_since);
-  void report(FailsafeReport r);
+  void report(const FailsafeReport& r);
   void endSafeState();       // a user's confirmed command: no longer "in their safe state"
   void timedMaybeChanged();  // tells timed_changed_ when timed commands run or did
   std::string lostHeartbeat() const;
