@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <deque>
 #include <fstream>
 #include <functional>
@@ -192,6 +191,8 @@ struct Chan {
   bool adopt_is_command = false;
   uint64_t adopt_after_poll = 0;
   TP adopt_not_before{};
+  TP adopt_at{};                                            // when the write was confirmed
+  bool adopt_prev_known = false, adopt_prev_level = false;  // what it should show before
 };
 
 struct DevModel {
@@ -199,6 +200,8 @@ struct DevModel {
   bool justified = false;      // I6: something changed outputs the node did not confirm
   TP justified_until{};        // ... and goes on changing them until then (a timed command)
   std::optional<TP> cause_at;  // I4: the newest thing that may make the node see a restart
+  bool cause_pending = false;  // ... not yet followed by a restart report
+  TP last_poll_at{};           // the end of its newest good poll
   TP reachable_since{};        // no fault, no power cycle, port open, node running since
   uint64_t polls_started = 0;
   uint64_t poll_running = 0;  // the sequence number of the poll running now
@@ -216,9 +219,14 @@ struct Operation {
 
 class World {
  public:
-  World(uint64_t seed, const std::set<std::string>& known, bool keep_history)
-      : config_(drawConfig(seed)), known_(known), link_(config_.link, clock_), transport_(link_) {
+  World(uint64_t seed, const std::set<std::string>& known, bool keep_history, std::FILE* trace)
+      : config_(drawConfig(seed)),
+        known_(known),
+        link_(config_.link, clock_),
+        transport_(link_),
+        trace_(trace) {
     link_.keepHistory(keep_history ? 40 : 0);
+    link_.trace(trace);
     SimLineSettings line;
     line.baud = config_.link.baud;
     link_.addDevice(std::make_unique<SimLcRelay8>(kAddr[kLc], line));
@@ -301,6 +309,14 @@ class World {
   void commandedTimed(int d, int ch, std::optional<bool> during, bool after, double seconds);
   void unconfirmed(int d, int ch, double not_before_s, bool as_command);
   void hold(int d, int ch);
+  // A client's write (share, raw) whose answer was lost: the device may have acted, the node
+  // did not carry it (docs:35: the reply confirms it). The docs do not say what the intent is
+  // then: nothing is checked on the channel until it is commanded again.
+  void unknownIntent(int d, int ch) {
+    Chan& c = model_[d].ch[ch];
+    c.known = false;
+    c.adopt = false;
+  }
   void deviceDisturbed(int d, bool justified, double extra = 0);
   bool expected(const Chan& c, TP t, bool* level) const;
   // Invariants checked after each step.
@@ -318,6 +334,7 @@ class World {
   CountingTransport transport_;
   std::unique_ptr<SimNode> node_;
   bool dying_ = false;
+  bool stopping_ = false;
   TP start_{};
   DevModel model_[kDevices];
   // The controller and its heartbeat (docs:32).
@@ -334,6 +351,7 @@ class World {
   const std::deque<std::string>* steps_ = nullptr;
   std::vector<std::future<Result>> pending_;
   bool port_lost_ = false;
+  std::FILE* trace_ = nullptr;
 };
 
 void World::fail(const std::string& invariant, const std::string& message) {
@@ -498,6 +516,7 @@ void World::stopNode() {
       }
   next_tick_ = next_feed_ = TP::max();
   node_->beginStop();
+  stopping_ = true;
   runUntil(began + dur(config_.shutdown_timeout), [this] { return node_->stopWritesDone(); });
   // I10 (docs:31): a device that answered throughout shows its safe states.
   if (node_->stopWritesDone() && !port_lost_)
@@ -514,6 +533,7 @@ void World::stopNode() {
 void World::killNode() {
   if (!node_) return;
   dying_ = true;
+  stopping_ = false;
   node_.reset();  // queued jobs fail unsent: nothing reaches the line
   dying_ = false;
   pending_.clear();
@@ -566,6 +586,8 @@ void World::unconfirmed(int d, int ch, double not_before_s, bool as_command) {
   // The docs do not say what the intent is after a write whose answer was lost: nothing is
   // checked on the channel until a poll shows it again.
   Chan& c = model_[d].ch[ch];
+  c.adopt_prev_known = expected(c, clock_.now(), &c.adopt_prev_level);
+  c.adopt_at = clock_.now();
   c.known = false;
   c.adopt = true;
   c.adopt_is_command = as_command;
@@ -576,6 +598,7 @@ void World::unconfirmed(int d, int ch, double not_before_s, bool as_command) {
 void World::deviceDisturbed(int d, bool justified, double extra) {
   DevModel& m = model_[d];
   m.cause_at = clock_.now();
+  m.cause_pending = true;
   // A device that stopped answering is probed again with backoff, up to backoff_max (5 s,
   // bus_scheduler.h); an owed write goes when it answers a poll again (docs:37).
   m.reachable_since = std::max(m.reachable_since, clock_.now() + dur(5.0 + extra));
@@ -622,7 +645,12 @@ void World::onAttempt(const LineEvent& e) {
     bool level = false;
     if (!expected(c, e.at, &level) || level == v) continue;
     if (hasSafe(d, ch) && v == safeLevel(d, ch) && c.triggered && c.trigger_at >= c.at) continue;
-    if (m.cause_at && *m.cause_at >= c.at) {
+    // docs:31, 99-100: the stop's safe writes run after what was queued before them, and they
+    // are what the outputs are left with.
+    if (stopping_ && hasSafe(d, ch) && v == safeLevel(d, ch)) continue;
+    // The node sees a restart at a poll (docs:34): a command confirmed before the poll that saw
+    // it is not newer than the restart; one confirmed after it is (docs:90-92).
+    if ((m.cause_at && *m.cause_at >= c.at) || (m.cause_pending && c.at <= m.last_poll_at)) {
       if (onRestart(d) == OnRestart::kSafe && hasSafe(d, ch) && v == safeLevel(d, ch)) continue;
       if (onRestart(d) == OnRestart::kRestore && c.timed && v == c.level) continue;
     }
@@ -660,22 +688,26 @@ void World::onPolled(const std::string& device, const Result& r) {
       // docs:35, 64-65: what an undecoded write changed is taken as commanded at the next
       // poll; it ends a hold on the channels it changed.
       const bool level = outputs[ch];
-      const bool changed = c.held ? level != safeLevel(d, ch) : true;
-      const bool keep_held = c.held && !(c.adopt_is_command && changed);
-      const TP held_since = c.held_since;
-      const bool triggered = c.triggered;
-      const TP trigger_at = c.trigger_at;
+      // docs:35, 64-65: what the write changed is taken as commanded; a level that did not
+      // change (or was not known) is not. Only a client's write is a command (it ends holds
+      // and owed writes), and only those that fired before it was confirmed (docs:75-78); a
+      // user's write whose answer was lost is not (docs:81-83: commanded after the stamp).
+      const bool changed = c.adopt_prev_known && level != c.adopt_prev_level;
+      const bool ends = c.adopt_is_command && changed && !(c.held && c.held_since > c.adopt_at);
+      Chan kept = c;
       c = Chan{};
       c.known = true;
-      c.command = true;
+      c.command = kept.adopt_is_command;
       c.level = level;
       c.continuous = pwm;
       c.at = clock_.now();
-      if (keep_held) {
-        c.held = true;
-        c.held_since = held_since;
-        c.triggered = triggered;
-        c.trigger_at = trigger_at;
+      c.deadline = kept.deadline;
+      if (!ends) {
+        c.held = kept.held;
+        c.held_since = kept.held_since;
+        c.owed = kept.owed;
+        c.triggered = kept.triggered;
+        c.trigger_at = kept.trigger_at;
       }
     }
   }
@@ -684,6 +716,7 @@ void World::onPolled(const std::string& device, const Result& r) {
   // writes computed from here on have that reason (found states included).
   if (m.unanswered) m.cause_at = clock_.now();
   m.unanswered = false;
+  m.last_poll_at = clock_.now();
 }
 
 void World::onWritten(const std::string& device, const std::vector<uint8_t>& chs,
@@ -704,6 +737,7 @@ void World::checkCoils(int d, const std::vector<uint8_t>& chs, const std::vector
 }
 
 void World::onReport(const FailsafeReport& r) {
+  if (trace_) std::fprintf(trace_, "report %s: %s\n", r.device.c_str(), r.text().c_str());
   const int d = devOf(r.device);
   if (d == kGen) return onGenericReport(r);
   DevModel& m = model_[d];
@@ -717,6 +751,7 @@ void World::onReport(const FailsafeReport& r) {
       fail("I6", std::string(kNames[d]) + ": restart reported (" + r.reason +
                      ") though nothing changed its outputs without a confirmed command");
     m.justified = false;
+    m.cause_pending = false;
   }
   if (r.action == "restore") {
     // I5 (docs:85-89): what a restore writes, channel by channel.
@@ -861,6 +896,10 @@ bool World::step(const SimStep& s, size_t index) {
     const int d = arg(0) % kDevices;
     sim(d)->powerCycle(clock_.now());
     deviceDisturbed(d, true);
+    // It may restart saved PWM runs (LD58A08 power-down save) and it ended the timed commands
+    // the node expects: their ends may show as more changes. The docs do not say what the
+    // intent of an interrupted timed command is with on_restart: leave; nothing is checked.
+    model_[d].justified_until = std::max(model_[d].justified_until, clock_.now() + dur(8.0));
   } else if (k == "ld_save") {
     sim(kLd)->write(Table::kHoldingRegister, 0x00FA, {static_cast<uint16_t>(arg(0) != 0)},
                     clock_.now());
@@ -998,18 +1037,15 @@ void World::doCommandStep(const SimStep& s) {
       if (r.ok()) {
         for (size_t i = 0; i < chs.size(); ++i) {
           // An LD58A08 channel running a PWM acknowledges a coil write and goes on running
-          // (its manual); the share passes the device's answer on. The docs do not say what
-          // the intent is then: the run is the device's (docs:68), nothing is checked.
-          if (outd == kLd && simRegister(kLd, static_cast<uint16_t>(chs[i] * 0x10 + 2)) != 0) {
-            commandedTimed(outd, chs[i], std::nullopt, sts[i], -1);
-            continue;
-          }
-          checkCoils(outd, {chs[i]}, {sts[i]}, k);
+          // (its manual); the share passes the device's answer on: no I1. docs:68 says an
+          // output write replaces the run: the written level is the intent.
+          if (outd != kLd || simRegister(kLd, static_cast<uint16_t>(chs[i] * 0x10 + 2)) == 0)
+            checkCoils(outd, {chs[i]}, {sts[i]}, k);
           // docs:35: the coils a write names are taken as commanded at once.
           commanded(outd, chs[i], sts[i]);
         }
       } else if (answerLost(r.error)) {
-        for (uint8_t c : chs) unconfirmed(outd, c, 0, false);
+        for (uint8_t c : chs) unknownIntent(outd, c);
       }
     };
     pending_.push_back(share ? node_->share(op(k).id, req, done) : node_->raw(op(k).id, req, done));
@@ -1024,7 +1060,7 @@ void World::doCommandStep(const SimStep& s) {
         checkCoils(kLc, {ch}, {close}, k);
         commandedTimed(kLc, ch, close, !close, tenths / 10.0);
       } else if (answerLost(r.error)) {
-        unconfirmed(kLc, ch, tenths / 10.0 + 1.0, false);
+        unknownIntent(kLc, ch);
       }
     };
     pending_.push_back(k[0] == 's' ? node_->share(op(k).id, req, done)
@@ -1041,7 +1077,7 @@ void World::doCommandStep(const SimStep& s) {
         commandedTimed(kLd, c6, std::nullopt, false,
                        pulses == 0xFFFF ? -1.0 : pulses * period / 10.0);
       } else if (answerLost(r.error)) {
-        unconfirmed(kLd, c6, pulses == 0xFFFF ? 1.0 : pulses * period / 10.0 + 1.0, false);
+        unknownIntent(kLd, c6);
       }
     }));
   } else if (k == "share06_stop") {
@@ -1049,7 +1085,8 @@ void World::doCommandStep(const SimStep& s) {
     const Request req =
         Request::writeSingleRegister(kAddr[kLd], static_cast<uint16_t>(ch * 0x10 + 2), 0);
     pending_.push_back(node_->share(op(k).id, req, [this, ch](const Result& r) {
-      if (r.ok() || answerLost(r.error)) unconfirmed(kLd, ch, 0, r.ok());
+      if (r.ok()) unconfirmed(kLd, ch, 0, true);
+      if (answerLost(r.error)) unknownIntent(kLd, ch);
     }));
   } else if (k == "signal") {
     const size_t signal = static_cast<size_t>(arg(0) % 2);
@@ -1166,7 +1203,7 @@ SimRunResult FailsafeSimulation::run(const std::vector<SimStep>& steps,
                                      const std::set<std::string>& known, bool keep_history) const {
   SimRunResult out;
   std::deque<std::string> recent;
-  auto world = std::make_unique<World>(seed_, known, keep_history);
+  auto world = std::make_unique<World>(seed_, known, keep_history, trace_);
   world->setHistory(&recent);
   for (size_t i = 0; i < steps.size(); ++i) {
     if (keep_history) {
@@ -1174,8 +1211,9 @@ SimRunResult FailsafeSimulation::run(const std::vector<SimStep>& steps,
       if (recent.size() > 30) recent.pop_front();
     }
     ++out.steps;
-    if (getenv("SIMDBG"))
-      std::fprintf(stderr, "STEP %zu t=%.3f %s\n", i, world->simSeconds(), steps[i].text().c_str());
+    if (trace_)
+      std::fprintf(trace_, "step %zu t=%.3f: %s\n", i, world->simSeconds(),
+                   steps[i].text().c_str());
     if (!world->step(steps[i], i)) break;
   }
   out.digest = world->digest();
@@ -1235,6 +1273,7 @@ bool writeSimCase(const std::string& path, const SimCase& c, std::string* error)
     while (std::getline(note, line)) out << "# " << line << "\n";
   }
   out << "seed " << c.seed << "\n";
+  out << "status " << c.status << "\n";
   out << "invariant " << c.invariant << "\n";
   for (const SimStep& s : c.steps) out << s.text() << "\n";
   return static_cast<bool>(out);
@@ -1259,6 +1298,16 @@ bool readSimCase(const std::string& path, SimCase* c, std::string* error) {
     }
     if (line.rfind("invariant ", 0) == 0) {
       c->invariant = line.substr(10);
+      continue;
+    }
+    if (line.rfind("status ", 0) == 0) {
+      c->status = line.substr(7);
+      if (c->status != "fixed" && c->status != "known") {
+        if (error)
+          *error = path + ":" + std::to_string(n) + ": status: '" + c->status +
+                   "' is neither fixed nor known";
+        return false;
+      }
       continue;
     }
     std::string why;

@@ -23,7 +23,8 @@ namespace {
 void usage() {
   std::fprintf(stderr,
                "usage: failsafe_simulation [--seed S] [--seeds N | --seconds T] [--steps N]\n"
-               "         [--known I5,I6] [--cases DIR] [--junit FILE] [--replay FILE] [--quiet]\n");
+               "         [--known I5,I6] [--cases DIR] [--junit FILE] [--replay FILE [--trace]] "
+               "[--quiet]\n");
 }
 
 std::string xml(const std::string& s) {
@@ -65,6 +66,7 @@ int main(int argc, char** argv) {
   std::set<std::string> known;
   std::string cases, junit, replay;
   bool quiet = false;
+  bool trace = false;  // --replay: every step, frame and report on stderr
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](const char* name) -> std::string {
@@ -91,6 +93,8 @@ int main(int argc, char** argv) {
         replay = value("--replay");
       else if (a == "--quiet")
         quiet = true;
+      else if (a == "--trace")
+        trace = true;
       else if (a == "--known") {
         std::istringstream in(value("--known"));
         std::string id;
@@ -118,8 +122,9 @@ int main(int argc, char** argv) {
       return 2;
     }
     FailsafeSimulation sim(c.seed);
-    std::printf("replay %s: seed %llu, %zu steps, expected %s\n%s", replay.c_str(),
-                static_cast<unsigned long long>(c.seed), c.steps.size(),
+    if (trace) sim.trace(stderr);
+    std::printf("replay %s: seed %llu, %zu steps, %s %s\n%s", replay.c_str(),
+                static_cast<unsigned long long>(c.seed), c.steps.size(), c.status.c_str(),
                 c.invariant.empty() ? "none" : c.invariant.c_str(), sim.describe().c_str());
     const SimRunResult r = sim.run(c.steps, known);
     std::printf("digest %016llx, %llu frames, %.1f s simulated\n",
@@ -129,7 +134,11 @@ int main(int argc, char** argv) {
       printFailure(c.seed, *r.failure);
     else
       std::printf("no failure\n");
-    return r.failure ? 1 : 0;
+    // A known case must still fail with its invariant, a fixed one must pass.
+    const bool as_expected =
+        c.status == "fixed" ? !r.failure : r.failure && r.failure->invariant == c.invariant;
+    std::printf("%s case: %s\n", c.status.c_str(), as_expected ? "as expected" : "NOT as expected");
+    return as_expected ? 0 : 1;
   }
 
   if (seeds < 0 && seconds < 0) seeds = 1;

@@ -1,7 +1,6 @@
 #include "modbus_rtu_driver/simulation/memory_link.h"
 
 #include <cstdio>
-#include <cstdlib>
 
 namespace modbus_rtu_driver {
 
@@ -66,11 +65,11 @@ void MemoryLink::fold(bool outgoing, const Bytes& frame) {
   for (int i = 0; i < 8; ++i) mix(static_cast<uint8_t>(ns >> (8 * i)));
   for (uint8_t b : frame) mix(b);
   ++frames_;
-  if (history_size_ == 0) return;
+  if (history_size_ == 0 && !trace_) return;
   char when[32];
   std::snprintf(when, sizeof when, "t=%.3f ", static_cast<double>(ns) * 1e-9 - 3600.0);
   history_.push_back(std::string(when) + (outgoing ? "tx " : "rx ") + toHex(frame));
-  if (getenv("SIMDBG")) fprintf(stderr, "%s\n", history_.back().c_str());
+  if (trace_) std::fprintf(trace_, "%s\n", history_.back().c_str());
   while (history_.size() > history_size_) history_.pop_front();
 }
 

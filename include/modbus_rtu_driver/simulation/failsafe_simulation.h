@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <optional>
 #include <set>
 #include <string>
@@ -59,14 +60,20 @@ class FailsafeSimulation {
                    bool keep_history = true) const;
   // The shortest sequence found (steps left out while `invariant` still fails).
   std::vector<SimStep> shrink(std::vector<SimStep> steps, const std::string& invariant) const;
+  // Every step, frame and fail-safe report of run() to `out` as they come (nullptr: none).
+  void trace(std::FILE* out) { trace_ = out; }
 
  private:
   uint64_t seed_;
+  std::FILE* trace_ = nullptr;
 };
 
-// A regression case: the seed (the configuration), the steps, the invariant it failed.
+// A regression case: the seed (the configuration), the steps, the invariant it failed, and
+// whether the defect is fixed (the case must pass now) or a known open one (it must still fail
+// with that invariant: a fix makes it pass, and the case is then marked fixed).
 struct SimCase {
   uint64_t seed = 0;
+  std::string status = "known";  // fixed | known
   std::string invariant;
   std::string note;
   std::vector<SimStep> steps;

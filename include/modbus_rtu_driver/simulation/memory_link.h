@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <deque>
 #include <functional>
 #include <memory>
@@ -64,6 +65,8 @@ class MemoryLink : public Link {
   // The newest frames, oldest first: "t=12.345 tx 01 05 00 02 FF 00 ..".
   std::vector<std::string> history() const { return {history_.begin(), history_.end()}; }
   void keepHistory(size_t n) { history_size_ = n; }
+  // Every frame also to `out` as it goes (nullptr: not).
+  void trace(std::FILE* out) { trace_ = out; }
 
   // Transport
   bool connect(std::string* error) override;
@@ -93,6 +96,7 @@ class MemoryLink : public Link {
   uint64_t frames_ = 0;
   std::deque<std::string> history_;
   size_t history_size_ = 40;
+  std::FILE* trace_ = nullptr;
 };
 
 // What the bus runs its transactions through: numbers each transaction on the line (see
