@@ -5,6 +5,8 @@
 // every seed runs twice at first to show that its digest repeats. A failure prints the seed,
 // the step, the invariant, the last frames and steps, is shrunk, and is written to DIR as a
 // regression case. Exit 1 on a failure (invariants in --known are counted, not failed).
+#include <sys/stat.h>
+
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -63,7 +65,7 @@ int main(int argc, char** argv) {
   long seeds = -1;
   double seconds = -1;
   size_t steps = 2000;
-  std::set<std::string> known;
+  std::set<std::string> known = simKnownOpen();  // --known none: check them all
   std::string cases, junit, replay;
   bool quiet = false;
   bool trace = false;  // --replay: every step, frame and report on stderr
@@ -96,6 +98,7 @@ int main(int argc, char** argv) {
       else if (a == "--trace")
         trace = true;
       else if (a == "--known") {
+        known.clear();
         std::istringstream in(value("--known"));
         std::string id;
         while (std::getline(in, id, ','))
@@ -109,6 +112,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  if (!cases.empty()) mkdir(cases.c_str(), 0755);  // an existing one is fine
   if (steps < 1 || steps > 10000000) {
     std::fprintf(stderr, "--steps: %zu is outside 1-10000000\n", steps);
     return 2;
@@ -195,7 +199,7 @@ int main(int argc, char** argv) {
     failure_texts.push_back("seed " + std::to_string(s) + " step " +
                             std::to_string(r.failure->step) + " " + r.failure->invariant + ": " +
                             r.failure->message);
-    const std::vector<SimStep> shrunk = sim.shrink(plan, r.failure->invariant);
+    const std::vector<SimStep> shrunk = sim.shrink(plan, r.failure->invariant, known);
     std::printf("  shrunk to %zu steps:\n", shrunk.size());
     for (const SimStep& st : shrunk) std::printf("    %s\n", st.text().c_str());
     if (!cases.empty()) {

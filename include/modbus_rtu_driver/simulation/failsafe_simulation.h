@@ -58,8 +58,10 @@ class FailsafeSimulation {
   // failed invariant not in `known`.
   SimRunResult run(const std::vector<SimStep>& steps, const std::set<std::string>& known = {},
                    bool keep_history = true) const;
-  // The shortest sequence found (steps left out while `invariant` still fails).
-  std::vector<SimStep> shrink(std::vector<SimStep> steps, const std::string& invariant) const;
+  // The shortest sequence found (steps left out while `invariant` still fails first, the
+  // invariants in `known` counted as run() counts them).
+  std::vector<SimStep> shrink(std::vector<SimStep> steps, const std::string& invariant,
+                              const std::set<std::string>& known = {}) const;
   // Every step, frame and fail-safe report of run() to `out` as they come (nullptr: none).
   void trace(std::FILE* out) { trace_ = out; }
 
@@ -88,5 +90,9 @@ struct SimInvariant {
   const char* text;
 };
 const std::vector<SimInvariant>& simInvariants();
+// The invariants that fail on known open defects (test/data/simulation/*.case with
+// "status known", docs/simulation.md): the timed runs count them and go on. Empty it as they
+// are fixed.
+const std::set<std::string>& simKnownOpen();
 
 }  // namespace modbus_rtu_driver
