@@ -1287,6 +1287,12 @@ bool writeSimCase(const std::string& path, const SimCase& c, std::string* error)
   out << "seed " << c.seed << "\n";
   out << "status " << c.status << "\n";
   out << "invariant " << c.invariant << "\n";
+  if (!c.known.empty()) {
+    out << "known ";
+    for (auto it = c.known.begin(); it != c.known.end(); ++it)
+      out << (it == c.known.begin() ? "" : ",") << *it;
+    out << "\n";
+  }
   for (const SimStep& s : c.steps) out << s.text() << "\n";
   return static_cast<bool>(out);
 }
@@ -1310,6 +1316,13 @@ bool readSimCase(const std::string& path, SimCase* c, std::string* error) {
     }
     if (line.rfind("invariant ", 0) == 0) {
       c->invariant = line.substr(10);
+      continue;
+    }
+    if (line.rfind("known ", 0) == 0) {
+      std::istringstream ids(line.substr(6));
+      std::string id;
+      while (std::getline(ids, id, ','))
+        if (!id.empty()) c->known.insert(id);
       continue;
     }
     if (line.rfind("status ", 0) == 0) {

@@ -66,6 +66,7 @@ int main(int argc, char** argv) {
   double seconds = -1;
   size_t steps = 2000;
   std::set<std::string> known = simKnownOpen();  // --known none: check them all
+  bool known_given = false;
   std::string cases, junit, replay;
   bool quiet = false;
   bool trace = false;  // --replay: every step, frame and report on stderr
@@ -99,6 +100,7 @@ int main(int argc, char** argv) {
         trace = true;
       else if (a == "--known") {
         known.clear();
+        known_given = true;
         std::istringstream in(value("--known"));
         std::string id;
         while (std::getline(in, id, ','))
@@ -130,7 +132,8 @@ int main(int argc, char** argv) {
     std::printf("replay %s: seed %llu, %zu steps, %s %s\n%s", replay.c_str(),
                 static_cast<unsigned long long>(c.seed), c.steps.size(), c.status.c_str(),
                 c.invariant.empty() ? "none" : c.invariant.c_str(), sim.describe().c_str());
-    const SimRunResult r = sim.run(c.steps, known);
+    // As the gtest replays it: the case's own known list (unless --known says otherwise).
+    const SimRunResult r = sim.run(c.steps, known_given ? known : c.known);
     std::printf("digest %016llx, %llu frames, %.1f s simulated\n",
                 static_cast<unsigned long long>(r.digest),
                 static_cast<unsigned long long>(r.frames), r.sim_seconds);
@@ -206,6 +209,7 @@ int main(int argc, char** argv) {
       SimCase c;
       c.seed = s;
       c.invariant = r.failure->invariant;
+      c.known = known;
       c.note = r.failure->message + "\n" + sim.describe();
       c.steps = shrunk;
       const std::string path =

@@ -39,7 +39,7 @@ TEST(FailsafeSimulation, RegressionCasesReplayAsRecorded) {
     SimCase c;
     std::string error;
     ASSERT_TRUE(readSimCase(f, &c, &error)) << error;
-    const SimRunResult r = FailsafeSimulation(c.seed).run(c.steps);
+    const SimRunResult r = FailsafeSimulation(c.seed).run(c.steps, c.known);
     if (c.status == "fixed") {
       EXPECT_FALSE(r.failure) << f << ": fixed, but fails again: " << r.failure->invariant << " "
                               << r.failure->message;

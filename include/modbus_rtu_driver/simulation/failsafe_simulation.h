@@ -77,6 +77,9 @@ struct SimCase {
   uint64_t seed = 0;
   std::string status = "known";  // fixed | known
   std::string invariant;
+  // Invariants counted, not failed, while it was shrunk ("known I2,I5"): a replay counts them
+  // too, so that the same invariant fails first.
+  std::set<std::string> known;
   std::string note;
   std::vector<SimStep> steps;
 };
