@@ -174,6 +174,12 @@ Config drawConfig(uint64_t seed) {
     c.devices.push_back(dc);
   }
   c.ld_save = r.chance(30);
+  // The LD58A08's own heartbeat (docs:17, 32: that device only) in half the seeds; drawn last,
+  // so the draws above stay what they were.
+  if (r.chance(50)) {
+    c.devices[kLd].failsafe.heartbeat_topic = "pwm_alive";
+    c.devices[kLd].failsafe.heartbeat_timeout = r.pick({0.3, 1.0});
+  }
   return c;
 }
 
@@ -350,7 +356,11 @@ class World {
   bool alive_ = true;
   TP last_feed_{};
   bool lost_ = false;
-  TP next_tick_ = TP::max(), next_feed_ = TP::max();
+  // The LD58A08's own heartbeat and its controller.
+  bool dev_alive_ = true;
+  TP dev_last_feed_{};
+  bool dev_lost_ = false;
+  TP next_tick_ = TP::max(), next_feed_ = TP::max(), next_dev_feed_ = TP::max();
   uint64_t op_seq_ = 0;
   std::map<uint64_t, int> starts_by_transaction_;  // I7
   std::optional<SimFailure> failure_;
@@ -403,6 +413,14 @@ void World::runUntil(TP end, const std::function<bool()>& done) {
       }
       next_feed_ = now + dur(config_.heartbeat / 4);
     }
+    if (node_ && node_->started() && now >= next_dev_feed_) {
+      if (dev_alive_) {
+        node_->feedDeviceHeartbeat(kNames[kLd]);
+        dev_last_feed_ = now;
+        dev_lost_ = false;
+      }
+      next_dev_feed_ = now + dur(config_.devices[kLd].failsafe.heartbeat_timeout / 4);
+    }
     if (node_ && node_->started() && now >= next_tick_) {
       tick();
       next_tick_ = now + dur(node_->checkPeriod());
@@ -410,7 +428,7 @@ void World::runUntil(TP end, const std::function<bool()>& done) {
     if (now >= end) return;
     TP next = TP::max();
     if (node_ && node_->bus().step(&next)) continue;
-    const TP t = std::min({next, next_tick_, next_feed_, end});
+    const TP t = std::min({next, next_tick_, next_feed_, next_dev_feed_, end});
     if (t > now) clock_.advanceTo(t);
   }
 }
@@ -423,6 +441,13 @@ void World::tick() {
     for (int d = 0; d < kGen; ++d)
       for (int ch = 0; ch < kChannels; ++ch)
         if (hasSafe(d, ch)) hold(d, ch);
+  }
+  const FailsafeConfig& ld = config_.devices[kLd].failsafe;
+  if (!ld.heartbeat_topic.empty() && !dev_lost_ &&
+      now - dev_last_feed_ >= dur(ld.heartbeat_timeout)) {
+    dev_lost_ = true;  // docs:32: that device's own heartbeat: its channels only
+    for (int ch = 0; ch < kChannels; ++ch)
+      if (hasSafe(kLd, ch)) hold(kLd, ch);
   }
   for (int d = 0; d < kGen; ++d)
     for (int ch = 0; ch < kChannels; ++ch) {
@@ -508,9 +533,11 @@ void World::startNode() {
                        (simCoil(d, ch) ? "on" : "off") + " after on_start: safe");
   }
   node_->finishStart();
-  last_feed_ = clock_.now();
-  lost_ = false;
+  last_feed_ = dev_last_feed_ = clock_.now();
+  lost_ = dev_lost_ = false;
   next_feed_ = clock_.now() + dur(config_.heartbeat / 4);
+  if (!config_.devices[kLd].failsafe.heartbeat_topic.empty())
+    next_dev_feed_ = clock_.now() + dur(config_.devices[kLd].failsafe.heartbeat_timeout / 4);
   next_tick_ = node_->checkPeriod() > 0 ? clock_.now() + dur(node_->checkPeriod()) : TP::max();
 }
 
@@ -523,7 +550,7 @@ void World::stopNode() {
         model_[d].ch[ch].triggered = true;
         model_[d].ch[ch].trigger_at = began;
       }
-  next_tick_ = next_feed_ = TP::max();
+  next_tick_ = next_feed_ = next_dev_feed_ = TP::max();
   node_->beginStop();
   stopping_ = true;
   runUntil(began + dur(config_.shutdown_timeout), [this] { return node_->stopWritesDone(); });
@@ -546,7 +573,7 @@ void World::killNode() {
   node_.reset();  // queued jobs fail unsent: nothing reaches the line
   dying_ = false;
   pending_.clear();
-  next_tick_ = next_feed_ = TP::max();
+  next_tick_ = next_feed_ = next_dev_feed_ = TP::max();
 }
 
 // ---- the model's inputs ------------------------------------------------------------------------
@@ -892,6 +919,10 @@ bool World::step(const SimStep& s, size_t index) {
     alive_ = false;
   } else if (k == "hb_resume") {
     alive_ = true;
+  } else if (k == "dhb_stop") {
+    dev_alive_ = false;
+  } else if (k == "dhb_resume") {
+    dev_alive_ = true;
   } else if (k == "silent") {
     const int d = arg(0) % kDevices;
     link_.faults(kAddr[d]).silent = arg(1) != 0;
@@ -1124,11 +1155,12 @@ std::optional<SimStep> SimStep::parse(const std::string& line, std::string* erro
     return std::nullopt;
   }
   static const std::set<std::string> kinds = {
-      "wait",        "set",         "set2",         "command", "pulse",   "pwm",
-      "pwm_stop",    "share05",     "share15",      "raw05",   "raw15",   "share16_flash",
-      "raw16_flash", "share16_pwm", "share06_stop", "signal",  "hb_stop", "hb_resume",
-      "silent",      "lose",        "late",         "garble",  "power",   "ld_save",
-      "port_lost",   "port_back",   "stop",         "kill",    "start"};
+      "wait",        "set",         "set2",         "command",   "pulse",   "pwm",
+      "pwm_stop",    "share05",     "share15",      "raw05",     "raw15",   "share16_flash",
+      "raw16_flash", "share16_pwm", "share06_stop", "signal",    "hb_stop", "hb_resume",
+      "dhb_stop",    "dhb_resume",  "silent",       "lose",      "late",    "garble",
+      "power",       "ld_save",     "port_lost",    "port_back", "stop",    "kill",
+      "start"};
   if (!kinds.count(s.kind)) {
     if (error) *error = "unknown step '" + s.kind + "'";
     return std::nullopt;
@@ -1165,7 +1197,10 @@ std::string FailsafeSimulation::describe() const {
       if (d.failsafe.commandTimeoutOf(ch) > 0) o << "/" << d.failsafe.commandTimeoutOf(ch) << "s";
     }
     o << ", on_restart " << onRestartName(d.failsafe.on_restart) << ", on_start "
-      << (d.failsafe.on_start_safe ? "safe" : "keep") << "\n";
+      << (d.failsafe.on_start_safe ? "safe" : "keep");
+    if (!d.failsafe.heartbeat_topic.empty())
+      o << ", own heartbeat " << d.failsafe.heartbeat_timeout << " s";
+    o << "\n";
   }
   return o.str();
 }
@@ -1184,10 +1219,10 @@ std::vector<SimStep> FailsafeSimulation::generate(size_t n) const {
       {"pulse", 4},       {"pwm", 4},         {"pwm_stop", 2},     {"share05", 3},
       {"share15", 2},     {"raw05", 1},       {"raw15", 1},        {"share16_flash", 2},
       {"raw16_flash", 1}, {"share16_pwm", 2}, {"share06_stop", 1}, {"signal", 2},
-      {"hb_stop", 3},     {"hb_resume", 4},   {"silent", 3},       {"lose", 2},
-      {"late", 1},        {"garble", 2},      {"power", 2},        {"ld_save", 1},
-      {"port_lost", 1},   {"port_back", 2},   {"stop", 1},         {"kill", 1},
-      {"start", 3}};
+      {"hb_stop", 3},     {"hb_resume", 4},   {"dhb_stop", 2},     {"dhb_resume", 3},
+      {"silent", 3},      {"lose", 2},        {"late", 1},         {"garble", 2},
+      {"power", 2},       {"ld_save", 1},     {"port_lost", 1},    {"port_back", 2},
+      {"stop", 1},        {"kill", 1},        {"start", 3}};
   int total = 0;
   for (const Kind& k : kinds) total += k.weight;
   while (steps.size() < n) {
@@ -1200,8 +1235,9 @@ std::vector<SimStep> FailsafeSimulation::generate(size_t n) const {
       s.args = {r.pick({10, 50, 100, 300, 700, 1500})};
     } else if (s.kind == "silent") {
       s.args = {r.below(kDevices), r.chance(50) ? 1 : 0};
-    } else if (s.kind == "hb_stop" || s.kind == "hb_resume" || s.kind == "port_lost" ||
-               s.kind == "port_back" || s.kind == "stop" || s.kind == "kill" || s.kind == "start") {
+    } else if (s.kind == "hb_stop" || s.kind == "hb_resume" || s.kind == "dhb_stop" ||
+               s.kind == "dhb_resume" || s.kind == "port_lost" || s.kind == "port_back" ||
+               s.kind == "stop" || s.kind == "kill" || s.kind == "start") {
     } else {
       s.args = {r.below(kDevices), r.below(kChannels), r.below(16), r.below(64)};
     }

@@ -50,6 +50,11 @@ SimNode::SimNode(SimNodeOptions options, Transport& transport, Clock& clock, Sim
       e->failsafe->setReportSink([this](const FailsafeReport& r) {
         if (hooks_.report) hooks_.report(r);
       });
+      // BusNode::startFailsafe watches a device's own heartbeat too.
+      if (e->failsafe->heartbeat()) {
+        shortest = std::min(shortest, dc.failsafe.heartbeat_timeout);
+        deadlines = true;
+      }
       for (double s : dc.failsafe.command_timeout) {
         if (s <= 0) continue;
         shortest = std::min(shortest, s);
@@ -141,6 +146,8 @@ void SimNode::finishStart() {
   start_writes_.clear();
   // The heartbeats count from here (BusNode::start).
   if (heartbeat_) heartbeat_->feed();
+  for (auto& e : entries_)
+    if (e->failsafe && e->failsafe->heartbeat()) e->failsafe->heartbeat()->feed();
   for (auto& up : entries_) {
     Entry* e = up.get();
     auto device = e->device;
@@ -212,6 +219,11 @@ void SimNode::checkDeadlines() {
 
 void SimNode::feedHeartbeat() {
   if (heartbeat_) heartbeat_->feed();
+}
+
+void SimNode::feedDeviceHeartbeat(const std::string& device) {
+  Entry* e = entry(device);
+  if (e && e->failsafe && e->failsafe->heartbeat()) e->failsafe->heartbeat()->feed();
 }
 
 std::future<Result> SimNode::runOp(uint64_t op, const std::string& device, Done done,

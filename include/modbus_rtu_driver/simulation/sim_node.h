@@ -69,8 +69,9 @@ class SimNode {
   BusScheduler& bus() { return *bus_; }
   // The deadline timer's period (a tenth of the shortest timeout, at most 0.5 s; 0: no timer).
   double checkPeriod() const { return check_period_; }
-  void checkDeadlines();  // BusNode::checkDeadlines
-  void feedHeartbeat();   // a message on the heartbeat topic
+  void checkDeadlines();                                // BusNode::checkDeadlines
+  void feedHeartbeat();                                 // a message on the heartbeat topic
+  void feedDeviceHeartbeat(const std::string& device);  // on a device's own heartbeat topic
   bool heartbeatLost() const { return heartbeat_ && heartbeat_->tripped(); }
 
   // The operation whose bus job runs now (0: none, i.e. the fail-safe's own or a poll).
