@@ -59,6 +59,9 @@ const std::vector<SimInvariant>& simInvariants() {
        "on_start: safe: the safe states are on every answering device before commands are taken"},
       {"I10", "docs/failsafe.md:31,99-100",
        "node stop: the safe states are on every answering device when the stop's writes end"},
+      {"I11", "docs/failsafe.md:4-5,31-32,34",
+       "a write of safe states (a trigger's, on_restart: safe, an owed one) writes only channels "
+       "whose safe state is not hold: a channel nobody asked to write is not written"},
   };
   return list;
 }
@@ -788,6 +791,13 @@ void World::onReport(const FailsafeReport& r) {
                      ") though nothing changed its outputs without a confirmed command");
     m.justified = false;
     m.cause_pending = false;
+  }
+  if (r.action == "safe") {
+    // I11 (docs:4-5): "Nothing changes unless it is configured: the default safe state is hold".
+    for (size_t i = 0; i < chs.size(); ++i)
+      if (!hasSafe(d, chs[i]))
+        fail("I11", std::string(kNames[d]) + " out" + std::to_string(chs[i]) +
+                        " (safe state hold) is written by a safe write (" + r.trigger + ")");
   }
   if (r.action == "restore") {
     // I5 (docs:85-89): what a restore writes, channel by channel.
