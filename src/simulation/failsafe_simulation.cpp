@@ -67,7 +67,8 @@ const std::vector<SimInvariant>& simInvariants() {
 }
 
 const std::set<std::string>& simKnownOpen() {
-  // I2: held_channel_after_power_cycle_leave; I3: share_register_write_then_power_cycle;
+  // I2: held_channel_after_power_cycle_leave, held_channel_uncarried_pwm_run,
+  // held_channel_unconfirmed_command; I3: share_register_write_then_power_cycle;
   // I4: unconfirmed_flash_final_level_restored; I5: found_pwm_run_restored;
   // I6: share_coil_write_on_pwm_channel, killed_node_ld_burst; I7: raw_fc16_sent_twice (issue
   // #32 item 13).
@@ -897,7 +898,7 @@ void World::checkHeld() {
   if (!node_ || !node_->started() || port_lost_) return;
   const TP now = clock_.now();
   const double budget =
-      node_->checkPeriod() + 2 * worstTransaction() + kDevices * 6 * normalTransaction();
+      node_->checkPeriod() + worstTransaction() + kDevices * 6 * normalTransaction();
   for (int d = 0; d < kGen; ++d) {
     const DevModel& m = model_[d];
     const MemoryLinkFaults& f = link_.faults(kAddr[d]);
@@ -910,7 +911,8 @@ void World::checkHeld() {
         fail("I2", std::string(kNames[d]) + " out" + std::to_string(ch) + " is held safe (" +
                        safeStateName(safeOf(d, ch)) +
                        ") since t=" + std::to_string(secs(c.held_since - start_)) +
-                       " but the device, answering since t=" +
+                       " (on_restart: " + onRestartName(onRestart(d)) +
+                       ") but the device, answering since t=" +
                        std::to_string(secs(m.reachable_since - start_)) + ", shows it " +
                        (simCoil(d, ch) ? "on" : "off"));
     }
