@@ -18,7 +18,8 @@
 #   core (ROS-free; five libraries, one per folder of src/core: see below)
 #   <- devices (one class per device type) <- failsafe (channel intents) <- config (the bus
 #   node's YAML)
-#   <- ros (adapters, node).   sim and tools sit on core (tools also on devices).
+#   <- ros (adapters, node).   sim and tools sit on core (tools also on devices); simulation
+#   (the fail-safe's deterministic simulation) on failsafe and sim.
 # The repository's root, without "cmake/..": the include path then reads as before (catkin_lint
 # reads the set(), the build the normalised path).
 set(MODBUS_RTU_DIR ${CMAKE_CURRENT_LIST_DIR}/..)
@@ -87,6 +88,14 @@ layer_sources(sim_sources sim)
 add_library(modbus_rtu_sim ${MODBUS_RTU_LIBRARY_TYPE} ${sim_sources})
 target_link_libraries(modbus_rtu_sim PUBLIC modbus_rtu_core yaml-cpp Threads::Threads)
 layer(modbus_rtu_sim)
+
+# The fail-safe's deterministic simulation (ROS-free): the node's real parts (devices, fail-safe,
+# bus scheduler in step mode) against the simulator's device models in one process, on a manual
+# clock; its main (failsafe_simulation_main.cpp) is the includer's.
+layer_sources(simulation_sources simulation)
+add_library(modbus_rtu_simulation ${MODBUS_RTU_LIBRARY_TYPE} ${simulation_sources})
+target_link_libraries(modbus_rtu_simulation PUBLIC modbus_rtu_failsafe modbus_rtu_sim)
+layer(modbus_rtu_simulation)
 
 # Commissioning tool (ROS-free): a library the unit tests use (its main is the includer's).
 layer_sources(tools_sources tools)

@@ -254,7 +254,9 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
     const Expectation e = expectedLocked(static_cast<uint8_t>(ch), now);
     if (e.kind == Expectation::Kind::kAny) continue;
     if (e.kind == Expectation::Kind::kEither) {
-      if (outputs[ch] == e.level) in->ends.reset();  // the timed command ended: settled
+      // The final level near the end: the timed command ended (settled). Not for a run the
+      // device toggles (a burst): its off phase shows the final level before the end too.
+      if (outputs[ch] == e.level && (in->during || now >= *in->ends)) in->ends.reset();
       continue;
     }
     if (in->ends && now > *in->ends) in->ends.reset();  // ended and shown: a steady level now

@@ -214,8 +214,11 @@ void DeviceFailsafe::timedCommandDone(const TimedIntent& intent, const Result& r
     timedMaybeChanged();
     return;
   }
-  // Not confirmed: it may run or not. Either level may show until its end, then its final one
-  // is what a poll finds (it is not taken as commanded: the caller was told it failed).
+  // Refused, or never sent (port not open): nothing started, the intent stays. The port
+  // dropped mid-frame (kIo) or the answer was lost: it may run or not. Either level may show
+  // until its end, then its final one is what a poll finds (it is not taken as commanded: the
+  // caller was told it failed).
+  if (!answerLost(result.error) && result.error != ErrorKind::kIo) return;
   TimedIntent unsure = intent;
   unsure.during.reset();
   intents_.timed(unsure, CommandSource::kFound);

@@ -27,7 +27,10 @@ uint16_t toRegister(double v, double scale) {
 }  // namespace
 
 SimYespeedPdu::SimYespeedPdu(uint8_t address, SimLineSettings line)
-    : SimDevice(address, line), born_(SimClock::now()), noise_(address) {
+    : SimYespeedPdu(address, line, SimClock::now()) {}
+
+SimYespeedPdu::SimYespeedPdu(uint8_t address, SimLineSettings line, SimClock::time_point born)
+    : SimDevice(address, line), born_(born), noise_(address) {
   measure(born_);
 }
 

@@ -21,6 +21,9 @@ namespace modbus_rtu_driver {
 class SimYespeedPdu : public SimDevice {
  public:
   SimYespeedPdu(uint8_t address, SimLineSettings line);
+  // `born`: where its telemetry's slow waves start (the default: now). A simulation on a manual
+  // clock gives its own start, so that the same run reads the same values.
+  SimYespeedPdu(uint8_t address, SimLineSettings line, SimClock::time_point born);
   const char* type() const override { return kYespeedPduType.name; }
   void tick(SimClock::time_point now) override;
   void powerCycle(SimClock::time_point now) override;

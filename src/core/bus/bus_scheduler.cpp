@@ -30,6 +30,8 @@ void BusScheduler::start() {
   if (running_) return;
   running_ = true;
   finished_ = false;
+  next_connect_ = clock_.now();
+  reconnect_delay_ = options_.reconnect_initial;
   thread_ = std::thread(&BusScheduler::run, this);
 }
 
@@ -261,92 +263,112 @@ void BusScheduler::run() {
   // Named, so top -H, perf and the benchmark tell the bus thread's CPU from ROS's threads.
   pthread_setname_np(pthread_self(), "modbus_bus");
   if (options_.on_thread_start) options_.on_thread_start();
-  double reconnect_delay = options_.reconnect_initial;
-  auto next_connect = clock_.now();
   std::unique_lock<std::mutex> lock(mutex_);
   while (running_) {
-    auto now = clock_.now();
-    if (!transport_.connected()) {
-      if (connected_ && !port_lost_at_) port_lost_at_ = now;  // it dropped while open
-      if (now >= next_connect) {
-        lock.unlock();
-        std::string error;
-        const bool ok = transport_.connect(&error);
-        lock.lock();
-        // Never retry faster than the initial delay, even if a transport misreports itself.
-        next_connect = clock_.now() + seconds(options_.reconnect_initial);
-        connected_ = ok;
-        connection_error_ = ok ? "" : error;
-        if (ok) {
-          reconnect_delay = options_.reconnect_initial;
-          if (port_lost_at_) {  // for the node's "port open again after ..."
-            ++reopens_.count;
-            reopens_.last_outage_seconds =
-                std::chrono::duration<double>(clock_.now() - *port_lost_at_).count();
-            port_lost_at_.reset();
-          }
-          continue;
-        }
-        if (!port_lost_at_) port_lost_at_ = now;
-        next_connect = clock_.now() + seconds(reconnect_delay);
-        reconnect_delay = std::min(options_.reconnect_max, reconnect_delay * 2);
-      }
-      // Nobody waits for a bus that is not there: queued writes fail now, and what they took
-      // from shared queues fails with them (never sent later).
-      refuseQueued(lock, "port not open: " + connection_error_);
-      if (!running_) break;  // the lock was free while jobs ran: stop() may have come then
-      clock_.waitUntil(lock, wake_, next_connect);
-      continue;
-    }
-    connected_ = true;
-
-    if (runOneQueued(lock)) continue;  // writes, then shared requests, go ahead of polls
-
-    // The poll due first; an offline device waits out its backoff.
-    Poll* next = nullptr;
-    Clock::time_point when{};
-    for (Poll& p : polls_) {
-      // A late device claims at most one period of priority: it catches up after a stall
-      // without starving the others, and a rate the bus cannot carry only takes what is left.
-      auto t = std::max(p.due, now - p.period);
-      auto b = backoff_until_.find(p.device);
-      if (b != backoff_until_.end() && health_[p.device].online == false)
-        t = std::max(t, b->second);
-      // Ties (devices late on a bus that cannot carry their rates) go to the one served least
-      // recently, so an overloaded bus is shared in turn rather than by list order or by who
-      // was reset last.
-      if (!next || t < when || (t == when && p.last_run < next->last_run)) {
-        next = &p;
-        when = t;
-      }
-    }
-    if (!next) {
-      clock_.waitUntil(lock, wake_, Clock::time_point::max());
-      continue;
-    }
-    if (when > now) {
-      clock_.waitUntil(lock, wake_, when);
-      continue;
-    }
-    lock.unlock();
-    Result r = next->job(poll_transport_);
-    if (next->on_result) next->on_result(r);
-    lock.lock();
-    record(next->device, r, Kind::kPoll);
-    if (r.error == ErrorKind::kIo) transport_.disconnect();
-    // Keep the schedule, so a poll delayed by a slow transaction (an offline device's probe)
-    // is caught up and the average rate holds. Lagging more than 1 s means the bus cannot carry
-    // the rate: say so; past 3 s give up catching up.
-    now = clock_.now();
-    next->last_run = now;
-    next->due += next->period;
-    DeviceHealth& h = health_[next->device];
-    const auto lag = now - next->due;
-    h.rate_overrun = h.online && lag > std::chrono::seconds(1);
-    if (lag > std::chrono::seconds(3)) next->due = now;
+    Clock::time_point wait{};
+    if (stepLocked(lock, &wait)) continue;
+    if (!running_) break;  // the lock was free while jobs ran: stop() may have come then
+    clock_.waitUntil(lock, wake_, wait);
   }
   finished_ = true;
   finished_cv_.notify_all();
+}
+
+void BusScheduler::startStepping() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  running_ = true;
+  finished_ = true;  // no thread: stopBy() has nothing to wait for
+  next_connect_ = clock_.now();
+  reconnect_delay_ = options_.reconnect_initial;
+}
+
+bool BusScheduler::step(Clock::time_point* next) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  Clock::time_point wait = Clock::time_point::max();
+  const bool ran = running_ && stepLocked(lock, &wait);
+  if (next) *next = running_ ? wait : Clock::time_point::max();
+  return ran;
+}
+
+bool BusScheduler::stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_point* wait) {
+  auto now = clock_.now();
+  if (!transport_.connected()) {
+    if (connected_ && !port_lost_at_) port_lost_at_ = now;  // it dropped while open
+    if (now >= next_connect_) {
+      lock.unlock();
+      std::string error;
+      const bool ok = transport_.connect(&error);
+      lock.lock();
+      // Never retry faster than the initial delay, even if a transport misreports itself.
+      next_connect_ = clock_.now() + seconds(options_.reconnect_initial);
+      connected_ = ok;
+      connection_error_ = ok ? "" : error;
+      if (ok) {
+        reconnect_delay_ = options_.reconnect_initial;
+        if (port_lost_at_) {  // for the node's "port open again after ..."
+          ++reopens_.count;
+          reopens_.last_outage_seconds =
+              std::chrono::duration<double>(clock_.now() - *port_lost_at_).count();
+          port_lost_at_.reset();
+        }
+        return true;
+      }
+      if (!port_lost_at_) port_lost_at_ = now;
+      next_connect_ = clock_.now() + seconds(reconnect_delay_);
+      reconnect_delay_ = std::min(options_.reconnect_max, reconnect_delay_ * 2);
+    }
+    // Nobody waits for a bus that is not there: queued writes fail now, and what they took
+    // from shared queues fails with them (never sent later).
+    refuseQueued(lock, "port not open: " + connection_error_);
+    *wait = next_connect_;
+    return false;
+  }
+  connected_ = true;
+
+  if (runOneQueued(lock)) return true;  // writes, then shared requests, go ahead of polls
+
+  // The poll due first; an offline device waits out its backoff.
+  Poll* next = nullptr;
+  Clock::time_point when{};
+  for (Poll& p : polls_) {
+    // A late device claims at most one period of priority: it catches up after a stall
+    // without starving the others, and a rate the bus cannot carry only takes what is left.
+    auto t = std::max(p.due, now - p.period);
+    auto b = backoff_until_.find(p.device);
+    if (b != backoff_until_.end() && health_[p.device].online == false) t = std::max(t, b->second);
+    // Ties (devices late on a bus that cannot carry their rates) go to the one served least
+    // recently, so an overloaded bus is shared in turn rather than by list order or by who
+    // was reset last.
+    if (!next || t < when || (t == when && p.last_run < next->last_run)) {
+      next = &p;
+      when = t;
+    }
+  }
+  if (!next) {
+    *wait = Clock::time_point::max();
+    return false;
+  }
+  if (when > now) {
+    *wait = when;
+    return false;
+  }
+  lock.unlock();
+  Result r = next->job(poll_transport_);
+  if (next->on_result) next->on_result(r);
+  lock.lock();
+  record(next->device, r, Kind::kPoll);
+  if (r.error == ErrorKind::kIo) transport_.disconnect();
+  // Keep the schedule, so a poll delayed by a slow transaction (an offline device's probe)
+  // is caught up and the average rate holds. Lagging more than 1 s means the bus cannot carry
+  // the rate: say so; past 3 s give up catching up.
+  now = clock_.now();
+  next->last_run = now;
+  next->due += next->period;
+  DeviceHealth& h = health_[next->device];
+  const auto lag = now - next->due;
+  h.rate_overrun = h.online && lag > std::chrono::seconds(1);
+  if (lag > std::chrono::seconds(3)) next->due = now;
+  return true;
 }
 
 }  // namespace modbus_rtu_driver

@@ -65,6 +65,15 @@ class BusScheduler {
   ~BusScheduler();  // stops the thread; pending jobs fail with "bus stopped"
 
   void start();
+  // Step mode, for a deterministic simulation: the scheduler takes jobs as after start(), but
+  // runs no thread; the caller runs the bus with step(), one unit of work at a time, on its own
+  // thread. stop() ends it as it ends the thread.
+  void startStepping();
+  // Runs the one thing the bus thread would run now (an attempt to open the port, the oldest
+  // queued job, or the poll due first) and returns true; or returns false with `next` set to
+  // when something falls due (time_point::max(): nothing until a job is queued). Without a
+  // port, queued jobs are refused as the thread refuses them.
+  bool step(Clock::time_point* next);
   void stop();
   // stop(), but waits for the job in progress (a transaction to a silent device may take
   // response_timeout x (retries + 1)) only until `deadline` (real time). False when the thread
@@ -139,6 +148,9 @@ class BusScheduler {
   };
 
   void run();
+  // One pass of the bus thread's loop (`lock` held on entry and on return): true when it ran
+  // something, else false with `wait` = when to look again.
+  bool stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_point* wait);
   // Runs the oldest write, else the oldest shared request; `lock` held on entry and on return.
   bool runOneQueued(std::unique_lock<std::mutex>& lock);
   // Runs every queued job against a ClosedTransport saying `reason`; `lock` held on entry/exit.
@@ -166,7 +178,10 @@ class BusScheduler {
   std::string shared_closed_reason_;
   bool connected_ = false;
   std::string connection_error_;
-  std::optional<Clock::time_point> port_lost_at_;  // set while the port is lost (or never opened)
+  std::optional<Clock::time_point> port_lost_at_;
+  Clock::time_point next_connect_{};  // the next attempt to open the port
+  double reconnect_delay_ =
+      0;  // s, doubling up to reconnect_max  // set while the port is lost (or never opened)
   PortReopens reopens_;
   std::map<std::string, Clock::time_point> offline_since_;
   std::thread thread_;

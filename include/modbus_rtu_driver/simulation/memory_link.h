@@ -1,0 +1,119 @@
+// The deterministic simulation's line (ROS-free): a real Link (its retry rule, its encoding and
+// its reply checks) whose medium is the simulator's device models in the same process. Every
+// frame goes to the models byte for byte and their reply comes back byte for byte; time is a
+// ManualClock that each frame moves on by its time on the wire (or by the response timeout when
+// nothing answers), so the same calls give the same frames at the same times. Faults are set per
+// device: silent, replies lost, late (after the timeout) or garbled; and the port can be lost.
+// Every frame is folded into a digest (FNV-1a) and kept in a short history for failure reports.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "modbus_rtu_driver/core/bus/clock.h"
+#include "modbus_rtu_driver/core/link/link.h"
+#include "modbus_rtu_driver/sim/sim_device.h"
+
+namespace modbus_rtu_driver {
+
+struct MemoryLinkFaults {
+  bool silent = false;  // hears nothing, answers nothing
+  int lost = 0;         // the next N replies are lost (the device acted)
+  int late = 0;         // the next N replies come after the response timeout (acted)
+  int garbled = 0;      // the next N replies arrive with a bad CRC (acted)
+};
+
+// What one attempt did, for the invariants: the request as the device decoded it, whether the
+// device heard it (and so acted on a write) and whether its normal reply reached the node.
+struct LineEvent {
+  Request request;
+  bool heard = false;
+  bool answered = false;  // a reply the node could decode (a normal one or an exception)
+  uint64_t execute_id = 0;
+  Clock::time_point at{};
+};
+
+class MemoryLink : public Link {
+ public:
+  MemoryLink(LinkConfig config, ManualClock& clock);
+
+  void addDevice(std::unique_ptr<SimDevice> device);
+  SimDevice* device(uint8_t address);
+  MemoryLinkFaults& faults(uint8_t address) { return faults_[address]; }
+  void clearFaults();
+
+  // The port: lost (every attempt fails with an i/o error, connect fails) or back.
+  void setPortLost(bool lost);
+  bool portLost() const { return port_lost_; }
+
+  // Called after each attempt the line carried (not for a closed port).
+  void onAttempt(std::function<void(const LineEvent&)> observer) {
+    observer_ = std::move(observer);
+  }
+  // Transport::execute of the caller (one transaction, its retries included); the simulation
+  // numbers them so that a frame sent twice for one transaction can be told apart from the same
+  // command given twice.
+  void beginTransaction() { ++execute_id_; }
+
+  uint64_t digest() const { return digest_; }
+  uint64_t frames() const { return frames_; }
+  // The newest frames, oldest first: "t=12.345 tx 01 05 00 02 FF 00 ..".
+  std::vector<std::string> history() const { return {history_.begin(), history_.end()}; }
+  void keepHistory(size_t n) { history_size_ = n; }
+  // Every frame also to `out` as it goes (nullptr: not).
+  void trace(std::FILE* out) { trace_ = out; }
+
+  // Transport
+  bool connect(std::string* error) override;
+  bool connected() const override { return connected_; }
+  void disconnect() override { connected_ = false; }
+  void awaitLineFree() override {}
+  PortKind kind() const override { return PortKind::kSerial; }
+
+ protected:
+  Result attempt(const EncodedRequest& request) override;
+  Result sendBroadcast(const EncodedRequest& request) override;
+  double minGap() const override { return 0.0; }
+
+ private:
+  void fold(bool outgoing, const Bytes& frame);
+  void wire(size_t bytes);  // moves time on by `bytes` characters plus the gap after them
+
+  ManualClock& clock_;
+  std::vector<std::unique_ptr<SimDevice>> devices_;
+  MemoryLinkFaults faults_[256];
+  bool port_lost_ = false;
+  bool connected_ = false;
+  double char_time_;
+  std::function<void(const LineEvent&)> observer_;
+  uint64_t execute_id_ = 0;
+  uint64_t digest_ = 1469598103934665603ull;
+  uint64_t frames_ = 0;
+  std::deque<std::string> history_;
+  size_t history_size_ = 40;
+  std::FILE* trace_ = nullptr;
+};
+
+// What the bus runs its transactions through: numbers each transaction on the line (see
+// MemoryLink::beginTransaction), then lets the link run it.
+class CountingTransport : public Transport {
+ public:
+  explicit CountingTransport(MemoryLink& link) : link_(link) {}
+  Result execute(const Request& request) override {
+    link_.beginTransaction();
+    return link_.execute(request);
+  }
+  bool connect(std::string* error) override { return link_.connect(error); }
+  bool connected() const override { return link_.connected(); }
+  void disconnect() override { link_.disconnect(); }
+
+ private:
+  MemoryLink& link_;
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,1401 @@
+#include "modbus_rtu_driver/simulation/failsafe_simulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include "modbus_rtu_driver/core/bus/clock.h"
+#include "modbus_rtu_driver/devices/generic_device.h"
+#include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/sim/sim_generic.h"
+#include "modbus_rtu_driver/sim/sim_lc_relay8.h"
+#include "modbus_rtu_driver/sim/sim_ld58a08.h"
+#include "modbus_rtu_driver/sim/sim_yespeed_pdu.h"
+#include "modbus_rtu_driver/simulation/memory_link.h"
+#include "modbus_rtu_driver/simulation/sim_node.h"
+
+namespace modbus_rtu_driver {
+
+// ---------------------------------------------------------------------------------------------
+// The invariants. Each stands on a line of docs/failsafe.md (the spec); the model below is
+// written from those lines, not from the code. Where the docs are silent the model checks
+// nothing (docs/simulation.md lists those questions).
+const std::vector<SimInvariant>& simInvariants() {
+  static const std::vector<SimInvariant> list = {
+      {"I1", "docs/failsafe.md:35,59; README (writes are confirmed)",
+       "a command reported as done (service, topic, pulse, PWM, share, raw write) is on the "
+       "device when its answer comes"},
+      {"I2", "docs/failsafe.md:32-33,76,173-175",
+       "a channel held safe (heartbeat lost, command timeout) shows its safe state on a device "
+       "that answers, within the timeout's tenth plus the bus transactions before it"},
+      {"I3", "docs/failsafe.md:34,76-80,85",
+       "a fail-safe write (restore, safe states, owed writes) never writes a held channel other "
+       "than safe"},
+      {"I4", "docs/failsafe.md:34,37,59-65,77-78,81-84,90-92",
+       "a fail-safe write changes a channel from its intent (the newest confirmed command, or "
+       "the found state) only for a reason: a trigger since, or a restart of the device since "
+       "(on_restart: safe writes safe, restore the timed command's final level)"},
+      {"I5", "docs/failsafe.md:34,62-63,85-89",
+       "a restore writes, channel by channel, the safe state of a held or owed channel, else a "
+       "timed command's final level, else the intent's level (found states included); never a "
+       "continuous PWM channel; and every channel whose intent is known"},
+      {"I6", "docs/failsafe.md:34-35,66-74,169-172",
+       "a restart 'outputs changed with no command in between' is reported only after "
+       "something did change them without the node's confirmed command (a power cycle, a "
+       "write whose reply was lost, a flash of a killed node)"},
+      {"I7", "README (writes that start something are never sent twice)",
+       "a frame that starts something (a flash, a PWM run) reaches the device at most once per "
+       "transaction"},
+      {"I8", "docs/failsafe.md:140-146",
+       "generic device: a safe value the device refuses does not stop the others, and is not "
+       "retried while the device answers"},
+      {"I9", "docs/failsafe.md:36",
+       "on_start: safe: the safe states are on every answering device before commands are taken"},
+      {"I10", "docs/failsafe.md:31,99-100",
+       "node stop: the safe states are on every answering device when the stop's writes end"},
+      {"I11", "docs/failsafe.md:4-5,31-32,34",
+       "a write of safe states (a trigger's, on_restart: safe, an owed one) writes only channels "
+       "whose safe state is not hold: a channel nobody asked to write is not written"},
+  };
+  return list;
+}
+
+const std::set<std::string>& simKnownOpen() {
+  // I2: held_channel_after_power_cycle_leave, held_channel_uncarried_pwm_run,
+  // held_channel_unconfirmed_command; I3: share_register_write_then_power_cycle;
+  // I4: unconfirmed_flash_final_level_restored; I5: found_pwm_run_restored;
+  // I6: share_coil_write_on_pwm_channel, killed_node_ld_burst; I7: raw_fc16_sent_twice (issue
+  // #32 item 13).
+  static const std::set<std::string> known = {"I2", "I3", "I4", "I5", "I6", "I7"};
+  return known;
+}
+
+namespace {
+
+using TP = Clock::time_point;
+Clock::duration dur(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+double secs(Clock::duration d) {
+  return std::chrono::duration<double>(d).count();
+}
+
+struct Rng {
+  uint64_t s;
+  uint64_t next() {  // splitmix64: the same numbers on every platform
+    uint64_t z = (s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  int below(int n) { return static_cast<int>(next() % static_cast<uint64_t>(n)); }
+  bool chance(int percent) { return below(100) < percent; }
+  template <typename T>
+  T pick(std::initializer_list<T> items) {
+    return *(items.begin() + below(static_cast<int>(items.size())));
+  }
+};
+
+enum Dev { kLc = 0, kLd = 1, kPdu = 2, kGen = 3, kDevices = 4 };
+const char* const kNames[kDevices] = {"relays", "pwm", "pdu", "drive"};
+const uint8_t kAddr[kDevices] = {1, 2, 3, 4};
+constexpr int kChannels = 8;
+
+// ---------------------------------------------------------------------------------------------
+// The configuration a seed draws.
+struct Config {
+  LinkConfig link;
+  double heartbeat = 0.5;
+  double shutdown_timeout = 3.0;
+  std::vector<DeviceConfig> devices;
+  bool generic_refuses = false;  // one safe value lands in a hole of the device's map
+  bool ld_save = false;          // the LD58A08's power-down save at the start
+};
+
+Config drawConfig(uint64_t seed) {
+  Rng r{seed ^ 0xC0FFEEull};
+  Config c;
+  c.link.port = "memory";
+  c.link.baud = r.pick({9600, 19200});
+  c.link.response_timeout = r.pick({0.05, 0.1, 0.2});
+  c.link.retries = r.pick({0, 1, 2});
+  c.link.late_reply_guard = 0;
+  c.heartbeat = r.pick({0.3, 0.5, 1.0});
+  const char* types[kDevices] = {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"};
+  for (int d = 0; d < kDevices; ++d) {
+    DeviceConfig dc;
+    dc.name = kNames[d];
+    dc.type = types[d];
+    dc.address = kAddr[d];
+    dc.poll_rate = r.pick({2.0, 5.0, 10.0});
+    FailsafeConfig& fs = dc.failsafe;
+    fs.on_start_safe = r.chance(50);
+    if (d != kGen) {
+      fs.on_restart = r.pick({OnRestart::kRestore, OnRestart::kSafe, OnRestart::kLeave});
+      fs.safe_state.resize(kChannels);
+      fs.command_timeout.assign(kChannels, 0.0);
+      for (int ch = 0; ch < kChannels; ++ch) {
+        const int k = r.below(10);
+        fs.safe_state[ch] = k < 4 ? SafeState::kHold : k < 8 ? SafeState::kOff : SafeState::kOn;
+        if (fs.safe_state[ch] != SafeState::kHold && r.chance(30))
+          fs.command_timeout[ch] = r.pick({0.3, 1.0, 2.0});
+      }
+    } else {
+      SignalConfig run;
+      run.name = "run";
+      run.table = Table::kCoil;
+      run.address = 0;
+      run.type = SignalType::kBool;
+      run.writable = true;
+      run.safe_value = r.chance(70) ? 0.0 : 1.0;
+      SignalConfig speed;
+      speed.name = "speed";
+      speed.table = Table::kHoldingRegister;
+      speed.address = 0x10;
+      speed.type = SignalType::kInt16;
+      speed.scale = 0.1;
+      speed.unit = "Hz";
+      speed.writable = true;
+      speed.min = 0.0;
+      speed.max = 50.0;
+      speed.safe_value = r.pick({0.0, 10.0, 25.0});
+      SignalConfig mode;
+      mode.name = "mode";
+      mode.table = Table::kHoldingRegister;
+      mode.address = 0x20;
+      mode.type = SignalType::kUint16;
+      mode.writable = true;
+      mode.safe_value = 3.0;
+      dc.generic.signals = {run, speed, mode};
+      c.generic_refuses = r.chance(50);
+    }
+    c.devices.push_back(dc);
+  }
+  c.ld_save = r.chance(30);
+  // The LD58A08's own heartbeat (docs:17, 32: that device only) in half the seeds; drawn last,
+  // so the draws above stay what they were.
+  if (r.chance(50)) {
+    c.devices[kLd].failsafe.heartbeat_topic = "pwm_alive";
+    c.devices[kLd].failsafe.heartbeat_timeout = r.pick({0.3, 1.0});
+  }
+  return c;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The model of docs/failsafe.md, per output channel.
+struct Chan {
+  bool known = false;    // the intent is known (docs:59-65); unknown after an unconfirmed write
+  bool command = false;  // the intent is a confirmed command (not found, restore or safe)
+  bool level = false;    // the steady level; a timed command's final level (docs:66-70)
+  bool timed = false;
+  std::optional<bool> during;  // a timed command's level until its end (none: any)
+  TP ends{};
+  double duration = 0;
+  bool continuous = false;  // a PWM run with no end: the device's (docs:68, 88)
+  bool from_old_node = false;
+  TP at{};
+  bool held = false;  // docs:76-80
+  TP held_since{};
+  bool owed = false;       // docs:81-84
+  bool triggered = false;  // a trigger covered it (start, shutdown, heartbeat, command timeout)
+  TP trigger_at{};
+  std::optional<TP> deadline;  // the dead man (docs:33)
+  bool adopt = false;          // take the level of a poll started after `adopt_after_poll`
+  bool adopt_is_command = false;
+  uint64_t adopt_after_poll = 0;
+  TP adopt_not_before{};
+  TP adopt_at{};                                            // when the write was confirmed
+  bool adopt_prev_known = false, adopt_prev_level = false;  // what it should show before
+};
+
+struct DevModel {
+  std::vector<Chan> ch;
+  bool justified = false;      // I6: something changed outputs the node did not confirm
+  TP justified_until{};        // ... and goes on changing them until then (a timed command)
+  std::optional<TP> cause_at;  // I4: the newest thing that may make the node see a restart
+  bool cause_pending = false;  // ... not yet followed by a restart report
+  TP last_poll_at{};           // the end of its newest good poll
+  TP reachable_since{};        // no fault, no power cycle, port open, node running since
+  uint64_t polls_started = 0;
+  uint64_t poll_running = 0;  // the sequence number of the poll running now
+  bool unanswered = false;    // an attempt went unanswered since its last good poll
+  bool found = false;
+  // generic (I8)
+  bool gen_unanswered = false;  // an attempt to it went unanswered since its last report
+  bool gen_prev_silent = true;  // ... before its previous report
+};
+
+struct Operation {
+  uint64_t id = 0;
+  std::string what;
+};
+
+class World {
+ public:
+  World(uint64_t seed, const std::set<std::string>& known, bool keep_history, std::FILE* trace)
+      : config_(drawConfig(seed)),
+        known_(known),
+        link_(config_.link, clock_),
+        transport_(link_),
+        trace_(trace) {
+    link_.keepHistory(keep_history ? 40 : 0);
+    link_.trace(trace);
+    SimLineSettings line;
+    line.baud = config_.link.baud;
+    link_.addDevice(std::make_unique<SimLcRelay8>(kAddr[kLc], line));
+    link_.addDevice(std::make_unique<SimLd58a08>(kAddr[kLd], line));
+    link_.addDevice(std::make_unique<SimYespeedPdu>(kAddr[kPdu], line, clock_.now()));
+    SimGenericConfig gc;
+    gc.map = config_.devices[kGen].generic;
+    if (config_.generic_refuses)
+      gc.holes.push_back({Table::kHoldingRegister, 0x20, 0x20});  // "mode" is refused
+    else
+      gc.holes.push_back({Table::kHoldingRegister, 0x30, 0x30});
+    link_.addDevice(std::make_unique<SimGeneric>(kAddr[kGen], line, gc));
+    if (config_.ld_save) sim(kLd)->write(Table::kHoldingRegister, 0x00FA, {1}, clock_.now());
+    link_.onAttempt([this](const LineEvent& e) { onAttempt(e); });
+    for (auto& m : model_) m.ch.resize(kChannels);
+    start_ = clock_.now();
+  }
+  ~World() { killNode(); }
+
+  // Runs one step; false when an invariant failed (failure_ says which).
+  bool step(const SimStep& s, size_t index);
+  const std::optional<SimFailure>& failure() const { return failure_; }
+  uint64_t digest() const { return link_.digest(); }
+  uint64_t frames() const { return link_.frames(); }
+  double simSeconds() const { return secs(clock_.now() - start_); }
+  const std::map<std::string, uint64_t>& knownFailures() const { return known_hits_; }
+  const std::string& knownExample() const { return known_example_; }
+  void setHistory(const std::deque<std::string>* steps) { steps_ = steps; }
+
+ private:
+  SimDevice* sim(int d) { return link_.device(kAddr[d]); }
+  bool simCoil(int d, int ch) {
+    uint16_t v = 0;
+    sim(d)->read(Table::kCoil, static_cast<uint16_t>(ch), clock_.now(), &v);
+    return v != 0;
+  }
+  uint16_t simRegister(int d, uint16_t address) {
+    uint16_t v = 0;
+    sim(d)->read(Table::kHoldingRegister, address, clock_.now(), &v);
+    return v;
+  }
+  SafeState safeOf(int d, int ch) const { return config_.devices[d].failsafe.safeStateOf(ch); }
+  bool safeLevel(int d, int ch) const { return safeOf(d, ch) == SafeState::kOn; }
+  bool hasSafe(int d, int ch) const { return safeOf(d, ch) != SafeState::kHold; }
+  OnRestart onRestart(int d) const { return config_.devices[d].failsafe.on_restart; }
+  int devOf(uint8_t address) const {
+    for (int d = 0; d < kDevices; ++d)
+      if (kAddr[d] == address) return d;
+    return -1;
+  }
+  int devOf(const std::string& name) const {
+    for (int d = 0; d < kDevices; ++d)
+      if (name == kNames[d]) return d;
+    return -1;
+  }
+  double pollPeriod(int d) const { return 1.0 / config_.devices[d].poll_rate; }
+  // The longest one transaction can take: every attempt timed out.
+  double worstTransaction() const {
+    return (config_.link.response_timeout + 0.03) * (config_.link.retries + 1);
+  }
+  double normalTransaction() const { return 60.0 * 10.0 / config_.link.baud; }
+
+  void fail(const std::string& invariant, const std::string& message);
+  void runFor(double seconds);
+  void runUntil(TP end, const std::function<bool()>& done = {});
+  void tick();
+  void startNode();
+  void stopNode();
+  void killNode();
+  void resetModelForNewNode();
+  void onAttempt(const LineEvent& e);
+  void onReport(const FailsafeReport& r);
+  void onGenericReport(const FailsafeReport& r);
+  void onPollStarting(const std::string& device);
+  void onPolled(const std::string& device, const Result& r);
+  void onWritten(const std::string& device, const std::vector<uint8_t>& chs,
+                 const std::vector<bool>& sts);
+  // Model updates.
+  void commanded(int d, int ch, bool level);
+  void commandedTimed(int d, int ch, std::optional<bool> during, bool after, double seconds);
+  void unconfirmed(int d, int ch, double not_before_s, bool as_command);
+  void hold(int d, int ch);
+  // A client's write (share, raw) whose answer was lost: the device may have acted, the node
+  // did not carry it (docs:35: the reply confirms it). The docs do not say what the intent is
+  // then: nothing is checked on the channel until it is commanded again.
+  void unknownIntent(int d, int ch) {
+    Chan& c = model_[d].ch[ch];
+    c.known = false;
+    c.adopt = false;
+  }
+  void deviceDisturbed(int d, bool justified, double extra = 0);
+  bool expected(const Chan& c, TP t, bool* level) const;
+  // Invariants checked after each step.
+  void checkHeld();
+  void checkCoils(int d, const std::vector<uint8_t>& chs, const std::vector<bool>& sts,
+                  const std::string& what);
+  // Steps.
+  void doCommandStep(const SimStep& s);
+  Operation op(const std::string& what) { return {++op_seq_, what}; }
+
+  Config config_;
+  std::set<std::string> known_;
+  ManualClock clock_;
+  MemoryLink link_;
+  CountingTransport transport_;
+  std::unique_ptr<SimNode> node_;
+  bool dying_ = false;
+  bool stopping_ = false;
+  TP start_{};
+  DevModel model_[kDevices];
+  // The controller and its heartbeat (docs:32).
+  bool alive_ = true;
+  TP last_feed_{};
+  bool lost_ = false;
+  // The LD58A08's own heartbeat and its controller.
+  bool dev_alive_ = true;
+  TP dev_last_feed_{};
+  bool dev_lost_ = false;
+  TP next_tick_ = TP::max(), next_feed_ = TP::max(), next_dev_feed_ = TP::max();
+  uint64_t op_seq_ = 0;
+  std::map<uint64_t, int> starts_by_transaction_;  // I7
+  std::optional<SimFailure> failure_;
+  size_t step_index_ = 0;
+  std::map<std::string, uint64_t> known_hits_;
+  std::string known_example_;
+  const std::deque<std::string>* steps_ = nullptr;
+  std::vector<std::future<Result>> pending_;
+  bool port_lost_ = false;
+  std::FILE* trace_ = nullptr;
+};
+
+void World::fail(const std::string& invariant, const std::string& message) {
+  if (known_.count(invariant)) {
+    if (known_hits_[invariant]++ == 0 && known_example_.empty())
+      known_example_ = invariant + " at step " + std::to_string(step_index_) + ": " + message;
+    return;
+  }
+  if (failure_) return;
+  SimFailure f;
+  f.step = step_index_;
+  f.invariant = invariant;
+  char when[32];
+  std::snprintf(when, sizeof when, "t=%.3f: ", simSeconds());
+  f.message = when + message;
+  f.frames = link_.history();
+  if (steps_) f.steps.assign(steps_->begin(), steps_->end());
+  failure_ = f;
+}
+
+// ---- time --------------------------------------------------------------------------------------
+
+void World::runFor(double seconds) {
+  runUntil(clock_.now() + dur(seconds));
+}
+
+// Runs the bus, the deadline timer and the heartbeat's sender on one thread until `end` (or
+// until `done`): whatever is due first runs first; time jumps to the next thing due.
+void World::runUntil(TP end, const std::function<bool()>& done) {
+  for (;;) {
+    if (done && done()) return;
+    const TP now = clock_.now();
+    // The timer and the heartbeat's sender are other threads in the node: they run when due,
+    // between two bus jobs (a job cannot be interrupted halfway).
+    if (node_ && node_->started() && now >= next_feed_) {
+      if (alive_) {
+        node_->feedHeartbeat();
+        last_feed_ = now;
+        lost_ = false;
+      }
+      next_feed_ = now + dur(config_.heartbeat / 4);
+    }
+    if (node_ && node_->started() && now >= next_dev_feed_) {
+      if (dev_alive_) {
+        node_->feedDeviceHeartbeat(kNames[kLd]);
+        dev_last_feed_ = now;
+        dev_lost_ = false;
+      }
+      next_dev_feed_ = now + dur(config_.devices[kLd].failsafe.heartbeat_timeout / 4);
+    }
+    if (node_ && node_->started() && now >= next_tick_) {
+      tick();
+      next_tick_ = now + dur(node_->checkPeriod());
+    }
+    if (now >= end) return;
+    TP next = TP::max();
+    if (node_ && node_->bus().step(&next)) continue;
+    const TP t = std::min({next, next_tick_, next_feed_, next_dev_feed_, end});
+    if (t > now) clock_.advanceTo(t);
+  }
+}
+
+// The deadline timer: the model's triggers fire first (from the docs' rule), then the node's.
+void World::tick() {
+  const TP now = clock_.now();
+  if (!lost_ && now - last_feed_ >= dur(config_.heartbeat)) {
+    lost_ = true;  // docs:32: no message within timeout; every device obeys the bus heartbeat
+    for (int d = 0; d < kGen; ++d)
+      for (int ch = 0; ch < kChannels; ++ch)
+        if (hasSafe(d, ch)) hold(d, ch);
+  }
+  const FailsafeConfig& ld = config_.devices[kLd].failsafe;
+  if (!ld.heartbeat_topic.empty() && !dev_lost_ &&
+      now - dev_last_feed_ >= dur(ld.heartbeat_timeout)) {
+    dev_lost_ = true;  // docs:32: that device's own heartbeat: its channels only
+    for (int ch = 0; ch < kChannels; ++ch)
+      if (hasSafe(kLd, ch)) hold(kLd, ch);
+  }
+  for (int d = 0; d < kGen; ++d)
+    for (int ch = 0; ch < kChannels; ++ch) {
+      Chan& c = model_[d].ch[ch];
+      if (c.deadline && now >= *c.deadline) {  // docs:33
+        c.deadline.reset();
+        hold(d, ch);
+      }
+    }
+  node_->checkDeadlines();
+}
+
+void World::hold(int d, int ch) {
+  Chan& c = model_[d].ch[ch];
+  const TP now = clock_.now();
+  if (!c.held) c.held_since = now;
+  c.held = true;
+  c.triggered = true;
+  c.trigger_at = now;
+}
+
+// ---- the node's life -----------------------------------------------------------------------
+
+void World::resetModelForNewNode() {
+  const TP now = clock_.now();
+  for (int d = 0; d < kDevices; ++d) {
+    DevModel& m = model_[d];
+    // docs:169-170: a flash the killed node started cannot be told from a restart. A device
+    // whose state the old node did not know may change by itself too.
+    bool running_unknown = false;
+    for (Chan& c : m.ch) {
+      if (!c.known && c.adopt) running_unknown = true;
+      if (c.timed && !c.continuous && d == kLc && c.ends + dur(0.5 + 0.02 * c.duration) > now)
+        running_unknown = true;
+      c = Chan{};
+    }
+    if (running_unknown) m.justified = true;
+    m.found = false;
+    m.reachable_since = std::max(m.reachable_since, now);
+    m.gen_unanswered = false;
+    m.gen_prev_silent = true;
+  }
+  lost_ = false;
+}
+
+void World::startNode() {
+  if (node_) return;
+  resetModelForNewNode();
+  SimNodeOptions o;
+  o.devices = config_.devices;
+  o.heartbeat_timeout = config_.heartbeat;
+  o.shutdown_timeout = config_.shutdown_timeout;
+  SimNodeHooks h;
+  h.report = [this](const FailsafeReport& r) {
+    if (!dying_) onReport(r);
+  };
+  h.poll_starting = [this](const std::string& d) { onPollStarting(d); };
+  h.polled = [this](const std::string& d, const Result& r) { onPolled(d, r); };
+  h.written = [this](const std::string& d, const std::vector<uint8_t>& c,
+                     const std::vector<bool>& s) { onWritten(d, c, s); };
+  node_ = std::make_unique<SimNode>(o, transport_, clock_, h);
+  const TP started = clock_.now();
+  for (int d = 0; d < kGen; ++d)
+    if (config_.devices[d].failsafe.on_start_safe)
+      for (int ch = 0; ch < kChannels; ++ch)
+        if (hasSafe(d, ch)) {
+          model_[d].ch[ch].triggered = true;
+          model_[d].ch[ch].trigger_at = started;
+        }
+  node_->beginStart();
+  // BusNode::start waits shutdown_timeout + 5 s for them.
+  runUntil(started + dur(config_.shutdown_timeout + 5.0),
+           [this] { return node_->startWritesDone(); });
+  // I9 (docs:36): before any command is taken, the safe states are on every device that
+  // answered throughout.
+  for (int d = 0; d < kGen; ++d) {
+    if (!config_.devices[d].failsafe.on_start_safe || model_[d].reachable_since > started ||
+        port_lost_)
+      continue;
+    for (int ch = 0; ch < kChannels; ++ch)
+      if (hasSafe(d, ch) && simCoil(d, ch) != safeLevel(d, ch))
+        fail("I9", std::string(kNames[d]) + " out" + std::to_string(ch) + " is " +
+                       (simCoil(d, ch) ? "on" : "off") + " after on_start: safe");
+  }
+  node_->finishStart();
+  last_feed_ = dev_last_feed_ = clock_.now();
+  lost_ = dev_lost_ = false;
+  next_feed_ = clock_.now() + dur(config_.heartbeat / 4);
+  if (!config_.devices[kLd].failsafe.heartbeat_topic.empty())
+    next_dev_feed_ = clock_.now() + dur(config_.devices[kLd].failsafe.heartbeat_timeout / 4);
+  next_tick_ = node_->checkPeriod() > 0 ? clock_.now() + dur(node_->checkPeriod()) : TP::max();
+}
+
+void World::stopNode() {
+  if (!node_) return;
+  const TP began = clock_.now();
+  for (int d = 0; d < kGen; ++d)
+    for (int ch = 0; ch < kChannels; ++ch)
+      if (hasSafe(d, ch)) {
+        model_[d].ch[ch].triggered = true;
+        model_[d].ch[ch].trigger_at = began;
+      }
+  next_tick_ = next_feed_ = next_dev_feed_ = TP::max();
+  node_->beginStop();
+  stopping_ = true;
+  runUntil(began + dur(config_.shutdown_timeout), [this] { return node_->stopWritesDone(); });
+  // I10 (docs:31): a device that answered throughout shows its safe states.
+  if (node_->stopWritesDone() && !port_lost_)
+    for (int d = 0; d < kGen; ++d) {
+      if (model_[d].reachable_since > began) continue;
+      for (int ch = 0; ch < kChannels; ++ch)
+        if (hasSafe(d, ch) && simCoil(d, ch) != safeLevel(d, ch))
+          fail("I10", std::string(kNames[d]) + " out" + std::to_string(ch) + " is " +
+                          (simCoil(d, ch) ? "on" : "off") + " after the node stopped");
+    }
+  killNode();
+}
+
+void World::killNode() {
+  if (!node_) return;
+  dying_ = true;
+  stopping_ = false;
+  node_.reset();  // queued jobs fail unsent: nothing reaches the line
+  dying_ = false;
+  pending_.clear();
+  next_tick_ = next_feed_ = next_dev_feed_ = TP::max();
+}
+
+// ---- the model's inputs ------------------------------------------------------------------------
+
+bool World::expected(const Chan& c, TP t, bool* level) const {
+  if (!c.known || c.adopt || c.continuous) return false;
+  if (c.timed) {
+    const double slack = 0.5 + 0.02 * c.duration;  // docs:69-70
+    if (std::abs(secs(t - c.ends)) <= slack) return false;
+    if (t < c.ends) {
+      if (!c.during) return false;
+      *level = *c.during;
+      return true;
+    }
+  }
+  *level = c.level;
+  return true;
+}
+
+void World::commanded(int d, int ch, bool level) {
+  Chan& c = model_[d].ch[ch];
+  const auto deadline = c.deadline;  // only C/command moves the dead man (docs:33)
+  c = Chan{};
+  c.deadline = deadline;
+  c.known = c.command = true;
+  c.level = level;
+  c.at = clock_.now();
+  // docs:77-78: a confirmed command ends the hold and cancels what was owed; a trigger before
+  // it no longer covers it.
+}
+
+void World::commandedTimed(int d, int ch, std::optional<bool> during, bool after, double seconds) {
+  commanded(d, ch, after);
+  Chan& c = model_[d].ch[ch];
+  if (seconds < 0) {
+    c.continuous = true;
+    return;
+  }
+  c.timed = true;
+  c.during = during;
+  c.duration = seconds;
+  c.ends = clock_.now() + dur(seconds);
+}
+
+void World::unconfirmed(int d, int ch, double not_before_s, bool as_command) {
+  // The docs do not say what the intent is after a write whose answer was lost: nothing is
+  // checked on the channel until a poll shows it again.
+  Chan& c = model_[d].ch[ch];
+  c.adopt_prev_known = expected(c, clock_.now(), &c.adopt_prev_level);
+  c.adopt_at = clock_.now();
+  c.known = false;
+  c.adopt = true;
+  c.adopt_is_command = as_command;
+  c.adopt_after_poll = model_[d].polls_started;
+  c.adopt_not_before = clock_.now() + dur(not_before_s);
+}
+
+void World::deviceDisturbed(int d, bool justified, double extra) {
+  DevModel& m = model_[d];
+  m.cause_at = clock_.now();
+  m.cause_pending = true;
+  // A device that stopped answering is probed again with backoff, up to backoff_max (5 s,
+  // bus_scheduler.h); an owed write goes when it answers a poll again (docs:37).
+  m.reachable_since = std::max(m.reachable_since, clock_.now() + dur(5.0 + extra));
+  if (justified) m.justified = true;
+}
+
+void World::onAttempt(const LineEvent& e) {
+  const int d = devOf(e.request.slave);
+  if (d < 0) return;
+  DevModel& m = model_[d];
+  const bool write = !isReadFunction(e.request.function);
+  if (!e.answered) {
+    m.unanswered = true;
+    // A device that does not answer may be taken offline: its return is a restart (docs:34).
+    // A write it heard but whose answer was lost changed outputs the node did not confirm.
+    deviceDisturbed(d, write && e.heard);
+    // A flash or PWM run it started changes the outputs again at its end (docs:171-172).
+    if (write && e.heard && sim(d)->startsSomething(e.request))
+      m.justified_until = std::max(m.justified_until, e.at + dur(8.0));
+    if (d == kGen) m.gen_unanswered = true;
+  }
+  // I7: a write that starts something reaches the device once per transaction.
+  if (e.heard && sim(d)->startsSomething(e.request) && ++starts_by_transaction_[e.execute_id] > 1)
+    fail("I7", std::string(kNames[d]) + ": " + e.request.describe() +
+                   " reached the device twice in one transaction");
+  if (d == kGen || !write || !node_) return;
+  const bool coils = e.request.function == FunctionCode::kWriteSingleCoil ||
+                     e.request.function == FunctionCode::kWriteMultipleCoils;
+  if (!coils || node_->currentOp() != 0) return;
+  // A write of the fail-safe's own (no command's job runs): I3 and I4.
+  for (size_t i = 0; i < e.request.values.size(); ++i) {
+    const int ch = e.request.address + static_cast<int>(i);
+    if (ch >= kChannels) continue;
+    const bool v = e.request.values[i] != 0;
+    const Chan& c = m.ch[ch];
+    const std::string name = std::string(kNames[d]) + " out" + std::to_string(ch);
+    if (c.held) {
+      if (v != safeLevel(d, ch))
+        fail("I3", name + " is held safe (" + safeStateName(safeOf(d, ch)) +
+                       ") but a fail-safe write sets it " + (v ? "on" : "off"));
+      continue;
+    }
+    if (c.owed && hasSafe(d, ch) && v == safeLevel(d, ch)) continue;
+    bool level = false;
+    if (!expected(c, e.at, &level) || level == v) continue;
+    if (hasSafe(d, ch) && v == safeLevel(d, ch) && c.triggered && c.trigger_at >= c.at) continue;
+    // docs:31, 99-100: the stop's safe writes run after what was queued before them, and they
+    // are what the outputs are left with.
+    if (stopping_ && hasSafe(d, ch) && v == safeLevel(d, ch)) continue;
+    // The node sees a restart at a poll (docs:34): a command confirmed before the poll that saw
+    // it is not newer than the restart; one confirmed after it is (docs:90-92).
+    if ((m.cause_at && *m.cause_at >= c.at) || (m.cause_pending && c.at <= m.last_poll_at)) {
+      if (onRestart(d) == OnRestart::kSafe && hasSafe(d, ch) && v == safeLevel(d, ch)) continue;
+      if (onRestart(d) == OnRestart::kRestore && c.timed && v == c.level) continue;
+    }
+    fail("I4", name + ": a fail-safe write sets it " + (v ? "on" : "off") + " where the " +
+                   (c.command ? "confirmed command" : "intent") +
+                   " of t=" + std::to_string(secs(c.at - start_)) + " says " +
+                   (level ? "on" : "off") + " and nothing since is a reason");
+  }
+}
+
+void World::onPollStarting(const std::string& device) {
+  const int d = devOf(device);
+  model_[d].poll_running = ++model_[d].polls_started;
+}
+
+void World::onPolled(const std::string& device, const Result& r) {
+  const int d = devOf(device);
+  if (d == kGen || !r.ok()) return;
+  DevModel& m = model_[d];
+  const auto& outputs = node_->device(device)->outputs();
+  if (outputs.size() < kChannels) return;
+  for (int ch = 0; ch < kChannels; ++ch) {
+    Chan& c = m.ch[ch];
+    const bool pwm = d == kLd && simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0;
+    if (!m.found && !c.known && !c.adopt) {
+      // docs:62-63: where the node has commanded nothing, the intent is the state found at its
+      // first good poll. A running PWM is the device's (docs:73).
+      c.known = true;
+      c.level = outputs[ch];
+      c.continuous = pwm;
+      c.at = clock_.now();
+      continue;
+    }
+    if (c.adopt && m.poll_running > c.adopt_after_poll && clock_.now() >= c.adopt_not_before) {
+      // docs:35, 64-65: what an undecoded write changed is taken as commanded at the next
+      // poll; it ends a hold on the channels it changed.
+      const bool level = outputs[ch];
+      // docs:35, 64-65: what the write changed is taken as commanded; a level that did not
+      // change (or was not known) is not. Only a client's write is a command (it ends holds
+      // and owed writes), and only those that fired before it was confirmed (docs:75-78); a
+      // user's write whose answer was lost is not (docs:81-83: commanded after the stamp).
+      const bool changed = c.adopt_prev_known && level != c.adopt_prev_level;
+      const bool ends = c.adopt_is_command && changed && !(c.held && c.held_since > c.adopt_at);
+      Chan kept = c;
+      c = Chan{};
+      c.known = true;
+      c.command = kept.adopt_is_command;
+      c.level = level;
+      c.continuous = pwm;
+      c.at = clock_.now();
+      c.deadline = kept.deadline;
+      if (!ends) {
+        c.held = kept.held;
+        c.held_since = kept.held_since;
+        c.owed = kept.owed;
+        c.triggered = kept.triggered;
+        c.trigger_at = kept.trigger_at;
+      }
+    }
+  }
+  m.found = true;
+  // docs:34: a device that answers again after being offline has restarted: on_restart's
+  // writes computed from here on have that reason (found states included).
+  if (m.unanswered) m.cause_at = clock_.now();
+  m.unanswered = false;
+  m.last_poll_at = clock_.now();
+}
+
+void World::onWritten(const std::string& device, const std::vector<uint8_t>& chs,
+                      const std::vector<bool>& sts) {
+  const int d = devOf(device);
+  checkCoils(d, chs, sts, "a user's write");
+  for (size_t i = 0; i < chs.size(); ++i) commanded(d, chs[i], sts[i]);
+}
+
+void World::checkCoils(int d, const std::vector<uint8_t>& chs, const std::vector<bool>& sts,
+                       const std::string& what) {
+  // I1: reported done means the device shows it now.
+  for (size_t i = 0; i < chs.size(); ++i)
+    if (simCoil(d, chs[i]) != sts[i])
+      fail("I1", std::string(kNames[d]) + " out" + std::to_string(chs[i]) + ": " + what +
+                     " was confirmed (" + (sts[i] ? "on" : "off") + ") but the device shows " +
+                     (sts[i] ? "off" : "on"));
+}
+
+void World::onReport(const FailsafeReport& r) {
+  if (trace_) std::fprintf(trace_, "report %s: %s\n", r.device.c_str(), r.text().c_str());
+  const int d = devOf(r.device);
+  if (d == kGen) return onGenericReport(r);
+  DevModel& m = model_[d];
+  const TP now = clock_.now();
+  std::vector<int> chs;
+  for (const std::string& name : r.channels) chs.push_back(name[3] - '0');  // out0..out7
+  if (r.trigger == "restart") {
+    // I6 (docs:34-35, 66-74): the outputs changed only if something changed them.
+    if (r.reason.find("changed with no command") != std::string::npos && !m.justified &&
+        now >= m.justified_until)
+      fail("I6", std::string(kNames[d]) + ": restart reported (" + r.reason +
+                     ") though nothing changed its outputs without a confirmed command");
+    m.justified = false;
+    m.cause_pending = false;
+  }
+  if (r.action == "safe") {
+    // I11 (docs:4-5): "Nothing changes unless it is configured: the default safe state is hold".
+    for (size_t i = 0; i < chs.size(); ++i)
+      if (!hasSafe(d, chs[i]))
+        fail("I11", std::string(kNames[d]) + " out" + std::to_string(chs[i]) +
+                        " (safe state hold) is written by a safe write (" + r.trigger + ")");
+  }
+  if (r.action == "restore") {
+    // I5 (docs:85-89): what a restore writes, channel by channel.
+    std::vector<bool> written(kChannels, false);
+    for (size_t i = 0; i < chs.size(); ++i) {
+      const int ch = chs[i];
+      written[ch] = true;
+      const Chan& c = m.ch[ch];
+      const std::string name = std::string(kNames[d]) + " out" + std::to_string(ch);
+      const bool v = r.states[i];
+      if ((c.held || c.owed) && hasSafe(d, ch)) {
+        if (v != safeLevel(d, ch))
+          fail("I5", name + " is " + (c.held ? "held" : "owed") + " safe but the restore writes " +
+                         (v ? "on" : "off"));
+        continue;
+      }
+      if (!c.known || c.adopt) continue;
+      if (c.continuous) {
+        fail("I5", name +
+                       " runs a continuous PWM, which a restore does not restart, but the "
+                       "restore writes it " +
+                       std::string(v ? "on" : "off"));
+        continue;
+      }
+      if (v != c.level)
+        fail("I5", name + ": the restore writes " + (v ? "on" : "off") + " where the " +
+                       (c.timed ? "timed command's final level" : "intent") + " is " +
+                       (c.level ? "on" : "off"));
+    }
+    for (int ch = 0; ch < kChannels; ++ch) {
+      const Chan& c = m.ch[ch];
+      if (!written[ch] && c.known && !c.adopt && !c.continuous)
+        fail("I5", std::string(kNames[d]) + " out" + std::to_string(ch) +
+                       ": the restore leaves "
+                       "it out, though its intent (" +
+                       (c.level ? "on" : "off") + ") is known");
+    }
+  }
+  if (r.confirmed) {
+    // docs:62: a restore or a safe write is a command like any other (not a hold's end).
+    for (size_t i = 0; i < chs.size(); ++i) {
+      Chan& c = m.ch[chs[i]];
+      const bool held = c.held, triggered = c.triggered;
+      const TP held_since = c.held_since, trigger_at = c.trigger_at;
+      const auto deadline = c.deadline;
+      c = Chan{};
+      c.known = true;
+      c.level = r.states[i];
+      c.at = now;
+      c.held = held;
+      c.held_since = held_since;
+      c.triggered = triggered;
+      c.trigger_at = trigger_at;
+      c.deadline = deadline;
+    }
+  } else if (r.trigger == "heartbeat" || r.trigger == "command_timeout" || r.trigger == "start") {
+    // docs:37, 81-82: owed on the channels it carried.
+    for (int ch : chs) m.ch[ch].owed = true;
+  }
+}
+
+void World::onGenericReport(const FailsafeReport& r) {
+  DevModel& m = model_[kGen];
+  // A port that is not open refuses the write unsent: the device was not asked.
+  if (!link_.connected()) m.gen_unanswered = true;
+  // I8 (docs:144-146): a value refused is reported, not retried: a "restart" write comes only
+  // when the device did not answer the write before.
+  if (r.trigger == "restart" && !m.gen_prev_silent)
+    fail("I8", std::string("drive: safe values written again (") + r.reason +
+                   ") though the device answered the previous safe write");
+  // A device that answered throughout has the safe values it keeps, the refused one aside.
+  if (!m.gen_unanswered && !port_lost_) {
+    const auto& signals = config_.devices[kGen].generic.signals;
+    for (const SignalConfig& s : signals) {
+      if (!s.safe_value) continue;
+      if (config_.generic_refuses && s.address == 0x20) continue;
+      uint16_t raw = 0;
+      const Table t = s.table;
+      sim(kGen)->read(t, s.address, clock_.now(), &raw);
+      std::vector<uint16_t> words;
+      writeValueProblem(s, *s.safe_value, &words);
+      if (words.empty() || raw != words[0])
+        fail("I8", "drive: " + s.name + " is " + std::to_string(raw) + " (raw) after the safe " +
+                       "write (" + r.trigger + "), not its safe value " +
+                       std::to_string(*s.safe_value));
+    }
+  }
+  m.gen_prev_silent = m.gen_unanswered;
+  m.gen_unanswered = false;
+}
+
+// I2 (docs:32-33, 76, 173-175): a held channel of a device that answers shows its safe state
+// within the deadline timer's period, one transaction in progress (a silent device's, with its
+// retries) and a few transactions per device (a write and its read back, an LD58A08's PWM
+// reads): the docs' "timeout plus that tenth plus one bus transaction for each output write".
+void World::checkHeld() {
+  if (!node_ || !node_->started() || port_lost_) return;
+  const TP now = clock_.now();
+  const double budget =
+      node_->checkPeriod() + worstTransaction() + kDevices * 6 * normalTransaction();
+  for (int d = 0; d < kGen; ++d) {
+    const DevModel& m = model_[d];
+    const MemoryLinkFaults& f = link_.faults(kAddr[d]);
+    if (f.silent || f.lost || f.late || f.garbled) continue;
+    if (now - m.reachable_since < dur(budget + pollPeriod(d))) continue;
+    for (int ch = 0; ch < kChannels; ++ch) {
+      const Chan& c = m.ch[ch];
+      if (!c.held || now - c.held_since < dur(budget)) continue;
+      if (simCoil(d, ch) != safeLevel(d, ch))
+        fail("I2", std::string(kNames[d]) + " out" + std::to_string(ch) + " is held safe (" +
+                       safeStateName(safeOf(d, ch)) +
+                       ") since t=" + std::to_string(secs(c.held_since - start_)) +
+                       " (on_restart: " + onRestartName(onRestart(d)) +
+                       ") but the device, answering since t=" +
+                       std::to_string(secs(m.reachable_since - start_)) + ", shows it " +
+                       (simCoil(d, ch) ? "on" : "off"));
+    }
+  }
+}
+
+// ---- steps -------------------------------------------------------------------------------------
+
+bool World::step(const SimStep& s, size_t index) {
+  step_index_ = index;
+  const std::string& k = s.kind;
+  auto arg = [&s](size_t i) { return i < s.args.size() ? s.args[i] : 0; };
+  if (k == "wait") {
+    runFor(arg(0) / 1000.0);
+  } else if (k == "hb_stop") {
+    alive_ = false;
+  } else if (k == "hb_resume") {
+    alive_ = true;
+  } else if (k == "dhb_stop") {
+    dev_alive_ = false;
+  } else if (k == "dhb_resume") {
+    dev_alive_ = true;
+  } else if (k == "silent") {
+    const int d = arg(0) % kDevices;
+    link_.faults(kAddr[d]).silent = arg(1) != 0;
+    deviceDisturbed(d, false);
+  } else if (k == "lose" || k == "late" || k == "garble") {
+    const int d = arg(0) % kDevices;
+    MemoryLinkFaults& f = link_.faults(kAddr[d]);
+    (k == "lose" ? f.lost : k == "late" ? f.late : f.garbled) = 1 + arg(1) % 3;
+    deviceDisturbed(d, false);
+  } else if (k == "power") {
+    const int d = arg(0) % kDevices;
+    sim(d)->powerCycle(clock_.now());
+    deviceDisturbed(d, true);
+    // It may restart saved PWM runs (LD58A08 power-down save) and it ended the timed commands
+    // the node expects: their ends may show as more changes. The docs do not say what the
+    // intent of an interrupted timed command is with on_restart: leave; nothing is checked.
+    model_[d].justified_until = std::max(model_[d].justified_until, clock_.now() + dur(8.0));
+  } else if (k == "ld_save") {
+    sim(kLd)->write(Table::kHoldingRegister, 0x00FA, {static_cast<uint16_t>(arg(0) != 0)},
+                    clock_.now());
+  } else if (k == "port_lost") {
+    link_.setPortLost(true);
+    port_lost_ = true;
+    for (int d = 0; d < kDevices; ++d) deviceDisturbed(d, false);
+  } else if (k == "port_back") {
+    link_.setPortLost(false);
+    port_lost_ = false;
+    // The port is opened again with backoff, up to reconnect_max (5 s).
+    for (int d = 0; d < kDevices; ++d) deviceDisturbed(d, false, 5.0);
+  } else if (k == "stop") {
+    stopNode();
+  } else if (k == "kill") {
+    killNode();
+  } else if (k == "start") {
+    startNode();
+  } else if (node_ && node_->started()) {
+    doCommandStep(s);
+  }
+  // Every step lets the bus run a little: commands are sent, their answers come.
+  if (k != "wait") runFor(0.02);
+  if (!failure_) checkHeld();
+  return !failure_;
+}
+
+void World::doCommandStep(const SimStep& s) {
+  const std::string& k = s.kind;
+  auto arg = [&s](size_t i) { return i < s.args.size() ? s.args[i] : 0; };
+  const int outd = arg(0) % 3;  // an output device: LC, LD58A08, PDU
+  const std::string dn = kNames[outd];
+  const auto ch = static_cast<uint8_t>(arg(1) % kChannels);
+  if (k == "set" || k == "set2") {
+    std::vector<uint8_t> chs{ch};
+    std::vector<bool> sts{arg(2) != 0};
+    if (k == "set2") {
+      chs.push_back(static_cast<uint8_t>((ch + 2) % kChannels));
+      sts.push_back(arg(3) != 0);
+    }
+    pending_.push_back(node_->set(op("set").id, dn, chs, sts, [this, outd, chs](const Result& r) {
+      if (answerLost(r.error))
+        for (uint8_t c : chs) unconfirmed(outd, c, 0, false);
+    }));
+  } else if (k == "command") {
+    const bool st = arg(2) != 0;
+    // docs:33: a channel turned on through C/command arms its dead man; any command re-arms.
+    Chan& c = model_[outd].ch[ch];
+    const double timeout = config_.devices[outd].failsafe.commandTimeoutOf(ch);
+    if (st && timeout > 0)
+      c.deadline = clock_.now() + dur(timeout);
+    else
+      c.deadline.reset();
+    pending_.push_back(node_->command(op("command").id, dn, ch, st, [this, outd](const Result& r) {
+      // The merged write's channels come through onWritten; a lost answer leaves them unknown.
+      (void)r;
+      (void)outd;
+    }));
+  } else if (k == "pulse") {
+    const bool st = arg(2) != 0;
+    const double seconds = (1 + arg(3) % 40) / 10.0;
+    pending_.push_back(node_->pulse(op("pulse").id, kNames[kLc], ch, st, seconds,
+                                    [this, ch, st, seconds](const Result& r) {
+                                      if (r.ok()) {
+                                        checkCoils(kLc, {ch}, {st}, "a pulse");
+                                        commandedTimed(kLc, ch, st, !st, seconds);
+                                      } else if (answerLost(r.error)) {
+                                        unconfirmed(kLc, ch, seconds + 1.0, false);
+                                      }
+                                    }));
+  } else if (k == "pwm") {
+    PwmSettings p;
+    p.channel = ch;
+    const int mode = arg(2) % 2;  // 0: timed (burst / fast run), 1: continuous
+    double seconds = -1;
+    if (ch < 6) {
+      p.period = (2 + arg(3) % 8) / 10.0;
+      p.on_time = 0.1;
+      p.pulses = mode == 0 ? static_cast<uint16_t>(1 + arg(3) % 5) : 0;
+      if (mode == 0) seconds = p.pulses * p.period;
+    } else {
+      p.frequency = 100;
+      p.duty_cycle = 50;
+      p.duration = mode == 0 ? (1 + arg(3) % 30) / 10.0 : 0;
+      if (mode == 0) seconds = p.duration;
+    }
+    pending_.push_back(
+        node_->setPwm(op("pwm").id, kNames[kLd], p, [this, ch, seconds](const Result& r) {
+          if (r.ok()) {
+            if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) == 0 && seconds > 1.5)
+              fail("I1", "pwm out" + std::to_string(ch) +
+                             ": set_pwm was confirmed but the channel "
+                             "does not run");
+            // (A burst shorter than a lost answer's timeouts and read back may have ended.)
+            // docs:66-68: a burst or timed run is the device's until its end, then off.
+            commandedTimed(kLd, ch, std::nullopt, false, seconds);
+          } else if (answerLost(r.error)) {
+            unconfirmed(kLd, ch, std::max(0.0, seconds) + 1.0, false);
+          }
+        }));
+  } else if (k == "pwm_stop") {
+    pending_.push_back(
+        node_->stopPwm(op("pwm_stop").id, kNames[kLd], ch, [this, ch](const Result& r) {
+          if (r.ok()) {
+            if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0)
+              fail("I1", "pwm out" + std::to_string(ch) + ": stop_pwm was confirmed but it runs");
+            // A PWM command (docs:77) ends the hold; the level shows at the next poll.
+            commanded(kLd, ch, false);
+            unconfirmed(kLd, ch, 0, true);
+            model_[kLd].ch[ch].known = false;
+          } else if (answerLost(r.error)) {
+            unconfirmed(kLd, ch, 0, false);
+          }
+        }));
+  } else if (k == "share05" || k == "raw05" || k == "share15" || k == "raw15") {
+    const bool share = k[0] == 's';
+    Request req;
+    std::vector<uint8_t> chs;
+    std::vector<bool> sts;
+    if (k == "share05" || k == "raw05") {
+      req = Request::writeSingleCoil(kAddr[outd], ch, arg(2) != 0);
+      chs = {ch};
+      sts = {arg(2) != 0};
+      if (!share) req = Request::writeMultipleCoils(kAddr[outd], ch, {arg(2) != 0});
+    } else {
+      const int n = 1 + arg(3) % std::min(4, kChannels - ch);
+      std::vector<bool> bits;
+      for (int i = 0; i < n; ++i) {
+        bits.push_back(((arg(2) >> i) & 1) != 0);
+        chs.push_back(static_cast<uint8_t>(ch + i));
+      }
+      sts = bits;
+      req = Request::writeMultipleCoils(kAddr[outd], ch, bits);
+    }
+    SimNode::Done done = [this, outd, chs, sts, k](const Result& r) {
+      if (r.ok()) {
+        for (size_t i = 0; i < chs.size(); ++i) {
+          // A client's coil write is the device's to confirm (the node passes its answer on):
+          // I1 on the LC board and the PDU. An LD58A08 channel running a PWM acknowledges a
+          // coil write and goes on running (its manual), and the model does not follow every
+          // run (a killed node's, one a power cycle restarted): no I1 there. docs:68 says an
+          // output write replaces the run: the written level is the intent.
+          if (outd != kLd) checkCoils(outd, {chs[i]}, {sts[i]}, k);
+          // docs:35: the coils a write names are taken as commanded at once.
+          commanded(outd, chs[i], sts[i]);
+        }
+      } else if (answerLost(r.error)) {
+        for (uint8_t c : chs) unknownIntent(outd, c);
+      }
+    };
+    pending_.push_back(share ? node_->share(op(k).id, req, done) : node_->raw(op(k).id, req, done));
+  } else if (k == "share16_flash" || k == "raw16_flash") {
+    // An LC flash through its registers (docs:60-61): mode 4 close, 2 open; delay in 0.1 s.
+    const bool close = arg(2) % 2 == 0;
+    const auto tenths = static_cast<uint16_t>(1 + arg(3) % 40);
+    const Request req = Request::writeMultipleRegisters(
+        kAddr[kLc], static_cast<uint16_t>(3 + 5 * ch), {close ? uint16_t{4} : uint16_t{2}, tenths});
+    SimNode::Done done = [this, ch, close, tenths, k](const Result& r) {
+      if (r.ok()) {
+        checkCoils(kLc, {ch}, {close}, k);
+        commandedTimed(kLc, ch, close, !close, tenths / 10.0);
+      } else if (answerLost(r.error)) {
+        unknownIntent(kLc, ch);
+      }
+    };
+    pending_.push_back(k[0] == 's' ? node_->share(op(k).id, req, done)
+                                   : node_->raw(op(k).id, req, done));
+  } else if (k == "share16_pwm") {
+    // An LD58A08 PWM run through its registers (period, on-time, enable = pulses).
+    const auto c6 = static_cast<uint8_t>(ch % 6);
+    const auto period = static_cast<uint16_t>(2 + arg(3) % 8);
+    const auto pulses = static_cast<uint16_t>(arg(2) % 2 == 0 ? 1 + arg(3) % 5 : 0xFFFF);
+    const Request req = Request::writeMultipleRegisters(
+        kAddr[kLd], static_cast<uint16_t>(c6 * 0x10), {period, 1, pulses});
+    pending_.push_back(node_->share(op(k).id, req, [this, c6, period, pulses](const Result& r) {
+      if (r.ok()) {
+        commandedTimed(kLd, c6, std::nullopt, false,
+                       pulses == 0xFFFF ? -1.0 : pulses * period / 10.0);
+      } else if (answerLost(r.error)) {
+        unknownIntent(kLd, c6);
+      }
+    }));
+  } else if (k == "share06_stop") {
+    // The enable register to 0: a write the type does not decode as a run (docs:64-65).
+    const Request req =
+        Request::writeSingleRegister(kAddr[kLd], static_cast<uint16_t>(ch * 0x10 + 2), 0);
+    pending_.push_back(node_->share(op(k).id, req, [this, ch](const Result& r) {
+      if (r.ok()) unconfirmed(kLd, ch, 0, true);
+      if (answerLost(r.error)) unknownIntent(kLd, ch);
+    }));
+  } else if (k == "signal") {
+    const size_t signal = static_cast<size_t>(arg(0) % 2);
+    const double value = signal == 0 ? arg(1) % 2 : (arg(1) % 6) * 10.0;
+    pending_.push_back(node_->writeSignal(op(k).id, kNames[kGen], signal, value, nullptr));
+  }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+std::string SimStep::text() const {
+  std::string t = kind;
+  for (int a : args) t += " " + std::to_string(a);
+  return t;
+}
+
+std::optional<SimStep> SimStep::parse(const std::string& line, std::string* error) {
+  std::istringstream in(line);
+  SimStep s;
+  if (!(in >> s.kind)) {
+    if (error) *error = "empty line";
+    return std::nullopt;
+  }
+  static const std::set<std::string> kinds = {
+      "wait",        "set",         "set2",         "command",   "pulse",   "pwm",
+      "pwm_stop",    "share05",     "share15",      "raw05",     "raw15",   "share16_flash",
+      "raw16_flash", "share16_pwm", "share06_stop", "signal",    "hb_stop", "hb_resume",
+      "dhb_stop",    "dhb_resume",  "silent",       "lose",      "late",    "garble",
+      "power",       "ld_save",     "port_lost",    "port_back", "stop",    "kill",
+      "start"};
+  if (!kinds.count(s.kind)) {
+    if (error) *error = "unknown step '" + s.kind + "'";
+    return std::nullopt;
+  }
+  int a = 0;
+  while (in >> a) s.args.push_back(a);
+  if (!in.eof()) {
+    if (error) *error = "'" + line + "': arguments must be integers";
+    return std::nullopt;
+  }
+  return s;
+}
+
+FailsafeSimulation::FailsafeSimulation(uint64_t seed) : seed_(seed) {}
+
+std::string FailsafeSimulation::describe() const {
+  const Config c = drawConfig(seed_);
+  std::ostringstream o;
+  o << "link " << c.link.baud << " baud, response_timeout " << c.link.response_timeout
+    << " s, retries " << c.link.retries << "; heartbeat " << c.heartbeat << " s"
+    << (c.ld_save ? "; LD58A08 power-down save on" : "") << "\n";
+  for (const DeviceConfig& d : c.devices) {
+    o << "  " << d.name << " (" << d.type << " @" << d.address << ", " << d.poll_rate << " Hz): ";
+    if (d.type == "generic") {
+      o << "safe values";
+      for (const SignalConfig& s : d.generic.signals) o << " " << s.name << "=" << *s.safe_value;
+      o << (c.generic_refuses ? " (mode refused)" : "") << ", on_start "
+        << (d.failsafe.on_start_safe ? "safe" : "keep") << "\n";
+      continue;
+    }
+    o << "safe";
+    for (int ch = 0; ch < kChannels; ++ch) {
+      o << " " << safeStateName(d.failsafe.safeStateOf(ch));
+      if (d.failsafe.commandTimeoutOf(ch) > 0) o << "/" << d.failsafe.commandTimeoutOf(ch) << "s";
+    }
+    o << ", on_restart " << onRestartName(d.failsafe.on_restart) << ", on_start "
+      << (d.failsafe.on_start_safe ? "safe" : "keep");
+    if (!d.failsafe.heartbeat_topic.empty())
+      o << ", own heartbeat " << d.failsafe.heartbeat_timeout << " s";
+    o << "\n";
+  }
+  return o.str();
+}
+
+std::vector<SimStep> FailsafeSimulation::generate(size_t n) const {
+  Rng r{seed_};
+  std::vector<SimStep> steps;
+  steps.push_back({"start", {}});
+  // Weights: mostly commands and time, then triggers, faults and the node's life.
+  struct Kind {
+    const char* name;
+    int weight;
+  };
+  static const Kind kinds[] = {
+      {"wait", 26},       {"set", 8},         {"set2", 3},         {"command", 6},
+      {"pulse", 4},       {"pwm", 4},         {"pwm_stop", 2},     {"share05", 3},
+      {"share15", 2},     {"raw05", 1},       {"raw15", 1},        {"share16_flash", 2},
+      {"raw16_flash", 1}, {"share16_pwm", 2}, {"share06_stop", 1}, {"signal", 2},
+      {"hb_stop", 3},     {"hb_resume", 4},   {"dhb_stop", 2},     {"dhb_resume", 3},
+      {"silent", 3},      {"lose", 2},        {"late", 1},         {"garble", 2},
+      {"power", 2},       {"ld_save", 1},     {"port_lost", 1},    {"port_back", 2},
+      {"stop", 1},        {"kill", 1},        {"start", 3}};
+  int total = 0;
+  for (const Kind& k : kinds) total += k.weight;
+  while (steps.size() < n) {
+    int x = r.below(total);
+    const Kind* k = kinds;
+    while (x >= k->weight) x -= (k++)->weight;
+    SimStep s;
+    s.kind = k->name;
+    if (s.kind == "wait") {
+      s.args = {r.pick({10, 50, 100, 300, 700, 1500})};
+    } else if (s.kind == "silent") {
+      s.args = {r.below(kDevices), r.chance(50) ? 1 : 0};
+    } else if (s.kind == "hb_stop" || s.kind == "hb_resume" || s.kind == "dhb_stop" ||
+               s.kind == "dhb_resume" || s.kind == "port_lost" || s.kind == "port_back" ||
+               s.kind == "stop" || s.kind == "kill" || s.kind == "start") {
+    } else {
+      s.args = {r.below(kDevices), r.below(kChannels), r.below(16), r.below(64)};
+    }
+    steps.push_back(s);
+  }
+  return steps;
+}
+
+SimRunResult FailsafeSimulation::run(const std::vector<SimStep>& steps,
+                                     const std::set<std::string>& known, bool keep_history) const {
+  SimRunResult out;
+  std::deque<std::string> recent;
+  auto world = std::make_unique<World>(seed_, known, keep_history, trace_);
+  world->setHistory(&recent);
+  for (size_t i = 0; i < steps.size(); ++i) {
+    if (keep_history) {
+      recent.push_back(std::to_string(i) + ": " + steps[i].text());
+      if (recent.size() > 30) recent.pop_front();
+    }
+    ++out.steps;
+    if (trace_)
+      std::fprintf(trace_, "step %zu t=%.3f: %s\n", i, world->simSeconds(),
+                   steps[i].text().c_str());
+    if (!world->step(steps[i], i)) break;
+  }
+  out.digest = world->digest();
+  out.frames = world->frames();
+  out.sim_seconds = world->simSeconds();
+  out.failure = world->failure();
+  for (const auto& [id, n] : world->knownFailures()) out.known_failures.emplace_back(id, n);
+  out.known_example = world->knownExample();
+  return out;
+}
+
+std::vector<SimStep> FailsafeSimulation::shrink(std::vector<SimStep> steps,
+                                                const std::string& invariant,
+                                                const std::set<std::string>& known) const {
+  auto fails = [&](const std::vector<SimStep>& s) {
+    const SimRunResult r = run(s, known, false);
+    return r.failure && r.failure->invariant == invariant;
+  };
+  {
+    const SimRunResult r = run(steps, known, false);
+    if (!r.failure || r.failure->invariant != invariant) return steps;
+    steps.resize(r.failure->step + 1);
+  }
+  // Drop chunks, halving their size, while it still fails (delta debugging, roughly).
+  for (size_t chunk = std::max<size_t>(1, steps.size() / 2); chunk >= 1; chunk /= 2) {
+    bool removed = true;
+    while (removed) {
+      removed = false;
+      for (size_t at = 0; at < steps.size();) {
+        std::vector<SimStep> shorter = steps;
+        const size_t n = std::min(chunk, shorter.size() - at);
+        shorter.erase(shorter.begin() + static_cast<long>(at),
+                      shorter.begin() + static_cast<long>(at + n));
+        if (!shorter.empty() && fails(shorter)) {
+          steps = shorter;
+          removed = true;
+        } else {
+          at += chunk;
+        }
+      }
+    }
+    if (chunk == 1) break;
+  }
+  return steps;
+}
+
+bool writeSimCase(const std::string& path, const SimCase& c, std::string* error) {
+  std::ofstream out(path);
+  if (!out) {
+    if (error) *error = "cannot write " + path;
+    return false;
+  }
+  out << "# A failsafe_simulation regression case (docs/simulation.md): replayed by\n"
+      << "# test_failsafe_simulation; `failsafe_simulation --replay FILE` prints its run.\n";
+  if (!c.note.empty()) {
+    std::istringstream note(c.note);
+    std::string line;
+    while (std::getline(note, line)) out << "# " << line << "\n";
+  }
+  out << "seed " << c.seed << "\n";
+  out << "status " << c.status << "\n";
+  out << "invariant " << c.invariant << "\n";
+  if (!c.known.empty()) {
+    out << "known ";
+    for (auto it = c.known.begin(); it != c.known.end(); ++it)
+      out << (it == c.known.begin() ? "" : ",") << *it;
+    out << "\n";
+  }
+  for (const SimStep& s : c.steps) out << s.text() << "\n";
+  return static_cast<bool>(out);
+}
+
+bool readSimCase(const std::string& path, SimCase* c, std::string* error) {
+  std::ifstream in(path);
+  if (!in) {
+    if (error) *error = "cannot read " + path;
+    return false;
+  }
+  std::string line;
+  int n = 0;
+  bool seeded = false;
+  while (std::getline(in, line)) {
+    ++n;
+    if (line.empty() || line[0] == '#') continue;
+    if (line.rfind("seed ", 0) == 0) {
+      c->seed = std::stoull(line.substr(5));
+      seeded = true;
+      continue;
+    }
+    if (line.rfind("invariant ", 0) == 0) {
+      c->invariant = line.substr(10);
+      continue;
+    }
+    if (line.rfind("known ", 0) == 0) {
+      std::istringstream ids(line.substr(6));
+      std::string id;
+      while (std::getline(ids, id, ','))
+        if (!id.empty()) c->known.insert(id);
+      continue;
+    }
+    if (line.rfind("status ", 0) == 0) {
+      c->status = line.substr(7);
+      if (c->status != "fixed" && c->status != "known") {
+        if (error)
+          *error = path + ":" + std::to_string(n) + ": status: '" + c->status +
+                   "' is neither fixed nor known";
+        return false;
+      }
+      continue;
+    }
+    std::string why;
+    auto s = SimStep::parse(line, &why);
+    if (!s) {
+      if (error) *error = path + ":" + std::to_string(n) + ": " + why;
+      return false;
+    }
+    c->steps.push_back(*s);
+  }
+  if (!seeded) {
+    if (error) *error = path + ": no 'seed N' line";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,136 @@
+#include "modbus_rtu_driver/simulation/memory_link.h"
+
+#include <cstdio>
+
+namespace modbus_rtu_driver {
+
+namespace {
+Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+}  // namespace
+
+MemoryLink::MemoryLink(LinkConfig config, ManualClock& clock)
+    : Link(std::move(config)), clock_(clock) {
+  // 8N1 (or the configured parity): start, data, parity, stop bits per character.
+  const int bits =
+      1 + config_.data_bits + (config_.parity == Parity::kNone ? 0 : 1) + config_.stop_bits;
+  char_time_ = static_cast<double>(bits) / config_.baud;
+}
+
+void MemoryLink::addDevice(std::unique_ptr<SimDevice> device) {
+  devices_.push_back(std::move(device));
+}
+
+SimDevice* MemoryLink::device(uint8_t address) {
+  for (auto& d : devices_)
+    if (d->address() == address) return d.get();
+  return nullptr;
+}
+
+void MemoryLink::clearFaults() {
+  for (auto& f : faults_) f = MemoryLinkFaults{};
+}
+
+void MemoryLink::setPortLost(bool lost) {
+  port_lost_ = lost;
+  if (lost) connected_ = false;
+}
+
+bool MemoryLink::connect(std::string* error) {
+  if (port_lost_) {
+    if (error) *error = "the adapter is gone (simulated port loss)";
+    return false;
+  }
+  connected_ = true;
+  noteConnected();
+  return true;
+}
+
+void MemoryLink::wire(size_t bytes) {
+  // The frame's characters, then the 3.5 characters of silence that end it.
+  clock_.advance(seconds((static_cast<double>(bytes) + 3.5) * char_time_));
+}
+
+void MemoryLink::fold(bool outgoing, const Bytes& frame) {
+  // FNV-1a over the direction, the time (ns) and the bytes: the same run gives the same digest.
+  auto mix = [this](uint8_t b) {
+    digest_ ^= b;
+    digest_ *= 1099511628211ull;
+  };
+  mix(outgoing ? 0x54 : 0x52);
+  const auto ns = static_cast<uint64_t>(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(clock_.now().time_since_epoch())
+          .count());
+  for (int i = 0; i < 8; ++i) mix(static_cast<uint8_t>(ns >> (8 * i)));
+  for (uint8_t b : frame) mix(b);
+  ++frames_;
+  if (history_size_ == 0 && !trace_) return;
+  char when[32];
+  std::snprintf(when, sizeof when, "t=%.3f ", static_cast<double>(ns) * 1e-9 - 3600.0);
+  history_.push_back(std::string(when) + (outgoing ? "tx " : "rx ") + toHex(frame));
+  if (trace_) std::fprintf(trace_, "%s\n", history_.back().c_str());
+  while (history_.size() > history_size_) history_.pop_front();
+}
+
+Result MemoryLink::attempt(const EncodedRequest& request) {
+  if (port_lost_) {
+    connected_ = false;
+    return Result::failure(ErrorKind::kIo, "the adapter is gone (simulated port loss)");
+  }
+  const Bytes& adu = request.adu();
+  fold(true, adu);
+  wire(adu.size());
+  LineEvent event;
+  event.request = request.request();
+  event.execute_id = execute_id_;
+  event.at = clock_.now();
+  const uint8_t slave = request.request().slave;
+  SimDevice* target = nullptr;
+  for (auto& d : devices_)
+    if (d->answersTo(slave, &request.request()) && !faults_[d->address()].silent) {
+      target = d.get();
+      break;
+    }
+  auto timeout = [&](const char* why) {
+    clock_.advance(seconds(responseTimeout(request)));
+    if (observer_) observer_(event);
+    return Result::failure(ErrorKind::kTimeout, request.request().describe() + ": " + why);
+  };
+  if (!target) return timeout("no reply");
+  event.heard = true;
+  std::optional<Bytes> reply = target->handle(request.request(), clock_.now());
+  if (!reply) return timeout("no reply");
+  MemoryLinkFaults& f = faults_[target->address()];
+  if (f.lost > 0) {
+    --f.lost;
+    return timeout("no reply (reply lost)");
+  }
+  if (f.late > 0) {
+    --f.late;
+    Result r = timeout("no reply (it came late)");
+    fold(false, *reply);  // on the line after the timeout: thrown away as stale
+    return r;
+  }
+  Bytes bytes = *reply;
+  if (f.garbled > 0) {
+    --f.garbled;
+    bytes.back() ^= 0x5A;  // a bad CRC
+  }
+  fold(false, bytes);
+  wire(bytes.size());
+  Result r = decodeReply(request, bytes);
+  event.answered = r.ok() || r.error == ErrorKind::kException;
+  if (observer_) observer_(event);
+  return r;
+}
+
+Result MemoryLink::sendBroadcast(const EncodedRequest& request) {
+  fold(true, request.adu());
+  wire(request.adu().size());
+  for (auto& d : devices_)
+    if (!faults_[d->address()].silent) d->handleBroadcast(request.request(), clock_.now());
+  return Result::success();
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,389 @@
+#include "modbus_rtu_driver/simulation/sim_node.h"
+
+#include <algorithm>
+
+#include "modbus_rtu_driver/core/config/number_text.h"
+#include "modbus_rtu_driver/devices/generic_device.h"
+#include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/yespeed_pdu.h"
+
+namespace modbus_rtu_driver {
+
+namespace {
+
+std::future<Result> ready(Result r) {
+  std::promise<Result> p;
+  p.set_value(std::move(r));
+  return p.get_future();
+}
+
+bool isReady(const std::future<Result>& f) {
+  return !f.valid() || f.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
+}
+
+std::shared_ptr<Device> makeDevice(const DeviceConfig& dc) {
+  if (dc.type == "lc_relay8") return std::make_shared<LcRelay8>(dc);
+  if (dc.type == "ld58a08") return std::make_shared<Ld58a08>(dc);
+  if (dc.type == "yespeed_pdu") return std::make_shared<YespeedPdu>(dc);
+  return std::make_shared<GenericDevice>(dc);
+}
+
+}  // namespace
+
+SimNode::SimNode(SimNodeOptions options, Transport& transport, Clock& clock, SimNodeHooks hooks)
+    : options_(std::move(options)), clock_(clock), hooks_(std::move(hooks)) {
+  bus_ = std::make_unique<BusScheduler>(transport, options_.scheduling, clock_);
+  double shortest = 0.5;
+  bool deadlines = false;
+  if (options_.heartbeat_timeout > 0) {
+    heartbeat_ = std::make_unique<Watchdog>(options_.heartbeat_timeout, clock_);
+    shortest = std::min(shortest, options_.heartbeat_timeout);
+    deadlines = true;
+  }
+  for (const DeviceConfig& dc : options_.devices) {
+    auto e = std::make_unique<Entry>();
+    e->device = makeDevice(dc);
+    bus_->addDevice(dc.name);
+    if (e->device->outputCount() > 0) {
+      e->failsafe = std::make_unique<DeviceFailsafe>(*e->device, *bus_, clock_);
+      e->failsafe->setBusHeartbeat(heartbeat_.get(), "/alive");
+      e->failsafe->setReportSink([this](const FailsafeReport& r) {
+        if (hooks_.report) hooks_.report(r);
+      });
+      // BusNode::startFailsafe watches a device's own heartbeat too.
+      if (e->failsafe->heartbeat()) {
+        shortest = std::min(shortest, dc.failsafe.heartbeat_timeout);
+        deadlines = true;
+      }
+      for (double s : dc.failsafe.command_timeout) {
+        if (s <= 0) continue;
+        shortest = std::min(shortest, s);
+        deadlines = true;
+      }
+    }
+    entries_.push_back(std::move(e));
+  }
+  // BusNode::startFailsafe: deadlines at a tenth of the shortest timeout.
+  if (deadlines) check_period_ = std::max(0.005, shortest / 10);
+}
+
+SimNode::~SimNode() {
+  // The bus's queued jobs call into the fail-safes: they fail unsent before those go.
+  bus_->stop();
+}
+
+SimNode::Entry* SimNode::entry(const std::string& name) {
+  for (auto& e : entries_)
+    if (e->device->name() == name) return e.get();
+  return nullptr;
+}
+
+Device* SimNode::device(const std::string& name) {
+  Entry* e = entry(name);
+  return e ? e->device.get() : nullptr;
+}
+
+DeviceFailsafe* SimNode::failsafe(const std::string& name) {
+  Entry* e = entry(name);
+  return e ? e->failsafe.get() : nullptr;
+}
+
+std::vector<SimNode::Entry*> SimNode::answeringFirst() {
+  std::vector<Entry*> order;
+  for (auto& e : entries_) order.push_back(e.get());
+  std::stable_sort(order.begin(), order.end(), [this](Entry* x, Entry* y) {
+    return bus_->health(x->device->name()).consecutive_failures == 0 &&
+           bus_->health(y->device->name()).consecutive_failures > 0;
+  });
+  return order;
+}
+
+std::future<Result> SimNode::applySafe(Entry& e, const std::string& trigger,
+                                       const std::string& reason) {
+  if (e.failsafe) return e.failsafe->applySafe(trigger, reason);
+  auto& generic = static_cast<GenericDevice&>(*e.device);
+  if (generic.safeSignals().empty()) return ready(Result::success());
+  return bus_->submit(e.device->name(), [this, &e, trigger, reason](Transport& t) {
+    return genericWriteSafe(e, t, trigger, reason);
+  });
+}
+
+// GenericAdapter::writeSafe: every safe value written and read back; not reached because the
+// device did not answer: written again when it answers a poll.
+Result SimNode::genericWriteSafe(Entry& e, Transport& t, const std::string& trigger,
+                                 const std::string& reason) {
+  auto& generic = static_cast<GenericDevice&>(*e.device);
+  FailsafeReport r;
+  r.device = e.device->name();
+  r.trigger = trigger;
+  r.reason = reason;
+  r.action = "safe";
+  for (size_t i : generic.safeSignals()) {
+    r.channels.push_back(generic.signals()[i].name);
+    r.states.push_back(*generic.signals()[i].safe_value != 0.0);
+  }
+  bool silent = false;
+  const Result w = generic.writeSafeValues(t, &silent);
+  e.generic_safe_pending = silent;
+  r.confirmed = w.ok();
+  r.message = w.ok() ? "confirmed by reading the signals back" : w.message;
+  if (hooks_.report) hooks_.report(r);
+  return w;
+}
+
+void SimNode::beginStart() {
+  bus_->startStepping();
+  for (auto& e : entries_)
+    if (e->device->config().failsafe.on_start_safe)
+      start_writes_.push_back(applySafe(*e, "start", "on_start: safe"));
+}
+
+bool SimNode::startWritesDone() const {
+  return std::all_of(start_writes_.begin(), start_writes_.end(), isReady);
+}
+
+void SimNode::finishStart() {
+  start_writes_.clear();
+  // The heartbeats count from here (BusNode::start).
+  if (heartbeat_) heartbeat_->feed();
+  for (auto& e : entries_)
+    if (e->failsafe && e->failsafe->heartbeat()) e->failsafe->heartbeat()->feed();
+  for (auto& up : entries_) {
+    Entry* e = up.get();
+    auto device = e->device;
+    if (e->failsafe) {
+      bus_->addPoll(
+          device->name(), device->config().poll_rate,
+          [this, e](Transport& t) {
+            if (hooks_.poll_starting) hooks_.poll_starting(e->device->name());
+            e->failsafe->pollStarting();
+            return e->device->poll(t);
+          },
+          [this, e](const Result& r) {
+            if (r.ok()) e->failsafe->afterPoll();
+            if (hooks_.polled) hooks_.polled(e->device->name(), r);
+          });
+    } else {
+      auto& generic = static_cast<GenericDevice&>(*device);
+      for (size_t g = 0; g < generic.groups().size(); ++g) {
+        if (generic.groups()[g].signals.empty()) continue;
+        bus_->addPoll(
+            device->name(), generic.groups()[g].rate,
+            [this, e, g](Transport& t) {
+              if (hooks_.poll_starting) hooks_.poll_starting(e->device->name());
+              return static_cast<GenericDevice&>(*e->device).pollGroup(t, g);
+            },
+            [this, e](const Result& r) {
+              // GenericAdapter::onPoll: safe values not reached are written once it answers.
+              if (e->generic_safe_pending && !noProperAnswer(r.error)) {
+                e->generic_safe_pending = false;
+                bus_->submit(e->device->name(), [this, e](Transport& t) {
+                  return genericWriteSafe(
+                      *e, t, "restart",
+                      "the device answers again; its safe values were not reached before");
+                });
+              }
+              if (hooks_.polled) hooks_.polled(e->device->name(), r);
+            });
+      }
+    }
+  }
+  started_ = true;
+}
+
+void SimNode::beginStop() {
+  share_closed_ = true;
+  bus_->closeShared("the share stopped (the node is stopping)");
+  started_ = false;
+  for (Entry* e : answeringFirst()) {
+    const bool safe = e->failsafe ? e->failsafe->hasSafeStates()
+                                  : !static_cast<GenericDevice&>(*e->device).safeSignals().empty();
+    if (safe) stop_writes_.push_back(applySafe(*e, "shutdown", "node stops"));
+  }
+}
+
+bool SimNode::stopWritesDone() const {
+  return std::all_of(stop_writes_.begin(), stop_writes_.end(), isReady);
+}
+
+void SimNode::checkDeadlines() {
+  const std::vector<Entry*> order = answeringFirst();
+  if (heartbeat_ && heartbeat_->expired()) {
+    const std::string reason =
+        "no message on /alive within " + numberText(options_.heartbeat_timeout) + " s";
+    for (Entry* e : order) applySafe(*e, "heartbeat", reason);
+  }
+  for (Entry* e : order)
+    if (e->failsafe) e->failsafe->checkDeadlines();
+}
+
+void SimNode::feedHeartbeat() {
+  if (heartbeat_) heartbeat_->feed();
+}
+
+void SimNode::feedDeviceHeartbeat(const std::string& device) {
+  Entry* e = entry(device);
+  if (e && e->failsafe && e->failsafe->heartbeat()) e->failsafe->heartbeat()->feed();
+}
+
+std::future<Result> SimNode::runOp(uint64_t op, const std::string& device, Done done,
+                                   std::function<Result(Transport&)> job) {
+  return bus_->submit(device, [this, op, done, job](Transport& t) {
+    const uint64_t outer = current_op_;
+    current_op_ = op;
+    Result r = job(t);
+    current_op_ = outer;
+    if (done) done(r);
+    return r;
+  });
+}
+
+Result SimNode::completeBatch(Entry& e, Transport& t,
+                              const std::shared_ptr<OutputBatch::Entry>& entry) {
+  // DeviceAdapter::completeBatch.
+  const bool sent = !entry->result;
+  if (sent) e.failsafe->userWriteSending();
+  Result w =
+      e.batch.complete(*e.device, t, entry,
+                       [this, &e](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
+                         e.failsafe->userWriteConfirmed(chs, sts);
+                         if (hooks_.written) hooks_.written(e.device->name(), chs, sts);
+                       });
+  if (sent && !w.ok()) e.failsafe->userWriteNotConfirmed(entry->channels, w);
+  return w;
+}
+
+std::future<Result> SimNode::set(uint64_t op, const std::string& device,
+                                 const std::vector<uint8_t>& channels,
+                                 const std::vector<bool>& states, Done done) {
+  Entry* e = entry(device);
+  auto added = e->batch.add(*e->device, channels, states);
+  if (added->result) return ready(*added->result);
+  return runOp(op, device, done,
+               [this, e, added](Transport& t) { return completeBatch(*e, t, added); });
+}
+
+std::future<Result> SimNode::command(uint64_t op, const std::string& device, uint8_t channel,
+                                     bool state, Done done) {
+  // DeviceAdapter::onCommand: one job at a time completes the newest command and everything
+  // added before it. The caller of a topic gets no answer; the future says how the job went.
+  Entry* e = entry(device);
+  e->failsafe->commandReceived(channel, state);
+  auto added = e->batch.add(*e->device, {channel}, {state});
+  if (added->result) return ready(*added->result);
+  e->newest_command = std::move(added);
+  if (e->command_job_queued) return ready(Result::success());  // merged into the queued job
+  e->command_job_queued = true;
+  return runOp(op, device, done, [this, e](Transport& t) {
+    auto newest = std::move(e->newest_command);
+    e->command_job_queued = false;
+    return completeBatch(*e, t, newest);
+  });
+}
+
+std::future<Result> SimNode::pulse(uint64_t op, const std::string& device, uint8_t channel,
+                                   bool state, double duration, Done done) {
+  Entry* e = entry(device);
+  const std::string problem = LcRelay8::validatePulse(channel, duration);
+  if (!problem.empty()) return ready(Result::failure(ErrorKind::kInvalidArgument, problem));
+  return runOp(op, device, done, [e, channel, state, duration](Transport& t) {
+    // LcRelay8Adapter::onPulse.
+    auto& board = static_cast<LcRelay8&>(*e->device);
+    e->failsafe->timedCommandSending();
+    Result w = board.pulse(t, channel, state, duration);
+    e->failsafe->timedCommandDone(TimedIntent{channel, state, !state, duration}, w);
+    if (w.ok()) board.poll(t);
+    return w;
+  });
+}
+
+std::future<Result> SimNode::setPwm(uint64_t op, const std::string& device, const PwmSettings& s,
+                                    Done done) {
+  Entry* e = entry(device);
+  const std::string problem = Ld58a08::validatePwm(s);
+  if (!problem.empty()) return ready(Result::failure(ErrorKind::kInvalidArgument, problem));
+  return runOp(op, device, done, [e, s](Transport& t) {
+    // Ld58a08Adapter::onSetPwm.
+    auto& board = static_cast<Ld58a08&>(*e->device);
+    e->failsafe->timedCommandSending();
+    Result w = board.setPwm(t, s);
+    e->failsafe->timedCommandDone(Ld58a08::pwmIntent(s), w);
+    if (w.ok()) board.readPwm(t);
+    return w;
+  });
+}
+
+std::future<Result> SimNode::stopPwm(uint64_t op, const std::string& device, uint8_t channel,
+                                     Done done) {
+  Entry* e = entry(device);
+  return runOp(op, device, done, [e, channel](Transport& t) {
+    // Ld58a08Adapter::onStopPwm.
+    auto& board = static_cast<Ld58a08&>(*e->device);
+    e->failsafe->timedCommandSending();
+    Result w = board.stopPwm(t, channel);
+    if (w.ok()) e->failsafe->timedCommandStopped(channel);
+    if (w.ok()) board.readPwm(t);
+    return w;
+  });
+}
+
+void SimNode::externalWrite(const Request& request, CommandSource source) {
+  // BusNode::externalWrite.
+  for (auto& e : entries_)
+    if (e->failsafe &&
+        (request.slave == kBroadcastAddress || e->device->address() == request.slave))
+      e->failsafe->externalWrite(request, source);
+}
+
+std::future<Result> SimNode::share(uint64_t op, const Request& request, Done done) {
+  // ShareGateway::handle (the TCP server aside): a client's write is sent once; confirmed, it
+  // is the fail-safe's externalWrite before any later job runs.
+  auto promise = std::make_shared<std::promise<Result>>();
+  std::future<Result> f = promise->get_future();
+  std::string device;
+  for (auto& e : entries_)
+    if (e->device->address() == request.slave) device = e->device->name();
+  Request sent = request;
+  sent.repeatable = isReadFunction(request.function);
+  bus_->submitShared(
+      device,
+      [this, op, sent, done](Transport& t) {
+        const uint64_t outer = current_op_;
+        current_op_ = op;
+        Result r = t.execute(sent);
+        current_op_ = outer;
+        if (r.ok() && !isReadFunction(sent.function)) externalWrite(sent, CommandSource::kShare);
+        if (done) done(r);
+        return r;
+      },
+      [promise](const Result& r) { promise->set_value(r); });
+  return f;
+}
+
+std::future<Result> SimNode::raw(uint64_t op, const Request& request, Done done) {
+  // RawWrites::run: the request as the service builds it, confirmed writes are externalWrite.
+  const std::string problem = request.validate();
+  if (!problem.empty()) return ready(Result::failure(ErrorKind::kInvalidArgument, problem));
+  std::string owner = "slave " + std::to_string(request.slave);
+  for (auto& e : entries_)
+    if (e->device->address() == request.slave) owner = e->device->name();
+  return runOp(op, owner, done, [this, request](Transport& t) {
+    Result r = t.execute(request);
+    if (r.ok()) externalWrite(request, CommandSource::kRaw);
+    return r;
+  });
+}
+
+std::future<Result> SimNode::writeSignal(uint64_t op, const std::string& device, size_t signal,
+                                         double value, Done done) {
+  Entry* e = entry(device);
+  auto& generic = static_cast<GenericDevice&>(*e->device);
+  std::vector<uint16_t> words;
+  const std::string problem = generic.encodeWrite(signal, value, &words);
+  if (!problem.empty()) return ready(Result::failure(ErrorKind::kInvalidArgument, problem));
+  return runOp(op, device, done, [&generic, signal, value](Transport& t) {
+    return generic.writeSignal(t, signal, value);
+  });
+}
+
+}  // namespace modbus_rtu_driver
