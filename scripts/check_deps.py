@@ -60,6 +60,7 @@ ROSDEP_TO_DEBIAN = {
     "python3-catkin-lint": ["catkin-lint"],
     "clang-format": ["clang-format"],
     "clang-tidy": ["clang-tidy"],
+    "git": ["git"],
     "clang": ["clang"],
 }
 SHELL_SKIP = {
