@@ -111,7 +111,7 @@ std::future<Result> SimNode::applySafe(Entry& e, const std::string& trigger,
 // GenericAdapter::writeSafe: every safe value written and read back; not reached because the
 // device did not answer: written again when it answers a poll.
 Result SimNode::genericWriteSafe(Entry& e, Transport& t, const std::string& trigger,
-                                 const std::string& reason) {
+                                 const std::string& reason) const {
   auto& generic = static_cast<GenericDevice&>(*e.device);
   FailsafeReport r;
   r.device = e.device->name();
@@ -123,7 +123,7 @@ Result SimNode::genericWriteSafe(Entry& e, Transport& t, const std::string& trig
     r.states.push_back(*generic.signals()[i].safe_value != 0.0);
   }
   bool silent = false;
-  const Result w = generic.writeSafeValues(t, &silent);
+  Result w = generic.writeSafeValues(t, &silent);
   e.generic_safe_pending = silent;
   r.confirmed = w.ok();
   r.message = w.ok() ? "confirmed by reading the signals back" : w.message;
@@ -228,14 +228,15 @@ void SimNode::feedDeviceHeartbeat(const std::string& device) {
 
 std::future<Result> SimNode::runOp(uint64_t op, const std::string& device, Done done,
                                    std::function<Result(Transport&)> job) {
-  return bus_->submit(device, [this, op, done, job](Transport& t) {
-    const uint64_t outer = current_op_;
-    current_op_ = op;
-    Result r = job(t);
-    current_op_ = outer;
-    if (done) done(r);
-    return r;
-  });
+  return bus_->submit(device,
+                      [this, op, done = std::move(done), job = std::move(job)](Transport& t) {
+                        const uint64_t outer = current_op_;
+                        current_op_ = op;
+                        Result r = job(t);
+                        current_op_ = outer;
+                        if (done) done(r);
+                        return r;
+                      });
 }
 
 Result SimNode::completeBatch(Entry& e, Transport& t,
@@ -259,7 +260,7 @@ std::future<Result> SimNode::set(uint64_t op, const std::string& device,
   Entry* e = entry(device);
   auto added = e->batch.add(*e->device, channels, states);
   if (added->result) return ready(*added->result);
-  return runOp(op, device, done,
+  return runOp(op, device, std::move(done),
                [this, e, added](Transport& t) { return completeBatch(*e, t, added); });
 }
 
@@ -274,7 +275,7 @@ std::future<Result> SimNode::command(uint64_t op, const std::string& device, uin
   e->newest_command = std::move(added);
   if (e->command_job_queued) return ready(Result::success());  // merged into the queued job
   e->command_job_queued = true;
-  return runOp(op, device, done, [this, e](Transport& t) {
+  return runOp(op, device, std::move(done), [this, e](Transport& t) {
     auto newest = std::move(e->newest_command);
     e->command_job_queued = false;
     return completeBatch(*e, t, newest);
@@ -286,7 +287,7 @@ std::future<Result> SimNode::pulse(uint64_t op, const std::string& device, uint8
   Entry* e = entry(device);
   const std::string problem = LcRelay8::validatePulse(channel, duration);
   if (!problem.empty()) return ready(Result::failure(ErrorKind::kInvalidArgument, problem));
-  return runOp(op, device, done, [e, channel, state, duration](Transport& t) {
+  return runOp(op, device, std::move(done), [e, channel, state, duration](Transport& t) {
     // LcRelay8Adapter::onPulse.
     auto& board = static_cast<LcRelay8&>(*e->device);
     e->failsafe->timedCommandSending();
@@ -302,7 +303,7 @@ std::future<Result> SimNode::setPwm(uint64_t op, const std::string& device, cons
   Entry* e = entry(device);
   const std::string problem = Ld58a08::validatePwm(s);
   if (!problem.empty()) return ready(Result::failure(ErrorKind::kInvalidArgument, problem));
-  return runOp(op, device, done, [e, s](Transport& t) {
+  return runOp(op, device, std::move(done), [e, s](Transport& t) {
     // Ld58a08Adapter::onSetPwm.
     auto& board = static_cast<Ld58a08&>(*e->device);
     e->failsafe->timedCommandSending();
@@ -316,7 +317,7 @@ std::future<Result> SimNode::setPwm(uint64_t op, const std::string& device, cons
 std::future<Result> SimNode::stopPwm(uint64_t op, const std::string& device, uint8_t channel,
                                      Done done) {
   Entry* e = entry(device);
-  return runOp(op, device, done, [e, channel](Transport& t) {
+  return runOp(op, device, std::move(done), [e, channel](Transport& t) {
     // Ld58a08Adapter::onStopPwm.
     auto& board = static_cast<Ld58a08&>(*e->device);
     e->failsafe->timedCommandSending();
@@ -347,7 +348,7 @@ std::future<Result> SimNode::share(uint64_t op, const Request& request, Done don
   sent.repeatable = isReadFunction(request.function);
   bus_->submitShared(
       device,
-      [this, op, sent, done](Transport& t) {
+      [this, op, sent, done = std::move(done)](Transport& t) {
         const uint64_t outer = current_op_;
         current_op_ = op;
         Result r = t.execute(sent);
@@ -367,7 +368,7 @@ std::future<Result> SimNode::raw(uint64_t op, const Request& request, Done done)
   std::string owner = "slave " + std::to_string(request.slave);
   for (auto& e : entries_)
     if (e->device->address() == request.slave) owner = e->device->name();
-  return runOp(op, owner, done, [this, request](Transport& t) {
+  return runOp(op, owner, std::move(done), [this, request](Transport& t) {
     Result r = t.execute(request);
     if (r.ok()) externalWrite(request, CommandSource::kRaw);
     return r;
@@ -381,7 +382,7 @@ std::future<Result> SimNode::writeSignal(uint64_t op, const std::string& device,
   std::vector<uint16_t> words;
   const std::string problem = generic.encodeWrite(signal, value, &words);
   if (!problem.empty()) return ready(Result::failure(ErrorKind::kInvalidArgument, problem));
-  return runOp(op, device, done, [&generic, signal, value](Transport& t) {
+  return runOp(op, device, std::move(done), [&generic, signal, value](Transport& t) {
     return generic.writeSignal(t, signal, value);
   });
 }

@@ -114,7 +114,7 @@ class SimNode {
   std::vector<Entry*> answeringFirst();
   std::future<Result> applySafe(Entry& e, const std::string& trigger, const std::string& reason);
   Result genericWriteSafe(Entry& e, Transport& t, const std::string& trigger,
-                          const std::string& reason);
+                          const std::string& reason) const;
   Result completeBatch(Entry& e, Transport& t, const std::shared_ptr<OutputBatch::Entry>& entry);
   void externalWrite(const Request& request, CommandSource source);
   std::future<Result> runOp(uint64_t op, const std::string& device, Done done,
