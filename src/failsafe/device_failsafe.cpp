@@ -7,16 +7,6 @@
 
 namespace modbus_rtu_driver {
 
-namespace {
-
-std::future<Result> ready(Result r) {
-  std::promise<Result> p;
-  p.set_value(std::move(r));
-  return p.get_future();
-}
-
-}  // namespace
-
 std::string FailsafeReport::text() const {
   std::string t = trigger + " (" + reason + "): ";
   std::vector<std::string> changes;
@@ -66,7 +56,7 @@ std::future<Result> DeviceFailsafe::applySafe(const std::string& trigger, const 
       targets.states.push_back(all.states[i]);
     }
   }
-  if (targets.empty()) return ready(Result::success());
+  if (targets.empty()) return readyResult(Result::success());
   return bus_.submit(device_.name(),
                      [this, lasting, only, targets, trigger, reason, since](Transport& t) {
                        const OutputTargets now = lasting ? intents_.heldTargets(only) : targets;

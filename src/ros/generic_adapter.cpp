@@ -114,11 +114,7 @@ class GenericAdapter : public DeviceAdapter {
 
   std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
                                 const std::vector<uint8_t>&) override {
-    if (!hasSafeStates()) {
-      std::promise<Result> nothing;
-      nothing.set_value(Result::success());
-      return nothing.get_future();
-    }
+    if (!hasSafeStates()) return readyResult(Result::success());
     return bus_.submit(device_->name(), [this, trigger, reason](Transport& t) {
       return writeSafe(t, trigger, reason);
     });

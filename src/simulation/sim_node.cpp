@@ -11,12 +11,6 @@ namespace modbus_rtu_driver {
 
 namespace {
 
-std::future<Result> ready(Result r) {
-  std::promise<Result> p;
-  p.set_value(std::move(r));
-  return p.get_future();
-}
-
 bool isReady(const std::future<Result>& f) {
   return !f.valid() || f.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
 }
@@ -102,7 +96,7 @@ std::future<Result> SimNode::applySafe(Entry& e, const std::string& trigger,
                                        const std::string& reason) {
   if (e.failsafe) return e.failsafe->applySafe(trigger, reason);
   auto& generic = static_cast<GenericDevice&>(*e.device);
-  if (generic.safeSignals().empty()) return ready(Result::success());
+  if (generic.safeSignals().empty()) return readyResult(Result::success());
   return bus_->submit(e.device->name(), [this, &e, trigger, reason](Transport& t) {
     return genericWriteSafe(e, t, trigger, reason);
   });
@@ -259,7 +253,7 @@ std::future<Result> SimNode::set(uint64_t op, const std::string& device,
                                  const std::vector<bool>& states, Done done) {
   Entry* e = entry(device);
   auto added = e->batch.add(*e->device, channels, states);
-  if (added->result) return ready(*added->result);
+  if (added->result) return readyResult(*added->result);
   return runOp(op, device, std::move(done),
                [this, e, added](Transport& t) { return completeBatch(*e, t, added); });
 }
@@ -271,9 +265,9 @@ std::future<Result> SimNode::command(uint64_t op, const std::string& device, uin
   Entry* e = entry(device);
   e->failsafe->commandReceived(channel, state);
   auto added = e->batch.add(*e->device, {channel}, {state});
-  if (added->result) return ready(*added->result);
+  if (added->result) return readyResult(*added->result);
   e->newest_command = std::move(added);
-  if (e->command_job_queued) return ready(Result::success());  // merged into the queued job
+  if (e->command_job_queued) return readyResult(Result::success());  // merged into the queued job
   e->command_job_queued = true;
   return runOp(op, device, std::move(done), [this, e](Transport& t) {
     auto newest = std::move(e->newest_command);
@@ -286,7 +280,7 @@ std::future<Result> SimNode::pulse(uint64_t op, const std::string& device, uint8
                                    bool state, double duration, Done done) {
   Entry* e = entry(device);
   const std::string problem = LcRelay8::validatePulse(channel, duration);
-  if (!problem.empty()) return ready(Result::failure(ErrorKind::kInvalidArgument, problem));
+  if (!problem.empty()) return readyResult(Result::failure(ErrorKind::kInvalidArgument, problem));
   return runOp(op, device, std::move(done), [e, channel, state, duration](Transport& t) {
     // LcRelay8Adapter::onPulse.
     auto& board = static_cast<LcRelay8&>(*e->device);
@@ -302,7 +296,7 @@ std::future<Result> SimNode::setPwm(uint64_t op, const std::string& device, cons
                                     Done done) {
   Entry* e = entry(device);
   const std::string problem = Ld58a08::validatePwm(s);
-  if (!problem.empty()) return ready(Result::failure(ErrorKind::kInvalidArgument, problem));
+  if (!problem.empty()) return readyResult(Result::failure(ErrorKind::kInvalidArgument, problem));
   return runOp(op, device, std::move(done), [e, s](Transport& t) {
     // Ld58a08Adapter::onSetPwm.
     auto& board = static_cast<Ld58a08&>(*e->device);
@@ -364,7 +358,7 @@ std::future<Result> SimNode::share(uint64_t op, const Request& request, Done don
 std::future<Result> SimNode::raw(uint64_t op, const Request& request, Done done) {
   // RawWrites::run: the request as the service builds it, confirmed writes are externalWrite.
   const std::string problem = request.validate();
-  if (!problem.empty()) return ready(Result::failure(ErrorKind::kInvalidArgument, problem));
+  if (!problem.empty()) return readyResult(Result::failure(ErrorKind::kInvalidArgument, problem));
   std::string owner = "slave " + std::to_string(request.slave);
   for (auto& e : entries_)
     if (e->device->address() == request.slave) owner = e->device->name();
@@ -381,7 +375,7 @@ std::future<Result> SimNode::writeSignal(uint64_t op, const std::string& device,
   auto& generic = static_cast<GenericDevice&>(*e->device);
   std::vector<uint16_t> words;
   const std::string problem = generic.encodeWrite(signal, value, &words);
-  if (!problem.empty()) return ready(Result::failure(ErrorKind::kInvalidArgument, problem));
+  if (!problem.empty()) return readyResult(Result::failure(ErrorKind::kInvalidArgument, problem));
   return runOp(op, device, std::move(done), [&generic, signal, value](Transport& t) {
     return generic.writeSignal(t, signal, value);
   });

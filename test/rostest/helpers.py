@@ -1,6 +1,7 @@
 """Shared pieces of the rostests: the simulator's control socket and waiting helpers."""
 import os
 import socket
+import struct
 import sys
 import time
 
@@ -82,3 +83,50 @@ def wire_log(path):
             out.append((direction, float(first), float(last), bytes.fromhex(hexed), float(cpu),
                         waits))
     return out
+
+
+def device_status(diagnostics, device):
+    """The /diagnostics status of `device` in a message published after this call (diagnostics:
+    a Latest of /diagnostics)."""
+    diagnostics.msg = None
+    return wait_until(
+        lambda: next((s for s in (diagnostics.msg.status if diagnostics.msg else [])
+                      if s.name.endswith("device " + device)), None), 10,
+        "diagnostics of " + device)
+
+
+def device_value(diagnostics, device, key):
+    """One key's value in device_status."""
+    return next(kv.value for kv in device_status(diagnostics, device).values if kv.key == key)
+
+
+def modbus_tcp_write(port, unit, pdu, echoed):
+    """A write through a Modbus TCP server (the share): "ok" when the reply echoes the unit and
+    the request PDU's first `echoed` bytes, "exception N" on an exception, else "unexpected"."""
+    request = struct.pack(">HHHB", 9, 0, len(pdu) + 1, unit) + pdu
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
+        s.sendall(request)
+        reply = b""
+        while len(reply) < 9:
+            chunk = s.recv(64)
+            if not chunk:
+                break
+            reply += chunk
+    if reply[7:8] == bytes([pdu[0] | 0x80]):
+        return "exception %d" % reply[8]
+    # A whole echo (FC05, FC06) is the reply, byte for byte; FC15/16 echo the address and count.
+    same = (reply[6:] == request[6:] if echoed == len(pdu) else
+            reply[6:7 + echoed] == request[6:7 + echoed])
+    return "ok" if same else "unexpected %r" % reply
+
+
+def modbus_tcp_write_coil(port, unit, coil, state):
+    """FC05: the whole request is echoed."""
+    return modbus_tcp_write(port, unit, struct.pack(">BHH", 5, coil, 0xFF00 if state else 0), 5)
+
+
+def modbus_tcp_write_registers(port, unit, address, values):
+    """FC16: the reply echoes the address and the count."""
+    pdu = struct.pack(">BHHB", 16, address, len(values), 2 * len(values))
+    pdu += b"".join(struct.pack(">H", v) for v in values)
+    return modbus_tcp_write(port, unit, pdu, 5)

@@ -4,8 +4,6 @@ simulator's coils, not only in the node's topics. The test runs the bus node its
 start it on outputs left on and stop it with SIGINT or SIGTERM."""
 import os
 import signal
-import socket
-import struct
 import tempfile
 import subprocess
 import threading
@@ -233,7 +231,7 @@ class FailsafeTest(unittest.TestCase):
             helpers.wait_until(lambda: self.coils(RELAYS, 4) == [0, 0, 1, 1], 10,
                                "pump held off, lamp and fan restored")
             self.assertEqual(dict(zip(e.channels, e.states))["pump"], False)
-            status = self.diagnostics("relays")
+            status = helpers.device_status(self.diag, "relays")
             self.assertEqual(status.level, DiagnosticStatus.WARN, status)
             self.assertIn("safe state", status.message)
         finally:
@@ -255,48 +253,22 @@ class FailsafeTest(unittest.TestCase):
         try:
             self.start_node()
             self.set("relays/fan", False)
-            restarts = self.diagnostics_value("relays", "restarts detected")
+            restarts = helpers.device_value(self.diag, "relays", "restarts detected")
             since = len(self.events)
-            self.assertEqual(modbus_tcp_write_coil(port, int(RELAYS), 3, True), "ok")
+            self.assertEqual(helpers.modbus_tcp_write_coil(port, int(RELAYS), 3, True), "ok")
             self.assertEqual(self.coils(RELAYS, 4)[3], 1)
             # Enough polls (10 Hz) for a restart to have been seen.
             outputs = helpers.Latest(NS + "relays/outputs", DigitalStates)
             helpers.wait_until(lambda: outputs.count >= 6, 10, "5 more polls of the relays")
             self.assertEqual(self.coils(RELAYS, 4)[3], 1, "the share's write was reverted")
             self.assertFalse([e for e in self.events[since:] if e.trigger == "restart"])
-            self.assertEqual(self.diagnostics_value("relays", "restarts detected"), restarts)
+            self.assertEqual(helpers.device_value(self.diag, "relays", "restarts detected"),
+                             restarts)
             self.sim.command("power_cycle")
             self.event("restart", "relays", since)
             helpers.wait_until(lambda: self.coils(RELAYS, 4)[3] == 1, 10, "fan restored")
         finally:
             del self.config["share"]
-
-    def diagnostics(self, device):
-        self.diag.msg = None  # one published after this call
-        status = helpers.wait_until(
-            lambda: next((s for s in (self.diag.msg.status if self.diag.msg else [])
-                          if s.name.endswith("device " + device)), None), 10,
-            "diagnostics of " + device)
-        return status
-
-    def diagnostics_value(self, device, key):
-        return next(kv.value for kv in self.diagnostics(device).values if kv.key == key)
-
-
-def modbus_tcp_write_coil(port, unit, coil, state):
-    """FC05 through a Modbus TCP server: "ok" on the echo, else the exception code."""
-    request = struct.pack(">HHHBBHH", 7, 0, 6, unit, 5, coil, 0xFF00 if state else 0)
-    with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
-        s.sendall(request)
-        reply = b""
-        while len(reply) < 9:
-            chunk = s.recv(64)
-            if not chunk:
-                break
-            reply += chunk
-    if reply[7:8] == b"\x85":
-        return "exception %d" % reply[8]
-    return "ok" if reply[6:] == request[6:] else "unexpected %r" % reply
 
 
 if __name__ == "__main__":

@@ -8,8 +8,6 @@ makes that likely, not certain; the deterministic simulation covers it exactly).
 import copy
 import os
 import signal
-import socket
-import struct
 import subprocess
 import tempfile
 import threading
@@ -146,16 +144,16 @@ class FailsafeItemsTest(unittest.TestCase):
         self.assertTrue(res.success, res.message)
 
     def diagnostics(self, device):
-        self.diag.msg = None  # one published after this call
-        return helpers.wait_until(
-            lambda: next((s for s in (self.diag.msg.status if self.diag.msg else [])
-                          if s.name.endswith("device " + device)), None), 10,
-            "diagnostics of " + device)
+        return helpers.device_status(self.diag, device)
 
     def diagnostics_value(self, device, key):
-        return next(kv.value for kv in self.diagnostics(device).values if kv.key == key)
+        return helpers.device_value(self.diag, device, key)
 
-    def valve_on_by_topic(self):
+    def pump_on_lamp_off_valve_by_topic(self):
+        """Items 1 and 2 start here: pump on and lamp off by service, the valve on by its command
+        topic (its dead man armed)."""
+        self.set("relays/pump", True)
+        self.set("relays/lamp", False)
         self.valve_on.set()
         self.wait_coils(RELAYS, {VALVE: 1}, 15, "valve on by its command topic")
 
@@ -163,9 +161,7 @@ class FailsafeItemsTest(unittest.TestCase):
     def test_01_a_failed_dead_man_write_owes_only_its_channel(self):
         # docs/failsafe.md: "owes it on the channels it carried (not the others)".
         self.start_node()
-        self.set("relays/pump", True)
-        self.set("relays/lamp", False)
-        self.valve_on_by_topic()
+        self.pump_on_lamp_off_valve_by_topic()
         since = len(self.events)
         self.sim.silence(RELAYS, True)
         self.valve_on.clear()
@@ -179,9 +175,7 @@ class FailsafeItemsTest(unittest.TestCase):
         # docs/failsafe.md: "A later safe write that succeeds pays only its own channels."
         self.config["devices"]["relays"]["poll_rate"] = 0.2
         self.start_node()
-        self.set("relays/pump", True)
-        self.set("relays/lamp", False)
-        self.valve_on_by_topic()
+        self.pump_on_lamp_off_valve_by_topic()
         since = len(self.events)
         self.sim.silence(RELAYS, True)
         self.beating.clear()
@@ -248,7 +242,8 @@ class FailsafeItemsTest(unittest.TestCase):
         restarts = self.diagnostics_value("relays", "restarts detected")
         since = len(self.events)
         flash_out5 = 3 + 5 * OUT5  # mode register, then tenths of a second
-        self.assertEqual(modbus_tcp_write_registers(port, int(RELAYS), flash_out5, [4, 20]), "ok")
+        self.assertEqual(
+            helpers.modbus_tcp_write_registers(port, int(RELAYS), flash_out5, [4, 20]), "ok")
         self.wait_coils(RELAYS, {OUT5: 1}, 5, "the flash-close")
         self.wait_coils(RELAYS, {OUT5: 0}, 10, "the flash's end")
         time.sleep(2.0)  # polls after the end
@@ -268,7 +263,8 @@ class FailsafeItemsTest(unittest.TestCase):
         t0 = time.time()
         kept = helpers.wait_until(lambda: rospy.get_param(NS + "running_timed/relays", None), 5,
                                   "the flash kept on the parameter server")
-        self.assertEqual([(k["channel"], k["during"], k["after"]) for k in kept], [(OUT4, 1, False)])
+        self.assertEqual([(k["channel"], k["during"], k["after"]) for k in kept],
+                         [(OUT4, 1, False)])
         type(self).node.kill()  # SIGKILL: no code of the node runs
         type(self).node.wait(10)
         type(self).node = None
@@ -361,24 +357,6 @@ class FailsafeItemsTest(unittest.TestCase):
         self.stop_node()
         self.assertIn("pdu: restart detected", self.output)
         self.assertNotIn("pdu: fail-safe restart", self.output)
-
-
-def modbus_tcp_write_registers(port, unit, address, values):
-    """FC16 through a Modbus TCP server: "ok" on the echo, else the exception code."""
-    pdu = struct.pack(">BHHB", 16, address, len(values), 2 * len(values))
-    pdu += b"".join(struct.pack(">H", v) for v in values)
-    request = struct.pack(">HHHB", 9, 0, len(pdu) + 1, unit) + pdu
-    with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
-        s.sendall(request)
-        reply = b""
-        while len(reply) < 9:
-            chunk = s.recv(64)
-            if not chunk:
-                break
-            reply += chunk
-    if reply[7:8] == b"\x90":
-        return "exception %d" % reply[8]
-    return "ok" if reply[7:12] == request[7:12] else "unexpected %r" % reply
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "modbus_rtu_driver/core/bus/clock.h"
@@ -22,6 +23,14 @@
 #include "modbus_rtu_driver/core/link/transport.h"
 
 namespace modbus_rtu_driver {
+
+// A job's outcome known without running it (nothing to write, a request refused unsent), in the
+// form BusScheduler::submit answers.
+inline std::future<Result> readyResult(Result r) {
+  std::promise<Result> p;
+  p.set_value(std::move(r));
+  return p.get_future();
+}
 
 struct DeviceHealth {
   bool online = true;     // false after `offline_after` failed transactions in a row
