@@ -32,9 +32,10 @@ Result RawWrites::run(const Request& request) {
       known != devices_.end() ? known->second : "slave " + std::to_string(request.slave);
   return bus_
       .submit(owner,
-              [this, request](Transport& t) {
-                Result r = t.execute(request);
-                if (r.ok() && wrote_) wrote_(request);
+              [this, sent = forwarded(request)](Transport& t) {
+                // Sent once: a raw write may start something (an LC flash through FC16).
+                Result r = t.execute(sent);
+                if (r.ok() && wrote_) wrote_(sent);
                 return r;
               })
       .get();

@@ -70,9 +70,8 @@ const std::set<std::string>& simKnownOpen() {
   // I2: held_channel_after_power_cycle_leave, held_channel_uncarried_pwm_run,
   // held_channel_unconfirmed_command; I3: share_register_write_then_power_cycle;
   // I4: unconfirmed_flash_final_level_restored; I5: found_pwm_run_restored;
-  // I6: share_coil_write_on_pwm_channel, killed_node_ld_burst; I7: raw_fc16_sent_twice (issue
-  // #32 item 13).
-  static const std::set<std::string> known = {"I2", "I3", "I4", "I5", "I6", "I7"};
+  // I6: share_coil_write_on_pwm_channel, killed_node_ld_burst.
+  static const std::set<std::string> known = {"I2", "I3", "I4", "I5", "I6"};
   return known;
 }
 

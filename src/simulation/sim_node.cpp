@@ -338,8 +338,7 @@ std::future<Result> SimNode::share(uint64_t op, const Request& request, Done don
   std::string device;
   for (auto& e : entries_)
     if (e->device->address() == request.slave) device = e->device->name();
-  Request sent = request;
-  sent.repeatable = isReadFunction(request.function);
+  const Request sent = forwarded(request);
   bus_->submitShared(
       device,
       [this, op, sent, done = std::move(done)](Transport& t) {
@@ -362,9 +361,9 @@ std::future<Result> SimNode::raw(uint64_t op, const Request& request, Done done)
   std::string owner = "slave " + std::to_string(request.slave);
   for (auto& e : entries_)
     if (e->device->address() == request.slave) owner = e->device->name();
-  return runOp(op, owner, std::move(done), [this, request](Transport& t) {
-    Result r = t.execute(request);
-    if (r.ok()) externalWrite(request, CommandSource::kRaw);
+  return runOp(op, owner, std::move(done), [this, sent = forwarded(request)](Transport& t) {
+    Result r = t.execute(sent);
+    if (r.ok()) externalWrite(sent, CommandSource::kRaw);
     return r;
   });
 }

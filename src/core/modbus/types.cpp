@@ -221,4 +221,9 @@ Result Result::failure(ErrorKind kind, std::string message, uint8_t exception_co
   return r;
 }
 
+Request forwarded(Request request) {
+  request.repeatable = isReadFunction(request.function);
+  return request;
+}
+
 }  // namespace modbus_rtu_driver

@@ -60,9 +60,7 @@ void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
     --in_flight_;
     return server_->replyException(in, kSlaveDeviceBusy);
   }
-  Request sent = request;
-  // A client's write is sent once: it may start something, and the client decides on a retry.
-  sent.repeatable = isReadFunction(request.function);
+  const Request sent = forwarded(request);
   const std::string device = device_of_ ? device_of_(request.slave) : "";
   const auto turnaround = std::chrono::duration<double>(
       sent.slave == kBroadcastAddress ? config_.broadcast_turnaround : 0.0);

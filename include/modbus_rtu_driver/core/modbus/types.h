@@ -99,6 +99,11 @@ struct Request {
   std::string describe() const;
 };
 
+// A request the node carries for someone else (a share client, the raw write services): a write
+// is sent once (not repeatable), since the node cannot tell whether it starts something (an LC
+// flash, an LD58A08 burst); the caller decides on a retry. Reads stay repeatable.
+Request forwarded(Request request);
+
 enum class ErrorKind {
   kNone,
   kTimeout,          // no (complete) reply in time
