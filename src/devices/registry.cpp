@@ -4,6 +4,7 @@
 #include <set>
 
 #include "modbus_rtu_driver/core/config/config_yaml.h"
+#include "modbus_rtu_driver/core/config/device_types.h"
 #include "modbus_rtu_driver/core/config/number_text.h"
 
 namespace modbus_rtu_driver {
@@ -52,10 +53,8 @@ std::string validateDeviceConfig(const DeviceConfig& c) {
   if (c.address < 1 || c.address > t->max_address)
     return where + "address: " + std::to_string(c.address) + " is outside 1-" +
            std::to_string(t->max_address) + " for " + c.type;
-  if (!(c.poll_rate >= 0.0 && c.poll_rate <= 1000.0)) {
-    return where + "poll_rate: " + numberText(c.poll_rate) +
-           " Hz is outside 0-1000 Hz (0 = never poll)";
-  }
+  if (!validPollRate(c.poll_rate))
+    return where + "poll_rate: " + numberText(c.poll_rate) + kPollRateRange;
   if (!(c.reply_delay >= 0.0 && c.reply_delay <= 1.0)) {
     return where + "reply_delay: " + numberText(c.reply_delay) + " s is outside 0-1 s";
   }

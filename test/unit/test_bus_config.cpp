@@ -114,6 +114,11 @@ TEST(BusConfig, EachBadValueIsNamed) {
       {"address: 2,", "address: 248,", {"devices/pdu/address", "248", "1-247"}},
       {"address: 2,", "address: 1,", {"devices/pdu/address", "already used", "pwm_board"}},
       {"poll_rate: 10.0", "poll_rate: -2", {"devices/relays/poll_rate", "-2"}},
+      // Issue #32 item 15: 1/rate overflowed the scheduler's nanosecond clock.
+      {"poll_rate: 10.0",
+       "poll_rate: 1.0e-10",
+       {"devices/relays/poll_rate", "1e-10", "0.001-1000"}},
+      {"poll_rate: 10.0", "poll_rate: 0.0009", {"devices/relays/poll_rate", "0.001-1000 Hz"}},
       {"port: /dev/ttyUSB0",
        "port: /dev/ttyUSB0\nrealtime_priority: 100",
        {"realtime_priority", "100", "0-99"}},

@@ -152,6 +152,10 @@ TEST(SignalYaml, ErrorsNameTheKey) {
   EXPECT_EQ(parseError(oneSignal("table: input_register, address: 1, poll_rate: -1"))
                 .rfind(base + "poll_rate", 0),
             0u);
+  // Issue #32 item 15: a rate whose period overflows the scheduler's clock is refused by name.
+  EXPECT_EQ(parseError(oneSignal("table: input_register, address: 1, poll_rate: 1.0e-10")),
+            base + "poll_rate: 1e-10 Hz is outside 0.001-1000 Hz (0 = never poll)");
+  EXPECT_EQ(parseError(oneSignal("table: input_register, address: 1, poll_rate: 0")), "");
   EXPECT_EQ(parseError("signals: [{name: 'a b', table: coil, address: 1}]").rfind(base + "name", 0),
             0u);
   EXPECT_EQ(

@@ -8,6 +8,8 @@
 #include <sstream>
 
 #include "modbus_rtu_driver/core/config/config_yaml.h"
+#include "modbus_rtu_driver/core/config/device_types.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/core/config/signal.h"
 
 namespace modbus_rtu_driver {
@@ -125,8 +127,7 @@ SignalConfig parseSignal(const YAML::Node& n, const std::string& where) {
   if (n["safe_value"]) parseSafeValue(n["safe_value"], at + "safe_value", &s);
   if (n["poll_rate"]) {
     const double r = getNumber(n["poll_rate"], at + "poll_rate");
-    if (!(r >= 0.0 && r <= 1000.0))
-      fail(at + "poll_rate", number(r) + " Hz is outside 0-1000 Hz (0 = never poll)");
+    if (!validPollRate(r)) fail(at + "poll_rate", numberText(r) + kPollRateRange);
     s.poll_rate = r;
   }
   return s;

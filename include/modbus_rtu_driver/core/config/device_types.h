@@ -30,4 +30,14 @@ struct DeviceDescriptor {
   int also_answers = 0;
 };
 
+// poll_rate (Hz) of a device or a generic signal: 0 = never polled, else 0.001-1000 Hz. The floor
+// keeps the poll period (1/rate) inside the scheduler's nanosecond clock (1e-10 Hz overflowed it
+// and flooded the line); one poll in 1000 s is slower than anything a robot logs.
+constexpr double kMinPollRate = 0.001;
+constexpr double kMaxPollRate = 1000.0;
+constexpr const char* kPollRateRange = " Hz is outside 0.001-1000 Hz (0 = never poll)";
+inline bool validPollRate(double hz) {
+  return hz == 0.0 || (hz >= kMinPollRate && hz <= kMaxPollRate);
+}
+
 }  // namespace modbus_rtu_driver
