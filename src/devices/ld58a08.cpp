@@ -362,4 +362,24 @@ std::vector<TimedIntent> Ld58a08::timedWrittenBy(const Request& request) const {
   return timed;
 }
 
+std::vector<uint8_t> Ld58a08::timedStoppedBy(const Request& request) const {
+  std::vector<uint8_t> stopped;
+  if (request.function != FunctionCode::kWriteMultipleRegisters &&
+      request.function != FunctionCode::kWriteSingleRegister)
+    return stopped;
+  // Only a write of PWM registers alone is decoded per channel: anything else it wrote (the
+  // outputs register, a setting) is taken from the next poll for the whole device.
+  for (size_t i = 0; i < request.values.size(); ++i) {
+    const size_t reg = request.address + i;
+    if (reg / 0x10 >= kChannels || reg % 0x10 > 2) return stopped;
+  }
+  for (uint8_t ch = 0; ch < kChannels; ++ch) {
+    const uint16_t enable = pwmRegister(ch) + 2;
+    if (enable >= request.address && enable < request.address + request.values.size() &&
+        request.values[enable - request.address] == 0)
+      stopped.push_back(ch);
+  }
+  return stopped;
+}
+
 }  // namespace modbus_rtu_driver

@@ -35,6 +35,8 @@ ChannelIntents::ChannelIntents(FailsafeConfig config, size_t channels, Clock& cl
       intent_(channels),
       held_(channels, 0),
       held_since_(channels),
+      held_written_(channels, false),
+      held_not_safe_(channels, false),
       owed_(channels),
       command_deadline_(channels) {}
 
@@ -70,6 +72,10 @@ void ChannelIntents::commanded(const std::vector<uint8_t>& channels,
     in.level = levels[i];
     intent_[ch] = in;
     newCommand(ch, source);
+    const bool safe_level = config_.safeStateOf(ch) == SafeState::kOn;
+    if (held_[ch] != 0 && levels[i] == safe_level &&
+        (source == CommandSource::kSafe || source == CommandSource::kRestore))
+      held_written_[ch] = true;
   }
 }
 
@@ -91,7 +97,7 @@ void ChannelIntents::timed(const TimedIntent& timed, CommandSource source) {
   newCommand(timed.channel, source);
 }
 
-void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source) {
+void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double not_before_s) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (channel >= channels_) return;
   const auto now = clock_.now();
@@ -99,9 +105,26 @@ void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source) {
   in.source = source;
   in.at = now;
   in.adopt = true;
+  if (not_before_s > 0) in.adopt_from = now + seconds(not_before_s);
   if (intent_[channel]) in.level = intent_[channel]->level;
   intent_[channel] = in;
   newCommand(channel, source);
+}
+
+void ChannelIntents::adoptChangeNextPoll(uint8_t channel, CommandSource source) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (channel >= channels_) return;
+  const auto now = clock_.now();
+  Intent in;
+  in.source = source;
+  in.at = now;
+  in.adopt = true;
+  in.adopt_change = true;
+  const Expectation e = expectedLocked(channel, now);
+  if (e.kind == Expectation::Kind::kLevel) in.adopt_prev = e.level;
+  if (intent_[channel]) in.level = intent_[channel]->level;
+  intent_[channel] = in;
+  write_during_poll_ = true;  // holds and owed writes end at the poll, if it changed
 }
 
 void ChannelIntents::adoptChangesNextPoll(CommandSource source) {
@@ -120,7 +143,10 @@ void ChannelIntents::hold(const std::vector<uint8_t>& channels, HoldTrigger trig
   const auto now = clock_.now();
   const auto holdOne = [&](size_t ch) {
     if (ch >= channels_ || config_.safeStateOf(ch) == SafeState::kHold) return;
-    if (held_[ch] == 0) held_since_[ch] = now;
+    if (held_[ch] == 0) {
+      held_since_[ch] = now;
+      held_written_[ch] = false;
+    }
     held_[ch] |= static_cast<uint8_t>(trigger);
   };
   if (channels.empty()) {
@@ -147,6 +173,14 @@ bool ChannelIntents::anyHeld() const {
   for (uint8_t h : held_)
     if (h != 0) return true;
   return false;
+}
+
+std::vector<uint8_t> ChannelIntents::heldNotSafe() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<uint8_t> chs;
+  for (size_t ch = 0; ch < channels_; ++ch)
+    if (held_[ch] != 0 && held_not_safe_[ch]) chs.push_back(static_cast<uint8_t>(ch));
+  return chs;
 }
 
 uint8_t ChannelIntents::heldBy(uint8_t channel) const {
@@ -226,6 +260,7 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
                                                     std::vector<uint8_t>* changed) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (changed) changed->clear();
+  std::fill(held_not_safe_.begin(), held_not_safe_.end(), false);
   if (write_during_poll_) {
     // What it read may predate that write: neither a restart nor an intent to adopt.
     write_during_poll_ = false;
@@ -235,22 +270,50 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
   bool differs = false;
   for (size_t ch = 0; ch < channels_ && ch < outputs.size(); ++ch) {
     auto& in = intent_[ch];
+    const bool device_runs = ch < self_timed.size() && self_timed[ch];
     if (!in) {
-      // Found at the node's start (or never commanded): that is what a restore puts back.
+      // Found at the node's start (or never commanded): that is what a restore puts back. A
+      // PWM the device runs is the device's: not compared, not restored (docs/failsafe.md).
       Intent found;
       found.at = now;
       found.level = outputs[ch];
+      found.driven = device_runs;
       in = found;
       continue;
     }
     if (in->adopt) {
-      in->adopt = false;
-      in->level = outputs[ch];
-      if (in->source == CommandSource::kShare || in->source == CommandSource::kRaw)
+      if (in->adopt_from && now < *in->adopt_from) continue;  // it may still run
+      const bool level = outputs[ch];
+      const bool client = in->source == CommandSource::kShare || in->source == CommandSource::kRaw;
+      if (in->adopt_change) {
+        // What the write changed is its command; a level it did not change is not (a hold
+        // that began after the write is newer than it).
+        const bool differs_now = in->adopt_prev && *in->adopt_prev != level;
+        if (differs_now && !(held_[ch] != 0 && held_since_[ch] > in->at)) {
+          held_[ch] = 0;
+          owed_[ch].reset();
+          took_adopted_ = true;
+        } else {
+          in->source = CommandSource::kFound;
+        }
+      } else if (client) {
         took_adopted_ = true;
+      }
+      in->adopt_from.reset();
+      in->adopt_prev.reset();
+      in->level = level;
+      // A stop the type decoded ended the run, whatever the device's PWM snapshot (up to a
+      // few polls old) still says.
+      in->driven = device_runs && !in->adopt_change;
+      in->ends.reset();
+      in->during.reset();
+      in->adopt = in->adopt_change = false;
       continue;
     }
-    if (ch < self_timed.size() && self_timed[ch]) continue;  // the device's PWM drives it
+    if (held_[ch] != 0 && held_written_[ch] &&
+        (device_runs || outputs[ch] != (config_.safeStateOf(ch) == SafeState::kOn)))
+      held_not_safe_[ch] = true;
+    if (device_runs) continue;  // the device's PWM drives it
     const Expectation e = expectedLocked(static_cast<uint8_t>(ch), now);
     if (e.kind == Expectation::Kind::kAny) continue;
     if (e.kind == Expectation::Kind::kEither) {
@@ -327,6 +390,10 @@ OutputTargets ChannelIntents::afterPollTargets(Verdict verdict) const {
     }
     for (size_t ch = 0; ch < channels_; ++ch)
       if (owed_[ch]) by_channel[static_cast<uint8_t>(ch)] = owed_[ch]->level;
+    // A hold keeps its channels safe whatever on_restart says (docs/failsafe.md, precedence).
+    for (size_t ch = 0; ch < channels_; ++ch)
+      if (held_[ch] != 0 && held_not_safe_[ch])
+        by_channel[static_cast<uint8_t>(ch)] = config_.safeStateOf(ch) == SafeState::kOn;
   }
   if (verdict != Verdict::kNormal && config_.on_restart == OnRestart::kSafe) {
     const OutputTargets safe = safeTargets();

@@ -126,9 +126,19 @@ void DeviceFailsafe::afterPoll() {
   // the safe write set) is no longer true, as after a user's write.
   if (intents_.tookAdoptedWrite()) endSafeState();
   const bool owed = !intents_.owed().empty();
-  if (verdict == ChannelIntents::Verdict::kNormal && !owed) return;
+  const std::vector<uint8_t> held_not_safe = intents_.heldNotSafe();
+  if (verdict == ChannelIntents::Verdict::kNormal && !owed && held_not_safe.empty()) return;
+  std::string trigger = "restart";
   std::string reason = "the device answers again; its safe state was not reached before";
   std::string action = "safe";
+  if (!owed && !held_not_safe.empty()) {
+    // A hold puts its channels back (whatever on_restart says), named for its trigger.
+    trigger =
+        (intents_.heldBy(held_not_safe.front()) & static_cast<uint8_t>(HoldTrigger::kHeartbeat))
+            ? "heartbeat"
+            : "command_timeout";
+    reason = "held safe, but a poll shows " + channelNames(held_not_safe) + " otherwise";
+  }
   if (verdict != ChannelIntents::Verdict::kNormal) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -139,13 +149,16 @@ void DeviceFailsafe::afterPoll() {
                  : "outputs " + channelNames(changed) +
                        " changed with no command in between (power cycle?)";
     const OnRestart policy = config().on_restart;
-    // With on_restart: leave, only the owed safe states are written: say so.
-    action = owed && policy == OnRestart::kLeave ? "safe" : onRestartName(policy);
+    // With on_restart: leave, only the owed and held safe states are written: say so.
+    action = (owed || !held_not_safe.empty()) && policy == OnRestart::kLeave
+                 ? "safe"
+                 : onRestartName(policy);
+    trigger = "restart";
   }
   // What to write is read when the write runs: a command confirmed before then is not undone.
-  bus_.submit(device_.name(), [this, verdict, reason, action](Transport& t) {
+  bus_.submit(device_.name(), [this, verdict, trigger, reason, action](Transport& t) {
     const OutputTargets targets = intents_.afterPollTargets(verdict);
-    if (!targets.empty()) return writeAndReport(t, targets, "restart", reason, action, {});
+    if (!targets.empty()) return writeAndReport(t, targets, trigger, reason, action, {});
     if (verdict == ChannelIntents::Verdict::kNormal) return Result::success();
     FailsafeReport r;
     r.device = device_.name();
@@ -208,10 +221,14 @@ void DeviceFailsafe::timedCommandDone(const TimedIntent& intent, const Result& r
   // dropped mid-frame (kIo) or the answer was lost: it may run or not. Either level may show
   // until its end, then its final one is what a poll finds (it is not taken as commanded: the
   // caller was told it failed).
+  // Not compared and not restored until its end; the first poll after it gives the channel's
+  // level, taken as found (docs/failsafe.md, "A command whose answer was lost").
   if (!answerLost(result.error) && result.error != ErrorKind::kIo) return;
-  TimedIntent unsure = intent;
-  unsure.during.reset();
-  intents_.timed(unsure, CommandSource::kFound);
+  const double until = intent.seconds < 0
+                           ? 0.0
+                           : intent.seconds * (1.0 + ChannelIntents::kEndSlackFraction) +
+                                 ChannelIntents::kEndSlackSeconds;
+  intents_.adoptNextPoll(intent.channel, CommandSource::kFound, until);
   timedMaybeChanged();
 }
 
@@ -227,9 +244,11 @@ void DeviceFailsafe::externalWrite(const Request& request, CommandSource source)
   if (!set.empty()) intents_.commanded(set.channels, set.states, source);
   const std::vector<TimedIntent> timed = device_.timedWrittenBy(request);
   for (const TimedIntent& t : timed) intents_.timed(t, source);
+  const std::vector<uint8_t> stopped = device_.timedStoppedBy(request);
+  for (uint8_t ch : stopped) intents_.adoptChangeNextPoll(ch, source);
   if (!set.empty() || !timed.empty()) endSafeState();
   // Any other write (registers the type does not decode) shows at the next poll.
-  if (set.empty() && timed.empty() && !isBitFunction(request.function))
+  if (set.empty() && timed.empty() && stopped.empty() && !isBitFunction(request.function))
     intents_.adoptChangesNextPoll(source);
   timedMaybeChanged();
 }

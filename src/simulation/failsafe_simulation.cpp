@@ -67,10 +67,9 @@ const std::vector<SimInvariant>& simInvariants() {
 }
 
 const std::set<std::string>& simKnownOpen() {
-  // I2: held_channel_after_power_cycle_leave, held_channel_uncarried_pwm_run,
-  // held_channel_unconfirmed_command; I3: share_register_write_then_power_cycle;
-  // I4: unconfirmed_flash_final_level_restored; I5: found_pwm_run_restored;
-  // I6: share_coil_write_on_pwm_channel, killed_node_ld_burst.
+  // I2: held_channel_restore_after_offline; I3: held_channel_failsafe_write_unsafe;
+  // I4: share_write_lost_answer_then_restore; I5: pwm_channel_left_out_of_restore;
+  // I6: share_coil_write_on_pwm_channel (docs/simulation.md, "Known open defects").
   static const std::set<std::string> known = {"I2", "I3", "I4", "I5", "I6"};
   return known;
 }
@@ -689,7 +688,11 @@ void World::onAttempt(const LineEvent& e) {
     if (stopping_ && hasSafe(d, ch) && v == safeLevel(d, ch)) continue;
     // The node sees a restart at a poll (docs:34): a command confirmed before the poll that saw
     // it is not newer than the restart; one confirmed after it is (docs:90-92).
-    if ((m.cause_at && *m.cause_at >= c.at) || (m.cause_pending && c.at <= m.last_poll_at)) {
+    // A change the device made by itself that I6 accepts (a power cycle, a lost answer's write,
+    // a flash or saved PWM run ending) may be seen at any poll of its window: what that poll
+    // saw is a restart for the commands confirmed before it.
+    const bool seeable = m.cause_pending || m.justified || e.at < m.justified_until;
+    if ((m.cause_at && *m.cause_at >= c.at) || (seeable && c.at <= m.last_poll_at)) {
       if (onRestart(d) == OnRestart::kSafe && hasSafe(d, ch) && v == safeLevel(d, ch)) continue;
       if (onRestart(d) == OnRestart::kRestore && c.timed && v == c.level) continue;
     }
@@ -789,6 +792,11 @@ void World::onReport(const FailsafeReport& r) {
         now >= m.justified_until)
       fail("I6", std::string(kNames[d]) + ": restart reported (" + r.reason +
                      ") though nothing changed its outputs without a confirmed command");
+    // docs:34, 90-92: the restart is what the poll that saw it showed; on_restart's writes may
+    // change what was commanded before that poll (an I6-justified report: a PWM run that a
+    // power-down save restarted shows as a change polls later).
+    if (r.reason.find("changed with no command") != std::string::npos)
+      m.cause_at = std::max(m.cause_at.value_or(TP{}), m.last_poll_at);
     m.justified = false;
     m.cause_pending = false;
   }

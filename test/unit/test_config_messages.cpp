@@ -54,7 +54,7 @@ TEST(ConfigMessages, SecondsAsPeopleWriteThem) {
 
 TEST(ConfigMessages, NanIsNan) {
   EXPECT_EQ(parseError(relays(", poll_rate: .nan")),
-            "devices/r/poll_rate: nan Hz is outside 0-1000 Hz (0 = never poll)");
+            "devices/r/poll_rate: nan Hz is outside 0.001-1000 Hz (0 = never poll)");
   EXPECT_EQ(parseError(relays(", reply_delay: .nan")),
             "devices/r/reply_delay: nan s is outside 0-1 s");
   EXPECT_EQ(parseError(relays("", ", keep_alive: .nan")),

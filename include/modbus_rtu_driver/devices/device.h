@@ -93,6 +93,12 @@ class Device {
     (void)request;
     return {};
   }
+  // The channels whose timed command a client's confirmed register write stopped (an LD58A08
+  // enable register written 0): each shows its coil again, taken at the next poll.
+  virtual std::vector<uint8_t> timedStoppedBy(const Request& request) const {
+    (void)request;
+    return {};
+  }
 
   // Last confirmed states (from a poll or a confirmed write); empty until known.
   const std::vector<bool>& outputs() const { return outputs_; }

@@ -63,9 +63,15 @@ class ChannelIntents {
                  CommandSource source);
   // A timed command (flash, pulse burst, PWM run): ends holds, drops owed writes.
   void timed(const TimedIntent& intent, CommandSource source);
-  // A write whose effect on `channel` the node cannot decode (a register write of a share
-  // client or raw write, a PWM stopped): the next poll's level is taken as commanded.
-  void adoptNextPoll(uint8_t channel, CommandSource source);
+  // A write whose effect on `channel` the node cannot decode (a PWM stopped): the next poll's
+  // level is taken as commanded (a running PWM there: the device's). With `not_before_s`, polls
+  // before then are not compared and do not count (a timed command whose answer was lost may
+  // run until its end).
+  void adoptNextPoll(uint8_t channel, CommandSource source, double not_before_s = 0);
+  // A client's confirmed register write that the type decodes as touching `channel` only (an
+  // LD58A08 PWM stop): the next poll's level is the intent; if it differs from what the channel
+  // should have shown, it is the client's command (it ends a hold from before the write).
+  void adoptChangeNextPoll(uint8_t channel, CommandSource source);
   // A confirmed write the node cannot decode per channel (a share client's or raw register
   // write): the next compared poll takes every channel that differs as commanded by `source`,
   // not as a restart.
@@ -83,6 +89,10 @@ class ChannelIntents {
   OutputTargets heldTargets(const std::vector<uint8_t>& only) const;
   bool anyHeld() const;
   uint8_t heldBy(uint8_t channel) const;  // HoldTrigger bits
+  // Held channels whose safe write was confirmed that the last compared poll showed not in
+  // their safe state (a power cycle, a command whose answer was lost, a PWM someone started):
+  // the hold puts them back, whatever on_restart says.
+  std::vector<uint8_t> heldNotSafe() const;
 
   // A safe write (trigger time `since`) that did not get through: owed per channel, written when
   // the device answers again, unless the channel is commanded after `since`.
@@ -129,6 +139,9 @@ class ChannelIntents {
     std::optional<Clock::time_point> ends;  // a timed command's end
     bool driven = false;                    // the device drives it with no known end
     bool adopt = false;                     // the next poll's level is the intent
+    std::optional<Clock::time_point> adopt_from;  // adopt: not before then
+    std::optional<bool> adopt_prev;               // adoptChangeNextPoll: the level expected before
+    bool adopt_change = false;  // adoptChangeNextPoll: a change is the source's command
   };
   struct Owed {
     bool level = false;
@@ -146,6 +159,8 @@ class ChannelIntents {
   std::vector<std::optional<Intent>> intent_;
   std::vector<uint8_t> held_;  // HoldTrigger bits
   std::vector<Clock::time_point> held_since_;
+  std::vector<bool> held_written_;   // a safe write confirmed since the hold began
+  std::vector<bool> held_not_safe_;  // the last compared poll showed it otherwise
   std::vector<std::optional<Owed>> owed_;
   std::vector<std::optional<Clock::time_point>> command_deadline_;
   bool write_during_poll_ = false;
