@@ -29,14 +29,6 @@ KNOWN = {
     "span_rewrites_between": "issue 24 item 4: FC15 over a span rewrites (and ends the flash "
                              "of) channels not asked for",
     "share_after_stop": "issue 24 item 5: share jobs queued at stop run after the safe states",
-    "unconfirmed_pulse_final_restored": "issue 32 (the simulation's case unconfirmed_flash_final_"
-                                        "level_restored): a pulse whose answer was lost is "
-                                        "restored with its final level, not the last confirmed "
-                                        "state",
-    "lost_answer_adopts_power_cycle": "issue 32 (docs/simulation.md, open questions): a write "
-                                      "whose answer was lost (device silent) makes the node "
-                                      "adopt the next poll's level; a power cycle during the "
-                                      "silence is then adopted, not restored",
     "safe_claim_survives_pulse": "found by this test: /diagnostics keeps claiming 'outputs in "
                                  "their safe state' after a pulse took one out of it",
 }
@@ -75,7 +67,6 @@ class Channel:
         self.commanded_in_loss = False
         self.relaxed = False      # a known defect leaves its state open (known_defects.txt)
         self.refused = None       # the state a write answered success:false asked for (I2)
-        self.unconfirmed_final = None  # a pulse answered success:false would end at this level
         self.lost_answer = False  # a write to a silent device answered success:false
 
 
@@ -128,7 +119,6 @@ class Model:
             self._set(i, {s}, "I1 (%s answered success:true)" % why)
             c.settled, c.restore, c.by_failsafe, c.held, c.pending_safe = True, {s}, False, False, False
             c.commanded_in_loss = self.heartbeat_lost
-            c.unconfirmed_final = None  # a confirmed command since
             c.lost_answer = False
         if "span_rewrites_between" in self.known and len(channels) > 1:
             self._span_may_rewrite(min(channels), max(channels), channels)
@@ -143,7 +133,6 @@ class Model:
     def pulse(self, i, state, ok, sent, answered, duration):
         if not ok:
             self.ch[i].why = "I2 (pulse answered success:false: must never reach the board)"
-            self.ch[i].unconfirmed_final = 1 - state
             self.ch[i].lost_answer = self.unreachable()
             return
         c = self.ch[i]
@@ -152,7 +141,6 @@ class Model:
         c.why = "I5 (pulse answered success:true: it ends by itself unless its channel is written)"
         c.settled, c.restore, c.by_failsafe, c.held, c.pending_safe = False, set(BOTH), False, False, False
         c.commanded_in_loss = self.heartbeat_lost
-        c.unconfirmed_final = None
         c.lost_answer = False
 
     def failsafe(self, channels, why, hold=True):
@@ -166,7 +154,6 @@ class Model:
             else:
                 self._set(i, {SAFE[i]}, why)
                 c.settled = True
-                c.unconfirmed_final = None  # a confirmed safe write since
                 c.lost_answer = False
             c.restore, c.by_failsafe, c.held, c.commanded_in_loss = {SAFE[i]}, True, hold, False
         if "span_rewrites_between" in self.known and not self.unreachable():
@@ -198,15 +185,11 @@ class Model:
         if c.by_failsafe and "restore_after_failsafe" in self.known:
             values, why = set(BOTH), "known defect restore_after_failsafe"
             c.relaxed = True  # and /diagnostics' claim on it is not checked either
-        if (c.unconfirmed_final is not None and not (c.pending_safe or c.held) and
-                "unconfirmed_pulse_final_restored" in self.known):
-            values = set(values) | {c.unconfirmed_final}
-            why = "known defect unconfirmed_pulse_final_restored"
-            c.relaxed = True
-        if (c.lost_answer and not (c.pending_safe or c.held) and
-                "lost_answer_adopts_power_cycle" in self.known):
-            values, why = set(BOTH), "known defect lost_answer_adopts_power_cycle"
-            c.relaxed = True
+        if c.lost_answer and not (c.pending_safe or c.held):
+            # docs/failsafe.md ("What a write computes"): a command whose answer was lost leaves
+            # its channel unknown, not restored, until a poll after it (a pulse: after its end),
+            # whose level is taken as found; a power cycle in between is not seen on it.
+            values, why = set(BOTH), "docs (a command whose answer was lost: unknown until a poll)"
         return values, why
 
     def restored(self):
