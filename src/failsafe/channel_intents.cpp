@@ -362,7 +362,8 @@ bool ChannelIntents::tookAdoptedWrite() {
   return took;
 }
 
-OutputTargets ChannelIntents::afterPollTargets(Verdict verdict) const {
+OutputTargets ChannelIntents::afterPollTargets(Verdict verdict,
+                                               const std::vector<bool>& device_runs) const {
   std::map<uint8_t, bool> by_channel;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -384,6 +385,9 @@ OutputTargets ChannelIntents::afterPollTargets(Verdict verdict) const {
           by_channel[c] = in.level;
           continue;
         }
+        // A PWM the device runs that is no timed command of the node's (a client's run whose
+        // answer was lost, one the device restarted) is the device's: a restore does not stop it.
+        if (ch < device_runs.size() && device_runs[ch]) continue;
         const Expectation e = expectedLocked(c, now);
         if (e.kind != Expectation::Kind::kAny) by_channel[c] = e.level;
       }

@@ -157,7 +157,12 @@ void DeviceFailsafe::afterPoll() {
   }
   // What to write is read when the write runs: a command confirmed before then is not undone.
   bus_.submit(device_.name(), [this, verdict, trigger, reason, action](Transport& t) {
-    const OutputTargets targets = intents_.afterPollTargets(verdict);
+    std::vector<bool> runs(device_.outputCount(), false);
+    if (verdict != ChannelIntents::Verdict::kNormal && config().on_restart == OnRestart::kRestore) {
+      device_.refreshSelfTimed(t);  // failed: the snapshot as it was (the write fails anyway)
+      for (size_t i = 0; i < runs.size(); ++i) runs[i] = device_.outputSelfTimed(i);
+    }
+    const OutputTargets targets = intents_.afterPollTargets(verdict, runs);
     if (!targets.empty()) return writeAndReport(t, targets, trigger, reason, action, {});
     if (verdict == ChannelIntents::Verdict::kNormal) return Result::success();
     FailsafeReport r;

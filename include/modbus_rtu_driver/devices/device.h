@@ -99,6 +99,12 @@ class Device {
     (void)request;
     return {};
   }
+  // Reads again what outputSelfTimed() answers from (an LD58A08's PWM registers, otherwise
+  // read one channel per poll), so a restore decides on the device's state now.
+  virtual Result refreshSelfTimed(Transport& bus) {
+    (void)bus;
+    return Result::success();
+  }
 
   // Last confirmed states (from a poll or a confirmed write); empty until known.
   const std::vector<bool>& outputs() const { return outputs_; }

@@ -115,7 +115,9 @@ class ChannelIntents {
   // What to write after a poll with `verdict`, computed when the write runs (so a command
   // confirmed in between is not undone): on a restart, on_restart's targets (restore: every
   // channel's expected level; safe: the safe states); and every owed safe write, over them.
-  OutputTargets afterPollTargets(Verdict verdict) const;
+  // `device_runs[i]`: the device reports a PWM running on channel i, read just before the
+  // write (a restore does not write such a channel: it is the device's).
+  OutputTargets afterPollTargets(Verdict verdict, const std::vector<bool>& device_runs = {}) const;
 
   // --- timed commands across a node's restart ---
   // The timed commands not ended at `now`, with the seconds left (< 0: no end), for the next
