@@ -837,7 +837,11 @@ void World::onReport(const FailsafeReport& r) {
     }
     for (int ch = 0; ch < kChannels; ++ch) {
       const Chan& c = m.ch[ch];
-      if (!written[ch] && c.known && !c.adopt && !c.continuous)
+      // docs:88: a channel the device runs a PWM on that is no timed command of the node's is
+      // the device's: the restore leaves it (it ran when the restore read it: it runs now).
+      const bool devices_run =
+          d == kLd && !c.timed && simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0;
+      if (!written[ch] && c.known && !c.adopt && !c.continuous && !devices_run)
         fail("I5", std::string(kNames[d]) + " out" + std::to_string(ch) +
                        ": the restore leaves "
                        "it out, though its intent (" +
