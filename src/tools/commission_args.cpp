@@ -556,6 +556,10 @@ void parseLink(const Parsed& p, CommissionCommand& c) {
                                                       t.commissioning->returnDelayMaxUnits());
   const double wire = 30.0 * bitsPerCharacter(c.link) / c.link.baud;
   c.link.response_timeout = 0.05 + (c.command == "scan" ? 0 : longest_delay_ms / 1000.0) + wire;
+  // Through a Modbus TCP gateway a silent address costs the gateway's time, not ours: wait for
+  // its answer (kGatewayScanTimeout says why).
+  if (c.command == "scan" && address.kind == PortKind::kModbusTcp)
+    c.link.response_timeout = std::max(c.link.response_timeout, kGatewayScanTimeout);
   if (p.top.count("--timeout")) c.link.response_timeout = p.w.timeout;
 }
 

@@ -60,6 +60,9 @@ int exitCodeFor(const Result& r) {
     case ErrorKind::kTimeout:
       return kExitNotFound;
     case ErrorKind::kException:
+      // A gateway's 0B / 0A are no device's refusal: nobody answered, or its line is not open.
+      if (r.exception_code == kGatewayTargetFailed) return kExitNotFound;
+      if (r.exception_code == kGatewayPathUnavailable) return kExitBusError;
       return kExitRefused;
     case ErrorKind::kInvalidArgument:
       return kExitBadArguments;

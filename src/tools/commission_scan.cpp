@@ -101,8 +101,18 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
     for (const int address : cmd.addresses) {
       if (stop) break;
       progress.at(line, address, found.size());
+      const uint64_t stale_before = link.stats().stale_bytes;
       const Identity id = identifyDevice(link, static_cast<uint8_t>(address));
       if (!id.note.empty() && notes.insert(id.note).second) out.note(id.note);  // once each
+      // Over tcp:// a stale answer is the gateway's to a request given up (dropped by its
+      // transaction id): the gateway still works through those, and each address waits behind
+      // them, so a device there may be missed.
+      if (link.kind() == PortKind::kModbusTcp && link.stats().stale_bytes > stale_before) {
+        const std::string note =
+            "the gateway answered earlier requests after --timeout (its own response timeout "
+            "is longer): scan with a --timeout above it, or devices may be missed";
+        if (notes.insert(note).second) out.note(note);
+      }
       if (!id.present) continue;
       found.push_back({address, config.baud, config.parity, id.type});
       progress.clear();

@@ -158,6 +158,11 @@ Details (COMMAND --help lists a command's options):
       before the next request. Every baud and parity over 1-255 (--bauds all --parities all)
       is 255 x 8 x 3 = 6120 reads: 6120 x 0.081 s = 8.3 min of timeouts + 0.8 min of gaps,
       about 9 minutes (each device found adds up to 4 reads).
+      Through a Modbus TCP gateway (--port tcp://, the bus node's share) the gateway answers
+      every request itself, exception 0B once nothing answered on its line: that is no device.
+      The scan waits up to 3 s for each answer, since a request given up sooner stays queued in
+      the gateway and the next addresses wait behind it; a silent address then costs the
+      gateway's own response timeout x (retries + 1). A --timeout must stay above that.
   info --address A                         type and settings of the device at A
 )" + settingsHelp() +
          R"()" + limitsHelp() +
@@ -173,12 +178,13 @@ Numbers may be decimal or 0x-hex. Changes to how a device answers (address, baud
 return delay, factory reset) and protection limits ask for confirmation on stdin unless --yes;
 without a "y" (or at end of input) nothing is changed.
 Baud and parity take effect after the device is powered off and on.
---timeout: wait for a reply, default 0.05 s + 30 characters for scans, and for other
-commands more by the longest return delay below (a board with a return delay waits that long
-before answering; scan such a board with a --timeout above its return delay).
+--timeout: wait for a reply, default 0.05 s + 30 characters for scans (3 s through tcp://),
+and for other commands more by the longest return delay below (a board with a return delay
+waits that long before answering; scan such a board with a --timeout above its return delay).
 
-exit codes: 0 ok, 2 bad arguments, 3 not found / no answer, 4 refused by the device (Modbus
-exception), 5 other bus error (CRC, I/O, port), 6 not confirmed by the user
+exit codes: 0 ok, 2 bad arguments, 3 not found / no answer (also a gateway's exception 0B),
+4 refused by the device (Modbus exception), 5 other bus error (CRC, I/O, port, a gateway's
+exception 0A), 6 not confirmed by the user
 )" + typesHelp();
 }
 

@@ -3,7 +3,9 @@
 polls the simulator: writes through the share land in the simulated device and in the node's
 state at the next poll; reads through it equal the simulator's registers and the node's topics;
 bus failures and device refusals come back as Modbus exceptions; /diagnostics counts requests
-per client. Also the simulator's own Modbus TCP side (--tcp)."""
+per client; modbus_rtu_commission's scan through it lists exactly the devices. Also the
+simulator's own Modbus TCP side (--tcp)."""
+import json
 import os
 import re
 import subprocess
@@ -83,6 +85,25 @@ class ShareTest(unittest.TestCase):
         self.assertNotEqual(code, 0, text)
         self.assertIn("Illegal data value", text)
         self.assertEqual(self.sim.get(PDU, "holding_register", 0), before)
+
+    def test_the_commissioning_tools_scan_through_the_share_lists_only_the_devices(self):
+        # Issue 32 item 16: the share answers 0B for an empty address after the node's own
+        # timeouts (0.3 s x 2 here). That is no device, and the scan must wait for it: given up
+        # sooner, the next addresses queue behind it in the share and a device is missed.
+        tool = subprocess.check_output(["catkin_find", "--first-only", "--libexec",
+                                        "modbus_rtu_driver", "modbus_rtu_commission"],
+                                       text=True).strip()
+        port = "tcp://127.0.0.1:%d" % self.port
+        expected = [(1, "ld58a08"), (2, "yespeed_pdu"), (8, "lc_relay8")]
+        for timeout in ([], ["--timeout", "1.5"]):  # the default, and one above the node's
+            p = subprocess.run([tool, "--port", port] + timeout +
+                               ["--json", "scan", "--addresses", "1-3,7-9"],
+                               capture_output=True, text=True, timeout=120, check=False)
+            result = json.loads(p.stdout)
+            self.assertTrue(result["complete"], p.stdout + p.stderr)
+            self.assertEqual([(d["address"], d["type"]) for d in result["devices"]], expected,
+                             "%s: %s%s" % (timeout, p.stdout, p.stderr))
+            self.assertEqual(p.returncode, 0, p.stderr)
 
     def test_diagnostics_count_requests_per_client(self):
         code, text, _ = mbpoll(self.port, BOARD, "1", 0, count=8)

@@ -65,6 +65,21 @@ TEST(CommissionArgs, ScanLists) {
   EXPECT_EQ(c.parities, std::vector<Parity>{Parity::kEven});  // --parity is the default
 }
 
+// Through a Modbus TCP gateway (the node's share) a scan waits for the gateway's own answer
+// (0B comes after its timeout); a transparent rtu+tcp:// gateway answers nothing itself.
+TEST(CommissionArgs, ScansThroughAModbusTcpGatewayWaitForItsAnswer) {
+  auto timeout = [](std::vector<std::string> args) {
+    CommissionCommand c;
+    std::string error;
+    EXPECT_TRUE(parseCommission(args, &c, &error)) << error;
+    return c.link.response_timeout;
+  };
+  EXPECT_DOUBLE_EQ(timeout({"--port", "tcp://127.0.0.1:1502", "scan"}), kGatewayScanTimeout);
+  EXPECT_DOUBLE_EQ(timeout({"--port", "tcp://127.0.0.1:1502", "--timeout", "0.5", "scan"}), 0.5);
+  EXPECT_NEAR(timeout({"--port", "rtu+tcp://127.0.0.1:1502", "scan"}), 0.05 + 30 * 10.0 / 9600,
+              1e-9);
+}
+
 TEST(CommissionArgs, OtherCommandsWaitOutTheLongestReturnDelay) {
   EXPECT_GT(parsed({"read", "--address", "1", "coil", "0"}).link.response_timeout, 1.0);
   EXPECT_DOUBLE_EQ(

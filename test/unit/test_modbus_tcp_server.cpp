@@ -92,6 +92,44 @@ TEST(ModbusTcpServer, ReadOnlyRefusesWritesWithIllegalFunction) {
   EXPECT_EQ(f.gateway->server().stats().peers.at("127.0.0.1").exceptions, 4u);
 }
 
+// docs/share.md: a write while read_only gets 01, malformed or not. The fields of a write are
+// not checked first: 02 / 03 would tell the client how to fix a write that cannot pass anyway.
+TEST(ModbusTcpServer, ReadOnlyRefusesMalformedWritesWithIllegalFunctionToo) {
+  ShareConfig config;
+  config.read_only = true;
+  ShareFixture f(config);
+  ASSERT_TRUE(f.start());
+  TcpClient c(f.port());
+  ASSERT_TRUE(c.connected());
+  // transaction, unit 1, PDU -> the exception reply
+  const std::vector<std::pair<const char*, const char*>> cases = {
+      // FC05 with a coil value other than FF00 / 0000 (03 when writable)
+      {"00 11 00 00 00 06 01 05 00 00 12 34", "00 11 00 00 00 03 01 85 01"},
+      // FC15 with count 0 (03 when writable)
+      {"00 12 00 00 00 08 01 0F 00 00 00 00 01 00", "00 12 00 00 00 03 01 8F 01"},
+      // FC16 at 0xFFFF for 2 registers: past 65535 (02 when writable)
+      {"00 13 00 00 00 0B 01 10 FF FF 00 02 04 00 01 00 02", "00 13 00 00 00 03 01 90 01"},
+      // FC16 whose byte count does not match its quantity (03 when writable)
+      {"00 14 00 00 00 09 01 10 00 00 00 01 04 00 01", "00 14 00 00 00 03 01 90 01"},
+      // FC06 with a PDU too short for its function (03 when writable)
+      {"00 15 00 00 00 04 01 06 00 00", "00 15 00 00 00 03 01 86 01"},
+      // a well-formed FC06
+      {"00 16 00 00 00 06 01 06 00 03 00 09", "00 16 00 00 00 03 01 86 01"},
+      // FC22 / FC23 (mask write, read/write multiple): not served at all, 01 as before
+      {"00 17 00 00 00 08 01 16 00 03 FF FF 00 00", "00 17 00 00 00 03 01 96 01"},
+      {"00 18 00 00 00 0D 01 17 00 00 00 01 00 03 00 01 02 00 07", "00 18 00 00 00 03 01 97 01"},
+  };
+  for (const auto& [request, answer] : cases) {
+    ASSERT_TRUE(c.sendBytes(*fromHex(request))) << request;
+    EXPECT_EQ(toHex(c.receive()), answer) << request;
+  }
+  EXPECT_EQ(f.bus.reg(3), 0);
+  EXPECT_EQ(f.bus.reg(0), 0);
+  // Reads are still checked as before: FC03 at 0xFFFF for 2 registers is 02, not 01.
+  ASSERT_TRUE(c.sendBytes(*fromHex("00 19 00 00 00 06 01 03 FF FF 00 02")));
+  EXPECT_EQ(toHex(c.receive()), "00 19 00 00 00 03 01 83 02");
+}
+
 TEST(ModbusTcpServer, ClientsOutsideTheAllowListAreClosedAtAccept) {
   ShareConfig config;
   config.server.allow = {"10.0.0.0/8", "192.168.1.7"};

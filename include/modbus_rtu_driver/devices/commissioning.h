@@ -154,10 +154,17 @@ int baudOfCode(int code);
 std::string baudCodeText(int code);
 // "none", "even", "odd" for the parity codes 0-2, else "code N".
 std::string parityCodeText(int code);
-// An answer, even an exception, means something listens there. Garbage does not: at a wrong
-// baud, noise and half frames are what a scan hears most.
+// A gateway's own exceptions (tcp://, the node's share): 0A "path unavailable" (its line is not
+// open) and 0B "target device failed to respond". They say nobody answered behind it.
+inline bool gatewayHeardNothing(const Result& r) {
+  return r.error == ErrorKind::kException &&
+         (r.exception_code == kGatewayPathUnavailable || r.exception_code == kGatewayTargetFailed);
+}
+// An answer, even an exception, means something listens there; a gateway's 0A / 0B does not
+// (they come from the gateway, not from a device). Garbage does not either: at a wrong baud,
+// noise and half frames are what a scan hears most.
 inline bool answered(const Result& r) {
-  return r.ok() || r.error == ErrorKind::kException;
+  return r.ok() || (r.error == ErrorKind::kException && !gatewayHeardNothing(r));
 }
 
 // A registered type's class with its descriptor.

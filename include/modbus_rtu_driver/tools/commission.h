@@ -24,6 +24,13 @@ enum CommissionExit {
   kExitNotConfirmed = 6,  // the user did not confirm a change
 };
 
+// s a scan waits for each answer through a Modbus TCP gateway (tcp://, the node's share) when
+// no --timeout is given. The gateway answers every request itself, 0B after its own response
+// timeout and retries when nothing answered on its line (the node's share: its response_timeout
+// x (retries + 1), after the requests queued before). A request given up sooner stays queued in
+// the gateway, and every later address waits behind it.
+constexpr double kGatewayScanTimeout = 3.0;
+
 struct CommissionCommand {
   LinkConfig link;  // --port, --baud, --parity, --timeout; no retries: say what happened
   bool json = false, yes = false;

@@ -308,6 +308,10 @@ void ModbusTcpServer::handleFrame(ClientId id, const Bytes& adu) {
   const Bytes rtu = mbapToRtu(adu);  // unit, PDU, CRC: what decodeRequest reads
   const uint8_t unit = rtu[0], function = rtu[1];
   auto refuse = [&](uint8_t code) { reply(in, encodeException(unit, function, code)); };
+  // Read-only refuses a write as such, whatever its fields: before they are decoded or checked.
+  if (options_.refuse_writes && isKnownFunction(function) &&
+      !isReadFunction(static_cast<FunctionCode>(function)))
+    return refuse(kIllegalFunction);
   if (!isKnownFunction(function)) return refuse(kIllegalFunction);
   std::optional<Request> request = decodeRequest(rtu);
   if (!request) return refuse(kIllegalDataValue);

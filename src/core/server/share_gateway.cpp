@@ -20,6 +20,9 @@ Bytes shareReplyFor(const Request& request, const Result& result) {
 ShareGateway::ShareGateway(BusScheduler& bus, ShareConfig config,
                            std::function<std::string(uint8_t)> device_of)
     : bus_(bus), config_(std::move(config)), device_of_(std::move(device_of)) {
+  // The server refuses writes before decoding them: a malformed write gets 01 too, not the
+  // 02 / 03 its fields would earn (docs/share.md).
+  config_.server.refuse_writes = config_.read_only;
   server_ = std::make_unique<ModbusTcpServer>(
       config_.server, [this](const ModbusTcpServer::Incoming& in) { handle(in); });
 }
@@ -54,8 +57,6 @@ void ShareGateway::stop() {
 // On the server's thread: never waits for the bus.
 void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
   const Request& request = in.request;
-  if (config_.read_only && !isReadFunction(request.function))
-    return server_->replyException(in, kIllegalFunction);
   if (++in_flight_ > config_.max_queue) {
     --in_flight_;
     return server_->replyException(in, kSlaveDeviceBusy);

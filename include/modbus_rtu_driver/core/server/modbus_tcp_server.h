@@ -4,7 +4,10 @@
 // replies sent whenever the handler gives them, from any thread, so the loop never waits for a
 // bus. ROS-free: the node's share and the simulator's TCP side use it.
 //
-// What the server answers itself: a function it does not know -> exception 01; a start address
+// What the server answers itself: with refuse_writes, a write function (05, 06, 15, 16) -> 01
+// before any other check, so a malformed write is refused as a write (not 02/03: the client
+// learns that no write can pass, not how to fix this one); a function it does not know -> 01;
+// a start address
 // plus quantity past 65535 -> 02 (the application protocol's order: quantity first, then the
 // address range); a PDU that does not fit its function or a request Request::validate()
 // refuses otherwise -> 03 (01 for a read at unit 0, which nobody could answer). A header that
@@ -41,6 +44,9 @@ struct TcpServerOptions {
   int max_clients = 4;  // connections at once; a further one is closed at accept
   // s a client with no answer pending may stay silent before it is closed; 0 = never.
   double idle_timeout = 60.0;
+  // Every write function code answered with exception 01 before it is decoded (the share's
+  // read_only; not a YAML key of its own).
+  bool refuse_writes = false;
 };
 
 // Keep-alive on an accepted socket: first probe after 30 s of silence, then every 10 s, the

@@ -2,7 +2,8 @@
 // a bus that a BusScheduler owns. Each valid request is queued on the bus after the writes of
 // ROS and ahead of the polls (BusScheduler::submitShared) and answered when it has run, with
 // the client's transaction id and the slave address as unit id. What a client may see:
-//   01 a write while read_only (also a read at unit 0, a function the server does not know);
+//   01 a write while read_only, even a malformed one (also a read at unit 0, a function the
+//   server does not know);
 //   06 the share's queue is full (max_queue requests waiting for the bus, all clients together);
 //   0A the port is not open (or the bus is stopping; requests still queued when the share stops
 //   are refused this way, unsent, as their connections close); 0B the device did not answer
@@ -29,8 +30,10 @@ namespace modbus_rtu_driver {
 
 struct ShareConfig {
   bool enabled = false;
-  TcpServerOptions server;            // listen, allow, max_clients
-  bool read_only = false;             // write functions (05, 06, 15, 16) answered with exception 01
+  TcpServerOptions server;  // listen, allow, max_clients
+  // Write functions (05, 06, 15, 16) answered with exception 01 before any check of their
+  // fields (the server's refuse_writes).
+  bool read_only = false;
   int max_queue = 16;                 // requests waiting for or on the bus, all clients together
   double broadcast_turnaround = 0.1;  // s of silence on the bus after a broadcast, 0-1
 };
