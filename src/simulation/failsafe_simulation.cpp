@@ -839,8 +839,9 @@ void World::onReport(const FailsafeReport& r) {
       const Chan& c = m.ch[ch];
       // docs:88: a channel the device runs a PWM on that is no timed command of the node's is
       // the device's: the restore leaves it (it ran when the restore read it: it runs now).
+      const bool node_runs = c.timed && now <= c.ends + dur(0.5 + 0.02 * c.duration);
       const bool devices_run =
-          d == kLd && !c.timed && simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0;
+          d == kLd && !node_runs && simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0;
       if (!written[ch] && c.known && !c.adopt && !c.continuous && !devices_run)
         fail("I5", std::string(kNames[d]) + " out" + std::to_string(ch) +
                        ": the restore leaves "
