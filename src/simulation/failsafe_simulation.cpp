@@ -224,6 +224,9 @@ struct DevModel {
   uint64_t poll_running = 0;  // the sequence number of the poll running now
   bool unanswered = false;    // an attempt went unanswered since its last good poll
   bool found = false;
+  // LD58A08: whether a channel's PWM ran when the node last read its registers (docs:88: a
+  // restore leaves a run the device reports; the node knows only what it read)
+  std::vector<bool> pwm_read_running = std::vector<bool>(8, false);
   // generic (I8)
   bool gen_unanswered = false;  // an attempt to it went unanswered since its last report
   bool gen_prev_silent = true;  // ... before its previous report
@@ -648,6 +651,10 @@ void World::onAttempt(const LineEvent& e) {
   if (d < 0) return;
   DevModel& m = model_[d];
   const bool write = !isReadFunction(e.request.function);
+  if (d == kLd && e.answered && e.request.function == FunctionCode::kReadHoldingRegisters &&
+      e.request.address % 0x10 == 0 && e.request.address / 0x10 < kChannels && e.request.count == 3)
+    m.pwm_read_running[e.request.address / 0x10] =
+        simRegister(kLd, static_cast<uint16_t>(e.request.address + 2)) != 0;
   if (!e.answered) {
     m.unanswered = true;
     // A device that does not answer may be taken offline: its return is a restart (docs:34).
@@ -838,10 +845,9 @@ void World::onReport(const FailsafeReport& r) {
     for (int ch = 0; ch < kChannels; ++ch) {
       const Chan& c = m.ch[ch];
       // docs:88: a channel the device runs a PWM on that is no timed command of the node's is
-      // the device's: the restore leaves it (it ran when the restore read it: it runs now).
+      // the device's: the restore leaves it (as the node read it just before the restore).
       const bool node_runs = c.timed && now <= c.ends + dur(0.5 + 0.02 * c.duration);
-      const bool devices_run =
-          d == kLd && !node_runs && simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0;
+      const bool devices_run = d == kLd && !node_runs && m.pwm_read_running[ch];
       if (!written[ch] && c.known && !c.adopt && !c.continuous && !devices_run)
         fail("I5", std::string(kNames[d]) + " out" + std::to_string(ch) +
                        ": the restore leaves "
