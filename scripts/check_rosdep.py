@@ -94,7 +94,7 @@ class Rosdep:
             "LANG": "C.UTF-8",
         }
 
-    def run(self, *args):
+    def command(self, *args):
         p = subprocess.run(["/usr/bin/rosdep", *args], env=self.env, capture_output=True,
                            text=True, timeout=300)
         return p.returncode, (p.stdout + p.stderr).strip()
@@ -120,7 +120,7 @@ def check(pkgdir, work):
     folder = tempfile.mkdtemp(prefix="rosdep.", dir=work)
     try:
         rosdep = Rosdep(folder)
-        rc, out = rosdep.run("update", "--rosdistro", "noetic", "--include-eol-distros")
+        rc, out = rosdep.command("update", "--rosdistro", "noetic", "--include-eol-distros")
         print(f"$ rosdep update --rosdistro noetic --include-eol-distros   (exit {rc})\n{indent(out)}")
         if rc != 0:
             return [("rosdep_update", f"rosdep update from the snapshot failed: {out}")]
@@ -129,11 +129,11 @@ def check(pkgdir, work):
                     f"--os={os_name}:{codename}"]
             if os_name == "ubuntu":
                 args += ["--rosdistro", "noetic"]
-            rc, out = rosdep.run(*args)
+            rc, out = rosdep.command(*args)
             print(f"$ rosdep {' '.join(args)}   (exit {rc})\n{indent(out)}")
             cases.append((f"rosdep_install_{codename}", "" if rc == 0 else
                           f"{os_name}:{codename}: {key_lines(out)} (rosdep install --simulate, exit {rc})"))
-        rc, out = rosdep.run("keys", "--from-paths", pkgdir, "--ignore-src")
+        rc, out = rosdep.command("keys", "--from-paths", pkgdir, "--ignore-src")
         if rc != 0:
             return cases + [("rosdep_keys", f"rosdep keys failed: {out}")]
         ros = ros_packages()
@@ -142,7 +142,7 @@ def check(pkgdir, work):
         for os_name, codename in RESOLVE_PLATFORMS:
             failed, resolved = [], []
             for key in system:
-                rc, out = rosdep.run("resolve", key, f"--os={os_name}:{codename}")
+                rc, out = rosdep.command("resolve", key, f"--os={os_name}:{codename}")
                 if rc != 0:
                     failed.append(f"{key}: {key_lines(out).splitlines()[0][:300]}")
                 else:
