@@ -19,8 +19,8 @@ Then, after `rosdep update --rosdistro noetic` from those sources:
       package noetic releases) must resolve: rosdep resolve KEY --os=ubuntu:CODENAME
 Any failure names the platform and rosdep's message (which names the key).
 
-Usage: check_rosdep.py RESULTS_DIR [--work DIR]               the check of package.xml; one JUnit
-                                                             case per platform in RESULTS_DIR
+Usage: check_rosdep.py RESULTS_DIR [--work DIR] [--pkgdir DIR]  the check of package.xml (or of
+                                                             DIR's); one JUnit case per platform
        check_rosdep.py RESULTS_DIR --self-test [--work DIR]  the check fails on package.xml with
                                                              the cli11 key it had until issue 33
        check_rosdep.py --snapshot ROSDISTRO_GIT_DIR DEBIAN_YAML   rewrites test/data/rosdep/ from
@@ -247,6 +247,7 @@ def main():
     ap.add_argument("results", nargs="?")
     ap.add_argument("--self-test", action="store_true")
     ap.add_argument("--work", default=None)
+    ap.add_argument("--pkgdir", default=REPO, help="the package to check (default: this one)")
     ap.add_argument("--snapshot", nargs=2, metavar=("ROSDISTRO_GIT_DIR", "DEBIAN_YAML"))
     args = ap.parse_args()
     if args.snapshot:
@@ -266,7 +267,7 @@ def main():
             cases = self_test(work)
             write_cases(args.results, "rosdep_self_test", cases)
         else:
-            cases = check(REPO, work)
+            cases = check(os.path.abspath(args.pkgdir), work)
             write_cases(args.results, "rosdep", cases)
     finally:
         if not args.work:
