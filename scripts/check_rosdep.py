@@ -6,7 +6,7 @@ rosdep (Debian's python3-rosdep2) runs with a sources list written into a fresh 
 repository's snapshot in test/data/rosdep/ (file:// URLs), laid out as a Debian system with
 python3-rosdep2 has them:
   10-debian.list   debian.yaml, tag debian: Debian's own rosdep list (the ROS packages Debian
-                   ships itself, libroscpp-dev, ros-core-dev, ...), from python3-rosdep2;
+                   ships itself: roscpp -> libroscpp-dev, ...), from python3-rosdep2;
   20-default.list  base.yaml, python.yaml: ros/rosdistro's rosdep/*.yaml entries;
   and as the rosdistro index (ROSDISTRO_INDEX_URL) index.yaml with noetic/distribution.yaml,
   which gives the ROS packages' ros-noetic-* names on Ubuntu 20.04.
@@ -106,7 +106,11 @@ def key_lines(out):
     lines = [line.strip() for line in out.splitlines() if line.strip()]
     named = [line for line in lines if re.search(r"\[[^]]+\]|rule for '", line)
              and not line.startswith("#")]
-    return " ".join(named + [line for line in lines if line not in named])
+    text = " ".join(named + [line for line in lines if line not in named])
+    if "Cannot locate rosdep definition" in text or "no rosdep rule for" in text:
+        text += (" (not in test/data/rosdep: if rosdistro has the key, retake the snapshot with "
+                 "scripts/check_rosdep.py --snapshot)")
+    return text
 
 
 def indent(text):
