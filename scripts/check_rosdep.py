@@ -12,7 +12,8 @@ python3-rosdep2 has them:
   which gives the ROS packages' ros-noetic-* names on Ubuntu 20.04.
 Then, after `rosdep update --rosdistro noetic` from those sources:
   ubuntu:focal, debian:bullseye, debian:bookworm, debian:trixie:
-      rosdep install --simulate --from-paths PKGDIR --ignore-src --os=OS:CODENAME [--rosdistro noetic]
+      rosdep install --simulate --from-paths PKGDIR --ignore-src --os=OS:CODENAME
+                     [--rosdistro noetic]
       (--rosdistro noetic on focal only: on Debian the ROS packages come from Debian's list)
   ubuntu:jammy, ubuntu:noble: rosdistro has no rules there for the ROS packages (Ubuntu's own
       universe packages provide them), so each system key (a key of `rosdep keys` that is not a
@@ -125,7 +126,8 @@ def check(pkgdir, work):
     try:
         rosdep = Rosdep(folder)
         rc, out = rosdep.command("update", "--rosdistro", "noetic", "--include-eol-distros")
-        print(f"$ rosdep update --rosdistro noetic --include-eol-distros   (exit {rc})\n{indent(out)}")
+        print(f"$ rosdep update --rosdistro noetic --include-eol-distros   (exit {rc})\n"
+              + indent(out))
         if rc != 0:
             return [("rosdep_update", f"rosdep update from the snapshot failed: {out}")]
         for os_name, codename in INSTALL_PLATFORMS:
@@ -136,7 +138,8 @@ def check(pkgdir, work):
             rc, out = rosdep.command(*args)
             print(f"$ rosdep {' '.join(args)}   (exit {rc})\n{indent(out)}")
             cases.append((f"rosdep_install_{codename}", "" if rc == 0 else
-                          f"{os_name}:{codename}: {key_lines(out)} (rosdep install --simulate, exit {rc})"))
+                          f"{os_name}:{codename}: {key_lines(out)} "
+                          f"(rosdep install --simulate, exit {rc})"))
         rc, out = rosdep.command("keys", "--from-paths", pkgdir, "--ignore-src")
         if rc != 0:
             return cases + [("rosdep_keys", f"rosdep keys failed: {out}")]
@@ -150,7 +153,8 @@ def check(pkgdir, work):
                 if rc != 0:
                     failed.append(f"{key}: {key_lines(out).splitlines()[0][:300]}")
                 else:
-                    resolved.append(f"{key} -> {' '.join(out.split()[1:]) if out.startswith('#') else out}")
+                    packages = out.split()[1:] if out.startswith("#") else out.split()  # "#apt"
+                    resolved.append(f"{key} -> {' '.join(packages)}")
             print(f"$ rosdep resolve KEY --os={os_name}:{codename}   for each of the {len(system)} "
                   f"system keys: {len(failed)} failed\n" + indent("\n".join(failed or resolved)))
             cases.append((f"rosdep_resolve_system_keys_{codename}", "" if not failed else
@@ -192,7 +196,7 @@ def self_test(work):
     others = [name for name, msg in cases if msg and name != "rosdep_install_focal"]
     if not problem and others:
         problem = f"the cli11 key failed elsewhere too, where it should resolve: {others}"
-    print(f"self-test: {'OK: the check fails on focal with: ' + OLD_KEY_MESSAGE if not problem else problem}")
+    print("self-test: " + (problem or f"OK: the check fails on focal with: {OLD_KEY_MESSAGE}"))
     return [("rosdep_fails_on_cli11_key", problem)]
 
 

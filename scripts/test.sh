@@ -58,5 +58,5 @@ mkdir -p "$WS/build/test_results/simulation"
 "$REPO/scripts/check_install.sh" "$WS/build/test_results/install" || true
 # Each step above writes its results into a folder of its own; one that wrote nothing failed.
 exec /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$WS/build/test_results" \
-  --expect modbus_rtu_driver --expect dependencies --expect rosdep --expect sanitizers --expect fuzz \
-  --expect conventions --expect install --expect tidy --expect simulation
+  --expect modbus_rtu_driver --expect dependencies --expect rosdep --expect sanitizers \
+  --expect fuzz --expect conventions --expect install --expect tidy --expect simulation
