@@ -50,7 +50,6 @@ ROSDEP_TO_DEBIAN = {
     "gtest": ["libgtest-dev"],
     "libmodbus-dev": ["libmodbus-dev"],
     "yaml-cpp": ["libyaml-cpp-dev"],
-    "cli11": ["libcli11-dev"],
     "nlohmann-json-dev": ["nlohmann-json3-dev"],
     "python3-yaml": ["python3-yaml"],
     "python3-matplotlib": ["python3-matplotlib"],

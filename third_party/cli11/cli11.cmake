@@ -1,4 +1,6 @@
-# CLI11: the system's when it has one (Debian 12+, Ubuntu 22.04+: libcli11-dev, rosdep key cli11).
+# CLI11: the system's when it has one (Debian 12+, Ubuntu 22.04+: libcli11-dev, installed by
+# scripts/debian_packages.txt; no rosdep key in package.xml, since rosdep's cli11 is "not
+# available" on focal and `rosdep install` stops there, issue 33).
 # Debian 11 and Ubuntu 20.04 (Noetic's) have no CLI11 package and rosdep's cli11 key resolves to
 # nothing there, so the released single header CLI11 2.4.2 (BSD-3-Clause, licence beside it) is
 # kept here and used only then: header-only, no build step, the series Debian 13 ships.
