@@ -9,7 +9,7 @@ as marks on the time axis of every panel.
 
 The bus nodes are found by their topics' message types (any namespace); --node keeps one.
 Several bags (a bag per bus of one robot, or one recording's split files) make one figure on
-one time axis, each bus node's devices labelled with the node's name.
+one time axis: each bus node's panels together, its devices labelled with the node's name.
 """
 import argparse
 import collections
@@ -45,6 +45,16 @@ class BagData:
 
     def empty(self):
         return not (self.telemetry or self.outputs or self.signals or self.failsafe)
+
+    def of_node(self, node):
+        """This data's part of one bus node."""
+        out = BagData()
+        for kind in ("telemetry", "outputs", "signals"):
+            for key, samples in getattr(self, kind).items():
+                if key[0] == node:
+                    getattr(out, kind)[key] = samples
+        out.failsafe = [e for e in self.failsafe if e[1] == node]
+        return out
 
 
 def stamp_of(msg, t):
@@ -93,7 +103,13 @@ def label(node, device, several_nodes):
 
 
 def panels(data):
-    """[(height in inches, draw(ax, t0, several_nodes))] in the order shown."""
+    """[(height in inches, draw(ax, t0, several_nodes))] in the order shown: each bus node's
+    panels together (a robot's bags: one bus after the other), nodes in name order."""
+    return [row for node in data.nodes() for row in node_panels(data.of_node(node))]
+
+
+def node_panels(data):
+    """One bus node's panels: PDU telemetry, signals by unit, each device's outputs."""
     out = []
     if data.telemetry:
         for i, (field, unit) in enumerate(TELEMETRY_ROWS):
