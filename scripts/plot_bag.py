@@ -5,8 +5,11 @@ in a panel of its own, one labelled row per channel; and the fail-safe's actions
 as marks on the time axis of every panel.
 
     scripts/plot_bag.py my.bag -o robot.png [--node /my_robot/io_bus]
+    scripts/plot_bag.py ~/modbus_rtu_io_bus_*.bag ~/modbus_rtu_sensor_bus_*.bag -o robot.png
 
 The bus nodes are found by their topics' message types (any namespace); --node keeps one.
+Several bags (a bag per bus of one robot, or one recording's split files) make one figure on
+one time axis: each bus node's panels together, its devices labelled with the node's name.
 """
 import argparse
 import collections
@@ -43,14 +46,34 @@ class BagData:
     def empty(self):
         return not (self.telemetry or self.outputs or self.signals or self.failsafe)
 
+    def of_node(self, node):
+        """This data's part of one bus node."""
+        out = BagData()
+        for kind in ("telemetry", "outputs", "signals"):
+            for key, samples in getattr(self, kind).items():
+                if key[0] == node:
+                    getattr(out, kind)[key] = samples
+        out.failsafe = [e for e in self.failsafe if e[1] == node]
+        return out
+
 
 def stamp_of(msg, t):
     stamp = getattr(getattr(msg, "header", None), "stamp", None)
     return stamp.to_sec() if stamp and stamp.to_sec() > 0 else t.to_sec()
 
 
-def load(bag_path, only_node=None):
+def load(bag_paths, only_node=None):
     data = BagData()
+    for bag_path in bag_paths:
+        load_one(bag_path, only_node, data)
+    for series in (data.telemetry, data.outputs, data.signals):
+        for samples in series.values():
+            samples.sort(key=lambda s: s[0])  # split files given in any order
+    data.failsafe.sort(key=lambda e: e[0])
+    return data
+
+
+def load_one(bag_path, only_node, data):
     with rosbag.Bag(bag_path) as bag:
         types = {topic: info.msg_type for topic, info in bag.get_type_and_topic_info().topics.items()}
         wanted = []
@@ -73,7 +96,6 @@ def load(bag_path, only_node=None):
             if kind == "outputs" and leaf != "outputs":
                 continue  # the LC board's inputs: not plotted
             getattr(data, kind)[(node, device)].append((stamp_of(msg, t), msg))
-    return data
 
 
 def label(node, device, several_nodes):
@@ -81,7 +103,13 @@ def label(node, device, several_nodes):
 
 
 def panels(data):
-    """[(height in inches, draw(ax, t0, several_nodes))] in the order shown."""
+    """[(height in inches, draw(ax, t0, several_nodes))] in the order shown: each bus node's
+    panels together (a robot's bags: one bus after the other), nodes in name order."""
+    return [row for node in data.nodes() for row in node_panels(data.of_node(node))]
+
+
+def node_panels(data):
+    """One bus node's panels: PDU telemetry, signals by unit, each device's outputs."""
     out = []
     if data.telemetry:
         for i, (field, unit) in enumerate(TELEMETRY_ROWS):
@@ -159,17 +187,18 @@ def plot(data, out_path, title):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("bag")
+    p.add_argument("bags", nargs="+", metavar="bag",
+                   help="one or more bags (several: one figure, e.g. a bag per bus of a robot)")
     p.add_argument("-o", "--output", default="telemetry.png")
-    p.add_argument("--node", help="only this bus node (e.g. /my_robot/io_bus); default: every one in the bag")
+    p.add_argument("--node", help="only this bus node (e.g. /my_robot/io_bus); default: every one in the bags")
     args = p.parse_args()
-    data = load(args.bag, args.node.rstrip("/") if args.node else None)
+    data = load(args.bags, args.node.rstrip("/") if args.node else None)
     if data.empty():
         where = f" under {args.node}/" if args.node else ""
-        print(f"{args.bag}: no bus node's telemetry, outputs, signals or fail-safe events{where}",
-              file=sys.stderr)
+        print(f"{', '.join(args.bags)}: no bus node's telemetry, outputs, signals or fail-safe "
+              f"events{where}", file=sys.stderr)
         return 1
-    plot(data, args.output, os.path.basename(args.bag))
+    plot(data, args.output, ", ".join(os.path.basename(b) for b in args.bags))
     print(f"wrote {args.output}: bus node(s) {', '.join(data.nodes())}; "
           f"{sum(map(len, data.telemetry.values()))} telemetry samples, "
           f"{sum(map(len, data.outputs.values()))} output messages, "

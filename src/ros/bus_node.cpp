@@ -216,7 +216,7 @@ bool BusNode::start() {
     share_ = std::make_unique<ShareBridge>(
         *bus_, config_, [this](const Request& r) { externalWrite(r, CommandSource::kShare); });
     if (!share_->start(&error)) {
-      ROS_FATAL("share: %s", error.c_str());
+      ROS_FATAL("%s", error.c_str());  // names the share's key
       return false;
     }
     diagnostics_->add("share", share_.get(), &ShareBridge::diagnose);

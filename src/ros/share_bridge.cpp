@@ -18,8 +18,19 @@ ShareBridge::ShareBridge(BusScheduler& bus, const BusConfig& config,
   gateway_->onWriteConfirmed(std::move(wrote));
 }
 
+// Errors name the key to change: a second bus left on the default listen address (1502) is the
+// usual cause of a taken port (docs/share.md, "Several buses").
 bool ShareBridge::start(std::string* error) {
-  return gateway_->start(error);
+  std::string why;
+  if (gateway_->start(&why)) return true;
+  if (error)
+    *error = gateway_->server().addressInUse()
+                 ? "share/listen: " + config_.server.host + ":" +
+                       std::to_string(config_.server.port) +
+                       ": address in use (another bus's share, or another program, listens "
+                       "there): give each bus its own share/listen port"
+                 : "share: " + why;
+  return false;
 }
 
 void ShareBridge::stop() {

@@ -1,12 +1,15 @@
 #include "modbus_rtu_driver/sim/pty_link.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <termios.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <climits>
 #include <cstring>
+#include <string>
 
 namespace modbus_rtu_driver {
 
@@ -67,7 +70,64 @@ bool makeDirs(const std::string& path) {
   return true;
 }
 
+std::string readAll(int fd) {
+  std::string text;
+  char buf[64];
+  ssize_t n = 0;
+  while ((n = pread(fd, buf, sizeof buf, static_cast<off_t>(text.size()))) > 0)
+    text.append(buf, static_cast<size_t>(n));
+  return text;
+}
+
+std::string targetOf(const std::string& link) {
+  char buf[PATH_MAX];
+  const ssize_t n = readlink(link.c_str(), buf, sizeof buf - 1);
+  return n > 0 ? std::string(buf, static_cast<size_t>(n)) : std::string();
+}
+
 }  // namespace
+
+// The lock is taken before the link is touched. A holder that stops removes the lock file while
+// it holds the lock, so a lock taken on a file no longer at the path is given up and taken again.
+bool PtyLink::lock(const std::string& link, std::string* error) {
+  const std::string path = link + ".lock";
+  for (int attempt = 0; attempt < 10; ++attempt) {
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) {
+      if (error) *error = "cannot create " + path + ": " + std::strerror(errno);
+      return false;
+    }
+    if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      const int err = errno;
+      std::string pid = readAll(fd);
+      while (!pid.empty() && (pid.back() == '\n' || pid.back() == ' ')) pid.pop_back();
+      ::close(fd);
+      if (error)
+        *error = err == EWOULDBLOCK
+                     ? link + " belongs to a running simulator (pid " +
+                           (pid.empty() ? std::string("unknown") : pid) + ", which holds " + path +
+                           "): give each simulator its own --link"
+                     : "cannot lock " + path + ": " + std::strerror(err);
+      return false;
+    }
+    struct stat held {
+    }, there{};
+    if (fstat(fd, &held) == 0 && stat(path.c_str(), &there) == 0 && held.st_dev == there.st_dev &&
+        held.st_ino == there.st_ino) {
+      const std::string pid = std::to_string(getpid()) + "\n";
+      // The pid only makes a refusal's message richer: the lock itself is what counts.
+      const bool written = ftruncate(fd, 0) == 0 && pwrite(fd, pid.data(), pid.size(), 0) ==
+                                                        static_cast<ssize_t>(pid.size());
+      (void)written;
+      lock_fd_ = fd;
+      lock_path_ = path;
+      return true;
+    }
+    ::close(fd);  // the previous holder removed it as we opened it: try the new one
+  }
+  if (error) *error = "cannot lock " + path + ": it keeps being replaced";
+  return false;
+}
 
 bool PtyLink::open(const std::string& link, int baud, std::string* error, Parity parity) {
   auto fail = [&](const std::string& what) {
@@ -75,6 +135,13 @@ bool PtyLink::open(const std::string& link, int baud, std::string* error, Parity
     close();
     return false;
   };
+  const size_t slash = link.find_last_of('/');
+  if (slash != std::string::npos && slash > 0 && !makeDirs(link.substr(0, slash)))
+    return fail("cannot create the directory of " + link);
+  if (!lock(link, error)) {
+    close();
+    return false;
+  }
   master_fd_ = posix_openpt(O_RDWR | O_NOCTTY);
   if (master_fd_ < 0 || grantpt(master_fd_) != 0 || unlockpt(master_fd_) != 0)
     return fail("cannot create a pseudo-terminal");
@@ -92,12 +159,10 @@ bool PtyLink::open(const std::string& link, int baud, std::string* error, Parity
   }
   tcsetattr(slave_fd_, TCSANOW, &tio);
   fcntl(master_fd_, F_SETFL, O_NONBLOCK);
-  const size_t slash = link.find_last_of('/');
-  if (slash != std::string::npos && slash > 0 && !makeDirs(link.substr(0, slash)))
-    return fail("cannot create the directory of " + link);
-  unlink(link.c_str());
+  unlink(link.c_str());  // a stale link: whoever made it is gone (it held no lock)
   if (symlink(pts.c_str(), link.c_str()) != 0) return fail("cannot link " + link);
   link_ = link;
+  pts_ = pts;
   return true;
 }
 
@@ -106,8 +171,17 @@ void PtyLink::close() {
     if (*fd >= 0) ::close(*fd);
     *fd = -1;
   }
-  if (!link_.empty()) unlink(link_.c_str());
+  // Only what this object made: the link while it still points to our pty, then the lock file
+  // (removed while still held, see lock()).
+  if (!link_.empty() && targetOf(link_) == pts_) unlink(link_.c_str());
   link_.clear();
+  pts_.clear();
+  if (lock_fd_ >= 0) {
+    unlink(lock_path_.c_str());
+    ::close(lock_fd_);
+  }
+  lock_fd_ = -1;
+  lock_path_.clear();
 }
 
 SimLineSettings PtyLink::lineSettings() const {

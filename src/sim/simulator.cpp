@@ -76,11 +76,7 @@ void Simulator::stop() {
   if (thread_.joinable()) thread_.join();
   for (const Client& c : clients_) close(c.fd);
   clients_.clear();
-  if (listen_fd_ >= 0) {
-    close(listen_fd_);
-    unlink(options_.control.c_str());
-  }
-  listen_fd_ = -1;
+  closeControl();
   gateway_.close();
   pty_.close();
   outgoing_.clear();

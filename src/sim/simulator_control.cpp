@@ -26,6 +26,7 @@
 //                         ms (a gateway reboot)
 //   help               -> ok <the command list>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
 
@@ -65,16 +66,43 @@ bool Simulator::openControl(std::string* error) {
     if (error) *error = "control socket path too long: " + options_.control;
     return false;
   }
-  listen_fd_ = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   addr.sun_family = AF_UNIX;
   std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", options_.control.c_str());
+  // A socket there that accepts a connection is a running simulator's (given the same --control
+  // with another --link): refused, never taken over. One that refuses is stale: replaced.
+  const int probe = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  const bool answers =
+      probe >= 0 && connect(probe, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
+  if (probe >= 0) close(probe);
+  if (answers) {
+    if (error)
+      *error = "control socket " + options_.control +
+               " belongs to a running simulator (it accepts connections): give each simulator "
+               "its own --control";
+    return false;
+  }
+  listen_fd_ = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   unlink(options_.control.c_str());  // a stale socket of an earlier run
   if (listen_fd_ < 0 || bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
       listen(listen_fd_, 16) != 0) {
     if (error) *error = "cannot listen on " + options_.control + ": " + std::strerror(errno);
     return false;
   }
+  struct stat st {};
+  if (stat(options_.control.c_str(), &st) == 0) control_inode_ = {st.st_dev, st.st_ino};
   return true;
+}
+
+void Simulator::closeControl() {
+  if (listen_fd_ < 0) return;
+  close(listen_fd_);
+  listen_fd_ = -1;
+  // Only the socket this run made: never one that replaced it since (see openControl).
+  struct stat st {};
+  if (control_inode_.second != 0 && stat(options_.control.c_str(), &st) == 0 &&
+      std::make_pair(st.st_dev, st.st_ino) == control_inode_)
+    unlink(options_.control.c_str());
+  control_inode_ = {};
 }
 
 void Simulator::serveControl() {

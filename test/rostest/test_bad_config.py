@@ -1,5 +1,8 @@
 #!/usr/bin/env python3
-"""Bad YAML stops the real node with one clear error naming the key and the value."""
+"""Bad YAML stops the real node with one clear error naming the key and the value; so does a
+share port another bus already listens on."""
+import copy
+import socket
 import subprocess
 import unittest
 
@@ -16,7 +19,6 @@ GOOD = {
 
 def with_change(path, value):
     """GOOD with one key changed (value None removes it)."""
-    import copy
     cfg = copy.deepcopy(GOOD)
     node = cfg
     for key in path[:-1]:
@@ -101,6 +103,27 @@ class BadConfigTest(unittest.TestCase):
             self.assertEqual(len(errors), 1, proc.stdout)
             for w in words:
                 self.assertIn(w, errors[0], "case %d: %r" % (i, cfg))
+
+    def test_a_taken_share_port_stops_the_node_naming_share_listen(self):
+        # Issue 33 item 2: a second bus left on the first's share/listen port (both on the
+        # default 1502) stops at start with the key to change (docs/share.md, "Several buses").
+        # The port is taken here by a socket of the test (bound to port 0: a free one).
+        with socket.socket() as taken:
+            taken.bind(("127.0.0.1", 0))
+            taken.listen(1)
+            port = taken.getsockname()[1]
+            cfg = copy.deepcopy(GOOD)
+            cfg["share"] = {"listen": "127.0.0.1:%d" % port}
+            rosparam.upload_params("/second_bus", cfg)
+            proc = subprocess.run(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus",
+                                   "__name:=second_bus"], stdout=subprocess.PIPE,
+                                  stderr=subprocess.STDOUT, text=True, timeout=30)
+        self.assertNotEqual(proc.returncode, 0, proc.stdout)
+        errors = [line for line in proc.stdout.splitlines() if "share/listen" in line]
+        self.assertEqual(len(errors), 1, proc.stdout)
+        self.assertIn("share/listen: 127.0.0.1:%d: address in use (another bus's share, or "
+                      "another program, listens there): give each bus its own share/listen "
+                      "port" % port, errors[0])
 
 
 if __name__ == "__main__":

@@ -285,3 +285,24 @@ TEST(ModbusTcpServer, AnswersToAClientThatLeftAreDropped) {
   ASSERT_TRUE(next.send(2, read));
   EXPECT_EQ(next.receive(), expected(2, encodeReply(read, {1})));
 }
+
+// Issue 33 item 2: a second share on a taken port (two buses left on 1502) is told apart from
+// other start failures, so the node can name share/listen (docs/share.md, "Several buses").
+TEST(ModbusTcpServer, ATakenPortIsReportedAsAddressInUse) {
+  TcpServerOptions options;
+  options.port = 0;
+  ModbusTcpServer first(options, [](const ModbusTcpServer::Incoming&) {});
+  std::string error;
+  ASSERT_TRUE(first.start(&error)) << error;
+  EXPECT_FALSE(first.addressInUse());
+  options.port = first.port();
+  ModbusTcpServer second(options, [](const ModbusTcpServer::Incoming&) {});
+  EXPECT_FALSE(second.start(&error));
+  EXPECT_TRUE(second.addressInUse());
+  EXPECT_EQ(error, "cannot listen on 127.0.0.1:" + std::to_string(options.port) +
+                       ": Address already in use");
+  options.host = "10.0.0.1.2";  // another failure: not an address in use
+  ModbusTcpServer third(options, [](const ModbusTcpServer::Incoming&) {});
+  EXPECT_FALSE(third.start(&error));
+  EXPECT_FALSE(third.addressInUse());
+}

@@ -172,3 +172,61 @@ TEST(SimExecutable, BadConfigurationAndOptionsAreRefused) {
   EXPECT_NE(refusal.find("--link PATH"), std::string::npos) << refusal;
   EXPECT_EQ(option.wait(5000), 2);
 }
+
+// Issue 33 item 2: a second simulator given a running one's --link (or --control) is refused
+// with a message naming it and exits 1; the first keeps its link, its control socket and its
+// line; and the one refused deletes nothing of the first's (docs/simulator.md).
+TEST(SimExecutable, ASecondSimulatorOnARunningOnesLinkIsRefused) {
+  if (!kExe) GTEST_SKIP() << "built without the executable";
+  ScratchDir dir;
+  std::ofstream(dir / "sim.yaml") << "baud: 9600\ndevices:\n  - {type: ld58a08, address: 1}\n";
+  const std::string link = dir / "tty", socket = dir / "tty.ctl";
+  Process first({kExe, "--config", dir / "sim.yaml", "--link", link});
+  ASSERT_GT(first.pid, 0);
+  ASSERT_EQ(Process::readFor(first.out, 10000, "\n"), "simulator ready on " + link + "\n");
+  char target[256] = {};
+  ASSERT_GT(readlink(link.c_str(), target, sizeof target - 1), 0);
+
+  // The same link: refused, naming the link and the running one's pid.
+  Process second({kExe, "--config", dir / "sim.yaml", "--link", link});
+  ASSERT_GT(second.pid, 0);
+  EXPECT_EQ(second.wait(10000), 1) << "the second simulator did not stop";
+  const std::string refusal = Process::readFor(second.err, 2000, "\n");
+  EXPECT_EQ(refusal, "modbus_rtu_simulator: " + link + " belongs to a running simulator (pid " +
+                         std::to_string(first.pid) + ", which holds " + link +
+                         ".lock): give each simulator its own --link\n");
+  // Another link but the first's control socket: refused too, its own link removed again.
+  Process third({kExe, "--config", dir / "sim.yaml", "--link", dir / "tty3", "--control", socket});
+  ASSERT_GT(third.pid, 0);
+  EXPECT_EQ(third.wait(10000), 1) << "the third simulator did not stop";
+  EXPECT_EQ(Process::readFor(third.err, 2000, "\n"),
+            "modbus_rtu_simulator: control socket " + socket +
+                " belongs to a running simulator (it accepts connections): give each simulator "
+                "its own --control\n");
+  EXPECT_FALSE(exists(dir / "tty3"));
+
+  // The first is untouched: its link to its pty, its control socket, its line.
+  char now[256] = {};
+  ASSERT_GT(readlink(link.c_str(), now, sizeof now - 1), 0);
+  EXPECT_STREQ(now, target);
+  EXPECT_EQ(control(socket, "info"), "ok #0:ld58a08:1:9600:N\n");
+  {
+    PtyClient client(link);
+    EXPECT_EQ(client.exchange("01 06 00 FE 00 04 E9 F9", 8), "01 06 00 FE 00 04 E9 F9");
+  }
+  ASSERT_EQ(kill(first.pid, SIGTERM), 0);
+  EXPECT_EQ(first.wait(5000), 0);
+  EXPECT_FALSE(exists(link));
+  EXPECT_FALSE(exists(socket));
+  EXPECT_FALSE(exists(link + ".lock"));
+
+  // Gone, it leaves nothing that refuses the next one (a killed one's lock file is no lock).
+  Process again({kExe, "--config", dir / "sim.yaml", "--link", link});
+  ASSERT_GT(again.pid, 0);
+  EXPECT_EQ(Process::readFor(again.out, 10000, "\n"), "simulator ready on " + link + "\n");
+  ASSERT_EQ(kill(again.pid, SIGKILL), 0);
+  EXPECT_EQ(again.wait(5000), 128 + SIGKILL);
+  Process after_kill({kExe, "--config", dir / "sim.yaml", "--link", link});
+  ASSERT_GT(after_kill.pid, 0);
+  EXPECT_EQ(Process::readFor(after_kill.out, 10000, "\n"), "simulator ready on " + link + "\n");
+}

@@ -18,7 +18,8 @@ class ShareBridge {
   // `wrote(slave)`: on the bus thread, a client's write to `slave` was confirmed.
   ShareBridge(BusScheduler& bus, const BusConfig& config,
               std::function<void(const Request&)> wrote);
-  // Listens; false with the reason (address in use, ...).
+  // Listens; false with the reason, naming the key to change (share/listen when the address is
+  // in use).
   bool start(std::string* error);
   void stop();
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);

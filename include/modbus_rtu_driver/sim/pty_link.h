@@ -1,6 +1,11 @@
 // A pseudo-terminal with its slave side linked at a path, so a program opens it like a serial
 // port. The slave side stays open here: the line survives the other program closing it, and its
 // termios (which that program sets) tells the line's baud and parity.
+//
+// One program per link: LINK.lock beside the link is flock'ed (and holds the pid) while the link
+// lives, so a second simulator given the same --link is refused instead of replacing the running
+// one's link (and deleting it when it stops). On close only what this object made goes: the link
+// while it still points to this pty, and the lock file.
 #pragma once
 
 #include <string>
@@ -17,7 +22,8 @@ class PtyLink {
   PtyLink& operator=(const PtyLink&) = delete;
 
   // Creates the pty (raw, 8 data bits, 1 stop bit, at `baud` and `parity` N/E/O) and the link
-  // (and its directory), replacing a stale link. False with a message.
+  // (and its directory), replacing a stale link. False with a message, also when the link
+  // belongs to a running program (its LINK.lock is held).
   bool open(const std::string& link, int baud, std::string* error, Parity parity = Parity::kNone);
   void close();
   int fd() const { return master_fd_; }  // non-blocking master side
@@ -28,8 +34,11 @@ class PtyLink {
   SimLineSettings lineSettings() const;
 
  private:
+  bool lock(const std::string& link, std::string* error);
+
   int master_fd_ = -1, slave_fd_ = -1;
-  std::string link_;
+  int lock_fd_ = -1;
+  std::string link_, pts_, lock_path_;
 };
 
 }  // namespace modbus_rtu_driver

@@ -17,12 +17,15 @@
 // the line's character rate.
 #pragma once
 
+#include <sys/types.h>
+
 #include <atomic>
 #include <memory>
 #include <mutex>
 #include <random>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "modbus_rtu_driver/core/config/type_registry.h"
@@ -92,7 +95,8 @@ class Simulator {
 
   // Loads the state file, creates the pty, the link and the control socket, starts the thread.
   bool start(std::string* error);
-  // Stops the thread; removes the link and the socket. Replies still waiting are lost.
+  // Stops the thread; removes the link and the socket this run made (not one that belongs to
+  // another simulator). Replies still waiting are lost.
   void stop();
   // One control command, as on the socket ("get 255 coil 0 8" -> "ok 0 1 ..."). Thread-safe.
   std::string command(const std::string& line);
@@ -134,7 +138,9 @@ class Simulator {
   void powerCycle(SimClock::time_point now);
   void saveState();
   void loadState(SimClock::time_point now);
+  // Refuses a control socket a running simulator answers on; closeControl removes only ours.
   bool openControl(std::string* error);
+  void closeControl();
   void serveControl();
   std::string doCommand(const std::string& line);
   std::string deviceCommand(const std::string& verb, SimDevice& device, std::istream& args);
@@ -149,6 +155,7 @@ class Simulator {
   PtyLink pty_;
   SimGateway gateway_;  // the same line, reached over TCP
   int listen_fd_ = -1;
+  std::pair<dev_t, ino_t> control_inode_{};  // the control socket this run made (0: none)
   std::vector<Client> clients_;
   RequestFramer framer_;
   SimLineSettings line_;  // the line's settings when the last bytes came

@@ -85,6 +85,7 @@ bool ModbusTcpServer::start(std::string* error) {
     stop();
     return false;
   };
+  address_in_use_ = false;
   allow_.clear();
   for (const std::string& entry : options_.allow) {
     AllowRule rule{};
@@ -106,8 +107,11 @@ bool ModbusTcpServer::start(std::string* error) {
   const int on = 1;
   if (listen_fd_ < 0 || setsockopt(listen_fd_, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on) != 0 ||
       bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
-      listen(listen_fd_, 16) != 0)
-    return fail("cannot listen on " + where + ": " + std::strerror(errno));
+      listen(listen_fd_, 16) != 0) {
+    const int err = errno;
+    address_in_use_ = err == EADDRINUSE;
+    return fail("cannot listen on " + where + ": " + std::strerror(err));
+  }
   socklen_t len = sizeof addr;
   getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
   bound_port_ = ntohs(addr.sin_port);

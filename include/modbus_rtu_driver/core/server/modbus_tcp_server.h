@@ -96,6 +96,9 @@ class ModbusTcpServer {
   bool start(std::string* error);
   void stop();  // closes every socket; later replies are dropped
   uint16_t port() const { return bound_port_; }
+  // After a failed start: the address was taken (EADDRINUSE), by another bus's share or any
+  // other program, so the caller can say which setting to change.
+  bool addressInUse() const { return address_in_use_; }
 
   // Sends the answer to `in`: an RTU ADU (encodeReply / encodeException; its CRC is dropped)
   // carried with the request's transaction id. Any thread; dropped when the client has gone.
@@ -134,6 +137,7 @@ class ModbusTcpServer {
   std::vector<AllowRule> allow_;
   int listen_fd_ = -1, wake_fd_ = -1;
   uint16_t bound_port_ = 0;
+  bool address_in_use_ = false;
   std::atomic<bool> running_{false}, drop_requested_{false};
   std::thread thread_;
   mutable std::mutex mutex_;  // clients_ and stats_ (the loop and reply() share them)
