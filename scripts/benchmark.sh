@@ -9,7 +9,41 @@
 # (bench/share_bench.py) and where the node's CPU goes, from perf's samples
 # (bench/profile_node.py). Each node figure is the median (lowest-highest) of 5 runs. Writes
 # bench/results.md and bench/results.csv. Usage: scripts/benchmark.sh [SECONDS_PER_CELL]
+#   scripts/benchmark.sh --smoke DIR   the test command's smoke run (about 90 s, the workspace
+#   built): every benchmark program with the least work it takes, its tables and CSV into DIR,
+#   one JUnit case per program in DIR/bench_smoke.xml, failed when it exits nonzero or prints no
+#   table. No figure is asserted: it proves that the benchmark still runs to its end.
 source "$(dirname "$0")/common.sh"
+if [ "${1:-}" = "--smoke" ]; then
+  out=${2:?--smoke needs a folder}
+  set +u
+  # shellcheck disable=SC1091
+  source "$WS/devel/setup.bash"
+  set -u
+  mkdir -p "$out"
+  rm -f "$out/results.csv"
+  cases=()
+  smoke() {  # NAME COMMAND...
+    local name=$1
+    shift
+    if "$@" --csv "$out/results.csv" >"$out/$name.md" 2>"$out/$name.err" &&
+      grep -q '^|' "$out/$name.md"; then
+      cases+=("$name")
+    else
+      tail -n 20 "$out/$name.md" "$out/$name.err" >"$out/$name.fail"
+      cases+=("$name=@$out/$name.fail")
+    fi
+    cat "$out/$name.md"
+  }
+  smoke benchmark "$WS/devel/lib/modbus_rtu_driver/modbus_rtu_benchmark" --seconds 0.1
+  smoke line_attribution /usr/bin/python3 "$REPO/bench/line_attribution.py" --seconds 1 \
+    --repeats 1 --bauds 115200
+  smoke node_bench /usr/bin/python3 "$REPO/bench/node_bench.py" --calls 20 --repeats 1 --hog 0 \
+    --cpu-seconds 1 --bauds 115200
+  smoke share_bench /usr/bin/python3 "$REPO/bench/share_bench.py" --requests 20 --bauds 115200
+  smoke profile_node /usr/bin/python3 "$REPO/bench/profile_node.py" --seconds 2
+  exec /usr/bin/python3 "$REPO/scripts/junit.py" "$out/bench_smoke.xml" bench_smoke "${cases[@]}"
+fi
 install_deps
 build_workspace >/dev/null
 rm -f "$REPO/bench/results.csv"

@@ -54,9 +54,12 @@ mkdir -p "$WS/build/test_results/simulation"
 "$REPO/scripts/fuzz.sh" --prebuilt 15 "$WS/build/test_results/fuzz" || true
 # catkin_lint (strict) and clang-format applied to every C++ file.
 "$REPO/scripts/check_conventions.sh" "$WS/build/test_results/conventions" || true
+# Every benchmark program runs to its end with the least work (tables, no figures asserted;
+# scripts/benchmark.sh measures).
+"$REPO/scripts/benchmark.sh" --smoke "$WS/build/test_results/bench_smoke" >"$WS/bench_smoke.log" 2>&1 || true
 # catkin_make install gives an install space that works on its own.
 "$REPO/scripts/check_install.sh" "$WS/build/test_results/install" || true
 # Each step above writes its results into a folder of its own; one that wrote nothing failed.
 exec /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$WS/build/test_results" \
   --expect modbus_rtu_driver --expect dependencies --expect rosdep --expect sanitizers \
-  --expect fuzz --expect conventions --expect install --expect tidy --expect simulation
+  --expect fuzz --expect conventions --expect install --expect tidy --expect simulation --expect bench_smoke
