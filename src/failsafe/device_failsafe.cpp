@@ -246,7 +246,26 @@ void DeviceFailsafe::timedCommandStopped(uint8_t channel) {
 
 void DeviceFailsafe::externalWrite(const Request& request, CommandSource source) {
   const OutputTargets set = device_.outputsWrittenBy(request);
-  if (!set.empty()) intents_.commanded(set.channels, set.states, source);
+  // A coil write on a channel the device runs a PWM on does not stop the run (the LD58A08
+  // keeps it): a command (it ends holds) whose channel stays the device's (docs/failsafe.md).
+  std::vector<bool> runs(device_.outputCount(), false);
+  if (device_.coilWriteKeepsRun()) {
+    for (size_t ch = 0; ch < runs.size(); ++ch) runs[ch] = device_.outputSelfTimed(ch);
+    for (const TimedIntent& t : intents_.runningTimed())
+      if (t.channel < runs.size()) runs[t.channel] = true;
+  }
+  for (size_t i = 0; i < set.channels.size(); ++i) {
+    const uint8_t ch = set.channels[i];
+    if (ch >= runs.size() || !runs[ch]) {
+      intents_.commanded({ch}, {set.states[i]}, source);
+      continue;
+    }
+    TimedIntent run;
+    run.channel = ch;
+    run.after = set.states[i];
+    run.seconds = -1.0;
+    intents_.timed(run, source);
+  }
   const std::vector<TimedIntent> timed = device_.timedWrittenBy(request);
   for (const TimedIntent& t : timed) intents_.timed(t, source);
   const std::vector<uint8_t> stopped = device_.timedStoppedBy(request);

@@ -69,7 +69,7 @@ const std::vector<SimInvariant>& simInvariants() {
 const std::set<std::string>& simKnownOpen() {
   // I2: held_channel_restore_after_offline; I3: held_channel_failsafe_write_unsafe;
   // I4: share_write_lost_answer_then_restore; I5: restore_left_out_pwm_channel;
-  // I6: share_coil_write_on_pwm_channel (docs/simulation.md, "Known open defects").
+  // I6: restart_after_killed_node_flash (docs/simulation.md, "Known open defects").
   static const std::set<std::string> known = {"I2", "I3", "I4", "I5", "I6"};
   return known;
 }
@@ -1110,11 +1110,16 @@ void World::doCommandStep(const SimStep& s) {
           // A client's coil write is the device's to confirm (the node passes its answer on):
           // I1 on the LC board and the PDU. An LD58A08 channel running a PWM acknowledges a
           // coil write and goes on running (its manual), and the model does not follow every
-          // run (a killed node's, one a power cycle restarted): no I1 there. docs:68 says an
-          // output write replaces the run: the written level is the intent.
+          // run (a killed node's, one a power cycle restarted): no I1 there.
           if (outd != kLd) checkCoils(outd, {chs[i]}, {sts[i]}, k);
-          // docs:35: the coils a write names are taken as commanded at once.
+          // docs:35: the coils a write names are taken as commanded at once; docs:68: on an
+          // LD58A08 channel the node last read as running a PWM the run goes on: the device's.
+          const Chan& was = model_[outd].ch[chs[i]];
+          const bool runs =
+              outd == kLd && (model_[kLd].pwm_read_running[chs[i]] || was.continuous ||
+                              (was.timed && clock_.now() < was.ends));
           commanded(outd, chs[i], sts[i]);
+          if (runs) model_[kLd].ch[chs[i]].continuous = true;
         }
       } else if (answerLost(r.error)) {
         for (uint8_t c : chs) unknownIntent(outd, c);

@@ -99,6 +99,9 @@ class Device {
     (void)request;
     return {};
   }
+  // Whether a coil write leaves a run the device times by itself going (an LD58A08's PWM: its
+  // outputs apply only with the channel's enable register at 0).
+  virtual bool coilWriteKeepsRun() const { return false; }
   // Reads again what outputSelfTimed() answers from (an LD58A08's PWM registers, otherwise
   // read one channel per poll), so a restore decides on the device's state now.
   virtual Result refreshSelfTimed(Transport& bus) {

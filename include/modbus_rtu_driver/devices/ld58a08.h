@@ -85,6 +85,7 @@ class Ld58a08 : public Device {
   // A client's write of 0 to a channel's enable register: that channel's run stopped.
   std::vector<uint8_t> timedStoppedBy(const Request& request) const override;
   Result refreshSelfTimed(Transport& bus) override { return readPwm(bus); }
+  bool coilWriteKeepsRun() const override { return true; }
   // Writes 0 to the channel's enable register (0x00n2); a lost reply is confirmed by reading
   // the channel back.
   Result stopPwm(Transport& bus, uint8_t channel);
