@@ -68,7 +68,7 @@ TEST(CommissionArgs, ScanLists) {
 // Through a Modbus TCP gateway (the node's share) a scan waits for the gateway's own answer
 // (0B comes after its timeout); a transparent rtu+tcp:// gateway answers nothing itself.
 TEST(CommissionArgs, ScansThroughAModbusTcpGatewayWaitForItsAnswer) {
-  auto timeout = [](std::vector<std::string> args) {
+  auto timeout = [](const std::vector<std::string>& args) {
     CommissionCommand c;
     std::string error;
     EXPECT_TRUE(parseCommission(args, &c, &error)) << error;
