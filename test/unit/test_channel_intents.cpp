@@ -339,3 +339,45 @@ TEST(ChannelIntents, Item6TheNextNodeResumesAKilledNodesFlash) {
   clock2.advance(5s);
   EXPECT_EQ(poll(blind, {true, false, false, false}), Verdict::kOutputsChanged);
 }
+
+// docs/failsafe.md line 76: once its safe write is confirmed, a hold writes a held channel safe
+// again when a poll shows it otherwise, whatever on_restart says (leave included); not before
+// its safe write was confirmed (that write is still on its way).
+TEST(ChannelIntents, AHoldPutsItsChannelBackWhateverOnRestartSays) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kLeave), 4, clock);
+  poll(t, {true, true, true, false});
+  t.hold({}, HoldTrigger::kHeartbeat);
+  EXPECT_EQ(poll(t, {true, true, true, false}), Verdict::kNormal);
+  EXPECT_TRUE(t.heldNotSafe().empty());  // its safe write has not run yet
+  t.commanded({0, 1, 2}, {false, false, true}, CommandSource::kSafe);
+  EXPECT_EQ(poll(t, {false, false, true, false}), Verdict::kNormal);
+  EXPECT_TRUE(t.heldNotSafe().empty());
+  // A power cycle drops every relay: the lamp (safe on) shows off.
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kOutputsChanged);
+  EXPECT_EQ(t.heldNotSafe(), (std::vector<uint8_t>{2}));
+  const OutputTargets w = t.afterPollTargets(Verdict::kOutputsChanged);
+  EXPECT_EQ(w.channels, (std::vector<uint8_t>{2}));
+  EXPECT_EQ(w.states, (std::vector<bool>{true}));
+  // Commanded again: no longer held, nothing written back.
+  t.commanded({2}, {false}, CommandSource::kUser);
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kNormal);
+  EXPECT_TRUE(t.heldNotSafe().empty());
+  EXPECT_TRUE(t.afterPollTargets(Verdict::kNormal).empty());
+}
+
+// docs/failsafe.md line 92: a timed command whose answer was lost is not compared (and not
+// restored) until its end plus the slack; the first poll after it gives the channel's level.
+TEST(ChannelIntents, ALostAnswersTimedCommandIsUnknownUntilItsEnd) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, false, false});
+  t.adoptNextPoll(1, CommandSource::kFound, 3.0);
+  clock.advance(1s);
+  EXPECT_EQ(poll(t, {false, true, false, false}), Verdict::kNormal);  // it may run
+  EXPECT_EQ(t.afterPollTargets(Verdict::kCameBack).channels,
+            (std::vector<uint8_t>{0, 2, 3}));  // channel 1 is not restored while unknown
+  clock.advance(3s);
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kNormal);  // taken as found
+  EXPECT_EQ(poll(t, {false, true, false, false}), Verdict::kOutputsChanged);
+}
