@@ -330,15 +330,22 @@ TimedIntent Ld58a08::pwmIntent(const PwmSettings& s) {
   return t;
 }
 
-std::vector<TimedIntent> Ld58a08::timedWrittenBy(const Request& request) const {
-  std::vector<TimedIntent> timed;
+namespace {
+
+// The value a client's register write (FC06 / FC16) puts into `reg`, if it writes it.
+std::optional<uint16_t> registerWritten(const Request& request, uint16_t reg) {
   if (request.function != FunctionCode::kWriteMultipleRegisters &&
       request.function != FunctionCode::kWriteSingleRegister)
-    return timed;
-  const auto written = [&request](uint16_t reg) -> std::optional<uint16_t> {
-    if (reg < request.address || reg >= request.address + request.values.size()) return {};
-    return request.values[reg - request.address];
-  };
+    return {};
+  if (reg < request.address || reg >= request.address + request.values.size()) return {};
+  return request.values[reg - request.address];
+}
+
+}  // namespace
+
+std::vector<TimedIntent> Ld58a08::timedWrittenBy(const Request& request) const {
+  std::vector<TimedIntent> timed;
+  const auto written = [&request](uint16_t reg) { return registerWritten(request, reg); };
   for (uint8_t ch = 0; ch < kChannels; ++ch) {
     const auto enable = written(pwmRegister(ch) + 2);
     if (!enable || *enable == 0) continue;  // not written, or a stop: the next poll shows it
@@ -373,12 +380,8 @@ std::vector<uint8_t> Ld58a08::timedStoppedBy(const Request& request) const {
     const size_t reg = request.address + i;
     if (reg / 0x10 >= kChannels || reg % 0x10 > 2) return stopped;
   }
-  for (uint8_t ch = 0; ch < kChannels; ++ch) {
-    const uint16_t enable = pwmRegister(ch) + 2;
-    if (enable >= request.address && enable < request.address + request.values.size() &&
-        request.values[enable - request.address] == 0)
-      stopped.push_back(ch);
-  }
+  for (uint8_t ch = 0; ch < kChannels; ++ch)
+    if (registerWritten(request, pwmRegister(ch) + 2) == uint16_t{0}) stopped.push_back(ch);
   return stopped;
 }
 

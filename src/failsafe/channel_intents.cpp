@@ -97,16 +97,23 @@ void ChannelIntents::timed(const TimedIntent& timed, CommandSource source) {
   newCommand(timed.channel, source);
 }
 
-void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double not_before_s) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (channel >= channels_) return;
-  const auto now = clock_.now();
+// An intent the next poll fills in (adopt), keeping the channel's last level meanwhile.
+ChannelIntents::Intent ChannelIntents::adoptingIntent(uint8_t channel, CommandSource source,
+                                                      Clock::time_point now) const {
   Intent in;
   in.source = source;
   in.at = now;
   in.adopt = true;
-  if (not_before_s > 0) in.adopt_from = now + seconds(not_before_s);
   if (intent_[channel]) in.level = intent_[channel]->level;
+  return in;
+}
+
+void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double not_before_s) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (channel >= channels_) return;
+  const auto now = clock_.now();
+  Intent in = adoptingIntent(channel, source, now);
+  if (not_before_s > 0) in.adopt_from = now + seconds(not_before_s);
   intent_[channel] = in;
   newCommand(channel, source);
 }
@@ -115,14 +122,10 @@ void ChannelIntents::adoptChangeNextPoll(uint8_t channel, CommandSource source) 
   std::lock_guard<std::mutex> lock(mutex_);
   if (channel >= channels_) return;
   const auto now = clock_.now();
-  Intent in;
-  in.source = source;
-  in.at = now;
-  in.adopt = true;
+  Intent in = adoptingIntent(channel, source, now);
   in.adopt_change = true;
   const Expectation e = expectedLocked(channel, now);
   if (e.kind == Expectation::Kind::kLevel) in.adopt_prev = e.level;
-  if (intent_[channel]) in.level = intent_[channel]->level;
   intent_[channel] = in;
   write_during_poll_ = true;  // holds and owed writes end at the poll, if it changed
 }

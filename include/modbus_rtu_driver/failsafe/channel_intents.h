@@ -152,6 +152,7 @@ class ChannelIntents {
   };
   bool userSource(CommandSource source) const;
   void newCommand(uint8_t channel, CommandSource source);
+  Intent adoptingIntent(uint8_t channel, CommandSource source, Clock::time_point now) const;
   Expectation expectedLocked(uint8_t channel, Clock::time_point t) const;
 
   FailsafeConfig config_;
