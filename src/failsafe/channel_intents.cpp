@@ -316,7 +316,15 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
     if (held_[ch] != 0 && held_written_[ch] &&
         (device_runs || outputs[ch] != (config_.safeStateOf(ch) == SafeState::kOn)))
       held_not_safe_[ch] = true;
-    if (device_runs) continue;  // the device's PWM drives it
+    if (device_runs) {
+      // The device's PWM drives it. A run that is no timed command of the node's still running
+      // (one a power-down save restarted, one someone else started) has no end the node knows:
+      // the channel is not compared until a plain write settles it again (docs/failsafe.md,
+      // "Restart detection needs polls"), also after the device reports the run ended.
+      const Expectation e = expectedLocked(static_cast<uint8_t>(ch), now);
+      if (!in->ends || e.kind == Expectation::Kind::kLevel) in->driven = true;
+      continue;
+    }
     const Expectation e = expectedLocked(static_cast<uint8_t>(ch), now);
     if (e.kind == Expectation::Kind::kAny) continue;
     if (e.kind == Expectation::Kind::kEither) {

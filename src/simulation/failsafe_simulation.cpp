@@ -68,9 +68,9 @@ const std::vector<SimInvariant>& simInvariants() {
 
 const std::set<std::string>& simKnownOpen() {
   // I2: held_channel_restore_after_offline; I3: held_channel_failsafe_write_unsafe;
-  // I4: share_write_lost_answer_then_restore; I5: restore_left_out_pwm_channel;
-  // I6: restart_after_killed_node_flash (docs/simulation.md, "Known open defects").
-  static const std::set<std::string> known = {"I2", "I3", "I4", "I5", "I6"};
+  // I4: share_write_lost_answer_then_restore; I5: restore_left_out_pwm_channel
+  // (docs/simulation.md, "Known open defects").
+  static const std::set<std::string> known = {"I2", "I3", "I4", "I5"};
   return known;
 }
 
@@ -215,6 +215,7 @@ struct Chan {
 struct DevModel {
   std::vector<Chan> ch;
   bool justified = false;      // I6: something changed outputs the node did not confirm
+  TP justified_at{};           // ... at this time
   TP justified_until{};        // ... and goes on changing them until then (a timed command)
   std::optional<TP> cause_at;  // I4: the newest thing that may make the node see a restart
   bool cause_pending = false;  // ... not yet followed by a restart report
@@ -482,14 +483,24 @@ void World::resetModelForNewNode() {
     DevModel& m = model_[d];
     // docs:169-170: a flash the killed node started cannot be told from a restart. A device
     // whose state the old node did not know may change by itself too.
+    // Each of its flashes changes the outputs at its own end (docs:171-172): every report up to
+    // the last end (+ the slack of docs line 70) is justified, not only the first.
     bool running_unknown = false;
     for (Chan& c : m.ch) {
       if (!c.known && c.adopt) running_unknown = true;
-      if (c.timed && !c.continuous && d == kLc && c.ends + dur(0.5 + 0.02 * c.duration) > now)
+      const TP seen_by = c.ends + dur(0.5 + 0.02 * c.duration);
+      // An LD58A08 burst too: its last pulse may still be on while its registers read it ended.
+      if (c.timed && !c.continuous && seen_by > now) {
         running_unknown = true;
+        // The poll that sees it may come later: the bus busy with others, a retry.
+        m.justified_until = std::max(m.justified_until, seen_by + dur(2.0));
+      }
       c = Chan{};
     }
-    if (running_unknown) m.justified = true;
+    if (running_unknown) {
+      m.justified = true;
+      m.justified_at = now;
+    }
     m.found = false;
     m.reachable_since = std::max(m.reachable_since, now);
     m.gen_unanswered = false;
@@ -643,7 +654,10 @@ void World::deviceDisturbed(int d, bool justified, double extra) {
   // A device that stopped answering is probed again with backoff, up to backoff_max (5 s,
   // bus_scheduler.h); an owed write goes when it answers a poll again (docs:37).
   m.reachable_since = std::max(m.reachable_since, clock_.now() + dur(5.0 + extra));
-  if (justified) m.justified = true;
+  if (justified) {
+    m.justified = true;
+    m.justified_at = clock_.now();
+  }
 }
 
 void World::onAttempt(const LineEvent& e) {
@@ -663,6 +677,13 @@ void World::onAttempt(const LineEvent& e) {
     // A flash or PWM run it started changes the outputs again at its end (docs:171-172).
     if (write && e.heard && sim(d)->startsSomething(e.request))
       m.justified_until = std::max(m.justified_until, e.at + dur(8.0));
+    // It may also have replaced a running timed command (a coil write over a flash): the change
+    // then shows at that command's end, after the first report (docs:69-70's slack, a late poll).
+    if (write && e.heard)
+      for (const Chan& c : m.ch)
+        if (c.timed && !c.continuous)
+          m.justified_until =
+              std::max(m.justified_until, c.ends + dur(0.5 + 0.02 * c.duration + 2.0));
     if (d == kGen) m.gen_unanswered = true;
   }
   // I7: a write that starts something reaches the device once per transaction.
@@ -804,7 +825,10 @@ void World::onReport(const FailsafeReport& r) {
     // power-down save restarted shows as a change polls later).
     if (r.reason.find("changed with no command") != std::string::npos)
       m.cause_at = std::max(m.cause_at.value_or(TP{}), m.last_poll_at);
-    m.justified = false;
+    // The report answers what a poll showed: a change made after that poll (the report's own
+    // write heard but its answer lost) is still to be seen, and so is one whose write back was
+    // not confirmed (the next poll shows the same change again).
+    if (m.justified_at <= m.last_poll_at && r.confirmed) m.justified = false;
     m.cause_pending = false;
   }
   if (r.action == "safe") {

@@ -381,3 +381,27 @@ TEST(ChannelIntents, ALostAnswersTimedCommandIsUnknownUntilItsEnd) {
   EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kNormal);  // taken as found
   EXPECT_EQ(poll(t, {false, true, false, false}), Verdict::kOutputsChanged);
 }
+
+// docs/failsafe.md, "Restart detection needs polls": a PWM run the device reports that is no
+// timed command of the node's (a power-down save restarted it after a power cycle) is not
+// compared until a plain write settles the channel, also after the device reports it ended.
+TEST(ChannelIntents, ARunTheDeviceReportsIsNotComparedUntilAPlainWrite) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kSafe), 4, clock);
+  poll(t, {false, false, false, false});
+  clock.advance(1s);
+  // A power cycle; the saved run shows its on phase before its registers are read.
+  EXPECT_EQ(poll(t, {false, false, false, true}), Verdict::kOutputsChanged);
+  t.pollStarting();
+  EXPECT_EQ(
+      t.observePoll({false, false, false, false}, {false, false, false, true}, false, nullptr),
+      Verdict::kNormal);  // its registers read: the device runs it
+  clock.advance(5s);
+  t.pollStarting();
+  EXPECT_EQ(
+      t.observePoll({false, false, false, false}, {false, false, false, false}, false, nullptr),
+      Verdict::kNormal);  // the run ended off: the device's doing, not a restart
+  EXPECT_EQ(poll(t, {false, false, false, true}), Verdict::kNormal);
+  t.commanded({3}, {false}, CommandSource::kUser);  // a plain write settles it
+  EXPECT_EQ(poll(t, {false, false, false, true}), Verdict::kOutputsChanged);
+}
