@@ -210,15 +210,22 @@ Result Ld58a08::readPwm(Transport& bus) {
 }
 
 Result Ld58a08::poll(Transport& bus) {
+  pwm_read_by_poll_.fill(false);
   Result r = bus.execute(Request::readCoils(address(), 0, kChannels));
   if (!r.ok()) return r;
   outputs_.assign(r.values.begin(), r.values.end());
-  if (!pwm_known_) return readPwm(bus);
+  if (!pwm_known_) {
+    r = readPwm(bus);
+    if (r.ok()) pwm_read_by_poll_.fill(true);
+    return r;
+  }
   // The manual allows reading 1-3 registers at a time: one channel per poll keeps a poll at two
   // transactions, and a burst that ends on the board shows within 8 polls.
   const uint8_t ch = poll_cursor_;
   poll_cursor_ = static_cast<uint8_t>((poll_cursor_ + 1) % kChannels);
-  return readPwmChannel(bus, ch, &pwm_[ch]);
+  r = readPwmChannel(bus, ch, &pwm_[ch]);
+  pwm_read_by_poll_[ch] = r.ok();
+  return r;
 }
 
 // The outputs (coils and register 0x0080) drive a channel only while its enable register is 0
@@ -367,6 +374,25 @@ std::vector<TimedIntent> Ld58a08::timedWrittenBy(const Request& request) const {
     timed.push_back(t);
   }
   return timed;
+}
+
+void Ld58a08::noteCarriedWrite(const Request& request) {
+  for (uint8_t ch = 0; ch < kChannels; ++ch) {
+    const auto enable = registerWritten(request, pwmRegister(ch) + 2);
+    if (!enable) continue;
+    PwmState& p = pwm_[ch];
+    p.channel = ch;
+    p.high_speed = ch >= 6;
+    p.enable = *enable;
+    p.running = *enable != 0;
+    p.continuous = *enable == kContinuous;
+    const uint16_t left = p.continuous ? 0 : *enable;
+    if (p.high_speed) {
+      p.remaining_time = left / 10.0;
+    } else {
+      p.remaining_pulses = left;
+    }
+  }
 }
 
 std::vector<uint8_t> Ld58a08::timedStoppedBy(const Request& request) const {

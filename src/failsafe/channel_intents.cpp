@@ -259,8 +259,8 @@ Expectation ChannelIntents::expectedLocked(uint8_t channel, Clock::time_point t)
 
 ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& outputs,
                                                     const std::vector<bool>& self_timed,
-                                                    bool was_offline,
-                                                    std::vector<uint8_t>* changed) {
+                                                    bool was_offline, std::vector<uint8_t>* changed,
+                                                    const std::vector<bool>& read_now) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (changed) changed->clear();
   std::fill(held_not_safe_.begin(), held_not_safe_.end(), false);
@@ -320,9 +320,11 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
       // The device's PWM drives it. A run that is no timed command of the node's still running
       // (one a power-down save restarted, one someone else started) has no end the node knows:
       // the channel is not compared until a plain write settles it again (docs/failsafe.md,
-      // "Restart detection needs polls"), also after the device reports the run ended.
+      // "Restart detection needs polls"), also after the device reports the run ended. Only
+      // as this poll read it: an older snapshot may still show a run that has ended.
+      const bool fresh = ch >= read_now.size() || read_now[ch];
       const Expectation e = expectedLocked(static_cast<uint8_t>(ch), now);
-      if (!in->ends || e.kind == Expectation::Kind::kLevel) in->driven = true;
+      if (fresh && (!in->ends || e.kind == Expectation::Kind::kLevel)) in->driven = true;
       continue;
     }
     const Expectation e = expectedLocked(static_cast<uint8_t>(ch), now);

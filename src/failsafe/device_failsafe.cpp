@@ -118,10 +118,14 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
 void DeviceFailsafe::afterPoll() {
   // The scheduler records this poll after this callback: health still says how it was before.
   const bool was_offline = !bus_.health(device_.name()).online;
-  std::vector<bool> timed(device_.outputCount());
-  for (size_t i = 0; i < timed.size(); ++i) timed[i] = device_.outputSelfTimed(i);
+  std::vector<bool> timed(device_.outputCount()), read_now(device_.outputCount());
+  for (size_t i = 0; i < timed.size(); ++i) {
+    timed[i] = device_.outputSelfTimed(i);
+    read_now[i] = device_.selfTimedReadByLastPoll(i);
+  }
   std::vector<uint8_t> changed;
-  const auto verdict = intents_.observePoll(device_.outputs(), timed, was_offline, &changed);
+  const auto verdict =
+      intents_.observePoll(device_.outputs(), timed, was_offline, &changed, read_now);
   // A share client or raw write changed outputs: "in their safe state" (which names the channels
   // the safe write set) is no longer true, as after a user's write.
   if (intents_.tookAdoptedWrite()) endSafeState();
@@ -245,12 +249,16 @@ void DeviceFailsafe::timedCommandStopped(uint8_t channel) {
 }
 
 void DeviceFailsafe::externalWrite(const Request& request, CommandSource source) {
+  device_.noteCarriedWrite(request);  // first: what follows reads the device's state now
   const OutputTargets set = device_.outputsWrittenBy(request);
   // A coil write on a channel the device runs a PWM on does not stop the run (the LD58A08
-  // keeps it): a command (it ends holds) whose channel stays the device's (docs/failsafe.md).
+  // keeps it): a command (it ends holds) whose channel stays the device's (docs/failsafe.md:
+  // a run read so, or one the node knows). A channel never read is commanded: if a run shows
+  // at the next poll, the channel becomes the device's then (ChannelIntents::observePoll).
   std::vector<bool> runs(device_.outputCount(), false);
   if (device_.coilWriteKeepsRun()) {
-    for (size_t ch = 0; ch < runs.size(); ++ch) runs[ch] = device_.outputSelfTimed(ch);
+    if (device_.selfTimedRead())
+      for (size_t ch = 0; ch < runs.size(); ++ch) runs[ch] = device_.outputSelfTimed(ch);
     for (const TimedIntent& t : intents_.runningTimed())
       if (t.channel < runs.size()) runs[t.channel] = true;
   }

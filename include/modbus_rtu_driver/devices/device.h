@@ -65,6 +65,15 @@ class Device {
     (void)channel;
     return false;
   }
+  // Whether the newest poll read what outputSelfTimed() answers for the channel (an LD58A08
+  // reads one channel's PWM registers per poll; the others are older).
+  virtual bool selfTimedReadByLastPoll(size_t channel) const {
+    (void)channel;
+    return true;
+  }
+  // Whether outputSelfTimed() answers from what was read (false while an LD58A08's PWM registers
+  // were never read: it then answers true for every channel, "may run").
+  virtual bool selfTimedRead() const { return true; }
 
   // Reads everything the device reports (outputs, inputs, telemetry, settings) into the
   // snapshot. On failure the snapshot keeps its previous values and the Result says why.
@@ -99,6 +108,10 @@ class Device {
     (void)request;
     return {};
   }
+  // Bus thread: a write the node carried for someone else (a share client, a raw write) was
+  // confirmed; what it set is the device's state now (an LD58A08's PWM snapshot, otherwise
+  // read one channel per poll, would say so only polls later).
+  virtual void noteCarriedWrite(const Request& request) { (void)request; }
   // Whether a coil write leaves a run the device times by itself going (an LD58A08's PWM: its
   // outputs apply only with the channel's enable register at 0).
   virtual bool coilWriteKeepsRun() const { return false; }

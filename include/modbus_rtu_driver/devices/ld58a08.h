@@ -84,6 +84,8 @@ class Ld58a08 : public Device {
   std::vector<TimedIntent> timedWrittenBy(const Request& request) const override;
   // A client's write of 0 to a channel's enable register: that channel's run stopped.
   std::vector<uint8_t> timedStoppedBy(const Request& request) const override;
+  // A client's write of a channel's enable register: the channel's run as written.
+  void noteCarriedWrite(const Request& request) override;
   Result refreshSelfTimed(Transport& bus) override { return readPwm(bus); }
   bool coilWriteKeepsRun() const override { return true; }
   // Writes 0 to the channel's enable register (0x00n2); a lost reply is confirmed by reading
@@ -95,6 +97,10 @@ class Ld58a08 : public Device {
     return !pwm_known_ || (channel < kChannels && pwm_[channel].running);
   }
   bool pwmKnown() const { return pwm_known_; }
+  bool selfTimedRead() const override { return pwm_known_; }
+  bool selfTimedReadByLastPoll(size_t channel) const override {
+    return channel < kChannels && pwm_read_by_poll_[channel];
+  }
 
   Result readSettings(Transport& bus, Ld58a08Settings* out);
   // Empty when `value` is in the setting's range, else a message naming it and the range.
@@ -123,6 +129,7 @@ class Ld58a08 : public Device {
                     const std::vector<uint16_t>& written);
 
   std::array<PwmState, kChannels> pwm_{};
+  std::array<bool, kChannels> pwm_read_by_poll_{};  // the channels the newest poll read
   uint8_t poll_cursor_ = 0;
   bool pwm_known_ = false;
 };

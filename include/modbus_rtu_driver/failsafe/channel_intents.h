@@ -103,10 +103,12 @@ class ChannelIntents {
   // --- polls (bus thread) ---
   enum class Verdict { kNormal, kCameBack, kOutputsChanged };
   void pollStarting();
-  // `self_timed[i]`: the device reports channel i as driven by itself now (a running PWM).
+  // `self_timed[i]`: the device reports channel i as driven by itself now (a running PWM);
+  // `read_now[i]`: this poll read that (empty: every channel), not an older snapshot.
   // A channel with no intent yet takes the level found as its intent (kFound).
   Verdict observePoll(const std::vector<bool>& outputs, const std::vector<bool>& self_timed,
-                      bool was_offline, std::vector<uint8_t>* changed);
+                      bool was_offline, std::vector<uint8_t>* changed,
+                      const std::vector<bool>& read_now = {});
   // Whether the last poll adopted a write the node carried for someone else (asked once).
   bool tookAdoptedWrite();
 
