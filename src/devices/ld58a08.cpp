@@ -378,20 +378,14 @@ std::vector<TimedIntent> Ld58a08::timedWrittenBy(const Request& request) const {
 
 void Ld58a08::noteCarriedWrite(const Request& request) {
   for (uint8_t ch = 0; ch < kChannels; ++ch) {
-    const auto enable = registerWritten(request, pwmRegister(ch) + 2);
-    if (!enable) continue;
+    // Only a stop: a run a client started is a timed command the fail-safe knows (with its
+    // end), while a snapshot that says "running" would outlive a short burst until re-read.
+    if (registerWritten(request, pwmRegister(ch) + 2) != uint16_t{0}) continue;
     PwmState& p = pwm_[ch];
-    p.channel = ch;
-    p.high_speed = ch >= 6;
-    p.enable = *enable;
-    p.running = *enable != 0;
-    p.continuous = *enable == kContinuous;
-    const uint16_t left = p.continuous ? 0 : *enable;
-    if (p.high_speed) {
-      p.remaining_time = left / 10.0;
-    } else {
-      p.remaining_pulses = left;
-    }
+    p.enable = 0;
+    p.running = p.continuous = false;
+    p.remaining_pulses = 0;
+    p.remaining_time = 0.0;
   }
 }
 

@@ -228,6 +228,8 @@ struct DevModel {
   // LD58A08: whether a channel's PWM ran when the node last read its registers (docs:88: a
   // restore leaves a run the device reports; the node knows only what it read)
   std::vector<bool> pwm_read_running = std::vector<bool>(8, false);
+  // ... as it was when the fail-safe's newest write went out (docs:88: read just before it)
+  std::vector<bool> pwm_read_at_write = std::vector<bool>(8, false);
   // generic (I8)
   bool gen_unanswered = false;  // an attempt to it went unanswered since its last report
   bool gen_prev_silent = true;  // ... before its previous report
@@ -694,6 +696,7 @@ void World::onAttempt(const LineEvent& e) {
   const bool coils = e.request.function == FunctionCode::kWriteSingleCoil ||
                      e.request.function == FunctionCode::kWriteMultipleCoils;
   if (!coils || node_->currentOp() != 0) return;
+  m.pwm_read_at_write = m.pwm_read_running;
   // A write of the fail-safe's own (no command's job runs): I3 and I4.
   for (size_t i = 0; i < e.request.values.size(); ++i) {
     const int ch = e.request.address + static_cast<int>(i);
@@ -871,7 +874,8 @@ void World::onReport(const FailsafeReport& r) {
       // docs:88: a channel the device runs a PWM on that is no timed command of the node's is
       // the device's: the restore leaves it (as the node read it just before the restore).
       const bool node_runs = c.timed && now <= c.ends + dur(0.5 + 0.02 * c.duration);
-      const bool devices_run = d == kLd && !node_runs && m.pwm_read_running[ch];
+      const bool devices_run = d == kLd && !node_runs &&
+                               (chs.empty() ? m.pwm_read_running[ch] : m.pwm_read_at_write[ch]);
       if (!written[ch] && c.known && !c.adopt && !c.continuous && !devices_run)
         fail("I5", std::string(kNames[d]) + " out" + std::to_string(ch) +
                        ": the restore leaves "

@@ -84,7 +84,7 @@ class Ld58a08 : public Device {
   std::vector<TimedIntent> timedWrittenBy(const Request& request) const override;
   // A client's write of 0 to a channel's enable register: that channel's run stopped.
   std::vector<uint8_t> timedStoppedBy(const Request& request) const override;
-  // A client's write of a channel's enable register: the channel's run as written.
+  // A client's write of 0 to a channel's enable register: that channel's run stopped.
   void noteCarriedWrite(const Request& request) override;
   Result refreshSelfTimed(Transport& bus) override { return readPwm(bus); }
   bool coilWriteKeepsRun() const override { return true; }
