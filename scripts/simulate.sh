@@ -35,6 +35,10 @@ args=(--steps "$steps")
 if [ -z "$cases" ]; then cases=$(mktemp -d /tmp/simulation.XXXXXX); fi
 mkdir -p "$cases"
 args+=(--cases "$cases")
+if [ -n "$minutes" ] && ! [[ "$minutes" =~ ^[1-9][0-9]*$ ]]; then
+  echo "--minutes: '$minutes' is not a whole number of minutes (1 or more)" >&2
+  exit 2
+fi
 if [ -z "$minutes" ]; then
   # One seed (the given one, or 1), every line of it.
   exec "$EXE" --seed "${seed:-1}" --seeds 1 "${args[@]}"
