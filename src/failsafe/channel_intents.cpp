@@ -114,6 +114,14 @@ void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double
   const auto now = clock_.now();
   Intent in = adoptingIntent(channel, source, now);
   if (not_before_s > 0) in.adopt_from = now + seconds(not_before_s);
+  // A timed command still running there (a write over a flash, heard or not): either level may
+  // show until its end, so the poll that decides comes after its end plus the slack.
+  const auto& was = intent_[channel];
+  if (was && was->ends && *was->ends > now) {
+    const auto slack = seconds(kEndSlackSeconds) + std::chrono::duration_cast<Clock::duration>(
+                                                       (*was->ends - was->at) * kEndSlackFraction);
+    in.adopt_from = std::max(in.adopt_from.value_or(now), *was->ends + slack);
+  }
   intent_[channel] = in;
   newCommand(channel, source);
 }
@@ -286,6 +294,8 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
     }
     if (in->adopt) {
       if (in->adopt_from && now < *in->adopt_from) continue;  // it may still run
+      // Whether the device runs a PWM there, as read now: an older snapshot may miss a run.
+      if (ch < read_now.size() && !read_now[ch]) continue;
       const bool level = outputs[ch];
       const bool client = in->source == CommandSource::kShare || in->source == CommandSource::kRaw;
       if (in->adopt_change) {
@@ -322,9 +332,7 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
       // the channel is not compared until a plain write settles it again (docs/failsafe.md,
       // "Restart detection needs polls"), also after the device reports the run ended. Only
       // as this poll read it: an older snapshot may still show a run that has ended.
-      const bool fresh = ch >= read_now.size() || read_now[ch];
-      const Expectation e = expectedLocked(static_cast<uint8_t>(ch), now);
-      if (fresh && (!in->ends || e.kind == Expectation::Kind::kLevel)) in->driven = true;
+      if (ch >= read_now.size() || read_now[ch]) deviceRunsLocked(static_cast<uint8_t>(ch), now);
       continue;
     }
     const Expectation e = expectedLocked(static_cast<uint8_t>(ch), now);
@@ -366,6 +374,20 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
   adopt_changes_.reset();
   if (was_offline) return Verdict::kCameBack;
   return differs ? Verdict::kOutputsChanged : Verdict::kNormal;
+}
+
+void ChannelIntents::deviceRunsLocked(uint8_t channel, Clock::time_point now) {
+  auto& in = intent_[channel];
+  if (!in) return;
+  const Expectation e = expectedLocked(channel, now);
+  if (!in->ends || e.kind == Expectation::Kind::kLevel) in->driven = true;
+}
+
+void ChannelIntents::observeRuns(const std::vector<bool>& runs) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto now = clock_.now();
+  for (size_t ch = 0; ch < channels_ && ch < runs.size(); ++ch)
+    if (runs[ch]) deviceRunsLocked(static_cast<uint8_t>(ch), now);
 }
 
 bool ChannelIntents::tookAdoptedWrite() {

@@ -163,8 +163,10 @@ void DeviceFailsafe::afterPoll() {
   bus_.submit(device_.name(), [this, verdict, trigger, reason, action](Transport& t) {
     std::vector<bool> runs(device_.outputCount(), false);
     if (verdict != ChannelIntents::Verdict::kNormal && config().on_restart == OnRestart::kRestore) {
-      device_.refreshSelfTimed(t);  // failed: the snapshot as it was (the write fails anyway)
+      // Failed: the snapshot as it was (the write fails anyway).
+      const bool read = device_.refreshSelfTimed(t).ok() && device_.selfTimedRead();
       for (size_t i = 0; i < runs.size(); ++i) runs[i] = device_.outputSelfTimed(i);
+      if (read) intents_.observeRuns(runs);  // a run found now stays the device's afterwards
     }
     const OutputTargets targets = intents_.afterPollTargets(verdict, runs);
     if (!targets.empty()) return writeAndReport(t, targets, trigger, reason, action, {});

@@ -230,6 +230,9 @@ struct DevModel {
   std::vector<bool> pwm_read_running = std::vector<bool>(8, false);
   // ... as it was when the fail-safe's newest write went out (docs:88: read just before it)
   std::vector<bool> pwm_read_at_write = std::vector<bool>(8, false);
+  // ... and the poll that read each channel's registers (docs:92: a lost answer's channel is
+  // taken at the first poll after its time that also reads them)
+  std::vector<uint64_t> pwm_read_in_poll = std::vector<uint64_t>(8, 0);
   // generic (I8)
   bool gen_unanswered = false;  // an attempt to it went unanswered since its last report
   bool gen_prev_silent = true;  // ... before its previous report
@@ -668,9 +671,12 @@ void World::onAttempt(const LineEvent& e) {
   DevModel& m = model_[d];
   const bool write = !isReadFunction(e.request.function);
   if (d == kLd && e.answered && e.request.function == FunctionCode::kReadHoldingRegisters &&
-      e.request.address % 0x10 == 0 && e.request.address / 0x10 < kChannels && e.request.count == 3)
+      e.request.address % 0x10 == 0 && e.request.address / 0x10 < kChannels &&
+      e.request.count == 3) {
     m.pwm_read_running[e.request.address / 0x10] =
         simRegister(kLd, static_cast<uint16_t>(e.request.address + 2)) != 0;
+    m.pwm_read_in_poll[e.request.address / 0x10] = m.poll_running;
+  }
   if (!e.answered) {
     m.unanswered = true;
     // A device that does not answer may be taken offline: its return is a restart (docs:34).
@@ -757,7 +763,9 @@ void World::onPolled(const std::string& device, const Result& r) {
       c.at = clock_.now();
       continue;
     }
-    if (c.adopt && m.poll_running > c.adopt_after_poll && clock_.now() >= c.adopt_not_before) {
+    const bool registers_read = d != kLd || m.pwm_read_in_poll[ch] == m.poll_running;
+    if (c.adopt && m.poll_running > c.adopt_after_poll && clock_.now() >= c.adopt_not_before &&
+        registers_read) {
       // docs:35, 64-65: what an undecoded write changed is taken as commanded at the next
       // poll; it ends a hold on the channels it changed.
       const bool level = outputs[ch];
@@ -767,15 +775,19 @@ void World::onPolled(const std::string& device, const Result& r) {
       // user's write whose answer was lost is not (docs:81-83: commanded after the stamp).
       const bool changed = c.adopt_prev_known && level != c.adopt_prev_level;
       const bool ends = c.adopt_is_command && changed && !(c.held && c.held_since > c.adopt_at);
+      // The level before the write unknown (a client's write whose answer was lost came before
+      // it: an open question, docs/simulation.md): whether it changed, and so whether the hold
+      // ended, is unknown too. Nothing is checked on the channel until it is commanded.
+      const bool unknown = c.adopt_is_command && !c.adopt_prev_known;
       Chan kept = c;
       c = Chan{};
-      c.known = true;
+      c.known = !unknown;
       c.command = kept.adopt_is_command;
       c.level = level;
       c.continuous = pwm;
       c.at = clock_.now();
       c.deadline = kept.deadline;
-      if (!ends) {
+      if (!ends && !unknown) {
         c.held = kept.held;
         c.held_since = kept.held_since;
         c.owed = kept.owed;

@@ -405,3 +405,36 @@ TEST(ChannelIntents, ARunTheDeviceReportsIsNotComparedUntilAPlainWrite) {
   t.commanded({3}, {false}, CommandSource::kUser);  // a plain write settles it
   EXPECT_EQ(poll(t, {false, false, false, true}), Verdict::kOutputsChanged);
 }
+
+// The same rule for a run the read just before a restore finds (docs line 88 leaves it out of
+// the restore): the channel stays the device's after the run ends, not compared until written.
+TEST(ChannelIntents, ARunFoundBeforeARestoreStaysTheDevicesAfterItEnds) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, false, false});
+  t.commanded({3}, {true}, CommandSource::kUser);
+  clock.advance(1s);
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kOutputsChanged);  // power cycle
+  t.observeRuns({false, false, false, true});  // a saved run restarted on channel 3
+  EXPECT_EQ(t.afterPollTargets(Verdict::kOutputsChanged, {false, false, false, true}).channels,
+            (std::vector<uint8_t>{0, 1, 2}));
+  clock.advance(5s);
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kNormal);  // it ended off
+}
+
+// docs/failsafe.md line 92: a plain write whose answer was lost on a channel where a flash
+// still runs (heard or not: either level may show until the flash ends) is decided by the
+// first poll after the flash's end plus the slack, not by a poll during the flash.
+TEST(ChannelIntents, ALostWriteOverARunningFlashIsDecidedAfterTheFlashEnds) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kLeave), 4, clock);
+  poll(t, {false, false, false, false});
+  t.timed(TimedIntent{0, true, false, 1.5}, CommandSource::kTimed);  // flash-close 1.5 s
+  clock.advance(300ms);
+  t.adoptNextPoll(0, CommandSource::kFound);  // `set on` whose answer was lost (not heard)
+  clock.advance(1s);
+  EXPECT_EQ(poll(t, {true, false, false, false}), Verdict::kNormal);  // the flash, still on
+  clock.advance(1s);
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kNormal);  // it ended: found off
+  EXPECT_EQ(poll(t, {true, false, false, false}), Verdict::kOutputsChanged);
+}

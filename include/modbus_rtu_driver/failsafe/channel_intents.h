@@ -109,6 +109,10 @@ class ChannelIntents {
   Verdict observePoll(const std::vector<bool>& outputs, const std::vector<bool>& self_timed,
                       bool was_offline, std::vector<uint8_t>* changed,
                       const std::vector<bool>& read_now = {});
+  // The PWM runs the device reports now, read just before a restore (`runs[i]`: channel i):
+  // each that is no timed command of the node's still running makes its channel the device's,
+  // as a poll that reads it does.
+  void observeRuns(const std::vector<bool>& runs);
   // Whether the last poll adopted a write the node carried for someone else (asked once).
   bool tookAdoptedWrite();
 
@@ -156,6 +160,9 @@ class ChannelIntents {
   void newCommand(uint8_t channel, CommandSource source);
   Intent adoptingIntent(uint8_t channel, CommandSource source, Clock::time_point now) const;
   Expectation expectedLocked(uint8_t channel, Clock::time_point t) const;
+  // The device runs a PWM on the channel (as read now): the channel is the device's unless a
+  // timed command of the node's still runs there.
+  void deviceRunsLocked(uint8_t channel, Clock::time_point now);
 
   FailsafeConfig config_;
   size_t channels_;

@@ -231,6 +231,26 @@ void BusScheduler::record(const std::string& device, const Result& result, Kind 
   backoff_until_[device] = now + seconds(b);
 }
 
+BusScheduler::Poll* BusScheduler::starvingPoll(Clock::time_point now) {
+  if (last_ran_starving_poll_ || (writes_.empty() && shared_.empty())) return nullptr;
+  // A device with a job of its own queued is left to it: its poll runs after (a poll between
+  // would see the device before that write, and whatever it decides would be decided twice).
+  auto queuedFor = [this](const std::string& device) {
+    for (const auto* queue : {&writes_, &shared_})
+      for (const Pending& job : *queue)
+        if (job.device == device) return true;
+    return false;
+  };
+  Poll* oldest = nullptr;
+  for (Poll& p : polls_) {
+    if (p.due + p.period > now || queuedFor(p.device)) continue;
+    auto b = backoff_until_.find(p.device);
+    if (b != backoff_until_.end() && !health_[p.device].online && b->second > now) continue;
+    if (!oldest || p.due < oldest->due) oldest = &p;
+  }
+  return oldest;
+}
+
 bool BusScheduler::runOneQueued(std::unique_lock<std::mutex>& lock) {
   std::deque<Pending>& queue = writes_.empty() ? shared_ : writes_;
   if (queue.empty()) return false;
@@ -253,7 +273,12 @@ Result BusScheduler::PollTransport::execute(const Request& request) {
   owner.transport_.awaitLineFree();  // a write that comes during the gap still goes first
   {
     std::unique_lock<std::mutex> lock(owner.mutex_);
-    while (owner.transport_.connected() && owner.runOneQueued(lock)) {
+    // A poll that went before them lets one queued job go per transaction, not the whole queue.
+    if (owner.starving_poll_running_) {
+      if (owner.transport_.connected()) owner.runOneQueued(lock);
+    } else {
+      while (owner.transport_.connected() && owner.runOneQueued(lock)) {
+      }
     }
   }
   return owner.transport_.execute(request);
@@ -325,12 +350,17 @@ bool BusScheduler::stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_po
   }
   connected_ = true;
 
-  if (runOneQueued(lock)) return true;  // writes, then shared requests, go ahead of polls
+  Poll* next = starvingPoll(now);
+  if (!next && runOneQueued(lock)) {  // writes, then shared requests, go ahead of polls
+    last_ran_starving_poll_ = false;
+    return true;
+  }
 
   // The poll due first; an offline device waits out its backoff.
-  Poll* next = nullptr;
-  Clock::time_point when{};
+  Clock::time_point when = now;
+  const bool starving = next != nullptr;
   for (Poll& p : polls_) {
+    if (starving) break;
     // A late device claims at most one period of priority: it catches up after a stall
     // without starving the others, and a rate the bus cannot carry only takes what is left.
     auto t = std::max(p.due, now - p.period);
@@ -352,10 +382,13 @@ bool BusScheduler::stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_po
     *wait = when;
     return false;
   }
+  starving_poll_running_ = starving;
+  last_ran_starving_poll_ = starving;
   lock.unlock();
   Result r = next->job(poll_transport_);
   if (next->on_result) next->on_result(r);
   lock.lock();
+  starving_poll_running_ = false;
   record(next->device, r, Kind::kPoll);
   if (r.error == ErrorKind::kIo) transport_.disconnect();
   // Keep the schedule, so a poll delayed by a slow transaction (an offline device's probe)

@@ -2,6 +2,9 @@
 // Three priorities: writes (submit) first, then shared requests (submitShared: Modbus TCP
 // clients of the node's share), then polls; polls run at their device's rate, earliest due
 // first, and a device that stops answering is polled with backoff so it cannot stall the others.
+// Writes cannot stop the polls: a poll overdue by a whole period goes before the next queued job
+// (unless its device has one queued), one such poll between two jobs (state topics, restart detection and owed safe writes all wait
+// for polls; a queued write waits at most that one poll).
 // Time comes from a Clock (the real steady clock unless one is given; tests use a ManualClock).
 #pragma once
 
@@ -162,6 +165,9 @@ class BusScheduler {
   bool stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_point* wait);
   // Runs the oldest write, else the oldest shared request; `lock` held on entry and on return.
   bool runOneQueued(std::unique_lock<std::mutex>& lock);
+  // The poll overdue by a whole period the longest (none while the last thing run was such a
+  // poll, or nothing is queued): it goes before the queued jobs. `lock` held.
+  Poll* starvingPoll(Clock::time_point now);
   // Runs every queued job against a ClosedTransport saying `reason`; `lock` held on entry/exit.
   void refuseQueued(std::unique_lock<std::mutex>& lock, const std::string& reason);
   enum class Kind { kPoll, kWrite, kShared };
@@ -180,6 +186,8 @@ class BusScheduler {
   std::map<std::string, double> backoff_;
   std::map<std::string, RateMeter> poll_rates_;
   PollTransport poll_transport_;
+  bool starving_poll_running_ = false;  // a poll that went before queued jobs: runs them 1:1
+  bool last_ran_starving_poll_ = false;
   bool running_ = false;
   bool finished_ = false;                // run() has returned
   std::condition_variable finished_cv_;  // real time, not clock_: stopBy's bound is wall time
