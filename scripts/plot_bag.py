@@ -27,7 +27,8 @@ What the figure shows besides the values (the rules, also in README.md "Logging 
 - fail-safe labels: identical labels (same device and trigger) less than MERGE_FRACTION of the
   time axis apart are one label with a count ("x3"); the others are set in rows above the top
   panel, each in the lowest row where it overlaps no other label (at most MAX_LABEL_ROWS rows;
-  what does not fit is counted in a note, its red marks still drawn).
+  what does not fit is counted in a note, its red marks still drawn); the node's stops and
+  restarts are labelled the same way, in black.
 """
 import argparse
 import collections
@@ -342,9 +343,10 @@ def node_panels(data):
             for (node, device, name), ts, vs, good in lines:
                 runs, outages = split_at_outages(ts, good, end)
                 color = None
+                name_shown = f"{label(node, device, several)}/{name}"
                 for n, run in enumerate(runs):
                     line, = ax.plot([ts[j] - t0 for j in run], [vs[j] for j in run], color=color,
-                                    label=f"{label(node, device, several)}/{name}" if n == 0 else None,
+                                    label=name_shown if n == 0 else None,
                                     drawstyle="steps-post" if not unit else "default", gid="series")
                     color = line.get_color()
                 shade(ax, outages, t0, OUTAGE_STYLE, "outage")
@@ -397,20 +399,32 @@ def failsafe_labels(data, several):
                 break
         else:
             out.append([t, text, 1])
-    return [(t, text if n == 1 else f"{text} x{n}") for t, text, n in out]
+    return [(t, text if n == 1 else f"{text} x{n}", "red") for t, text, n in out]
+
+
+def life_labels(data, several):
+    """[(time, text, colour)]: each node's stops and restarts, labelled as the fail-safe's are."""
+    out = []
+    for node in data.nodes():
+        silences, restarts = node_life(data.of_node(node))
+        name = f"{node} " if several else "node "
+        out += [(a, name + "stopped", "black") for a, _ in silences]
+        out += [(t, name + "restarted", "black") for t in restarts]
+    return out
 
 
 def place_labels(fig, ax, labels, t0):
-    """Sets the labels above `ax` in rows: each in the lowest row where its box, as rendered,
-    overlaps no label placed before. Returns (annotations, labels left out)."""
+    """Sets the labels [(time, text, colour)] above `ax` in rows: each in the lowest row where
+    its box, as rendered, overlaps no label placed before. Returns (annotations, left out)."""
     renderer = fig.canvas.get_renderer()
     placed = []  # (row, bbox)
     annotations, left_out = [], []
-    for t, text in labels:
+    for t, text, color in labels:
         for row in range(MAX_LABEL_ROWS):
             a = ax.annotate(text, xy=(t - t0, 1.0), xycoords=("data", "axes fraction"),
                             xytext=(2, 2 + LABEL_ROW_PT * row), textcoords="offset points",
-                            fontsize=7, color="red", va="bottom", gid="failsafe-label")
+                            fontsize=7, color=color, va="bottom",
+                            gid="failsafe-label" if color == "red" else "life-label")
             box = a.get_window_extent(renderer).padded(1)
             if not any(box.overlaps(other) for _, other in placed):
                 placed.append((row, box))
@@ -418,7 +432,7 @@ def place_labels(fig, ax, labels, t0):
                 break
             a.remove()
         else:
-            left_out.append((t, text))
+            left_out.append((t, text, color))
     return annotations, left_out
 
 
@@ -437,7 +451,7 @@ def plot(data, out_path, title):
         rows = [(1.0, lambda ax, t0, several: ax.set_yticks([]))]
     heights = [h for h, _ in rows]
     several = len(data.nodes()) > 1
-    labels = failsafe_labels(data, several)
+    labels = sorted(failsafe_labels(data, several) + life_labels(data, several))
     fig, axes = plt.subplots(len(rows), 1, sharex=True, squeeze=False,
                              figsize=(11, sum(heights) + 1.2),
                              gridspec_kw={"height_ratios": heights})
@@ -453,7 +467,7 @@ def plot(data, out_path, title):
     fig.tight_layout()  # the axes' final width first: the labels are placed on it
     annotations, left_out = place_labels(fig, axes[0], labels, t0)
     if left_out:
-        axes[0].set_title(f"{len(left_out)} more fail-safe events (red marks) not labelled",
+        axes[0].set_title(f"{len(left_out)} more labels not shown (their marks are drawn)",
                           loc="right", fontsize=7, color="red")
     if annotations:  # room above the top panel for the rows of labels, same widths
         rows_used = 1 + max(round((a.xyann[1] - 2) / LABEL_ROW_PT) for a in annotations)

@@ -201,11 +201,14 @@ class PlotBagTest(unittest.TestCase):
         self.assertEqual([round(t, 3) for t in restarted], [T0 + 18, T0 + 25])
         self.assertEqual(self.spans(ax, "node-silent", drawn), [(T0 + 9.8, T0 + 18)])
         self.assert_line_broken(ax, T0 + 9.8, T0 + 18, drawn)
+        self.assertEqual(sorted(a.get_text() for a in drawn.labels),
+                         ["node restarted", "node restarted", "node stopped"])
 
     def test_a_node_that_stopped_for_good(self):
         msgs = [(t, NODE + "/relays/outputs", self.relay_outputs(t, [False] * 4))
                 for t in times(T0, T0 + 10, 5)]
-        msgs += [(t, "/diagnostics", diagnostics(t, int((t - T0) * 10))) for t in times(T0, T0 + 10, 1)]
+        msgs += [(t, "/diagnostics", diagnostics(t, int((t - T0) * 10)))
+                 for t in times(T0, T0 + 10, 1)]
         # The recorder ran on (another node's message) for 10 s more.
         msgs.append((T0 + 20, "/diagnostics", diagnostics(T0 + 20, 5, node="/other")))
         self.write(msgs)
