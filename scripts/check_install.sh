@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the package (catkin_make install) and checks that the install space works on its
-# own: the package is found, the launch files resolve, and the installed simulator and
-# commissioning tool run (a scan finds the three simulated devices). Writes a JUnit case to $1.
+# own: the package is found, the launch files resolve, the scripts the docs use are installed,
+# and the installed simulator and commissioning tool run (a scan finds the three simulated devices). Writes a JUnit case to $1.
 set -euo pipefail
 REPO=$(cd "$(dirname "$0")/.." && pwd)
 WS=$("$REPO/scripts/workspace.sh")
@@ -18,6 +18,12 @@ check 'rospack find modbus_rtu_driver | grep -q "/install/share/modbus_rtu_drive
   problem="rospack does not find the installed package"
 [ -n "$problem" ] || check 'roslaunch --files modbus_rtu_driver demo.launch | grep -q bus.launch' ||
   problem="demo.launch does not resolve from the install space"
+# The scripts the docs run with rosrun (issue 33 item 4: test/sim_control.py was not installed).
+for script in sim_control.py plot_bag.py bus_record.py; do
+  [ -n "$problem" ] || check "BIN=\$(catkin_find --first-only --libexec modbus_rtu_driver $script) &&
+    case \$BIN in */install/*) ;; *) exit 1;; esac && test -x \$BIN" ||
+    problem="$script is not installed"
+done
 if [ -z "$problem" ]; then
   dir=$(mktemp -d)
   check "cd / && BIN=\$(catkin_find --first-only --libexec modbus_rtu_driver modbus_rtu_simulator) &&

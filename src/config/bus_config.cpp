@@ -76,16 +76,15 @@ void parseHeartbeat(const YAML::Node& n, const std::string& key, std::string* to
 void parseFailsafe(const YAML::Node& n, const std::string& where,
                    const std::vector<std::string>& names, FailsafeConfig* out) {
   if (n["safe_state"]) {
-    out->safe_state =
-        perChannel<SafeState>(n["safe_state"], where + "safe_state", names, SafeState::kHold,
-                              [](const YAML::Node& v, const std::string& key) {
-                                SafeState s;
-                                const std::string names = namesIn(kSafeStateNames);
-                                const std::string text = get<std::string>(v, key, names.c_str());
-                                if (!parseSafeState(text, &s))
-                                  fail(key, "'" + text + "' is not one of " + names);
-                                return s;
-                              });
+    out->safe_state = perChannel<SafeState>(
+        n["safe_state"], where + "safe_state", names, SafeState::kHold,
+        [](const YAML::Node& v, const std::string& key) {
+          SafeState s;
+          const std::string text = get<std::string>(v, key, safeStateWords().c_str());
+          if (!parseSafeState(text, &s))
+            fail(key, "'" + text + "' is not one of " + safeStateWords());
+          return s;
+        });
   }
   if (n["command_timeout"]) {
     out->command_timeout =
@@ -126,8 +125,7 @@ void parseShare(const YAML::Node& n, ShareConfig* out) {
   if (n["listen"] && !parseListenAddress(get<std::string>(n["listen"], "share/listen", "HOST:PORT"),
                                          &out->server.host, &out->server.port, &error))
     fail("share/listen", error);
-  if (n["read_only"])
-    out->read_only = get<bool>(n["read_only"], "share/read_only", "true or false");
+  if (n["read_only"]) out->read_only = getSwitch(n["read_only"], "share/read_only");
   if (n["allow"]) {
     const std::vector<std::string> allow = getNames(n["allow"], "share/allow");
     if (allow.empty()) fail("share/allow", "empty (no client could connect)");
@@ -260,16 +258,14 @@ void parse(const YAML::Node& root, BusConfig* out) {
   checkKeys(root, "", with(kLinkKeys, kBusKeys));
   parseLink(root, &out->link);
   if (root["allow_raw_writes"])
-    out->allow_raw_writes =
-        get<bool>(root["allow_raw_writes"], "allow_raw_writes", "true or false");
+    out->allow_raw_writes = getSwitch(root["allow_raw_writes"], "allow_raw_writes");
   if (root["role"]) {
     out->role = get<std::string>(root["role"], "role", "master or slave");
     if (out->role != "master") fail("role", "'" + out->role + "' is not master");
   }
   out->diagnostic_period = parseDiagnosticPeriod(root);
   if (root["publish_on_change"])
-    out->publish_on_change =
-        get<bool>(root["publish_on_change"], "publish_on_change", "true or false");
+    out->publish_on_change = getSwitch(root["publish_on_change"], "publish_on_change");
   if (root["keep_alive"]) {
     out->keep_alive = getNumber(root["keep_alive"], "keep_alive");
     if (!(out->keep_alive >= 0.1 && out->keep_alive <= 3600))
@@ -291,8 +287,7 @@ void parse(const YAML::Node& root, BusConfig* out) {
       fail("realtime_priority", std::to_string(out->realtime_priority) +
                                     " is outside 0-99 (0 = off, 1-99 SCHED_FIFO priority)");
   }
-  if (root["lock_memory"])
-    out->lock_memory = get<bool>(root["lock_memory"], "lock_memory", "true or false");
+  if (root["lock_memory"]) out->lock_memory = getSwitch(root["lock_memory"], "lock_memory");
   if (root["wire_log"]) {
     out->wire_log = get<std::string>(root["wire_log"], "wire_log", "a file path");
     if (out->wire_log.empty()) fail("wire_log", "'' is not a file path (leave it out for none)");

@@ -1,14 +1,23 @@
 #include "modbus_rtu_driver/devices/failsafe.h"
 
+#include "modbus_rtu_driver/core/modbus/switch_words.h"
+
 namespace modbus_rtu_driver {
 
 bool parseSafeState(const std::string& text, SafeState* out) {
-  // YAML 1.1 and rosparam turn a bare on/off into a boolean: its text is true/false.
-  const auto state = text == "true"    ? SafeState::kOn
-                     : text == "false" ? SafeState::kOff
-                                       : valueIn(kSafeStateNames, text);
+  // on and off in any of the switch words (rosparam turns a bare on/off/yes/no into a boolean,
+  // which reaches the node as true/false), or hold.
+  if (const auto on = parseSwitch(text)) {
+    *out = *on ? SafeState::kOn : SafeState::kOff;
+    return true;
+  }
+  const auto state = valueIn(kSafeStateNames, text);
   if (state) *out = *state;
   return state.has_value();
+}
+
+std::string safeStateWords() {
+  return "on, off, hold (on/off also as " + std::string(kSwitchWords.substr(8)) + ")";
 }
 
 const char* safeStateName(SafeState state) {

@@ -45,6 +45,7 @@ std::string ownRule(size_t which, long reg, const std::string& name) {
 }  // namespace
 
 Result YespeedPdu::poll(Transport& bus) {
+  reading_fresh_ = false;  // a poll that stops at the relays read has no telemetry either
   Result relays = bus.execute(Request::readCoils(address(), 0, kRelays));
   if (mayHaveActed(relays)) return relays;  // silent or garbled: do not spend more of the line
   if (relays.ok()) outputs_.assign(relays.values.begin(), relays.values.end());

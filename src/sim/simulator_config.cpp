@@ -58,7 +58,7 @@ void parseRoot(const YAML::Node& root, const std::string& base_dir, SimulatorCon
     if (!parity) fail("parity", problem);
     c.factory.parity = *parity;
   }
-  if (root["pace"]) c.pace = config::get<bool>(root["pace"], "pace", "true or false");
+  if (root["pace"]) c.pace = config::getSwitch(root["pace"], "pace");
   if (!root["devices"] || !root["devices"].IsSequence())
     fail("devices", "missing or not a list of {type, address}");
   for (size_t i = 0; i < root["devices"].size(); ++i) {

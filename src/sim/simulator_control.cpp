@@ -1,11 +1,13 @@
 // The simulator's control interface: a Unix stream socket, one text command per line, one reply
 // line each ("ok ..." or "error <message>"). Devices are named "#<index>" (config order) or by
 // their current address (decimal or 0x hex).
-//   get DEV coil|input|holding|ireg ADDR [COUNT]   -> ok V1 V2 ...
-//   set DEV coil|input|holding|ireg ADDR V1 [V2..] -> ok   (coils and holding registers as one
+//   get DEV TABLE ADDR [COUNT]   -> ok V1 V2 ...   (TABLE: coil, discrete_input,
+//                         holding_register, input_register)
+//   set DEV TABLE ADDR V1 [V2..] -> ok   (coils and holding registers as one
 //                         bus write with its checks; discrete inputs and input registers from
 //                         outside: optocouplers, telemetry pins; -32768..65535)
-//   silence DEV 0|1    the device stops / starts answering (and hearing) anything
+//   silence DEV 0|1    the device stops / starts answering (and hearing) anything (0/1 or any
+//                      switch word: on/off, true/false, yes/no)
 //   fail DEV 0|1       the device answers everything with exception 04
 //   corrupt DEV N      the next N replies of the device carry a bad CRC
 //   truncate DEV N     the next N replies are cut to half their length
@@ -37,6 +39,7 @@
 #include <cstring>
 #include <sstream>
 
+#include "modbus_rtu_driver/core/modbus/switch_words.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
 namespace modbus_rtu_driver {
@@ -210,8 +213,9 @@ std::string Simulator::deviceCommand(const std::string& verb, SimDevice& d, std:
   if (verb == "silence" || verb == "fail") {
     in >> a;
     if (a.empty()) a = "1";
-    if (!parseNumber(a, 0, 1, &n)) return "error " + verb + ": '" + a + "' is not 0 or 1";
-    (verb == "silence" ? d.silenced : d.failing) = n != 0;
+    const auto on = parseSwitch(a);
+    if (!on) return "error " + verb + ": '" + a + "' is not one of " + std::string(kSwitchWords);
+    (verb == "silence" ? d.silenced : d.failing) = *on;
     return "ok";
   }
   if (verb == "drop") {

@@ -12,6 +12,7 @@
 #include <map>
 #include <sstream>
 
+#include "modbus_rtu_driver/core/modbus/switch_words.h"
 #include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/commissioning.h"
 #include "modbus_rtu_driver/tools/commission.h"
@@ -437,9 +438,14 @@ struct Cli {
       // The settings whose words are the same for every type are checked here already.
       if (s.feature == BoardFeature::kParity) value->check(parityWords());
       if (s.feature == BoardFeature::kPowerDownSave)
-        value->check(
-            refusing(CLI::IsMember(std::vector<std::string>{"on", "off", "1", "0"}),
-                     [](const std::string& text) { return "'" + text + "' is not on or off"; }));
+        value->check(refusing(CLI::Validator(
+                                  [](std::string& text) {
+                                    return parseSwitch(text) ? std::string() : std::string("no");
+                                  },
+                                  "on|off"),
+                              [](const std::string& text) {
+                                return "'" + text + "' is not one of " + std::string(kSwitchWords);
+                              }));
     }
 
     // The limits commands, for the registered types that have limits; one option per limit
@@ -673,8 +679,8 @@ void parseDevice(const Parsed& p, CommissionCommand& c) {
       c.new_value = ms / step;
       break;
     }
-    case BoardFeature::kPowerDownSave:  // the word was checked by CLI::IsMember
-      c.new_value = v == "on" || v == "1";
+    case BoardFeature::kPowerDownSave:  // the word was checked by the option's validator
+      c.new_value = parseSwitch(v).value_or(false);
       break;
     case BoardFeature::kFactoryReset:
     case BoardFeature::kLimits:

@@ -72,6 +72,11 @@ class GenericDeviceTest(unittest.TestCase):
 
     def test_writes_reach_the_device(self):
         setpoint = helpers.service(NS + "setpoint/set", SetValue)
+        # A value between the register's steps (0.1 C): both numbers in the signal's unit
+        # (issue 33 item 5: "written as 1" did not say in which unit).
+        res = setpoint(21.54)
+        self.assertTrue(res.success, res.message)
+        self.assertIn("setpoint set to 21.54 C (written as 21.5 C)", res.message)
         res = setpoint(21.5)
         self.assertTrue(res.success, res.message)
         self.assertEqual(self.sim.get(METER, "holding_register", 100), [215])

@@ -1,9 +1,12 @@
 #!/usr/bin/env python3
 """A robot's bag: bus.launch with record:=true under a robot's namespace (three output boards
 and a generic sensor), a fail-safe action during the recording; the bag holds ~failsafe and the
-signals, and scripts/plot_bag.py draws it without being told the node.
+signals, and scripts/plot_bag.py draws it without being told the node. During the recording the
+PDU is unplugged for a while and the node is killed and respawned: the plot breaks the PDU's
+lines there, marks the node's stop and restart, and hatches the PWM burst (issue 33 item 3).
 MODBUS_RTU_KEEP_PLOTS=DIR keeps the PNG and the bag (docs/robot_telemetry.png comes from it)."""
 import glob
+import importlib.util
 import os
 import shutil
 import subprocess
@@ -18,7 +21,7 @@ import yaml
 from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
 
-from modbus_rtu_driver.msg import FailsafeEvent
+from modbus_rtu_driver.msg import FailsafeEvent, PduTelemetry
 from modbus_rtu_driver.srv import SetPwm
 
 import user_paths as up
@@ -68,6 +71,7 @@ class RobotBagTest(unittest.TestCase):
     <arg name="name" value="io_bus"/> <arg name="config" value="%s"/> <arg name="port" value="%s"/>
     <arg name="record" value="true"/> <arg name="bag" value="%s/robot"/>
     <arg name="required" value="false"/>
+    <arg name="respawn" value="true"/> <arg name="respawn_delay" value="5.0"/>
   </include></group></launch>""" % (config, link, self.dir))
         launch = up.Process(["roslaunch", launch_file], self.dir, "roslaunch")
         ns = "/robot/io_bus"
@@ -89,7 +93,7 @@ class RobotBagTest(unittest.TestCase):
             for service in ("relays/lamp/set", "pdu/socket2/set", "relays/siren/set"):
                 self.assertTrue(up.call("%s/%s" % (ns, service), SetBool, lambda: None,
                                         True).success)
-            res = up.call(ns + "/pwm_board/set_pwm", SetPwm, lambda: None, 0, 1.0, 0.5, 3, 0,
+            res = up.call(ns + "/pwm_board/set_pwm", SetPwm, lambda: None, 0, 1.0, 0.5, 6, 0,
                           0, 0.0)
             self.assertTrue(res.success, res.message)
             sim.set(1, "input_register", 1, 230)
@@ -102,6 +106,26 @@ class RobotBagTest(unittest.TestCase):
             self.assertTrue(up.call(ns + "/relays/siren/set", SetBool, lambda: None,
                                     False).success)
             sub.unregister()
+            # The PDU unplugged for 4 s (8 of its polls: no telemetry), then back.
+            telemetry = []
+            tsub = rospy.Subscriber(ns + "/pdu/telemetry", PduTelemetry,
+                                    lambda m: telemetry.append(m.header.stamp.to_sec()))
+            wait_until(lambda: telemetry, 10, "PDU telemetry")
+            sim.silence(2)
+            unplugged = rospy.get_time()
+            wait_until(lambda: rospy.get_time() > unplugged + 4.0, 10, "4 s")
+            sim.silence(2, False)
+            back = rospy.get_time()
+            wait_until(lambda: telemetry[-1] > back, 20, "PDU telemetry after the outage")
+            # The node killed: respawned 5 s later (bus.launch respawn:=true), silent for longer than
+            # 3 of its /diagnostics periods: plot_bag.py marks the stop too.
+            killed = rospy.get_time()
+            subprocess.run(["rosnode", "kill", ns], check=True, timeout=30,
+                           stdout=subprocess.DEVNULL)
+            wait_until(lambda: telemetry[-1] > killed + 5.0, 60, "the respawned node's telemetry")
+            again = telemetry[-1]
+            wait_until(lambda: telemetry[-1] > again + 3.0, 20, "3 s of the respawned node")
+            tsub.unregister()
         finally:
             launch.stop()
             sim_process.stop()
@@ -125,6 +149,55 @@ class RobotBagTest(unittest.TestCase):
         if keep:
             shutil.copy(png, os.path.join(keep, "robot_telemetry.png"))
             shutil.copy(bags[0], os.path.join(keep, "robot.bag"))
+            with open(os.path.join(keep, "robot_times.txt"), "w") as f:
+                f.write("unplugged %f back %f killed %f\n" % (unplugged, back, killed))
+        self.check_drawing(bags[0], unplugged, back, killed)
+
+    def check_drawing(self, bag, unplugged, back, killed):
+        """What plot_bag.py draws from the bag: the PDU's outage breaks its lines and is
+        shaded, the node's stop and restart are marked, the PWM burst is hatched, and no
+        fail-safe label overlaps another."""
+        spec = importlib.util.spec_from_file_location(
+            "plot_bag", os.path.join(up.REPO, "scripts", "plot_bag.py"))
+        plot_bag = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(plot_bag)
+        drawn = plot_bag.plot(plot_bag.load([bag]), os.path.join(self.dir, "check.png"), "bag")
+        t0 = drawn.t0
+        panel = {ax.get_ylabel(): ax for ax in drawn.axes}
+
+        def artists(ax, gid):
+            return [a for a in ax.get_children() if a.get_gid() == gid]
+
+        def spans(ax, gid):
+            return [(min(x for x, _ in a.get_xy()) + t0, max(x for x, _ in a.get_xy()) + t0)
+                    for a in artists(ax, gid)]
+        power = panel["power [W]"]
+        outages = spans(power, "outage")
+        self.assertTrue(any(a <= unplugged + 1.0 and b >= back - 0.5 for a, b in outages),
+                        "no outage shaded over %.1f-%.1f: %s" % (unplugged - t0, back - t0,
+                                                                  [(a - t0, b - t0)
+                                                                   for a, b in outages]))
+        for line in artists(power, "series"):
+            xs = [x + t0 for x in line.get_xdata()]
+            for a, b in zip(xs, xs[1:]):
+                self.assertFalse(a <= unplugged + 1.0 and b >= back - 0.5,
+                                 "a line runs across the outage: %.1f-%.1f" % (a - t0, b - t0))
+        stopped = [line.get_xdata()[0] + t0 for line in artists(power, "node-stopped")]
+        restarted = [line.get_xdata()[0] + t0 for line in artists(power, "node-restarted")]
+        self.assertTrue(any(killed - 2.0 <= t <= killed + 2.0 for t in stopped),
+                        "stop not marked near %.1f: %s" % (killed - t0, [t - t0 for t in stopped]))
+        self.assertTrue(any(killed + 5.0 <= t <= killed + 30.0 for t in restarted),
+                        "restart not marked: %s" % [t - t0 for t in restarted])
+        pwm = artists(panel["pwm_board"], "pwm:0")
+        self.assertEqual(len(pwm), 1)
+        xs = [x for path in pwm[0].get_paths() for x, _ in path.vertices]
+        self.assertGreater(max(xs) - min(xs), 3.0)  # 6 pulses of 1 s, seen by 5 Hz polls
+        renderer = drawn.fig.canvas.get_renderer()
+        boxes = [a.get_window_extent(renderer) for a in drawn.labels]
+        self.assertTrue(boxes)
+        for i in range(len(boxes)):
+            for j in range(i + 1, len(boxes)):
+                self.assertFalse(boxes[i].overlaps(boxes[j]))
 
 
 if __name__ == "__main__":

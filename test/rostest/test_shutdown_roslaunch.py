@@ -50,6 +50,11 @@ class ShutdownThroughRoslaunch(unittest.TestCase):
             # The node has seen the board fail (a poll of it timed out after its retries).
             diagnostics.wait(60, lambda m: (consecutive_failures(m, "lamps") or 0) >= 1,
                              "lamps failing in /diagnostics")
+            # The node's INFO lines reach roslaunch's output file while it runs, not only at
+            # its exit (stdout is line-buffered; issue 33 item 4).
+            log.flush()
+            with open("/proc/self/fd/%d" % log.fileno()) as running:
+                self.assertRegex(running.read(), r"bus .* at \d+ baud, .* parity: \d+ device")
             launch.send_signal(signal.SIGINT)
             code = launch.wait(60)
         finally:

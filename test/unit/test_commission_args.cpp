@@ -100,6 +100,10 @@ TEST(CommissionArgs, SettingsAreParsedIntoTheBoardsOwnCodes) {
   EXPECT_EQ(parsed({"set-return-delay", "--address", "1", "1000"}).new_value, 25);
   EXPECT_EQ(parsed({"set-save", "--address", "1", "on"}).new_value, 1);
   EXPECT_EQ(parsed({"set-save", "--address", "1", "off"}).new_value, 0);
+  // The one set of on/off words the node's configuration and the simulator take too.
+  EXPECT_EQ(parsed({"set-save", "--address", "1", "yes"}).new_value, 1);
+  EXPECT_EQ(parsed({"set-save", "--address", "1", "FALSE"}).new_value, 0);
+  EXPECT_EQ(parsed({"set-save", "--address", "1", "1"}).new_value, 1);
   const CommissionCommand reset = parsed({"factory-reset"});
   EXPECT_EQ(reset.type, "ld58a08");  // the LD-only commands need no --type
   EXPECT_EQ(reset.address, -1);      // through 0xFF
@@ -168,7 +172,7 @@ TEST(CommissionArgs, SettingsOutsideTheManualsRangesAreRefused) {
   EXPECT_EQ(refusal({"set-return-delay", "--address", "1", "-40"}),
             "return delay: '-40' is outside 0-1000");
   EXPECT_EQ(refusal({"set-save", "--address", "1", "maybe"}),
-            "power-down save: 'maybe' is not on or off");
+            "power-down save: 'maybe' is not one of on/off, true/false, yes/no, 1/0");
   EXPECT_EQ(refusal({"set-parity", "--type", "lc_relay8", "--address", "1", "even"}),
             "--type: set-parity is an ld58a08 command; the LC relay board has no such setting");
   EXPECT_NE(refusal({"factory-reset", "--type", "lc_relay8"}), "");

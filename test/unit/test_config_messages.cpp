@@ -24,7 +24,45 @@ std::string relays(const std::string& device, const std::string& bus = "") {
   return "{devices: {r: {type: lc_relay8, address: 1" + device + "}}" + bus + "}";
 }
 
+BusConfig parsed(const std::string& yaml) {
+  BusConfig c;
+  std::string error;
+  EXPECT_TRUE(parseBusConfig(YAML::Load(yaml), &c, &error)) << yaml << ": " << error;
+  return c;
+}
+
 }  // namespace
+
+// Issue #33 item 5: one set of on/off words everywhere: on/off, true/false, yes/no, 1/0 in any
+// case. rosparam turns yes/no/on/off into booleans (true/false by the time the node reads
+// them), so `{pump: yes}` was on while `0` was refused; a file read directly (these tests)
+// and through rosparam now mean the same, and any other word is refused with the list.
+TEST(ConfigMessages, OneSetOfOnOffWords) {
+  for (const char* on : {"on", "true", "yes", "1", "ON", "Yes", "True"}) {
+    const BusConfig c = parsed(relays(std::string(", safe_state: {out0: ") + on + "}"));
+    EXPECT_EQ(c.devices[0].failsafe.safeStateOf(0), SafeState::kOn) << on;
+  }
+  for (const char* off : {"off", "false", "no", "0", "OFF", "No", "False"}) {
+    const BusConfig c = parsed(relays(std::string(", safe_state: {out0: ") + off + "}"));
+    EXPECT_EQ(c.devices[0].failsafe.safeStateOf(0), SafeState::kOff) << off;
+  }
+  EXPECT_EQ(parsed(relays(", safe_state: hold")).devices[0].failsafe.safeStateOf(0),
+            SafeState::kHold);
+  EXPECT_EQ(parseError(relays(", safe_state: {out0: 2}")),
+            "devices/r/safe_state/out0: '2' is not one of on, off, hold (on/off also as "
+            "true/false, yes/no, 1/0)");
+  EXPECT_EQ(parseError(relays(", safe_state: y")),
+            "devices/r/safe_state: 'y' is not one of on, off, hold (on/off also as true/false, "
+            "yes/no, 1/0)");
+  // The true/false keys take the same words, and refuse the rest by the same list.
+  EXPECT_TRUE(parsed(relays("", ", publish_on_change: 1")).publish_on_change);
+  EXPECT_TRUE(parsed(relays("", ", allow_raw_writes: yes")).allow_raw_writes);
+  EXPECT_FALSE(parsed(relays("", ", publish_on_change: off")).publish_on_change);
+  EXPECT_EQ(parseError(relays("", ", publish_on_change: y")),
+            "publish_on_change: 'y' is not one of on/off, true/false, yes/no, 1/0");
+  EXPECT_EQ(parseError(relays("", ", low_latency: 2")),
+            "low_latency: '2' is not one of on/off, true/false, yes/no, 1/0");
+}
 
 TEST(NumberText, AsPeopleWriteThem) {
   EXPECT_EQ(numberText(1.0), "1");

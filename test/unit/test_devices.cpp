@@ -493,6 +493,16 @@ TEST(YespeedPdu, TelemetryInOneRequestAsTheManualReadsIt) {
   bus.expect(toHex(encodeRequest(t)));  // silence
   EXPECT_FALSE(pdu.poll(bus).ok());
   EXPECT_FALSE(pdu.readingFresh());
+  // Nor does a poll whose first read (the relays) failed, after a good one: the PDU unplugged
+  // went on publishing its last telemetry, newly stamped, every poll (issue #33 item 3's plot
+  // of a real bag showed the outage as a flat line).
+  bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 00 51 88");
+  bus.expect(toHex(encodeRequest(t)), toHex(encodeReply(t, {0xFFC9, 300, 2203, 730, 1581})));
+  ASSERT_TRUE(pdu.poll(bus).ok());
+  ASSERT_TRUE(pdu.readingFresh());
+  bus.expect("01 01 00 00 00 08 3D CC");  // silence
+  EXPECT_FALSE(pdu.poll(bus).ok());
+  EXPECT_FALSE(pdu.readingFresh());
   EXPECT_SCRIPT_DONE(bus);
 }
 

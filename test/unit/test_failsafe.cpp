@@ -80,7 +80,8 @@ TEST(FailsafeConfig, BooleansFromRosparamAreOffAndOn) {
 
 TEST(FailsafeConfig, BadValuesAreRefusedWithTheKeyNamed) {
   EXPECT_EQ(errorOf(device("safe_state: maybe")),
-            "devices/relays/safe_state: 'maybe' is not one of off, on, hold");
+            "devices/relays/safe_state: 'maybe' is not one of on, off, hold (on/off also as "
+            "true/false, yes/no, 1/0)");
   EXPECT_EQ(errorOf(device("safe_state: {pumpx: off}")),
             "devices/relays/safe_state/pumpx: no output channel of that name (outputs: out0, "
             "out1, out2, out3, out4, out5, out6, out7)");

@@ -70,8 +70,8 @@ TEST(GenericFailsafeConfig, ASafeValueTheDeviceWouldNotGetIsRefusedWithItsRange)
             "devices/m/signals[0]/safe_value: only for writable signals (writable: true)");
   EXPECT_EQ(errorOf(device("[{name: a, table: coil, address: 0, writable: true, "
                            "safe_value: 2}]")),
-            "devices/m/signals[0]/safe_value: '2' is not on / off (true / false, 1 / 0) for "
-            "the bit a");
+            "devices/m/signals[0]/safe_value: '2' is not one of on/off, true/false, yes/no, 1/0 "
+            "for the bit a");
   EXPECT_EQ(errorOf(device("[{name: a, table: holding_register, address: 0, writable: true, "
                            "safe_value: fast}]")),
             "devices/m/signals[0]/safe_value: 'fast' is not a number");

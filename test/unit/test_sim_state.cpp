@@ -72,7 +72,8 @@ TEST(SimConfig, BadConfigsAreRefusedNamingTheKey) {
             "parity: 'mark' is not one of none, even, odd");
   EXPECT_EQ(configError("parity: E\n" + devices),
             "parity: 'E' is not one of none, even, odd (write 'even')");
-  EXPECT_EQ(configError("pace: maybe\n" + devices), "pace: 'maybe' is not true or false");
+  EXPECT_EQ(configError("pace: maybe\n" + devices),
+            "pace: 'maybe' is not one of on/off, true/false, yes/no, 1/0");
   EXPECT_EQ(configError("baud: 9600\n"), "devices: missing or not a list of {type, address}");
   EXPECT_EQ(
       configError("devices: [{type: plc, address: 1}]"),
@@ -128,7 +129,10 @@ TEST(SimControl, CommandsAndTheirErrors) {
   EXPECT_EQ(sim->command("set 1 coil 0").rfind("error set needs at least one value", 0), 0u);
   EXPECT_EQ(sim->command("set 1 coil 0 2"), "error coil values are 0 or 1");
   EXPECT_EQ(sim->command("set 2 input_register 0 70000"), "error value '70000' is not 16 bits");
-  EXPECT_EQ(sim->command("silence 1 2"), "error silence: '2' is not 0 or 1");
+  EXPECT_EQ(sim->command("silence 1 2"),
+            "error silence: '2' is not one of on/off, true/false, yes/no, 1/0");
+  EXPECT_EQ(sim->command("silence 1 on"), "ok");  // the one set of on/off words (issue #33)
+  EXPECT_EQ(sim->command("silence 1 no"), "ok");
   EXPECT_EQ(sim->command("silence 1"), "ok");
   EXPECT_EQ(sim->command("help").rfind("ok get set", 0), 0u);
 }

@@ -19,8 +19,10 @@ inline constexpr NameTable<SafeState, 3> kSafeStateNames{
     {{SafeState::kOff, "off"}, {SafeState::kOn, "on"}, {SafeState::kHold, "hold"}}};
 inline constexpr NameTable<OnRestart, 3> kOnRestartNames{
     {{OnRestart::kRestore, "restore"}, {OnRestart::kSafe, "safe"}, {OnRestart::kLeave, "leave"}}};
-// "off", "on", "hold"; also true/false, which is what rosparam makes of a bare on/off.
+// "hold", or on / off in any of the switch words (kSwitchWords: on/off, true/false, yes/no, 1/0).
 bool parseSafeState(const std::string& text, SafeState* out);
+// The words parseSafeState takes, for an error message.
+std::string safeStateWords();
 const char* safeStateName(SafeState state);
 const char* onRestartName(OnRestart policy);
 

@@ -6,8 +6,8 @@
 // The telemetry is measured every 0.5 s and at once when a relay switches: slow drifts plus a
 // little noise; the current is what the switched-on outlets draw (resistive loads: it follows
 // the voltage); the power is voltage x current x 0.98 (power factor) of the register values.
-// `set ireg` pins a register until the next power cycle; a pinned voltage or current still
-// enters the power.
+// `set DEV input_register` pins a register until the next power cycle; a pinned voltage or current
+// still enters the power.
 #pragma once
 
 #include <array>

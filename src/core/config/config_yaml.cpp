@@ -43,6 +43,13 @@ Table getTable(const YAML::Node& n, const std::string& key) {
   return *table;
 }
 
+bool getSwitch(const YAML::Node& n, const std::string& key) {
+  const std::string words = std::string(kSwitchWords);
+  const auto on = parseSwitch(get<std::string>(n, key, ("one of " + words).c_str()));
+  if (!on) fail(key, show(n) + " is not one of " + words);
+  return *on;
+}
+
 double getNumber(const YAML::Node& n, const std::string& key) {
   return get<double>(n, key, "a number");
 }
@@ -93,8 +100,7 @@ void parseLink(const YAML::Node& root, LinkConfig* out) {
   if (root["network_allowance"])
     link.network_allowance = getNumber(root["network_allowance"], "network_allowance");
   if (root["min_gap"]) link.min_gap = getNumber(root["min_gap"], "min_gap");
-  if (root["low_latency"])
-    link.low_latency = get<bool>(root["low_latency"], "low_latency", "true or false");
+  if (root["low_latency"]) link.low_latency = getSwitch(root["low_latency"], "low_latency");
   if (root["direction"])
     link.direction = getNamed(root["direction"], "direction", kDirectionControlNames);
   const std::string link_problem = validateLinkConfig(link);

@@ -38,19 +38,18 @@ double finite(const YAML::Node& n, const std::string& key) {
   return v;
 }
 
-// safe_value: a bit takes on / off (true / false) or 1 / 0; a number is checked as a write of
-// it would be (min / max, after rounding to the register's steps, and the type's range).
+// safe_value: a bit takes the switch words (on/off, true/false, yes/no, 1/0); a number is checked
+// as a write of it would be (min / max, after rounding to the register's steps, and the type's
+// range).
 void parseSafeValue(const YAML::Node& n, const std::string& key, SignalConfig* s) {
   if (!s->writable) fail(key, "only for writable signals (writable: true)");
   double v = 0;
   if (s->type == SignalType::kBool) {
-    bool on = false;
-    if (n.IsScalar() && YAML::convert<bool>::decode(n, on))
-      v = on ? 1.0 : 0.0;
-    else if (n.IsScalar() && (n.Scalar() == "0" || n.Scalar() == "1"))
-      v = n.Scalar() == "1" ? 1.0 : 0.0;
-    else
-      fail(key, show(n) + " is not on / off (true / false, 1 / 0) for the bit " + s->name);
+    const auto on = n.IsScalar() ? parseSwitch(n.Scalar()) : std::nullopt;
+    if (!on)
+      fail(key,
+           show(n) + " is not one of " + std::string(kSwitchWords) + " for the bit " + s->name);
+    v = *on ? 1.0 : 0.0;
   } else {
     v = finite(n, key);
   }
@@ -100,7 +99,7 @@ SignalConfig parseSignal(const YAML::Node& n, const std::string& where) {
   }
   if (n["offset"]) s.offset = finite(n["offset"], at + "offset");
   if (n["unit"]) s.unit = get<std::string>(n["unit"], at + "unit", "a unit's name");
-  if (n["writable"]) s.writable = get<bool>(n["writable"], at + "writable", "true or false");
+  if (n["writable"]) s.writable = getSwitch(n["writable"], at + "writable");
   if (s.writable && s.table != Table::kCoil && s.table != Table::kHoldingRegister)
     fail(at + "writable", std::string("a ") + tableName(s.table) + " cannot be written");
   for (const char* key : {"min", "max"}) {

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "modbus_rtu_driver/core/config/link_config.h"
+#include "modbus_rtu_driver/core/modbus/switch_words.h"
 #include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/core/modbus/types.h"
 
@@ -43,6 +44,9 @@ E getNamed(const YAML::Node& n, const std::string& key, const NameTable<E, N>& n
 // A Modbus table by its one name; a spelling of earlier versions is refused with the name.
 Table getTable(const YAML::Node& n, const std::string& key);
 
+// A value that is on or off: one of kSwitchWords (on/off, true/false, yes/no, 1/0, any case);
+// otherwise fails naming the key and the words.
+bool getSwitch(const YAML::Node& n, const std::string& key);
 double getNumber(const YAML::Node& n, const std::string& key);
 int getInt(const YAML::Node& n, const std::string& key);  // decimal, or hex as 0x...
 // Fails on the first key of `map` that is not in `known`, listing the known ones.
