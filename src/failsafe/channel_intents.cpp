@@ -234,6 +234,7 @@ std::string ChannelIntents::owedTrigger() const {
 void ChannelIntents::pollStarting() {
   std::lock_guard<std::mutex> lock(mutex_);
   write_during_poll_ = false;
+  poll_started_at_ = clock_.now();
 }
 
 Expectation ChannelIntents::expected(uint8_t channel, Clock::time_point t) const {
@@ -343,8 +344,13 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
       if (outputs[ch] == e.level && (in->during || now >= *in->ends)) in->ends.reset();
       continue;
     }
+    // The outputs were read at some time since the poll started (queued jobs run between a
+    // poll's transactions: seconds, with a silent device's retries): a level the channel
+    // should have shown then is no change either (a flash that ended meanwhile).
+    const Expectation then = expectedLocked(static_cast<uint8_t>(ch), poll_started_at_);
     if (in->ends && now > *in->ends) in->ends.reset();  // ended and shown: a steady level now
     if (outputs[ch] == e.level) continue;
+    if (then.kind != Expectation::Kind::kLevel || outputs[ch] == then.level) continue;
     if (adopt_changes_) {
       // Someone else's confirmed register write (a flash, a PWM through registers): a command.
       Intent adopted;

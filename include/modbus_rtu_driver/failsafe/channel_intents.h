@@ -176,6 +176,7 @@ class ChannelIntents {
   std::vector<std::optional<Owed>> owed_;
   std::vector<std::optional<Clock::time_point>> command_deadline_;
   bool write_during_poll_ = false;
+  Clock::time_point poll_started_at_{};  // the outputs a poll reads were read since then
   bool took_adopted_ = false;
   std::optional<CommandSource> adopt_changes_;  // adoptChangesNextPoll
 };
