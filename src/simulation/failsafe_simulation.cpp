@@ -432,7 +432,7 @@ void World::runUntil(TP end, const std::function<bool()>& done) {
     }
     if (now >= end) return;
     TP next = TP::max();
-    if (node_ && node_->bus().step(&next)) continue;
+    if (node_ && node_->scheduler().step(&next)) continue;
     const TP t = std::min({next, next_tick_, next_feed_, next_dev_feed_, end});
     if (t > now) clock_.advanceTo(t);
   }
