@@ -53,7 +53,7 @@ Outcome run(const std::string& dir, int devices, bool one_offline, double second
   lc.port = options.link;
   lc.baud = 115200;
   RtuLink link(lc);
-  BusScheduler bus(link);
+  BusScheduler scheduler(link);
   std::vector<std::shared_ptr<Device>> pdus;
   for (int a = 1; a <= devices; ++a) {
     DeviceConfig dc;
@@ -61,22 +61,22 @@ Outcome run(const std::string& dir, int devices, bool one_offline, double second
     dc.type = kYespeedPduType.name;
     dc.address = a;
     std::shared_ptr<Device> d = createDevice(dc);
-    bus.addDevice(dc.name);
-    bus.addPoll(
+    scheduler.addDevice(dc.name);
+    scheduler.addPoll(
         dc.name, 1000.0, [d](Transport& t) { return d->poll(t); }, nullptr);
     pdus.push_back(d);
   }
-  bus.start();
+  scheduler.start();
   // Warm-up: first polls read the limits too; an offline device reaches its probing backoff.
   std::this_thread::sleep_for(std::chrono::seconds(2));
   auto polls = [&] {
     uint64_t n = 0;
-    for (const auto& d : pdus) n += bus.health(d->name()).polls_ok;
+    for (const auto& d : pdus) n += scheduler.health(d->name()).polls_ok;
     return n;
   };
   std::vector<uint64_t> each0;
   each0.reserve(pdus.size());
-  for (const auto& d : pdus) each0.push_back(bus.health(d->name()).polls_ok);
+  for (const auto& d : pdus) each0.push_back(scheduler.health(d->name()).polls_ok);
   const uint64_t polls0 = polls(), ok0 = link.stats().ok, tries0 = link.stats().timeouts;
   std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
   Outcome o;
@@ -85,13 +85,13 @@ Outcome run(const std::string& dir, int devices, bool one_offline, double second
   o.offline_tries = link.stats().timeouts - tries0;
   uint64_t least = UINT64_MAX, most = 0;
   for (size_t i = one_offline ? 1 : 0; i < pdus.size(); ++i) {
-    const DeviceHealth h = bus.health(pdus[i]->name());
+    const DeviceHealth h = scheduler.health(pdus[i]->name());
     least = std::min(least, h.polls_ok - each0[i]);
     most = std::max(most, h.polls_ok - each0[i]);
   }
   o.fairness = most ? static_cast<double>(least) / static_cast<double>(most) : 0.0;
-  for (const auto& d : pdus) o.overrun = o.overrun || bus.health(d->name()).rate_overrun;
-  bus.stop();
+  for (const auto& d : pdus) o.overrun = o.overrun || scheduler.health(d->name()).rate_overrun;
+  scheduler.stop();
   return o;
 }
 

@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "bench_common.h"
-#include "modbus_rtu_driver/core/link/make_transport.h"
+#include "modbus_rtu_driver/core/link/make_link.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
 namespace modbus_rtu_driver {
@@ -124,7 +124,7 @@ void onOneCpu(const Request& request, double seconds, Best* plain, Best* ours) {
     plain->round(seconds / 4, [&] { return plainLibmodbus(ctx, request); });
     modbus_close(ctx);
     modbus_free(ctx);
-    const std::unique_ptr<Link> link = makeTransport(config);
+    const std::unique_ptr<Link> link = makeLink(config);
     std::string error;
     if (!link->connect(&error)) std::fprintf(stderr, "%s\n", error.c_str());
     ours->round(seconds / 4, [&] { return link->execute(request).ok(); });
@@ -179,7 +179,7 @@ void benchmarkTransports(const std::string& dir, double seconds, std::ofstream& 
       modbus_free(ctx);
       for (auto [config_of, best] : {std::pair{&tcp, &ours_tcp}, std::pair{&rtu_tcp, &ours_rtu_tcp},
                                      std::pair{&serial, &ours_serial}}) {
-        const std::unique_ptr<Link> link = makeTransport(*config_of);
+        const std::unique_ptr<Link> link = makeLink(*config_of);
         if (!link->connect(&error)) std::fprintf(stderr, "%s\n", error.c_str());
         best->round(seconds / 4, [&] { return link->execute(request).ok(); });
       }

@@ -6,10 +6,8 @@ REPO=$(cd "$(dirname "$0")/.." && pwd)
 RESULTS=$1
 mkdir -p "$RESULTS"
 status=0
-junit() {  # name, failure message or ""
-  local body="<testcase classname=\"conventions\" name=\"$1\"/>"
-  [ -z "$2" ] || body="<testcase classname=\"conventions\" name=\"$1\"><failure message=\"$2\"/></testcase>"
-  printf '<testsuite name="conventions" tests="1">%s</testsuite>\n' "$body" >"$RESULTS/$1.xml"
+junit() {  # name, failure message or "" (scripts/junit.py writes every such file)
+  /usr/bin/python3 "$REPO/scripts/junit.py" "$RESULTS/$1.xml" conventions "$1${2:+=$2}"
 }
 if out=$(cd "$REPO" && catkin_lint --strict . 2>&1); then
   junit catkin_lint_strict ""
@@ -40,7 +38,7 @@ forbid simulation 'ros/|modbus_rtu_driver/(config|ros|tools)/|modbus_rtu_driver/
 if [ -z "$layering" ]; then
   junit layering_includes_go_down ""
 else
-  echo "$layering"; junit layering_includes_go_down "${layering//\"/}"; status=1
+  echo "$layering"; junit layering_includes_go_down "$layering"; status=1
 fi
 # clang-format: the project formats with clang-format 14 (Debian 12's); other versions format
 # the same .clang-format differently (19, Debian 13's, moves several constructs), so the check
@@ -57,8 +55,8 @@ done
 if [ -z "$format" ]; then
   reason="no clang-format 14 here ($(clang-format --version 2>/dev/null | head -1 || echo none)); the project formats with 14"
   echo "clang_format_applied: SKIPPED: $reason"
-  printf '<testsuite name="conventions" tests="1" skipped="1"><testcase classname="conventions" name="clang_format_applied"><skipped message="%s"/></testcase></testsuite>\n' \
-    "${reason//\"/}" >"$RESULTS/clang_format_applied.xml"
+  /usr/bin/python3 "$REPO/scripts/junit.py" "$RESULTS/clang_format_applied.xml" conventions \
+    --skipped "clang_format_applied=$reason"
 elif out=$(cd "$REPO" && "$format" --dry-run -Werror $files 2>&1); then
   junit clang_format_applied ""
 else

@@ -27,6 +27,9 @@ import sys
 import sysconfig
 import xml.etree.ElementTree as ET
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import junit  # noqa: E402  (scripts/junit.py, the one writer of result files)
+
 REPO = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
 # Scripts that install their own tools and run outside the test command.
 NOT_SCANNED = {"scripts/fresh_check.sh"}
@@ -290,12 +293,8 @@ def package_xml_problems(listed):
 
 def write_case(results, name, problems):
     os.makedirs(results, exist_ok=True)
-    body = f'<testcase classname="dependencies" name="{name}"/>'
-    if problems:
-        msg = "; ".join(problems).replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;")
-        body = f'<testcase classname="dependencies" name="{name}"><failure message="{msg}"/></testcase>'
-    with open(os.path.join(results, name + ".xml"), "w", encoding="utf-8") as f:
-        f.write(f'<testsuite name="dependencies" tests="1">{body}</testsuite>\n')
+    junit.write_suite(os.path.join(results, name + ".xml"), "dependencies",
+                      [(name, "; ".join(problems), None)])
 
 
 def main():

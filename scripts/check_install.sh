@@ -39,9 +39,10 @@ if [ -z "$problem" ]; then
 fi
 if [ -z "$problem" ]; then
   echo "install space: ok"
-  printf '<testsuite name="install" tests="1"><testcase classname="install" name="install_space_works"/></testsuite>\n' >"$RESULTS/install.xml"
+  /usr/bin/python3 "$REPO/scripts/junit.py" "$RESULTS/install.xml" install install_space_works
 else
   echo "install space: $problem (see $LOG)"
-  printf '<testsuite name="install" tests="1" failures="1"><testcase classname="install" name="install_space_works"><failure message="%s, see %s"/></testcase></testsuite>\n' "$problem" "$LOG" >"$RESULTS/install.xml"
+  /usr/bin/python3 "$REPO/scripts/junit.py" "$RESULTS/install.xml" install \
+    "install_space_works=$problem, see $LOG"
   exit 1
 fi

@@ -81,11 +81,10 @@ grep -q -- "install --from-paths .* --ignore-src" "$FAKE/rosdep.calls" 2>/dev/nu
 
 if ((${#failures[@]})); then
   printf 'ros choice: %s\n' "${failures[@]}"
-  msg=$(printf '%s; ' "${failures[@]}" | sed -e 's/&/\&amp;/g' -e 's/"/\&quot;/g' -e 's/</\&lt;/g')
-  body="<testcase classname=\"install\" name=\"ros_choice_and_release_lists\"><failure message=\"$msg\"/></testcase>"
+  case="ros_choice_and_release_lists=$(printf '%s; ' "${failures[@]}")"
 else
   echo "ros choice: all cases as expected"
-  body='<testcase classname="install" name="ros_choice_and_release_lists"/>'
+  case=ros_choice_and_release_lists
 fi
-printf '<testsuite name="install" tests="1">%s</testsuite>\n' "$body" >"$RESULTS/ros_choice_and_release_lists.xml"
+/usr/bin/python3 "$REPO/scripts/junit.py" "$RESULTS/ros_choice_and_release_lists.xml" install "$case"
 ((${#failures[@]} == 0))

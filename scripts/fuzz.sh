@@ -59,9 +59,10 @@ for name in "${TARGETS[@]}"; do
   if [ -n "$RESULTS" ]; then
     mkdir -p "$RESULTS"
     if [ $status = 0 ]; then
-      printf '<testsuite name="fuzz" tests="1"><testcase classname="fuzz" name="%s_%s_inputs"/></testsuite>\n' "$name" "$runs" >"$RESULTS/$name.xml"
+      /usr/bin/python3 "$REPO/scripts/junit.py" "$RESULTS/$name.xml" fuzz "${name}_${runs}_inputs"
     else
-      printf '<testsuite name="fuzz" tests="1" failures="1"><testcase classname="fuzz" name="%s"><failure message="not built, crash or invariant broken, see %s"/></testcase></testsuite>\n' "$name" "$OUT/$name.log" >"$RESULTS/$name.xml"
+      /usr/bin/python3 "$REPO/scripts/junit.py" "$RESULTS/$name.xml" fuzz \
+        "$name=not built, crash or invariant broken, see $OUT/$name.log"
     fi
   fi
 done

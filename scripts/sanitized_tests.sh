@@ -26,12 +26,15 @@ fi
 [ -n "$RESULTS" ] || { echo "usage: $0 [--build-only | --prebuilt] RESULTS" >&2; exit 2; }
 mkdir -p "$RESULTS"
 status=0
+junit() {  # suite (and file name), case: NAME or NAME=FAILURE (scripts/junit.py)
+  /usr/bin/python3 "$REPO/scripts/junit.py" "$RESULTS/$1.xml" "$1" --classname sanitizers "$2"
+}
 # A build that fails (or never ran) must fail the run: old binaries would otherwise be tested
 # as if new.
 if [ "$(cat "$BUILD_STATUS" 2>/dev/null)" != ok ]; then
   cat "$BUILD/logs/configure.log" 2>/dev/null | grep -E "Error" | head -5 || true
   grep -E "error|warning: " "$BUILD/logs/build.log" 2>/dev/null | head -20 || true
-  printf '<testsuite name="sanitized-build" tests="1" failures="1"><testcase classname="sanitizers" name="build"><failure message="the sanitizer build failed, see %s"/></testcase></testsuite>\n' "$BUILD/logs/build.log" >"$RESULTS/sanitized-build.xml"
+  junit sanitized-build "build=the sanitizer build failed, see $BUILD/logs/build.log"
   exit 1
 fi
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1
@@ -43,7 +46,8 @@ for t in "$BUILD"/test_*; do
     status=1
     tail -30 "$BUILD/logs/$name.log"
     # A sanitizer report aborts the binary before gtest writes its XML: record the failure.
-    [ -s "$RESULTS/sanitized-$name.xml" ] || printf '<testsuite name="sanitized-%s" tests="1" failures="1"><testcase classname="sanitizers" name="%s"><failure message="sanitizer report or crash, see %s"/></testcase></testsuite>\n' "$name" "$name" "$BUILD/logs/$name.log" >"$RESULTS/sanitized-$name.xml"
+    [ -s "$RESULTS/sanitized-$name.xml" ] ||
+      junit "sanitized-$name" "$name=sanitizer report or crash, see $BUILD/logs/$name.log"
   }
   if grep -qE "ERROR: (AddressSanitizer|LeakSanitizer)|runtime error:" "$BUILD/logs/$name.log"; then
     echo "sanitizer report in $name"; status=1
@@ -53,9 +57,7 @@ done
 # The node itself under the sanitizers: node_devices.test (every service and topic of the three
 # device types) with the sanitized build of modbus_rtu_bus in place of the normal one.
 node_case() {  # name, failure message or "" -> one JUnit case
-  local body="<testcase classname=\"sanitizers\" name=\"$1\"/>"
-  [ -z "$2" ] || body="<testcase classname=\"sanitizers\" name=\"$1\"><failure message=\"$2\"/></testcase>"
-  printf '<testsuite name="sanitized-node" tests="1">%s</testsuite>\n' "$body" >"$RESULTS/sanitized-node.xml"
+  junit sanitized-node "$1${2:+=$2}"
 }
 set +u
 # shellcheck disable=SC1091

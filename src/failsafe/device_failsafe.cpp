@@ -18,8 +18,10 @@ std::string FailsafeReport::text() const {
   return t;
 }
 
-DeviceFailsafe::DeviceFailsafe(Device& device, BusScheduler& bus, Clock& clock)
-    : device_(device), bus_(bus), intents_(device.config().failsafe, device.outputCount(), clock) {
+DeviceFailsafe::DeviceFailsafe(Device& device, BusScheduler& scheduler, Clock& clock)
+    : device_(device),
+      scheduler_(scheduler),
+      intents_(device.config().failsafe, device.outputCount(), clock) {
   const FailsafeConfig& fs = intents_.config();
   if (!fs.heartbeat_topic.empty())
     heartbeat_ = std::make_unique<Watchdog>(fs.heartbeat_timeout, clock);
@@ -57,13 +59,12 @@ std::future<Result> DeviceFailsafe::applySafe(const std::string& trigger, const 
     }
   }
   if (targets.empty()) return readyResult(Result::success());
-  return bus_.submit(device_.name(),
-                     [this, lasting, only, targets, trigger, reason, since](Transport& t) {
-                       const OutputTargets now = lasting ? intents_.heldTargets(only) : targets;
-                       if (now.empty())
-                         return Result::success();  // commanded again before the bus got to it
-                       return writeAndReport(t, now, trigger, reason, "safe", since);
-                     });
+  return scheduler_.submit(
+      device_.name(), [this, lasting, only, targets, trigger, reason, since](Transport& t) {
+        const OutputTargets now = lasting ? intents_.heldTargets(only) : targets;
+        if (now.empty()) return Result::success();  // commanded again before the bus got to it
+        return writeAndReport(t, now, trigger, reason, "safe", since);
+      });
 }
 
 Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets,
@@ -117,7 +118,7 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
 
 void DeviceFailsafe::afterPoll() {
   // The scheduler records this poll after this callback: health still says how it was before.
-  const bool was_offline = !bus_.health(device_.name()).online;
+  const bool was_offline = !scheduler_.health(device_.name()).online;
   std::vector<bool> timed(device_.outputCount()), read_now(device_.outputCount());
   for (size_t i = 0; i < timed.size(); ++i) {
     timed[i] = device_.outputSelfTimed(i);
@@ -160,7 +161,7 @@ void DeviceFailsafe::afterPoll() {
     trigger = "restart";
   }
   // What to write is read when the write runs: a command confirmed before then is not undone.
-  bus_.submit(device_.name(), [this, verdict, trigger, reason, action](Transport& t) {
+  scheduler_.submit(device_.name(), [this, verdict, trigger, reason, action](Transport& t) {
     std::vector<bool> runs(device_.outputCount(), false);
     if (verdict != ChannelIntents::Verdict::kNormal && config().on_restart == OnRestart::kRestore) {
       // Failed: the snapshot as it was (the write fails anyway).

@@ -7,10 +7,10 @@ TypeRegistry<AdapterFactory>& adapterClasses() {
   return registry;
 }
 
-std::unique_ptr<DeviceAdapter> createAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
-                                             const ros::NodeHandle& node) {
+std::unique_ptr<DeviceAdapter> createAdapter(std::shared_ptr<Device> device,
+                                             BusScheduler& scheduler, const ros::NodeHandle& node) {
   const auto* entry = adapterClasses().find(device->type());
-  return entry ? entry->make(std::move(device), bus, node) : nullptr;
+  return entry ? entry->make(std::move(device), scheduler, node) : nullptr;
 }
 
 }  // namespace modbus_rtu_driver

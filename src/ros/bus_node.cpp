@@ -12,7 +12,7 @@
 
 #include "modbus_rtu_driver/core/bus/realtime.h"
 #include "modbus_rtu_driver/core/config/number_text.h"
-#include "modbus_rtu_driver/core/link/make_transport.h"
+#include "modbus_rtu_driver/core/link/make_link.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
 #include "modbus_rtu_driver/ros/publish_shared.h"
@@ -25,7 +25,7 @@ BusNode::BusNode(const ros::NodeHandle& private_nh) : nh_(private_nh) {}
 BusNode::~BusNode() {
   // The bus thread calls into the adapters and the share: stop it before they go.
   if (share_) share_->stop();
-  if (bus_) bus_->stop();
+  if (scheduler_) scheduler_->stop();
   if (publish_queue_) publish_queue_->stop();  // what the bus thread left to publish
 }
 
@@ -80,8 +80,8 @@ std::vector<DeviceAdapter*> BusNode::answeringFirst() const {
   std::vector<DeviceAdapter*> order;
   for (const auto& a : adapters_) order.push_back(a.get());
   std::stable_sort(order.begin(), order.end(), [this](DeviceAdapter* x, DeviceAdapter* y) {
-    return bus_->health(x->name()).consecutive_failures == 0 &&
-           bus_->health(y->name()).consecutive_failures > 0;
+    return scheduler_->health(x->name()).consecutive_failures == 0 &&
+           scheduler_->health(y->name()).consecutive_failures > 0;
   });
   return order;
 }
@@ -93,7 +93,7 @@ void BusNode::externalWrite(const Request& request, CommandSource source) {
 }
 
 void BusNode::shutdown() {
-  if (!bus_) return;
+  if (!scheduler_) return;
   failsafe_timer_.stop();
   if (share_) share_->stop();  // no client request after the safe states, queued ones refused
   // Safe states before the port closes, bounded: a device that cannot be reached is logged and
@@ -122,7 +122,7 @@ void BusNode::shutdown() {
       std::fprintf(stderr, "[ERROR] %s: safe states not reached before exit: %s\n", name.c_str(),
                    r.message.c_str());
   }
-  if (!bus_->stopBy(deadline + kBusStopGrace)) {
+  if (!scheduler_->stopBy(deadline + kBusStopGrace)) {
     // Still in one transaction (a silent device with long timeouts): waiting on would run into
     // roslaunch's SIGKILL. The port is closed by the kernel as the process ends.
     std::fprintf(stderr,
@@ -151,7 +151,7 @@ bool BusNode::start() {
     ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());
     return false;
   }
-  link_ = makeTransport(config_.link);
+  link_ = makeLink(config_.link);
   // Only what needs it starts the publishing thread (see rosPublishing()).
   if (!config_.wire_log.empty() || config_.realtime_priority > 0)
     publish_queue_ = std::make_unique<TaskQueue>();
@@ -159,12 +159,12 @@ bool BusNode::start() {
     ROS_FATAL("wire_log: %s", error.c_str());
     return false;
   }
-  bus_ = std::make_unique<BusScheduler>(*link_, schedulingOptions());
+  scheduler_ = std::make_unique<BusScheduler>(*link_, schedulingOptions());
   for (const DeviceConfig& dc : config_.devices) {
     std::shared_ptr<Device> device = createDevice(dc);  // dc was validated as it was parsed
     link_->setReplyDelay(device->address(), dc.reply_delay);
-    bus_->addDevice(dc.name);
-    auto adapter = createAdapter(device, *bus_, nh_);
+    scheduler_->addDevice(dc.name);
+    auto adapter = createAdapter(device, *scheduler_, nh_);
     if (!adapter) {
       ROS_FATAL("devices/%s/type: '%s' has no ROS interface", dc.name.c_str(), dc.type.c_str());
       return false;
@@ -176,7 +176,7 @@ bool BusNode::start() {
   for (const DeviceConfig& dc : config_.devices)
     by_address[static_cast<uint8_t>(dc.address)] = dc.name;
   raw_writes_ = std::make_unique<RawWrites>(
-      nh_, *bus_, config_.allow_raw_writes, by_address,
+      nh_, *scheduler_, config_.allow_raw_writes, by_address,
       [this](const Request& r) { externalWrite(r, CommandSource::kRaw); });
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>();
@@ -192,7 +192,7 @@ bool BusNode::start() {
                       [this](const ros::TimerEvent&) { diagnostics_->force_update(); });
 
   startFailsafe();
-  bus_->start();
+  scheduler_->start();
   // on_start: safe puts those outputs there before any command is taken (and before the first
   // poll, so a restart is never seen in them). All are queued at once; none has answered yet.
   std::vector<std::pair<std::string, std::future<Result>>> starting;
@@ -213,8 +213,9 @@ bool BusNode::start() {
     a->start();
   }
   if (config_.share.enabled) {
-    share_ = std::make_unique<ShareBridge>(
-        *bus_, config_, [this](const Request& r) { externalWrite(r, CommandSource::kShare); });
+    share_ = std::make_unique<ShareBridge>(*scheduler_, config_, [this](const Request& r) {
+      externalWrite(r, CommandSource::kShare);
+    });
     if (!share_->start(&error)) {
       ROS_FATAL("%s", error.c_str());  // names the share's key
       return false;
@@ -290,11 +291,11 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const LinkStats s = link_->stats();
   const uint64_t recent = recentLineErrors(s);
   logRecoveries();
-  if (!bus_->connected()) {
-    status.summary(DiagnosticStatus::ERROR, "port not open: " + bus_->connectionError());
+  if (!scheduler_->connected()) {
+    status.summary(DiagnosticStatus::ERROR, "port not open: " + scheduler_->connectionError());
     // A wrong port or a second node on it must show in the log, not only in /diagnostics.
     ROS_ERROR_THROTTLE(10.0, "bus %s: port not open: %s (retrying with backoff)",
-                       config_.link.port.c_str(), bus_->connectionError().c_str());
+                       config_.link.port.c_str(), scheduler_->connectionError().c_str());
   } else if (logged_all_silent_) {
     status.summary(DiagnosticStatus::ERROR, silentBusAdvice());
   } else if (recent > 0) {
@@ -353,15 +354,15 @@ std::string BusNode::silentBusAdvice() const {
 // Recoveries are logged as they are seen (diagnostics thread), so a bus that heals itself
 // still leaves a trace; and a bus where nobody answers says what to check, once.
 void BusNode::logRecoveries() {
-  const PortReopens reopens = bus_->portReopens();
+  const PortReopens reopens = scheduler_->portReopens();
   if (reopens.count != logged_reopens_) {
     logged_reopens_ = reopens.count;
     ROS_INFO("bus %s: port open again after %s", config_.link.port.c_str(),
              secondsText(reopens.last_outage_seconds).c_str());
   }
-  const bool all_silent = !adapters_.empty() && bus_->connected() &&
+  const bool all_silent = !adapters_.empty() && scheduler_->connected() &&
                           std::all_of(adapters_.begin(), adapters_.end(), [this](const auto& a) {
-                            return !bus_->health(a->name()).online;
+                            return !scheduler_->health(a->name()).online;
                           });
   if (all_silent && !logged_all_silent_)
     ROS_WARN("bus %s: %s", config_.link.port.c_str(), silentBusAdvice().c_str());

@@ -8,9 +8,12 @@
 
 namespace modbus_rtu_driver {
 
-DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
+DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& scheduler,
                              const ros::NodeHandle& node)
-    : device_(std::move(device)), bus_(bus), nh_(node, device_->name()), failsafe_(*device_, bus) {
+    : device_(std::move(device)),
+      scheduler_(scheduler),
+      nh_(node, device_->name()),
+      failsafe_(*device_, scheduler) {
   // Here, not in start(): the start-up safe states are reported before start().
   if (device_->outputCount() > 0) failsafe_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 1, true);
   failsafe_.setReportSink([this](const FailsafeReport& r) { report(r); });
@@ -105,7 +108,7 @@ void DeviceAdapter::start() {
 
 void DeviceAdapter::addPolls() {
   auto device = device_;
-  bus_.addPoll(
+  scheduler_.addPoll(
       device_->name(), device_->config().poll_rate,
       [this, device](Transport& t) {
         failsafe_.pollStarting();
@@ -135,7 +138,7 @@ void DeviceAdapter::publishLater(std::function<void()> task) {
 }
 
 Result DeviceAdapter::runOnBus(BusScheduler::Job job) {
-  return bus_.submit(device_->name(), std::move(job)).get();
+  return scheduler_.submit(device_->name(), std::move(job)).get();
 }
 
 Result DeviceAdapter::writeOutputs(const std::vector<uint8_t>& channels,
@@ -168,7 +171,7 @@ void DeviceAdapter::publishOutputs() {
 std::string DeviceAdapter::answer(const Result& result, const std::string& what) const {
   if (result.ok()) return result.message.empty() ? what : what + " (" + result.message + ")";
   std::string msg = device_->name() + ": " + result.message;
-  if (result.error != ErrorKind::kInvalidArgument && !bus_.health(device_->name()).online)
+  if (result.error != ErrorKind::kInvalidArgument && !scheduler_.health(device_->name()).online)
     msg += " (device is offline)";
   return msg;
 }
@@ -202,7 +205,7 @@ void DeviceAdapter::onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& m
   newest_command_ = std::move(entry);
   if (command_job_queued_) return;  // the queued job will take this one too
   command_job_queued_ = true;
-  bus_.submit(device_->name(), [this](Transport& t) {
+  scheduler_.submit(device_->name(), [this](Transport& t) {
     std::shared_ptr<OutputBatch::Entry> entry;
     {
       std::lock_guard<std::mutex> lock(commands_mutex_);
@@ -236,7 +239,7 @@ void DeviceAdapter::logOnlineChange(const DeviceHealth& h) {
 }
 
 void DeviceAdapter::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
-  const DeviceHealth h = bus_.health(device_->name());
+  const DeviceHealth h = scheduler_.health(device_->name());
   using diagnostic_msgs::DiagnosticStatus;
   logOnlineChange(h);
   if (!h.online) {

@@ -81,7 +81,7 @@ class GenericAdapter : public DeviceAdapter {
     for (size_t g = 0; g < generic().groups().size(); ++g) {
       if (generic().groups()[g].signals.empty()) continue;
       auto device = device_;
-      bus_.addPoll(
+      scheduler_.addPoll(
           device_->name(), generic().groups()[g].rate,
           [device, g](Transport& t) {
             return static_cast<GenericDevice&>(*device).pollGroup(t, g);
@@ -115,7 +115,7 @@ class GenericAdapter : public DeviceAdapter {
   std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
                                 const std::vector<uint8_t>&) override {
     if (!hasSafeStates()) return readyResult(Result::success());
-    return bus_.submit(device_->name(), [this, trigger, reason](Transport& t) {
+    return scheduler_.submit(device_->name(), [this, trigger, reason](Transport& t) {
       return writeSafe(t, trigger, reason);
     });
   }
@@ -170,7 +170,7 @@ class GenericAdapter : public DeviceAdapter {
     publishSignals(true);
     if (!safe_pending_ || noProperAnswer(r.error)) return;
     safe_pending_ = false;  // one retry queued; it sets this again if it fails too
-    bus_.submit(device_->name(), [this](Transport& t) {
+    scheduler_.submit(device_->name(), [this](Transport& t) {
       return writeSafe(t, "restart",
                        "the device answers again; its safe values were not reached before");
     });

@@ -2,10 +2,13 @@
 
 namespace modbus_rtu_driver {
 
-RawWrites::RawWrites(ros::NodeHandle& nh, BusScheduler& bus, bool allowed,
+RawWrites::RawWrites(ros::NodeHandle& nh, BusScheduler& scheduler, bool allowed,
                      std::map<uint8_t, std::string> devices,
                      std::function<void(const Request&)> wrote)
-    : bus_(bus), allowed_(allowed), devices_(std::move(devices)), wrote_(std::move(wrote)) {
+    : scheduler_(scheduler),
+      allowed_(allowed),
+      devices_(std::move(devices)),
+      wrote_(std::move(wrote)) {
   registers_srv_ = nh.advertiseService("write_registers", &RawWrites::onRegisters, this);
   coils_srv_ = nh.advertiseService("write_coils", &RawWrites::onCoils, this);
 }
@@ -30,7 +33,7 @@ Result RawWrites::run(const Request& request) {
   const auto known = devices_.find(request.slave);
   const std::string owner =
       known != devices_.end() ? known->second : "slave " + std::to_string(request.slave);
-  return bus_
+  return scheduler_
       .submit(owner,
               [this, sent = forwarded(request)](Transport& t) {
                 // Sent once: a raw write may start something (an LC flash through FC16).

@@ -6,12 +6,12 @@
 
 namespace modbus_rtu_driver {
 
-ShareBridge::ShareBridge(BusScheduler& bus, const BusConfig& config,
+ShareBridge::ShareBridge(BusScheduler& scheduler, const BusConfig& config,
                          std::function<void(const Request&)> wrote)
     : config_(config.share) {
   std::map<uint8_t, std::string> device_at;
   for (const DeviceConfig& d : config.devices) device_at[static_cast<uint8_t>(d.address)] = d.name;
-  gateway_ = std::make_unique<ShareGateway>(bus, config_, [device_at](uint8_t slave) {
+  gateway_ = std::make_unique<ShareGateway>(scheduler, config_, [device_at](uint8_t slave) {
     auto it = device_at.find(slave);
     return it == device_at.end() ? std::string() : it->second;
   });

@@ -6,7 +6,7 @@
 
 #include "modbus_rtu_driver/WrittenCoils.h"
 #include "modbus_rtu_driver/WrittenRegisters.h"
-#include "modbus_rtu_driver/ros/publish_shared.h"
+#include "modbus_rtu_driver/ros/renamed_publisher.h"
 #include "modbus_rtu_driver/ros/yaml_params.h"
 
 namespace modbus_rtu_driver {
@@ -17,6 +17,21 @@ SlaveNode::~SlaveNode() {
   if (server_) server_->stop();  // its thread publishes through this object
 }
 
+// Each service under its name and under its old, plural name; the old one warns once, then
+// serves the same.
+template <class Request, class Response>
+void SlaveNode::serve(const std::string& name,
+                      const std::function<bool(Request&, Response&)>& handler) {
+  const std::string resolved = nh_.resolveName(name);
+  const std::string old_name = nh_.resolveName(name + "s");
+  services_.push_back(nh_.advertiseService<Request, Response>(name, handler));
+  services_.push_back(nh_.advertiseService<Request, Response>(
+      name + "s", [handler, resolved, old_name](Request& q, Response& s) {
+        warnRenamed(old_name, resolved);
+        return handler(q, s);
+      }));
+}
+
 bool SlaveNode::start() {
   XmlRpc::XmlRpcValue params;
   std::string error;
@@ -24,31 +39,37 @@ bool SlaveNode::start() {
     ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());
     return false;
   }
-  written_coils_ = nh_.advertise<WrittenCoils>("written/coils", 100);
-  written_registers_ = nh_.advertise<WrittenRegisters>("written/holding_registers", 100);
+  // Names follow the YAML's singular table names (coil, holding_register); the plural names
+  // of earlier versions still work for one release and warn once (docs/ros_api.md).
+  written_coils_ =
+      RenamedPublisher::advertise<WrittenCoils>(nh_, "written/coil", "written/coils", 100);
+  written_registers_ = RenamedPublisher::advertise<WrittenRegisters>(
+      nh_, "written/holding_register", "written/holding_registers", 100);
   for (const auto& [address, name] : config_.coil_names) {
-    coil_pubs_[address] = nh_.advertise<std_msgs::Bool>("coils/" + name, 1, true);
+    coil_pubs_[address] =
+        RenamedPublisher::advertise<std_msgs::Bool>(nh_, "coil/" + name, "coils/" + name, 1, true);
     publishNamed(Table::kCoil, address, {0});
   }
   for (const auto& [address, name] : config_.holding_names) {
-    holding_pubs_[address] = nh_.advertise<std_msgs::UInt16>("holding_registers/" + name, 1, true);
+    holding_pubs_[address] = RenamedPublisher::advertise<std_msgs::UInt16>(
+        nh_, "holding_register/" + name, "holding_registers/" + name, 1, true);
     publishNamed(Table::kHoldingRegister, address, {0});
   }
-  auto bits = [this](const char* name, Table table) {
-    services_.push_back(nh_.advertiseService<SetBits::Request, SetBits::Response>(
+  auto bits = [this](const std::string& name, Table table) {
+    serve<SetBits::Request, SetBits::Response>(
         name,
-        [this, table](SetBits::Request& q, SetBits::Response& s) { return setBits(table, q, s); }));
+        [this, table](SetBits::Request& q, SetBits::Response& s) { return setBits(table, q, s); });
   };
-  auto regs = [this](const char* name, Table table) {
-    services_.push_back(nh_.advertiseService<SetRegisters::Request, SetRegisters::Response>(
+  auto regs = [this](const std::string& name, Table table) {
+    serve<SetRegisters::Request, SetRegisters::Response>(
         name, [this, table](SetRegisters::Request& q, SetRegisters::Response& s) {
           return setRegisters(table, q, s);
-        }));
+        });
   };
-  bits("set_coils", Table::kCoil);
-  bits("set_discrete_inputs", Table::kDiscreteInput);
-  regs("set_holding_registers", Table::kHoldingRegister);
-  regs("set_input_registers", Table::kInputRegister);
+  bits("set_coil", Table::kCoil);
+  bits("set_discrete_input", Table::kDiscreteInput);
+  regs("set_holding_register", Table::kHoldingRegister);
+  regs("set_input_register", Table::kInputRegister);
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>();
   diagnostics_->setHardwareID(config_.link.port);
@@ -72,14 +93,14 @@ void SlaveNode::onWrite(const SlaveWrite& w) {
     msg.header.stamp = now;
     msg.address = w.address;
     msg.states.assign(w.values.begin(), w.values.end());
-    publishShared(written_coils_, std::move(msg));
+    written_coils_.publish(std::move(msg));
   } else {
     WrittenRegisters msg;
     msg.header.stamp = now;
     msg.address = w.address;
     msg.values = w.values;
     msg.bytes = registersToMacroBytes(w.values);
-    publishShared(written_registers_, std::move(msg));
+    written_registers_.publish(std::move(msg));
   }
   publishNamed(w.table, w.address, w.values);
 }
@@ -100,11 +121,11 @@ void SlaveNode::publishNamed(Table table, uint16_t address, const std::vector<ui
     if (table == Table::kCoil) {
       std_msgs::Bool b;
       b.data = values[i] != 0;
-      publishShared(pub->second, b);
+      pub->second.publish(b);
     } else {
       std_msgs::UInt16 u;
       u.data = values[i];
-      publishShared(pub->second, u);
+      pub->second.publish(u);
     }
   }
 }

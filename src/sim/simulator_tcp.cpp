@@ -10,7 +10,7 @@ SimulatorTcp::SimulatorTcp(const SimulatorConfig& config, const std::string& lin
   line.stop_bits = config.factory.stop_bits;
   line.response_timeout = 0.5;
   link_ = std::make_unique<RtuLink>(line);
-  bus_ = std::make_unique<BusScheduler>(*link_);
+  scheduler_ = std::make_unique<BusScheduler>(*link_);
 }
 
 SimulatorTcp::~SimulatorTcp() {
@@ -28,14 +28,14 @@ bool SimulatorTcp::start(const std::string& listen, std::string* error) {
     if (error) *error = "cannot open the line " + link_->config().port + ": " + why;
     return false;
   }
-  gateway_ = std::make_unique<ShareGateway>(*bus_, share);
-  bus_->start();
+  gateway_ = std::make_unique<ShareGateway>(*scheduler_, share);
+  scheduler_->start();
   return gateway_->start(error);
 }
 
 void SimulatorTcp::stop() {
   if (gateway_) gateway_->stop();
-  bus_->stop();  // before the gateway goes: pending answers call into it
+  scheduler_->stop();  // before the gateway goes: pending answers call into it
   gateway_.reset();
   link_->disconnect();
 }

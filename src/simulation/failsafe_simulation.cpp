@@ -67,10 +67,9 @@ const std::vector<SimInvariant>& simInvariants() {
 }
 
 const std::set<std::string>& simKnownOpen() {
-  // I2: held_channel_restore_after_offline; I3: held_channel_failsafe_write_unsafe;
   // I4: share_write_lost_answer_then_restore; I5: restore_left_out_pwm_channel;
-  // I6: restore_left_out_then_change_reported (docs/simulation.md, "Known open defects").
-  static const std::set<std::string> known = {"I2", "I3", "I4", "I5", "I6"};
+  // I6: lc_restart_after_stop38_fixes (docs/simulation.md, "Known open defects").
+  static const std::set<std::string> known = {"I4", "I5", "I6"};
   return known;
 }
 
@@ -438,7 +437,7 @@ void World::runUntil(TP end, const std::function<bool()>& done) {
     }
     if (now >= end) return;
     TP next = TP::max();
-    if (node_ && node_->bus().step(&next)) continue;
+    if (node_ && node_->scheduler().step(&next)) continue;
     const TP t = std::min({next, next_tick_, next_feed_, next_dev_feed_, end});
     if (t > now) clock_.advanceTo(t);
   }

@@ -26,7 +26,7 @@ std::shared_ptr<Device> makeDevice(const DeviceConfig& dc) {
 
 SimNode::SimNode(SimNodeOptions options, Transport& transport, Clock& clock, SimNodeHooks hooks)
     : options_(std::move(options)), clock_(clock), hooks_(std::move(hooks)) {
-  bus_ = std::make_unique<BusScheduler>(transport, options_.scheduling, clock_);
+  scheduler_ = std::make_unique<BusScheduler>(transport, options_.scheduling, clock_);
   double shortest = 0.5;
   bool deadlines = false;
   if (options_.heartbeat_timeout > 0) {
@@ -37,9 +37,9 @@ SimNode::SimNode(SimNodeOptions options, Transport& transport, Clock& clock, Sim
   for (const DeviceConfig& dc : options_.devices) {
     auto e = std::make_unique<Entry>();
     e->device = makeDevice(dc);
-    bus_->addDevice(dc.name);
+    scheduler_->addDevice(dc.name);
     if (e->device->outputCount() > 0) {
-      e->failsafe = std::make_unique<DeviceFailsafe>(*e->device, *bus_, clock_);
+      e->failsafe = std::make_unique<DeviceFailsafe>(*e->device, *scheduler_, clock_);
       e->failsafe->setBusHeartbeat(heartbeat_.get(), "/alive");
       e->failsafe->setReportSink([this](const FailsafeReport& r) {
         if (hooks_.report) hooks_.report(r);
@@ -63,7 +63,7 @@ SimNode::SimNode(SimNodeOptions options, Transport& transport, Clock& clock, Sim
 
 SimNode::~SimNode() {
   // The bus's queued jobs call into the fail-safes: they fail unsent before those go.
-  bus_->stop();
+  scheduler_->stop();
 }
 
 SimNode::Entry* SimNode::entry(const std::string& name) {
@@ -86,8 +86,8 @@ std::vector<SimNode::Entry*> SimNode::answeringFirst() {
   std::vector<Entry*> order;
   for (auto& e : entries_) order.push_back(e.get());
   std::stable_sort(order.begin(), order.end(), [this](Entry* x, Entry* y) {
-    return bus_->health(x->device->name()).consecutive_failures == 0 &&
-           bus_->health(y->device->name()).consecutive_failures > 0;
+    return scheduler_->health(x->device->name()).consecutive_failures == 0 &&
+           scheduler_->health(y->device->name()).consecutive_failures > 0;
   });
   return order;
 }
@@ -97,7 +97,7 @@ std::future<Result> SimNode::applySafe(Entry& e, const std::string& trigger,
   if (e.failsafe) return e.failsafe->applySafe(trigger, reason);
   auto& generic = static_cast<GenericDevice&>(*e.device);
   if (generic.safeSignals().empty()) return readyResult(Result::success());
-  return bus_->submit(e.device->name(), [this, &e, trigger, reason](Transport& t) {
+  return scheduler_->submit(e.device->name(), [this, &e, trigger, reason](Transport& t) {
     return genericWriteSafe(e, t, trigger, reason);
   });
 }
@@ -126,7 +126,7 @@ Result SimNode::genericWriteSafe(Entry& e, Transport& t, const std::string& trig
 }
 
 void SimNode::beginStart() {
-  bus_->startStepping();
+  scheduler_->startStepping();
   for (auto& e : entries_)
     if (e->device->config().failsafe.on_start_safe)
       start_writes_.push_back(applySafe(*e, "start", "on_start: safe"));
@@ -146,7 +146,7 @@ void SimNode::finishStart() {
     Entry* e = up.get();
     auto device = e->device;
     if (e->failsafe) {
-      bus_->addPoll(
+      scheduler_->addPoll(
           device->name(), device->config().poll_rate,
           [this, e](Transport& t) {
             if (hooks_.poll_starting) hooks_.poll_starting(e->device->name());
@@ -161,7 +161,7 @@ void SimNode::finishStart() {
       auto& generic = static_cast<GenericDevice&>(*device);
       for (size_t g = 0; g < generic.groups().size(); ++g) {
         if (generic.groups()[g].signals.empty()) continue;
-        bus_->addPoll(
+        scheduler_->addPoll(
             device->name(), generic.groups()[g].rate,
             [this, e, g](Transport& t) {
               if (hooks_.poll_starting) hooks_.poll_starting(e->device->name());
@@ -171,7 +171,7 @@ void SimNode::finishStart() {
               // GenericAdapter::onPoll: safe values not reached are written once it answers.
               if (e->generic_safe_pending && !noProperAnswer(r.error)) {
                 e->generic_safe_pending = false;
-                bus_->submit(e->device->name(), [this, e](Transport& t) {
+                scheduler_->submit(e->device->name(), [this, e](Transport& t) {
                   return genericWriteSafe(
                       *e, t, "restart",
                       "the device answers again; its safe values were not reached before");
@@ -187,7 +187,7 @@ void SimNode::finishStart() {
 
 void SimNode::beginStop() {
   share_closed_ = true;
-  bus_->closeShared("the share stopped (the node is stopping)");
+  scheduler_->closeShared("the share stopped (the node is stopping)");
   started_ = false;
   for (Entry* e : answeringFirst()) {
     const bool safe = e->failsafe ? e->failsafe->hasSafeStates()
@@ -222,15 +222,15 @@ void SimNode::feedDeviceHeartbeat(const std::string& device) {
 
 std::future<Result> SimNode::runOp(uint64_t op, const std::string& device, Done done,
                                    std::function<Result(Transport&)> job) {
-  return bus_->submit(device,
-                      [this, op, done = std::move(done), job = std::move(job)](Transport& t) {
-                        const uint64_t outer = current_op_;
-                        current_op_ = op;
-                        Result r = job(t);
-                        current_op_ = outer;
-                        if (done) done(r);
-                        return r;
-                      });
+  return scheduler_->submit(device,
+                            [this, op, done = std::move(done), job = std::move(job)](Transport& t) {
+                              const uint64_t outer = current_op_;
+                              current_op_ = op;
+                              Result r = job(t);
+                              current_op_ = outer;
+                              if (done) done(r);
+                              return r;
+                            });
 }
 
 Result SimNode::completeBatch(Entry& e, Transport& t,
@@ -339,7 +339,7 @@ std::future<Result> SimNode::share(uint64_t op, const Request& request, Done don
   for (auto& e : entries_)
     if (e->device->address() == request.slave) device = e->device->name();
   const Request sent = forwarded(request);
-  bus_->submitShared(
+  scheduler_->submitShared(
       device,
       [this, op, sent, done = std::move(done)](Transport& t) {
         const uint64_t outer = current_op_;

@@ -100,7 +100,7 @@ class DeviceCommands {
   }
 
   Result read(const Setting& s, uint16_t* v) {
-    return type_->readSetting(s_.bus, c_.address, s.feature, v);
+    return type_->readSetting(s_.transport, c_.address, s.feature, v);
   }
 
   int show(const Setting& s) {
@@ -128,7 +128,8 @@ class DeviceCommands {
     if (s.ask && !s_.confirm("Change the " + s.name + " of the " + device() + " from " +
                              s.text(now) + " to " + to + "? " + s.after))
       return s_.out.fail(kExitNotConfirmed, "not confirmed; nothing was changed");
-    r = type_->writeSetting(s_.bus, c_.address, s.feature, static_cast<uint16_t>(c_.new_value));
+    r = type_->writeSetting(s_.transport, c_.address, s.feature,
+                            static_cast<uint16_t>(c_.new_value));
     if (!r.ok()) return s_.out.fail(r, "writing the " + s.name + " of the " + device());
     s_.out.result(
         device() + ": " + s.name + " set to " + to + " (was " + s.text(now) + "). " + s.after,
@@ -139,7 +140,7 @@ class DeviceCommands {
   int getAddress() {
     // A board with no address register at its own address answers there or not.
     if (!type_->addressReadableAt() && c_.address >= 0) {
-      const Result r = type_->answersAt(s_.bus, c_.address);
+      const Result r = type_->answersAt(s_.transport, c_.address);
       if (!r.ok())
         return s_.out.fail(r,
                            "asking the " + c_.type + " at address " + std::to_string(c_.address));
@@ -148,7 +149,7 @@ class DeviceCommands {
     }
     uint16_t address = 0;
     const int at = type_->addressReadableAt() && c_.address >= 0 ? c_.address : kBlind;
-    const Result r = type_->readAddress(s_.bus, at, &address);
+    const Result r = type_->readAddress(s_.transport, at, &address);
     const std::string how = at == kBlind ? " " + type_->addressPath() : "";
     if (!r.ok()) {
       Result told = r;
@@ -187,7 +188,7 @@ class DeviceCommands {
     const bool blind = at == kBlind;
     const std::string path = blind ? " " + type_->addressPath() : "";
     uint16_t current = 0;
-    const Result now = type_->readAddress(s_.bus, at, &current);
+    const Result now = type_->readAddress(s_.transport, at, &current);
     if (!now.ok())
       return s_.out.fail(now, "reading the " + c_.type + " address" + path +
                                   (blind ? " (only one board may be on the bus)" : ""));
@@ -207,9 +208,9 @@ class DeviceCommands {
                     (blind ? path + "? " + type_->addressPathWarning() : "?") +
                     (after.empty() ? "" : " " + after)))
       return s_.out.fail(kExitNotConfirmed, "not confirmed; nothing was changed");
-    const Result r = type_->writeAddress(s_.bus, at, static_cast<uint16_t>(c_.new_value));
+    const Result r = type_->writeAddress(s_.transport, at, static_cast<uint16_t>(c_.new_value));
     if (!r.ok()) return s_.out.fail(r, "writing the " + c_.type + " address" + path);
-    return addressChanged(from, type_->answersAt(s_.bus, c_.new_value).ok());
+    return addressChanged(from, type_->answersAt(s_.transport, c_.new_value).ok());
   }
 
   // The factory settings named are the descriptor's (core/device_types/<type>.h).
@@ -222,7 +223,7 @@ class DeviceCommands {
                     (blind ? type_->factoryResetPathWarning() : "") + " to factory settings: " +
                     factoryText(type.factory) + type_->factoryResetAlsoText() + "?"))
       return s_.out.fail(kExitNotConfirmed, "not confirmed; nothing was changed");
-    const Result r = type_->factoryReset(s_.bus, blind ? kBlind : c_.address);
+    const Result r = type_->factoryReset(s_.transport, blind ? kBlind : c_.address);
     if (!r.ok()) return s_.out.fail(r, "factory reset " + where);
     const std::string after =
         "factory settings restored (address " + std::to_string(type.factory.address) + ", " +
@@ -257,7 +258,7 @@ class DeviceCommands {
 
   int getLimits() {
     std::vector<uint16_t> regs;
-    const Result r = type_->readLimits(s_.bus, c_.address, &regs);
+    const Result r = type_->readLimits(s_.transport, c_.address, &regs);
     if (!r.ok()) return s_.out.fail(r, "reading the limits of the " + device());
     s_.out.result(device() + ", limits: " + limitsHuman(regs), fields().merge(limitsJson(regs)));
     return kExitOk;
@@ -267,7 +268,7 @@ class DeviceCommands {
   // register values before anything is written, then the device's read back must show them.
   int setLimits() {
     std::vector<uint16_t> before;
-    Result r = type_->readLimits(s_.bus, c_.address, &before);
+    Result r = type_->readLimits(s_.transport, c_.address, &before);
     if (!r.ok()) return s_.out.fail(r, "reading the limits of the " + device());
     std::vector<uint16_t> to = before;
     for (size_t i = 0; i < to.size() && i < c_.limits.size(); ++i)
@@ -286,7 +287,7 @@ class DeviceCommands {
     if (!s_.confirm("Change the limits of the " + device() + " from " + limitsHuman(before) +
                     " to " + limitsHuman(to) + "?"))
       return s_.out.fail(kExitNotConfirmed, "not confirmed; nothing was changed");
-    r = type_->writeLimits(s_.bus, c_.address, to);
+    r = type_->writeLimits(s_.transport, c_.address, to);
     if (!r.ok()) return s_.out.fail(r, "writing the limits of the " + device());
     s_.out.result(device() + ": limits set to " + limitsHuman(to) + " (was " + limitsHuman(before) +
                       "); read back",
@@ -295,7 +296,7 @@ class DeviceCommands {
   }
 
   int info() {
-    const Identity id = identifyDevice(s_.bus, static_cast<uint8_t>(c_.address));
+    const Identity id = identifyDevice(s_.transport, static_cast<uint8_t>(c_.address));
     if (!id.present)
       return s_.out.fail(kExitNotFound, "no device answers at address " +
                                             std::to_string(c_.address) +
@@ -304,7 +305,7 @@ class DeviceCommands {
     std::string human = "address " + std::to_string(c_.address) + ": " + id.type;
     if (const Commissioning* type = commissioningOf(id.type)) {
       InfoReport report;
-      const Result r = type->report(s_.bus, static_cast<uint8_t>(c_.address), &report);
+      const Result r = type->report(s_.transport, static_cast<uint8_t>(c_.address), &report);
       if (!r.ok()) return s_.out.fail(r, "reading the settings of the " + id.type);
       human += report.human;
       for (const auto& [key, value] : report.fields)

@@ -2,7 +2,7 @@
 #include <ostream>
 #include <set>
 
-#include "modbus_rtu_driver/core/link/make_transport.h"
+#include "modbus_rtu_driver/core/link/make_link.h"
 #include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/commissioning.h"
 #include "modbus_rtu_driver/tools/commission_session.h"
@@ -48,9 +48,9 @@ class Progress {
 
 // The coil read first: most boards answer it, and a silent address costs one read only. Then
 // each registered type's probe, in probe order (devices/commissioning.h).
-Identity identifyDevice(Transport& bus, uint8_t address) {
+Identity identifyDevice(Transport& transport, uint8_t address) {
   Identity id;
-  const Result presence = bus.execute(Request::readCoils(address, 0, 1));
+  const Result presence = transport.execute(Request::readCoils(address, 0, 1));
   if (presence.error == ErrorKind::kWrongAddress)
     id.note =
         "a reply from another address arrived late: some device answers slower than "
@@ -61,7 +61,7 @@ Identity identifyDevice(Transport& bus, uint8_t address) {
   bool unclear = false;
   std::string elsewhere;  // a board that answered for another address of its own
   for (const CommissioningType& t : commissioningTypes()) {
-    const Probe p = t.commissioning->probe(bus, address);
+    const Probe p = t.commissioning->probe(transport, address);
     unclear = unclear || p.unclear;
     if (p.kind == Probe::kYes) {
       id.present = true;
@@ -94,7 +94,7 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
     config.baud = cmd.bauds[i / cmd.parities.size()];
     config.parity = cmd.parities[i % cmd.parities.size()];
     const std::string line = lineName(config.baud, config.parity);
-    const std::unique_ptr<Link> owned = makeTransport(config);
+    const std::unique_ptr<Link> owned = makeLink(config);
     Link& link = *owned;
     std::string error;
     if (!link.connect(&error)) return out.fail(kExitBusError, error);

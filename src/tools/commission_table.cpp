@@ -48,7 +48,7 @@ class TableCommands {
   }
 
   int read() {
-    const Result r = s_.bus.execute(readRequest());
+    const Result r = s_.transport.execute(readRequest());
     if (!r.ok()) return s_.out.fail(r);
     std::vector<std::string> lines;
     for (size_t i = 0; i < r.values.size(); ++i)
@@ -68,7 +68,7 @@ class TableCommands {
     else
       req = one ? Request::writeSingleRegister(slave_, start, c_.values[0])
                 : Request::writeMultipleRegisters(slave_, start, c_.values);
-    const Result r = s_.bus.execute(req);
+    const Result r = s_.transport.execute(req);
     if (!r.ok()) return s_.out.fail(r);
     const int fc = static_cast<int>(req.function);
     const std::string span = tableName(c_.table) + (" " + std::to_string(c_.start)) +
@@ -113,7 +113,7 @@ class TableCommands {
     for (int n = 0; !s_.stop && (c_.polls == 0 || n < c_.polls); ++n) {
       if (n) pause(c_.interval);
       if (s_.stop) break;
-      const Result r = s_.bus.execute(readRequest());
+      const Result r = s_.transport.execute(readRequest());
       const double t = std::chrono::duration<double>(Steady::now() - t0).count();
       if (!r.ok()) {
         if (!failing) s_.out.note("read failed: " + r.message);  // once, not every poll

@@ -112,7 +112,7 @@ class LaunchFilesTest(unittest.TestCase):
         launch = up.roslaunch(log_dir, "roslaunch", "bus.launch", "config:=" + path,
                               "port:=" + link)
         spindle = []
-        sub = rospy.Subscriber("/modbus_bus/coils/spindle_ready", Bool,
+        sub = rospy.Subscriber("/modbus_bus/coil/spindle_ready", Bool,
                                lambda m: spindle.append(m.data))
         try:
             from modbus_rtu_driver.srv import SetRegisters
@@ -121,10 +121,10 @@ class LaunchFilesTest(unittest.TestCase):
                 if not launch.running():
                     raise AssertionError("roslaunch exited (%s):\n%s"
                                          % (launch.proc.returncode, launch.tail()))
-            res = up.call("/modbus_bus/set_holding_registers", SetRegisters, alive, 5, [42])
+            res = up.call("/modbus_bus/set_holding_register", SetRegisters, alive, 5, [42])
             self.assertTrue(res.success, res.message)
             wait_until(lambda: alive() or (spindle and spindle[-1]), 60,
-                       "coil 6 (spindle_ready) written by the DM500 on /modbus_bus/coils/")
+                       "coil 6 (spindle_ready) written by the DM500 on /modbus_bus/coil/")
             self.assertIsNotNone(dm500.wait_exit(30), "the DM500 script did not end")
             with open(report) as f:
                 text = f.read()

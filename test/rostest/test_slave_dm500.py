@@ -1,14 +1,18 @@
 #!/usr/bin/env python3
 """Slave role against the simulated DM500: the topics carry exactly what the master wrote, the
 services set what it reads back, out-of-range requests get exception 02, and frames for other
-ids or with bad CRCs never cost a valid request its answer (the master's script checks those)."""
+ids or with bad CRCs never cost a valid request its answer (the master's script checks those).
+The names are singular, as the YAML's tables; the plural names of earlier versions still work
+for one release, and each warns once naming its new name (docs/ros_api.md)."""
 import os
 import time
 import unittest
 
+import rosgraph
 import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray
+from rosgraph_msgs.msg import Log
 from std_msgs.msg import Bool, UInt16
 
 from modbus_rtu_driver.msg import WrittenCoils, WrittenRegisters
@@ -17,20 +21,51 @@ from modbus_rtu_driver.srv import SetBits, SetRegisters
 import helpers
 
 NS = "/cnc/"
+# Old (plural) name -> the name that replaced it.
+RENAMED = {NS + "written/coils": NS + "written/coil",
+           NS + "written/holding_registers": NS + "written/holding_register",
+           NS + "coils/spindle_ready": NS + "coil/spindle_ready",
+           NS + "holding_registers/job_number": NS + "holding_register/job_number",
+           NS + "set_coils": NS + "set_coil",
+           NS + "set_discrete_inputs": NS + "set_discrete_input",
+           NS + "set_holding_registers": NS + "set_holding_register",
+           NS + "set_input_registers": NS + "set_input_register"}
+
+
+def node_uri(name):
+    try:
+        return rosgraph.Master(rospy.get_name()).lookupNode(name)
+    except rosgraph.MasterError:
+        return None
+
+
+def writes(messages):
+    return [(m.address, list(getattr(m, "states", None) or getattr(m, "values"))) for m in messages]
 
 
 class SlaveDm500Test(unittest.TestCase):
     def test_dm500_session(self):
         rospy.init_node("test_slave_dm500")
-        coils, regs = [], []
-        subs = [rospy.Subscriber(NS + "written/coils", WrittenCoils, coils.append),
-                rospy.Subscriber(NS + "written/holding_registers", WrittenRegisters, regs.append)]
-        spindle = helpers.Latest(NS + "coils/spindle_ready", Bool)
-        job = helpers.Latest(NS + "holding_registers/job_number", UInt16)
-        set_coils = helpers.service(NS + "set_coils", SetBits)
-        set_inputs = helpers.service(NS + "set_discrete_inputs", SetBits)
-        set_holding = helpers.service(NS + "set_holding_registers", SetRegisters)
-        set_input_regs = helpers.service(NS + "set_input_registers", SetRegisters)
+        # The warnings of the old names reach this test on /rosout: listen before using them.
+        log = []
+        rosout = rospy.Subscriber("/rosout", Log,
+                                  lambda m: log.append(m.msg) if m.name == "/cnc" else None)
+        cnc = helpers.wait_until(lambda: node_uri("/cnc"), 20, "the node /cnc")
+        helpers.wait_until(lambda: rosout.impl.has_connection(cnc), 20, "/rosout from /cnc")
+        coils, regs, old_coils, old_regs = [], [], [], []
+        subs = [rospy.Subscriber(NS + "written/coil", WrittenCoils, coils.append),
+                rospy.Subscriber(NS + "written/holding_register", WrittenRegisters, regs.append),
+                rospy.Subscriber(NS + "written/coils", WrittenCoils, old_coils.append),
+                rospy.Subscriber(NS + "written/holding_registers", WrittenRegisters,
+                                 old_regs.append)]
+        spindle = helpers.Latest(NS + "coil/spindle_ready", Bool)
+        job = helpers.Latest(NS + "holding_register/job_number", UInt16)
+        old_spindle = helpers.Latest(NS + "coils/spindle_ready", Bool)
+        old_job = helpers.Latest(NS + "holding_registers/job_number", UInt16)
+        set_coils = helpers.service(NS + "set_coil", SetBits)
+        set_inputs = helpers.service(NS + "set_discrete_input", SetBits)
+        set_holding = helpers.service(NS + "set_holding_register", SetRegisters)
+        set_input_regs = helpers.service(NS + "set_input_register", SetRegisters)
 
         # Tell the master to start once the subscriptions are connected.
         helpers.wait_until(lambda: rospy.get_published_topics() and
@@ -77,6 +112,38 @@ class SlaveDm500Test(unittest.TestCase):
             report = f.read()
         self.assertIn(" 0 failed", report, report)
         self.assertNotIn("FAIL", report, report)
+
+        # The old names: the same messages, and services that set the same tables.
+        helpers.wait_until(lambda: writes(old_coils) == writes(coils) and
+                           writes(old_regs) == writes(regs), 10,
+                           "the same writes on the old topics (%s, %s)"
+                           % (writes(old_coils), writes(old_regs)))
+        self.assertTrue(old_spindle.wait(5, lambda m: m.data, "old spindle_ready true").data)
+        self.assertEqual(old_job.wait(5, lambda m: m.data == 0x0807, "old job_number").data,
+                         0x0807)
+        for name, srv_type, values in (("set_coils", SetBits, [True]),
+                                       ("set_discrete_inputs", SetBits, [True]),
+                                       ("set_holding_registers", SetRegisters, [7]),
+                                       ("set_input_registers", SetRegisters, [7])):
+            old = helpers.service(NS + name, srv_type)
+            for _ in range(2):
+                res = old(address=60, values=values)
+                self.assertTrue(res.success, res.message)
+        res = helpers.service(NS + "set_coils", SetBits)(address=64, values=[True])
+        self.assertFalse(res.success)  # the same checks as the new name
+        self.assertIn("coil 0-63", res.message)
+
+        # Each old name warned once, naming its new name; the new names never warn.
+        def warned(old):
+            return [m for m in log
+                    if m == "%s is deprecated, use %s; removed in the next release"
+                    % (old, RENAMED[old])]
+        helpers.wait_until(lambda: all(warned(old) for old in RENAMED), 10,
+                           "a warning for each old name (got: %s)" % log)
+        for old in RENAMED:
+            self.assertEqual(len(warned(old)), 1, "%s: %s" % (old, log))
+        self.assertEqual(len([m for m in log if "deprecated" in m]), len(RENAMED), log)
+        rosout.unregister()
 
         # The server counts a request after it has written the reply, and /diagnostics comes
         # once a second: the first message after the report may predate the last counts. Read

@@ -603,31 +603,31 @@ TEST(BusSchedulerStepMode, RunsOneThingPerStepOnTheCallersThread) {
     }
   } line;
   ManualClock clock;
-  BusScheduler bus(line, {}, clock);
-  bus.startStepping();
+  BusScheduler scheduler(line, {}, clock);
+  scheduler.startStepping();
   const auto start = clock.now();
-  bus.addPoll(
+  scheduler.addPoll(
       "a", 10.0, [](Transport& t) { return t.execute(Request::readCoils(1, 0, 1)); }, nullptr);
   Clock::time_point next{};
-  EXPECT_TRUE(bus.step(&next));  // the poll due now (the port is open)
-  EXPECT_FALSE(bus.step(&next));
+  EXPECT_TRUE(scheduler.step(&next));  // the poll due now (the port is open)
+  EXPECT_FALSE(scheduler.step(&next));
   EXPECT_EQ(next, start + 100ms);  // the next poll
   const std::thread::id caller = std::this_thread::get_id();
   std::thread::id ran_on;
-  auto done = bus.submit("a", [&](Transport& t) {
+  auto done = scheduler.submit("a", [&](Transport& t) {
     ran_on = std::this_thread::get_id();
     return t.execute(Request::writeSingleCoil(1, 0, true));
   });
   EXPECT_EQ(done.wait_for(0s), std::future_status::timeout);  // queued, not run
-  EXPECT_TRUE(bus.step(&next));
+  EXPECT_TRUE(scheduler.step(&next));
   ASSERT_EQ(done.wait_for(0s), std::future_status::ready);
   EXPECT_TRUE(done.get().ok());
   EXPECT_EQ(ran_on, caller);
   EXPECT_EQ(line.log, (std::vector<std::string>{"1r", "1w"}));
   clock.advanceTo(next);
-  EXPECT_TRUE(bus.step(&next));
+  EXPECT_TRUE(scheduler.step(&next));
   EXPECT_EQ(line.log.back(), "1r");
-  bus.stop();
-  EXPECT_FALSE(bus.step(&next));
+  scheduler.stop();
+  EXPECT_FALSE(scheduler.step(&next));
   EXPECT_EQ(next, Clock::time_point::max());
 }

@@ -333,18 +333,18 @@ class RelayTestCommissioning : public Commissioning {
   }
   std::string title() const override { return "the test relay"; }
   std::pair<int, int> baudCodes() const override { return {3, 5}; }  // 9600, 19200, 38400
-  Result readSetting(Transport& bus, int address, BoardFeature, uint16_t* v) const override {
-    Result r =
-        bus.execute(Request::readHoldingRegisters(static_cast<uint8_t>(address), kBaudRegister, 1));
+  Result readSetting(Transport& transport, int address, BoardFeature, uint16_t* v) const override {
+    Result r = transport.execute(
+        Request::readHoldingRegisters(static_cast<uint8_t>(address), kBaudRegister, 1));
     if (r.ok()) *v = r.values[0];
     return r;
   }
-  Result writeSetting(Transport& bus, int address, BoardFeature, uint16_t v) const override {
-    return bus.execute(
+  Result writeSetting(Transport& transport, int address, BoardFeature, uint16_t v) const override {
+    return transport.execute(
         Request::writeSingleRegister(static_cast<uint8_t>(address), kBaudRegister, v));
   }
-  Result factoryReset(Transport& bus, int address) const override {
-    return bus.execute(
+  Result factoryReset(Transport& transport, int address) const override {
+    return transport.execute(
         Request::writeSingleRegister(static_cast<uint8_t>(address), kResetRegister, 1));
   }
 };

@@ -37,25 +37,25 @@ class OneDeviceLine : public Transport {
 };
 
 struct Share {
-  Share() : bus(line) {
+  Share() : scheduler(line) {
     ShareConfig config;
     config.enabled = true;
     config.server.port = 0;
-    gateway = std::make_unique<ShareGateway>(bus, config);
+    gateway = std::make_unique<ShareGateway>(scheduler, config);
   }
   ~Share() {
-    bus.stop();  // pending answers call into the gateway: stop the bus first
+    scheduler.stop();  // pending answers call into the gateway: stop the bus first
     gateway.reset();
   }
   bool start() {
-    bus.start();
+    scheduler.start();
     std::string error;
     return gateway->start(&error);
   }
   std::string port() const { return "tcp://127.0.0.1:" + std::to_string(gateway->server().port()); }
 
   OneDeviceLine line;
-  BusScheduler bus;
+  BusScheduler scheduler;
   std::unique_ptr<ShareGateway> gateway;
 };
 

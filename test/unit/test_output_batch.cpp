@@ -124,22 +124,22 @@ TEST(OutputBatch, ARequestRefusedWhileThePortIsGoneIsNeverSentLater) {
   BusScheduler::Options o;
   o.reconnect_initial = 0.01;
   o.reconnect_max = 0.01;
-  BusScheduler bus(port, o);
-  bus.addDevice("relays");
-  bus.start();
+  BusScheduler scheduler(port, o);
+  scheduler.addDevice("relays");
+  scheduler.start();
   auto job = [&](const std::shared_ptr<OutputBatch::Entry>& e) {
     return [&, e](Transport& t) { return batch.complete(*board, t, e); };
   };
-  const Result refused = bus.submit("relays", job(batch.add(*board, {3}, {true}))).get();
+  const Result refused = scheduler.submit("relays", job(batch.add(*board, {3}, {true}))).get();
   EXPECT_EQ(refused.error, ErrorKind::kNotConnected) << refused.message;
 
   port.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(255, 7, true))));
   port.plugged_ = true;
-  ASSERT_TRUE(waitFor([&] { return bus.connected(); }, 10.0));
-  const Result later = bus.submit("relays", job(batch.add(*board, {7}, {true}))).get();
+  ASSERT_TRUE(waitFor([&] { return scheduler.connected(); }, 10.0));
+  const Result later = scheduler.submit("relays", job(batch.add(*board, {7}, {true}))).get();
   EXPECT_TRUE(later.ok()) << later.message;
   EXPECT_EQ(later.message, "");  // not "merged with 1 other request(s)"
-  bus.stop();
+  scheduler.stop();
   EXPECT_TRUE(port.usedUp());
   EXPECT_EQ(port.mismatches(), "");  // only channel 7 went out: FC05, not FC15 over 3-7
 }

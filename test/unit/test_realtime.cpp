@@ -51,16 +51,16 @@ TEST(Realtime, TheSchedulerRunsTheHookOnItsThreadBeforeAnyJob) {
     hook_thread = std::this_thread::get_id();
     hook_ran = true;
   };
-  BusScheduler bus(transport, options);
-  bus.addDevice("d");
-  bus.start();
-  auto queued = bus.submit("d", [&](Transport& t) {
+  BusScheduler scheduler(transport, options);
+  scheduler.addDevice("d");
+  scheduler.start();
+  auto queued = scheduler.submit("d", [&](Transport& t) {
     hook_ran_before_job = hook_ran && std::this_thread::get_id() == hook_thread;
     return t.execute(Request::readCoils(1, 0, 1));
   });
   const Result r = queued.get();
   ASSERT_TRUE(r.ok()) << r.message;
-  bus.stop();
+  scheduler.stop();
   EXPECT_TRUE(hook_ran_before_job);
   EXPECT_NE(hook_thread, std::this_thread::get_id());
 }

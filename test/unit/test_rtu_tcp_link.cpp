@@ -3,7 +3,7 @@
 // replies, a dropped connection and the reconnect.
 #include <gtest/gtest.h>
 
-#include "modbus_rtu_driver/core/link/make_transport.h"
+#include "modbus_rtu_driver/core/link/make_link.h"
 #include "modbus_rtu_driver/core/link/tcp_link.h"
 #include "tcp_test_server.h"
 #include "wait_for.h"
@@ -32,11 +32,11 @@ Bytes holdingReply(const Request& r) {
 TEST(RtuOverTcpLink, FactoryChoosesByPortForm) {
   LinkConfig c;
   c.port = "rtu+tcp://gw:502";
-  EXPECT_EQ(makeTransport(c)->kind(), PortKind::kRtuOverTcp);
+  EXPECT_EQ(makeLink(c)->kind(), PortKind::kRtuOverTcp);
   c.port = "tcp://gw:502";
-  EXPECT_EQ(makeTransport(c)->kind(), PortKind::kModbusTcp);
+  EXPECT_EQ(makeLink(c)->kind(), PortKind::kModbusTcp);
   c.port = "/dev/ttyUSB0";
-  EXPECT_EQ(makeTransport(c)->kind(), PortKind::kSerial);
+  EXPECT_EQ(makeLink(c)->kind(), PortKind::kSerial);
 }
 
 TEST(RtuOverTcpLink, SendsTheRtuFrameByteForByteAndReadsTheReply) {

@@ -53,7 +53,7 @@ class DeviceFailsafe {
  public:
   using ReportSink = std::function<void(const FailsafeReport&)>;
 
-  DeviceFailsafe(Device& device, BusScheduler& bus, Clock& clock = Clock::steady());
+  DeviceFailsafe(Device& device, BusScheduler& scheduler, Clock& clock = Clock::steady());
   DeviceFailsafe(const DeviceFailsafe&) = delete;
   DeviceFailsafe& operator=(const DeviceFailsafe&) = delete;
 
@@ -126,7 +126,7 @@ class DeviceFailsafe {
   std::string channelNames(const std::vector<uint8_t>& channels) const;
 
   Device& device_;
-  BusScheduler& bus_;
+  BusScheduler& scheduler_;
   ChannelIntents intents_;
   std::unique_ptr<Watchdog> heartbeat_;
   const Watchdog* bus_heartbeat_ = nullptr;

@@ -14,13 +14,13 @@ using AdapterFactory = std::unique_ptr<DeviceAdapter> (*)(std::shared_ptr<Device
 TypeRegistry<AdapterFactory>& adapterClasses();
 // The factory of an adapter built from the device, the bus and the device's node handle.
 template <typename T>
-std::unique_ptr<DeviceAdapter> makeAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
+std::unique_ptr<DeviceAdapter> makeAdapter(std::shared_ptr<Device> device, BusScheduler& scheduler,
                                            const ros::NodeHandle& node) {
-  return std::make_unique<T>(std::move(device), bus, node);
+  return std::make_unique<T>(std::move(device), scheduler, node);
 }
 
 // Null for a type without an adapter.
-std::unique_ptr<DeviceAdapter> createAdapter(std::shared_ptr<Device> device, BusScheduler& bus,
-                                             const ros::NodeHandle& node);
+std::unique_ptr<DeviceAdapter> createAdapter(std::shared_ptr<Device> device,
+                                             BusScheduler& scheduler, const ros::NodeHandle& node);
 
 }  // namespace modbus_rtu_driver

@@ -65,7 +65,7 @@ class BusNode {
   ros::NodeHandle nh_;
   BusConfig config_;
   std::unique_ptr<Link> link_;  // serial, Modbus TCP or RTU over TCP (by `port`)
-  std::unique_ptr<BusScheduler> bus_;
+  std::unique_ptr<BusScheduler> scheduler_;
   std::vector<std::unique_ptr<DeviceAdapter>> adapters_;
   // wire_log's writes, and with realtime_priority the bus thread's publishing, run here; none
   // without either (stopped after the bus, before the adapters go).

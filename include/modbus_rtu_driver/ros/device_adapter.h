@@ -33,7 +33,8 @@ namespace modbus_rtu_driver {
 
 class DeviceAdapter {
  public:
-  DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& bus, const ros::NodeHandle& node);
+  DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& scheduler,
+                const ros::NodeHandle& node);
   virtual ~DeviceAdapter() = default;
   DeviceAdapter(const DeviceAdapter&) = delete;
   DeviceAdapter& operator=(const DeviceAdapter&) = delete;
@@ -119,7 +120,7 @@ class DeviceAdapter {
   // A PWM run stopped (confirmed): the output shows the channel's coil again.
   void timedCommandStopped(uint8_t channel) { failsafe_.timedCommandStopped(channel); }
   // Whether the last poll failed with the device now offline (its states are stale).
-  bool offline() const { return !bus_.health(device_->name()).online; }
+  bool offline() const { return !scheduler_.health(device_->name()).online; }
   // Service writes of outputs: checked, then merged with others queued for this device.
   Result writeOutputs(const std::vector<uint8_t>& channels, const std::vector<bool>& states);
   // Bus thread: the outcome of a batch entry (service write or command), written with every
@@ -129,7 +130,7 @@ class DeviceAdapter {
   std::string answer(const Result& result, const std::string& what) const;
 
   std::shared_ptr<Device> device_;
-  BusScheduler& bus_;
+  BusScheduler& scheduler_;
   ros::NodeHandle nh_;  // ~/<device>
   DigitalStatesPublisher::Policy publish_policy_;
 

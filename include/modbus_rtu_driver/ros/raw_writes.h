@@ -20,7 +20,7 @@ class RawWrites {
  public:
   // `devices`: address -> device name of the configured devices (their health applies).
   // `wrote(slave)`: on the bus thread, a raw write to `slave` was confirmed.
-  RawWrites(ros::NodeHandle& nh, BusScheduler& bus, bool allowed,
+  RawWrites(ros::NodeHandle& nh, BusScheduler& scheduler, bool allowed,
             std::map<uint8_t, std::string> devices, std::function<void(const Request&)> wrote);
 
  private:
@@ -30,7 +30,7 @@ class RawWrites {
   std::string refusal(uint8_t slave, uint16_t address, size_t count, size_t max) const;
   Result run(const Request& request);
 
-  BusScheduler& bus_;
+  BusScheduler& scheduler_;
   bool allowed_;
   std::map<uint8_t, std::string> devices_;
   std::function<void(const Request&)> wrote_;

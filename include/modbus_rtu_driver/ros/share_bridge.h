@@ -16,7 +16,7 @@ namespace modbus_rtu_driver {
 class ShareBridge {
  public:
   // `wrote(slave)`: on the bus thread, a client's write to `slave` was confirmed.
-  ShareBridge(BusScheduler& bus, const BusConfig& config,
+  ShareBridge(BusScheduler& scheduler, const BusConfig& config,
               std::function<void(const Request&)> wrote);
   // Listens; false with the reason, naming the key to change (share/listen when the address is
   // in use).

@@ -30,7 +30,7 @@ class SimulatorTcp {
 
  private:
   std::unique_ptr<RtuLink> link_;
-  std::unique_ptr<BusScheduler> bus_;
+  std::unique_ptr<BusScheduler> scheduler_;
   std::unique_ptr<ShareGateway> gateway_;
 };
 

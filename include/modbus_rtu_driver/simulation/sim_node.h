@@ -66,7 +66,7 @@ class SimNode {
   void beginStop();
   bool stopWritesDone() const;
 
-  BusScheduler& bus() { return *bus_; }
+  BusScheduler& scheduler() { return *scheduler_; }
   // The deadline timer's period (a tenth of the shortest timeout, at most 0.5 s; 0: no timer).
   double checkPeriod() const { return check_period_; }
   void checkDeadlines();                                // BusNode::checkDeadlines
@@ -123,7 +123,7 @@ class SimNode {
   SimNodeOptions options_;
   Clock& clock_;
   SimNodeHooks hooks_;
-  std::unique_ptr<BusScheduler> bus_;
+  std::unique_ptr<BusScheduler> scheduler_;
   std::vector<std::unique_ptr<Entry>> entries_;
   std::unique_ptr<Watchdog> heartbeat_;
   double check_period_ = 0;

@@ -15,7 +15,7 @@ namespace modbus_rtu_driver {
 
 struct Session {
   const CommissionCommand& cmd;
-  Transport& bus;  // the port at --baud / --parity
+  Transport& transport;  // the port at --baud / --parity
   Output& out;
   std::istream& in;
   const std::atomic<bool>& stop;
@@ -32,7 +32,7 @@ struct Identity {
       type;  // a registered type's name (devices/commissioning.h), or "unknown modbus device"
   std::string note;  // why an answer was not taken as a device there
 };
-Identity identifyDevice(Transport& bus, uint8_t address);
+Identity identifyDevice(Transport& transport, uint8_t address);
 
 // get/set-address, -baud, -parity, -return-delay, -save, factory-reset, info.
 int runDeviceCommand(Session& session);

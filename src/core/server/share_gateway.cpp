@@ -17,9 +17,9 @@ Bytes shareReplyFor(const Request& request, const Result& result) {
                          shareExceptionFor(result));
 }
 
-ShareGateway::ShareGateway(BusScheduler& bus, ShareConfig config,
+ShareGateway::ShareGateway(BusScheduler& scheduler, ShareConfig config,
                            std::function<std::string(uint8_t)> device_of)
-    : bus_(bus), config_(std::move(config)), device_of_(std::move(device_of)) {
+    : scheduler_(scheduler), config_(std::move(config)), device_of_(std::move(device_of)) {
   // The server refuses writes before decoding them: a malformed write gets 01 too, not the
   // 02 / 03 its fields would earn (docs/share.md).
   config_.server.refuse_writes = config_.read_only;
@@ -43,7 +43,7 @@ bool ShareGateway::start(std::string* error) {
                " s is outside 0-1 s";
     return false;
   }
-  bus_.openShared();
+  scheduler_.openShared();
   return server_->start(error);
 }
 
@@ -51,7 +51,7 @@ bool ShareGateway::start(std::string* error) {
 // before its safe writes at shutdown, and a client's write that ran after them would undo them.
 void ShareGateway::stop() {
   server_->stop();
-  bus_.closeShared("the share stopped (the node is stopping)");
+  scheduler_.closeShared("the share stopped (the node is stopping)");
 }
 
 // On the server's thread: never waits for the bus.
@@ -65,7 +65,7 @@ void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
   const std::string device = device_of_ ? device_of_(request.slave) : "";
   const auto turnaround = std::chrono::duration<double>(
       sent.slave == kBroadcastAddress ? config_.broadcast_turnaround : 0.0);
-  bus_.submitShared(
+  scheduler_.submitShared(
       device,
       [this, sent, turnaround](Transport& t) {
         Result r = t.execute(sent);

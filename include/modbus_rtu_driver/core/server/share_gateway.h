@@ -49,7 +49,7 @@ class ShareGateway {
   // `device_of(slave)` names the configured device at that address ("" when none): its health
   // counts the shared requests. The bus must stop before the gateway goes (pending answers
   // call back into it).
-  ShareGateway(BusScheduler& bus, ShareConfig config,
+  ShareGateway(BusScheduler& scheduler, ShareConfig config,
                std::function<std::string(uint8_t)> device_of = nullptr);
   ~ShareGateway();
   bool start(std::string* error);
@@ -66,7 +66,7 @@ class ShareGateway {
  private:
   void handle(const ModbusTcpServer::Incoming& in);
 
-  BusScheduler& bus_;
+  BusScheduler& scheduler_;
   ShareConfig config_;
   std::function<std::string(uint8_t)> device_of_;
   std::function<void(const Request&)> wrote_;

@@ -1,11 +1,11 @@
-#include "modbus_rtu_driver/core/link/make_transport.h"
+#include "modbus_rtu_driver/core/link/make_link.h"
 
 #include "modbus_rtu_driver/core/link/rtu_link.h"
 #include "modbus_rtu_driver/core/link/tcp_link.h"
 
 namespace modbus_rtu_driver {
 
-std::unique_ptr<Link> makeTransport(const LinkConfig& config) {
+std::unique_ptr<Link> makeLink(const LinkConfig& config) {
   PortAddress address;
   parsePortAddress(config.port, &address, nullptr);
   switch (address.kind) {

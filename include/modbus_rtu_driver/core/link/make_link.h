@@ -8,6 +8,6 @@
 
 namespace modbus_rtu_driver {
 
-std::unique_ptr<Link> makeTransport(const LinkConfig& config);
+std::unique_ptr<Link> makeLink(const LinkConfig& config);
 
 }  // namespace modbus_rtu_driver
