@@ -16,6 +16,9 @@ CPU is utime + stime from /proc/<pid>/stat over the same window of --seconds for
 with no calls in it; the calls come after the window. A poll rate is the 'polls ok' count of
 the node's /diagnostics over that window (from the last report before it to the first after
 it), by the reports' own stamps.
+
+CSV row (medians over the runs): multi_bus, buses, CPU per node mean, max, all nodes [% of one
+core], the lowest bus's polls held [%], SetBool p50, p95, max [s], all simulators' CPU [%].
 """
 import argparse
 import os
