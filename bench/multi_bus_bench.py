@@ -60,6 +60,15 @@ class Bus:
         self.sim = subprocess.Popen(
             [node_bench.executable("modbus_rtu_simulator"), "--config", sim_config, "--link",
              self.link] + (["--pace"] if pace else []), stdout=subprocess.PIPE, text=True)
+        self.node = None
+        try:
+            self._start_node(folder, rate)
+        except BaseException:
+            self.stop()  # this bus's simulator too: the caller only stops the buses it holds
+            raise
+        self.service = self.node_name + "/relays/out0/set"
+
+    def _start_node(self, folder, rate):
         while True:
             line = self.sim.stdout.readline()
             if not line:
@@ -75,21 +84,29 @@ class Bus:
             self.node = subprocess.Popen(
                 [node_bench.executable("modbus_rtu_bus"), "__name:=" + NODE,
                  "__ns:=" + self.namespace], stdout=log, stderr=subprocess.STDOUT)
-        self.service = self.node_name + "/relays/out0/set"
 
-    def wait_ready(self):
-        try:
-            rospy.wait_for_service(self.service, 30)
-        except rospy.ROSException:
-            with open(self.log) as f:
-                sys.stderr.write(f.read())
-            raise
+    def wait_ready(self, timeout=30.0):
+        """Until the node's service is up; raises with the node's log when it is not within
+        TIMEOUT or the node has exited."""
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                rospy.wait_for_service(self.service, 0.5)
+                return
+            except rospy.ROSException:
+                if self.node.poll() is not None or time.monotonic() > deadline:
+                    with open(self.log) as f:
+                        sys.stderr.write(f.read())
+                    raise RuntimeError("%s: no %s (node %s)" % (
+                        self.namespace, self.service, "exited with %d" % self.node.returncode
+                        if self.node.returncode is not None else "still running"))
 
     def stop(self):
-        for proc in (self.node, self.sim):
+        procs = [p for p in (self.node, self.sim) if p is not None]
+        for proc in procs:
             if proc.poll() is None:
                 proc.terminate()
-        for proc in (self.node, self.sim):
+        for proc in procs:
             try:
                 proc.wait(20)
             except subprocess.TimeoutExpired:
