@@ -6,11 +6,14 @@
 # modbus_rtu_wakeup_probe, the machine's share), the node's latency and CPU use against the CPU
 # a bare thread waking as often costs (bench/node_bench.py, its own
 # rosmaster), the latency of a request through the node's Modbus TCP share
-# (bench/share_bench.py) and where the node's CPU goes, from perf's samples
-# (bench/profile_node.py). Each node figure is the median (lowest-highest) of 5 runs. Writes
+# (bench/share_bench.py), where the node's CPU goes, from perf's samples
+# (bench/profile_node.py), and 1, 2, 4 and 8 buses on one machine, a node and a simulator each
+# (bench/multi_bus_bench.py: CPU per node and in all, polls held, SetBool latency). Each node
+# figure is the median (lowest-highest) of 5 runs (3 for the buses' rows). Writes
 # bench/results.md and bench/results.csv. Usage: scripts/benchmark.sh [SECONDS_PER_CELL]
-#   scripts/benchmark.sh --smoke DIR   the test command's smoke run (about 90 s, the workspace
-#   built): every benchmark program with the least work it takes, its tables and CSV into DIR,
+#   scripts/benchmark.sh --smoke DIR   the test command's smoke run (about 100 s, the workspace
+#   built): every benchmark program with the least work it takes (1 and 2 buses for
+#   multi_bus_bench.py), its tables and CSV into DIR,
 #   one JUnit case per program in DIR/bench_smoke.xml, failed when it exits nonzero or prints no
 #   table. No figure is asserted: it proves that the benchmark still runs to its end.
 source "$(dirname "$0")/common.sh"
@@ -42,6 +45,8 @@ if [ "${1:-}" = "--smoke" ]; then
     --cpu-seconds 1 --bauds 115200
   smoke share_bench /usr/bin/python3 "$REPO/bench/share_bench.py" --requests 20 --bauds 115200
   smoke profile_node /usr/bin/python3 "$REPO/bench/profile_node.py" --seconds 2
+  smoke multi_bus_bench /usr/bin/python3 "$REPO/bench/multi_bus_bench.py" --buses 1,2 \
+    --seconds 2 --settle 1 --calls 10 --repeats 1
   exec /usr/bin/python3 "$REPO/scripts/junit.py" "$out/bench_smoke.xml" bench_smoke "${cases[@]}"
 fi
 install_deps
@@ -58,4 +63,7 @@ rm -f "$REPO/bench/results.csv"
     --csv "$REPO/bench/results.csv" 2> >(grep -v "^modbus_rtu_simulator\|wait_for_service" >&2)
   /usr/bin/python3 "$REPO/bench/profile_node.py" --seconds 20 \
     --csv "$REPO/bench/results.csv" 2> >(grep -v "^modbus_rtu_simulator\|wait_for_service" >&2)
+  /usr/bin/python3 "$REPO/bench/multi_bus_bench.py" --buses 1,2,4,8 --seconds 10 --calls 300 \
+    --repeats 3 --csv "$REPO/bench/results.csv" \
+    2> >(grep -v "^modbus_rtu_simulator\|wait_for_service" >&2)
 } | tee "$REPO/bench/results.md"
