@@ -68,7 +68,7 @@ const std::vector<SimInvariant>& simInvariants() {
 
 const std::set<std::string>& simKnownOpen() {
   // I4: share_write_lost_answer_then_restore; I5: restore_left_out_pwm_channel;
-  // I6: lc_restart_after_stop38_fixes (docs/simulation.md, "Known open defects").
+  // I6: ld_restart_after_stop38_fixes (docs/simulation.md, "Known open defects").
   static const std::set<std::string> known = {"I4", "I5", "I6"};
   return known;
 }
@@ -219,6 +219,7 @@ struct DevModel {
   std::optional<TP> cause_at;  // I4: the newest thing that may make the node see a restart
   bool cause_pending = false;  // ... not yet followed by a restart report
   TP last_poll_at{};           // the end of its newest good poll
+  TP prev_poll_at{};           // ... and of the one before it
   TP reachable_since{};        // no fault, no power cycle, port open, node running since
   uint64_t polls_started = 0;
   uint64_t poll_running = 0;  // the sequence number of the poll running now
@@ -800,6 +801,7 @@ void World::onPolled(const std::string& device, const Result& r) {
   // writes computed from here on have that reason (found states included).
   if (m.unanswered) m.cause_at = clock_.now();
   m.unanswered = false;
+  m.prev_poll_at = m.last_poll_at;
   m.last_poll_at = clock_.now();
 }
 
@@ -829,9 +831,11 @@ void World::onReport(const FailsafeReport& r) {
   std::vector<int> chs;
   for (const std::string& name : r.channels) chs.push_back(name[3] - '0');  // out0..out7
   if (r.trigger == "restart") {
-    // I6 (docs:34-35, 66-74): the outputs changed only if something changed them.
+    // I6 (docs:34-35, 66-74): the outputs changed only if something changed them. A change in
+    // the window of a justified one (a flash's end) may be seen by any later poll: only a good
+    // poll after the window that showed nothing closes it (the port may be lost meanwhile).
     if (r.reason.find("changed with no command") != std::string::npos && !m.justified &&
-        now >= m.justified_until)
+        m.prev_poll_at >= m.justified_until)
       fail("I6", std::string(kNames[d]) + ": restart reported (" + r.reason +
                      ") though nothing changed its outputs without a confirmed command");
     // docs:34, 90-92: the restart is what the poll that saw it showed; on_restart's writes may

@@ -3,8 +3,8 @@
 // clients of the node's share), then polls; polls run at their device's rate, earliest due
 // first, and a device that stops answering is polled with backoff so it cannot stall the others.
 // Writes cannot stop the polls: a poll overdue by a whole period goes before the next queued job
-// (unless its device has one queued), one such poll between two jobs (state topics, restart detection and owed safe writes all wait
-// for polls; a queued write waits at most that one poll).
+// (unless its device has one queued), one such poll between two jobs (state topics, restart
+// detection and owed safe writes all wait for polls; a queued write waits at most that one poll).
 // Time comes from a Clock (the real steady clock unless one is given; tests use a ManualClock).
 #pragma once
 
