@@ -236,11 +236,32 @@ void DeviceFailsafe::timedCommandDone(const TimedIntent& intent, const Result& r
   // Not compared and not restored until its end; the first poll after it gives the channel's
   // level, taken as found (docs/failsafe.md, "A command whose answer was lost").
   if (!answerLost(result.error) && result.error != ErrorKind::kIo) return;
+  adoptAfterLost(intent);
+  timedMaybeChanged();
+}
+
+void DeviceFailsafe::adoptAfterLost(const TimedIntent& intent) {
   const double until = intent.seconds < 0
                            ? 0.0
                            : intent.seconds * (1.0 + ChannelIntents::kEndSlackFraction) +
                                  ChannelIntents::kEndSlackSeconds;
   intents_.adoptNextPoll(intent.channel, CommandSource::kFound, until);
+}
+
+void DeviceFailsafe::externalWrite(const Request& request, const Result& result,
+                                   CommandSource source) {
+  if (result.ok())
+    externalWriteConfirmed(request, source);
+  else if (answerLost(result.error) || result.error == ErrorKind::kIo)
+    externalWriteLost(request);
+}
+
+void DeviceFailsafe::externalWriteLost(const Request& request) {
+  for (uint8_t ch : device_.outputsWrittenBy(request).channels)
+    intents_.adoptNextPoll(ch, CommandSource::kFound);
+  for (const TimedIntent& t : device_.timedWrittenBy(request)) adoptAfterLost(t);
+  for (uint8_t ch : device_.timedStoppedBy(request))
+    intents_.adoptNextPoll(ch, CommandSource::kFound);
   timedMaybeChanged();
 }
 
@@ -251,7 +272,7 @@ void DeviceFailsafe::timedCommandStopped(uint8_t channel) {
   timedMaybeChanged();
 }
 
-void DeviceFailsafe::externalWrite(const Request& request, CommandSource source) {
+void DeviceFailsafe::externalWriteConfirmed(const Request& request, CommandSource source) {
   device_.noteCarriedWrite(request);  // first: what follows reads the device's state now
   const OutputTargets set = device_.outputsWrittenBy(request);
   // A coil write on a channel the device runs a PWM on does not stop the run (the LD58A08

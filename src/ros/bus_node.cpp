@@ -86,10 +86,10 @@ std::vector<DeviceAdapter*> BusNode::answeringFirst() const {
   return order;
 }
 
-void BusNode::externalWrite(const Request& request, CommandSource source) {
+void BusNode::externalWrite(const Request& request, const Result& result, CommandSource source) {
   for (auto& a : adapters_)
     if (request.slave == kBroadcastAddress || a->address() == request.slave)
-      a->externalWrite(request, source);
+      a->externalWrite(request, result, source);
 }
 
 void BusNode::shutdown() {
@@ -175,9 +175,10 @@ bool BusNode::start() {
   std::map<uint8_t, std::string> by_address;
   for (const DeviceConfig& dc : config_.devices)
     by_address[static_cast<uint8_t>(dc.address)] = dc.name;
-  raw_writes_ = std::make_unique<RawWrites>(
-      nh_, *scheduler_, config_.allow_raw_writes, by_address,
-      [this](const Request& r) { externalWrite(r, CommandSource::kRaw); });
+  raw_writes_ = std::make_unique<RawWrites>(nh_, *scheduler_, config_.allow_raw_writes, by_address,
+                                            [this](const Request& r, const Result& done) {
+                                              externalWrite(r, done, CommandSource::kRaw);
+                                            });
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>();
   diagnostics_->setHardwareID(config_.link.port);
@@ -213,9 +214,10 @@ bool BusNode::start() {
     a->start();
   }
   if (config_.share.enabled) {
-    share_ = std::make_unique<ShareBridge>(*scheduler_, config_, [this](const Request& r) {
-      externalWrite(r, CommandSource::kShare);
-    });
+    share_ = std::make_unique<ShareBridge>(*scheduler_, config_,
+                                           [this](const Request& r, const Result& done) {
+                                             externalWrite(r, done, CommandSource::kShare);
+                                           });
     if (!share_->start(&error)) {
       ROS_FATAL("%s", error.c_str());  // names the share's key
       return false;

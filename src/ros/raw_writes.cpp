@@ -4,7 +4,7 @@ namespace modbus_rtu_driver {
 
 RawWrites::RawWrites(ros::NodeHandle& nh, BusScheduler& scheduler, bool allowed,
                      std::map<uint8_t, std::string> devices,
-                     std::function<void(const Request&)> wrote)
+                     std::function<void(const Request&, const Result&)> wrote)
     : scheduler_(scheduler),
       allowed_(allowed),
       devices_(std::move(devices)),
@@ -38,7 +38,7 @@ Result RawWrites::run(const Request& request) {
               [this, sent = forwarded(request)](Transport& t) {
                 // Sent once: a raw write may start something (an LC flash through FC16).
                 Result r = t.execute(sent);
-                if (r.ok() && wrote_) wrote_(sent);
+                if (wrote_) wrote_(sent, r);
                 return r;
               })
       .get();

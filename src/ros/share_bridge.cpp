@@ -7,7 +7,7 @@
 namespace modbus_rtu_driver {
 
 ShareBridge::ShareBridge(BusScheduler& scheduler, const BusConfig& config,
-                         std::function<void(const Request&)> wrote)
+                         std::function<void(const Request&, const Result&)> wrote)
     : config_(config.share) {
   std::map<uint8_t, std::string> device_at;
   for (const DeviceConfig& d : config.devices) device_at[static_cast<uint8_t>(d.address)] = d.name;
@@ -15,7 +15,7 @@ ShareBridge::ShareBridge(BusScheduler& scheduler, const BusConfig& config,
     auto it = device_at.find(slave);
     return it == device_at.end() ? std::string() : it->second;
   });
-  gateway_->onWriteConfirmed(std::move(wrote));
+  gateway_->onWriteDone(std::move(wrote));
 }
 
 // Errors name the key to change: a second bus left on the default listen address (1502) is the

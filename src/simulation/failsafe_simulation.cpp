@@ -67,7 +67,7 @@ const std::vector<SimInvariant>& simInvariants() {
 }
 
 const std::set<std::string>& simKnownOpen() {
-  // I4: share_write_lost_answer_then_restore; I5: restore_left_out_pwm_channel;
+  // I4: relays_restore_after_stop38_fixes; I5: restore_left_out_pwm_channel;
   // I6: ld_restart_after_stop38_fixes (docs/simulation.md, "Known open defects").
   static const std::set<std::string> known = {"I4", "I5", "I6"};
   return known;
@@ -1066,11 +1066,12 @@ void World::doCommandStep(const SimStep& s) {
       c.deadline = clock_.now() + dur(timeout);
     else
       c.deadline.reset();
-    pending_.push_back(node_->command(op("command").id, dn, ch, st, [this, outd](const Result& r) {
-      // The merged write's channels come through onWritten; a lost answer leaves them unknown.
-      (void)r;
-      (void)outd;
-    }));
+    pending_.push_back(
+        node_->command(op("command").id, dn, ch, st, [this, outd, ch](const Result& r) {
+          // The merged write's channels come through onWritten; a lost answer leaves the channel
+          // unknown until the next poll (docs:92-94: a service's or topic's command alike).
+          if (answerLost(r.error)) unknownIntent(outd, ch);
+        }));
   } else if (k == "pulse") {
     const bool st = arg(2) != 0;
     const double seconds = (1 + arg(3) % 40) / 10.0;

@@ -322,12 +322,12 @@ std::future<Result> SimNode::stopPwm(uint64_t op, const std::string& device, uin
   });
 }
 
-void SimNode::externalWrite(const Request& request, CommandSource source) {
-  // BusNode::externalWrite.
+void SimNode::externalWrite(const Request& request, const Result& result, CommandSource source) {
+  // BusNode::externalWrite and DeviceAdapter::externalWrite.
   for (auto& e : entries_)
     if (e->failsafe &&
         (request.slave == kBroadcastAddress || e->device->address() == request.slave))
-      e->failsafe->externalWrite(request, source);
+      e->failsafe->externalWrite(request, result, source);
 }
 
 std::future<Result> SimNode::share(uint64_t op, const Request& request, Done done) {
@@ -346,7 +346,7 @@ std::future<Result> SimNode::share(uint64_t op, const Request& request, Done don
         current_op_ = op;
         Result r = t.execute(sent);
         current_op_ = outer;
-        if (r.ok() && !isReadFunction(sent.function)) externalWrite(sent, CommandSource::kShare);
+        if (!isReadFunction(sent.function)) externalWrite(sent, r, CommandSource::kShare);
         if (done) done(r);
         return r;
       },
@@ -363,7 +363,7 @@ std::future<Result> SimNode::raw(uint64_t op, const Request& request, Done done)
     if (e->device->address() == request.slave) owner = e->device->name();
   return runOp(op, owner, std::move(done), [this, sent = forwarded(request)](Transport& t) {
     Result r = t.execute(sent);
-    if (r.ok()) externalWrite(sent, CommandSource::kRaw);
+    externalWrite(sent, r, CommandSource::kRaw);
     return r;
   });
 }

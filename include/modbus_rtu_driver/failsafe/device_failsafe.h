@@ -108,12 +108,20 @@ class DeviceFailsafe {
   void timedCommandSending() { intents_.writeRan(); }
   void timedCommandDone(const TimedIntent& intent, const Result& result);
   void timedCommandStopped(uint8_t channel);
-  // A write the node carried for someone else (a share client, a raw write), confirmed.
-  void externalWrite(const Request& request, CommandSource source);
+  // Bus thread: a write the node carried for someone else (a share client, a raw write) went
+  // out. Confirmed: a command. Its answer lost (or the port dropped mid-frame: the device may
+  // have acted): the channels it decodes to are unknown until the next poll, whose level is
+  // taken as found (a timed command's: after its end), as for a caller's command
+  // (docs/failsafe.md line 94). Refused or unsent: nothing changed.
+  void externalWrite(const Request& request, const Result& result, CommandSource source);
 
   FailsafeStatus status() const;
 
  private:
+  // A timed command whose answer was lost: its channel unknown until its end plus the slack.
+  void adoptAfterLost(const TimedIntent& intent);
+  void externalWriteConfirmed(const Request& request, CommandSource source);
+  void externalWriteLost(const Request& request);
   // Writes `targets`, reads back, reports. `owe_since`: the write carries a trigger's safe
   // states (fired then), owed per channel when it does not get through.
   Result writeAndReport(Transport& t, const OutputTargets& targets, const std::string& trigger,

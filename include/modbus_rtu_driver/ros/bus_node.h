@@ -39,8 +39,9 @@ class BusNode {
   // Fail-safe: ~failsafe, heartbeat subscriptions (any type), the deadline timer.
   void startFailsafe();
   void checkDeadlines();
-  // Bus thread: a share client's or raw write to `slave` (0: every device) was confirmed.
-  void externalWrite(const Request& request, CommandSource source);
+  // Bus thread: a share client's or raw write to `slave` (0: every device) went out: confirmed
+  // (a command), or its answer lost (its channels unknown until the next poll).
+  void externalWrite(const Request& request, const Result& result, CommandSource source);
   // The adapters, those whose last transaction succeeded first (a silent device's safe write
   // costs response_timeout x (retries + 1) per frame: it goes last).
   std::vector<DeviceAdapter*> answeringFirst() const;

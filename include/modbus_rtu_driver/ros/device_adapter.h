@@ -66,9 +66,10 @@ class DeviceAdapter {
     return failsafe_.applySafe(trigger, reason, only);
   }
   // Bus thread: a write to this device that the node carried for someone else (a share
-  // client, a raw write) was confirmed by its reply; the fail-safe takes it as a command.
-  void externalWrite(const Request& request, CommandSource source) {
-    failsafe_.externalWrite(request, source);
+  // client, a raw write) went out: confirmed by its reply, the fail-safe takes it as a
+  // command; its answer lost, the channels it names are unknown until the next poll.
+  void externalWrite(const Request& request, const Result& result, CommandSource source) {
+    failsafe_.externalWrite(request, result, source);
   }
   // The bus-wide heartbeat (none: nullptr), for /diagnostics; before start().
   void setBusHeartbeat(const Watchdog* heartbeat, std::string topic) {

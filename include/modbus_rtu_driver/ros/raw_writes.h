@@ -19,9 +19,10 @@ namespace modbus_rtu_driver {
 class RawWrites {
  public:
   // `devices`: address -> device name of the configured devices (their health applies).
-  // `wrote(slave)`: on the bus thread, a raw write to `slave` was confirmed.
+  // `wrote(request, result)`: on the bus thread, a raw write went out, with its outcome.
   RawWrites(ros::NodeHandle& nh, BusScheduler& scheduler, bool allowed,
-            std::map<uint8_t, std::string> devices, std::function<void(const Request&)> wrote);
+            std::map<uint8_t, std::string> devices,
+            std::function<void(const Request&, const Result&)> wrote);
 
  private:
   bool onRegisters(WriteRegisters::Request& req, WriteRegisters::Response& res);
@@ -33,7 +34,7 @@ class RawWrites {
   BusScheduler& scheduler_;
   bool allowed_;
   std::map<uint8_t, std::string> devices_;
-  std::function<void(const Request&)> wrote_;
+  std::function<void(const Request&, const Result&)> wrote_;
   ros::ServiceServer registers_srv_, coils_srv_;
 };
 

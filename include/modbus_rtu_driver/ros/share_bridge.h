@@ -15,9 +15,9 @@ namespace modbus_rtu_driver {
 
 class ShareBridge {
  public:
-  // `wrote(slave)`: on the bus thread, a client's write to `slave` was confirmed.
+  // `wrote(request, result)`: on the bus thread, a client's write went out, with its outcome.
   ShareBridge(BusScheduler& scheduler, const BusConfig& config,
-              std::function<void(const Request&)> wrote);
+              std::function<void(const Request&, const Result&)> wrote);
   // Listens; false with the reason, naming the key to change (share/listen when the address is
   // in use).
   bool start(std::string* error);

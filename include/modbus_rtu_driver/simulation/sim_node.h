@@ -116,7 +116,7 @@ class SimNode {
   Result genericWriteSafe(Entry& e, Transport& t, const std::string& trigger,
                           const std::string& reason) const;
   Result completeBatch(Entry& e, Transport& t, const std::shared_ptr<OutputBatch::Entry>& entry);
-  void externalWrite(const Request& request, CommandSource source);
+  void externalWrite(const Request& request, const Result& result, CommandSource source);
   std::future<Result> runOp(uint64_t op, const std::string& device, Done done,
                             std::function<Result(Transport&)> job);
 

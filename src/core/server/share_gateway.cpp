@@ -69,7 +69,7 @@ void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
       device,
       [this, sent, turnaround](Transport& t) {
         Result r = t.execute(sent);
-        if (r.ok() && !isReadFunction(sent.function) && wrote_) wrote_(sent);
+        if (!isReadFunction(sent.function) && wrote_) wrote_(sent, r);
         // On the bus thread, on purpose: nothing else may go on the line during the delay.
         if (r.ok() && turnaround.count() > 0) std::this_thread::sleep_for(turnaround);
         return r;

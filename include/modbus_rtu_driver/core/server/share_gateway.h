@@ -57,10 +57,13 @@ class ShareGateway {
   // after this returns, except the one on the bus right now.
   void stop();
   ModbusTcpServer& server() { return *server_; }
-  // Called on the bus thread with the slave address when a client's write got its normal reply
-  // (the device confirmed it; unit 0: sent), before any later job runs: the node's fail-safe
-  // takes it as a command, not as a device restart. Before start().
-  void onWriteConfirmed(std::function<void(const Request&)> wrote) { wrote_ = std::move(wrote); }
+  // Called on the bus thread after each client's write, with its outcome (confirmed by its
+  // normal reply, unit 0: sent; or failed, its answer perhaps lost), before any later job runs:
+  // the node's fail-safe takes a confirmed one as a command, not as a device restart, and a
+  // lost answer's channels as unknown (docs/failsafe.md). Before start().
+  void onWriteDone(std::function<void(const Request&, const Result&)> done) {
+    wrote_ = std::move(done);
+  }
   int queued() const { return in_flight_.load(); }
 
  private:
@@ -69,7 +72,7 @@ class ShareGateway {
   BusScheduler& scheduler_;
   ShareConfig config_;
   std::function<std::string(uint8_t)> device_of_;
-  std::function<void(const Request&)> wrote_;
+  std::function<void(const Request&, const Result&)> wrote_;
   std::unique_ptr<ModbusTcpServer> server_;
   std::atomic<int> in_flight_{0};
 };
