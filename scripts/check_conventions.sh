@@ -9,7 +9,10 @@ status=0
 junit() {  # name, failure message or "" (scripts/junit.py writes every such file)
   /usr/bin/python3 "$REPO/scripts/junit.py" "$RESULTS/$1.xml" conventions "$1${2:+=$2}"
 }
-if out=$(cd "$REPO" && catkin_lint --strict . 2>&1); then
+# Whether each dependency key exists is rosdep's to say: scripts/check_rosdep.py asks rosdep itself,
+# offline, on four platforms. catkin_lint's own lookup reads the machine's rosdep cache, which a
+# fresh root with python3-rosdep2 but no `rosdep update` lacks (every key "unknown" there).
+if out=$(cd "$REPO" && catkin_lint --strict --ignore unknown_package . 2>&1); then
   junit catkin_lint_strict ""
 else
   echo "$out"; junit catkin_lint_strict "catkin_lint found problems"; status=1
