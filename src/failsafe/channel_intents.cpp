@@ -118,9 +118,7 @@ void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double
   // show until its end, so the poll that decides comes after its end plus the slack.
   const auto& was = intent_[channel];
   if (was && was->ends && *was->ends > now) {
-    const auto slack = seconds(kEndSlackSeconds) + std::chrono::duration_cast<Clock::duration>(
-                                                       (*was->ends - was->at) * kEndSlackFraction);
-    in.adopt_from = std::max(in.adopt_from.value_or(now), *was->ends + slack);
+    in.adopt_from = std::max(in.adopt_from.value_or(now), *was->ends + endSlack(*was));
   }
   intent_[channel] = in;
   newCommand(channel, source);
@@ -231,6 +229,11 @@ std::string ChannelIntents::owedTrigger() const {
   return oldest ? oldest->trigger : std::string();
 }
 
+Clock::duration ChannelIntents::endSlack(const Intent& in) {
+  return seconds(kEndSlackSeconds) +
+         std::chrono::duration_cast<Clock::duration>((*in.ends - in.at) * kEndSlackFraction);
+}
+
 void ChannelIntents::pollStarting() {
   std::lock_guard<std::mutex> lock(mutex_);
   write_during_poll_ = false;
@@ -252,8 +255,7 @@ Expectation ChannelIntents::expectedLocked(uint8_t channel, Clock::time_point t)
     e.kind = Expectation::Kind::kLevel;
     return e;
   }
-  const auto slack = seconds(kEndSlackSeconds) + std::chrono::duration_cast<Clock::duration>(
-                                                     (*in.ends - in.at) * kEndSlackFraction);
+  const auto slack = endSlack(in);
   if (t < *in.ends - slack) {
     if (!in.during) return Expectation{};  // the device switches it by itself meanwhile
     e.kind = Expectation::Kind::kLevel;

@@ -231,6 +231,12 @@ void BusScheduler::record(const std::string& device, const Result& result, Kind 
   backoff_until_[device] = now + seconds(b);
 }
 
+Clock::time_point BusScheduler::probeNotBefore(const Poll& poll) {
+  auto b = backoff_until_.find(poll.device);
+  if (b == backoff_until_.end() || health_[poll.device].online) return Clock::time_point{};
+  return b->second;
+}
+
 BusScheduler::Poll* BusScheduler::starvingPoll(Clock::time_point now) {
   if (last_ran_starving_poll_ || (writes_.empty() && shared_.empty())) return nullptr;
   // A device with a job of its own queued is left to it: its poll runs after (a poll between
@@ -243,9 +249,7 @@ BusScheduler::Poll* BusScheduler::starvingPoll(Clock::time_point now) {
   };
   Poll* oldest = nullptr;
   for (Poll& p : polls_) {
-    if (p.due + p.period > now || queuedFor(p.device)) continue;
-    auto b = backoff_until_.find(p.device);
-    if (b != backoff_until_.end() && !health_[p.device].online && b->second > now) continue;
+    if (p.due + p.period > now || queuedFor(p.device) || probeNotBefore(p) > now) continue;
     if (!oldest || p.due < oldest->due) oldest = &p;
   }
   return oldest;
@@ -363,9 +367,7 @@ bool BusScheduler::stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_po
     if (starving) break;
     // A late device claims at most one period of priority: it catches up after a stall
     // without starving the others, and a rate the bus cannot carry only takes what is left.
-    auto t = std::max(p.due, now - p.period);
-    auto b = backoff_until_.find(p.device);
-    if (b != backoff_until_.end() && health_[p.device].online == false) t = std::max(t, b->second);
+    const auto t = std::max({p.due, now - p.period, probeNotBefore(p)});
     // Ties (devices late on a bus that cannot carry their rates) go to the one served least
     // recently, so an overloaded bus is shared in turn rather than by list order or by who
     // was reset last.

@@ -168,6 +168,8 @@ class BusScheduler {
   // The poll overdue by a whole period the longest (none while the last thing run was such a
   // poll, or nothing is queued): it goes before the queued jobs. `lock` held.
   Poll* starvingPoll(Clock::time_point now);
+  // An offline device's poll waits out its backoff: not before then (else the epoch). `lock` held.
+  Clock::time_point probeNotBefore(const Poll& poll);
   // Runs every queued job against a ClosedTransport saying `reason`; `lock` held on entry/exit.
   void refuseQueued(std::unique_lock<std::mutex>& lock, const std::string& reason);
   enum class Kind { kPoll, kWrite, kShared };
