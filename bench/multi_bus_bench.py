@@ -10,8 +10,8 @@ pieces); prints a markdown table; appends CSV rows to --csv.
                        [--pace] [--csv FILE]
 
 Each bus is node_bench.py's: an LC relay board (8), an LD58A08 (1) and a PDU (2) at --rate each
-(50 Hz, the CPU table's), 115200 baud, the simulator answering at once unless --pace. No TCP
-port is fixed: the nodes have no share and roscpp takes free ports; the rosmaster's is free.
+(50 Hz, the CPU table's), 115200 baud, the simulator answering at once unless --pace. Every TCP
+port is chosen at run time: the nodes have no share, roscpp and the rosmaster take free ones.
 CPU is utime + stime from /proc/<pid>/stat over the same window of --seconds for every process,
 with no calls in it; the calls come after the window. A poll rate is the 'polls ok' count of
 the node's /diagnostics over that window (from the last report before it to the first after
