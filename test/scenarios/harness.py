@@ -139,6 +139,16 @@ class Harness:
         return self.sim_process is not None and self.sim_process.running()
 
     # --- the node ----------------------------------------------------------------------------
+    def forget_kept_state(self):
+        """A new robot: what earlier nodes kept on the parameter server for the next node (the
+        timed commands still running, `~running_timed`, docs/failsafe.md) goes, as with a new
+        roscore. Without this an example would resume the flashes of the example before it on
+        a board that was power cycled and set anew, and its replay would not repeat it."""
+        try:
+            rospy.delete_param("/" + NODE + "/running_timed")
+        except KeyError:
+            pass
+
     def start_node(self):
         rosparam.upload_params("/" + NODE, self.config)
         self.log = tempfile.TemporaryFile(mode="w+")

@@ -71,6 +71,7 @@ class Scenario(RuleBasedStateMachine):
         Run.examples += 1
         self.note("example %d: board %s, node starts (on_start: safe)" % (Run.examples, coils))
         self.h.stop_node()
+        self.h.forget_kept_state()  # each example is a robot of its own
         self.h.start_simulator()  # an earlier example may have ended with the port gone
         self.h.beating.set()
         self.h.sim.silence(harness.BOARD, False)
