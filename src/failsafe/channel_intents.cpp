@@ -124,6 +124,13 @@ void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double
   newCommand(channel, source);
 }
 
+void ChannelIntents::stoppedNextPoll(uint8_t channel, CommandSource source) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (channel >= channels_) return;
+  intent_[channel] = adoptingIntent(channel, source, clock_.now());
+  newCommand(channel, source);
+}
+
 void ChannelIntents::adoptChangeNextPoll(uint8_t channel, CommandSource source) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (channel >= channels_) return;

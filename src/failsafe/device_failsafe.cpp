@@ -164,10 +164,25 @@ void DeviceFailsafe::afterPoll() {
   scheduler_.submit(device_.name(), [this, verdict, trigger, reason, action](Transport& t) {
     std::vector<bool> runs(device_.outputCount(), false);
     if (verdict != ChannelIntents::Verdict::kNormal && config().on_restart == OnRestart::kRestore) {
-      // Failed: the snapshot as it was (the write fails anyway).
-      const bool read = device_.refreshSelfTimed(t).ok() && device_.selfTimedRead();
+      // What runs is read just before the restore (docs/failsafe.md, "What restore writes").
+      // Unread, a restore could stop a run the device restarted (a power-down save) where the
+      // snapshot, up to 8 polls old, says none runs: nothing is written now, and the next poll
+      // that answers decides again (the change, and what is owed, are still there).
+      const Result read = device_.refreshSelfTimed(t);
+      if (!read.ok()) {
+        FailsafeReport r;
+        r.device = device_.name();
+        r.trigger = trigger;
+        r.reason = reason;
+        r.action = action;
+        r.confirmed = false;
+        r.message = "nothing written: reading which PWM runs before the restore failed (" +
+                    read.message + "); the next poll decides again";
+        report(r);
+        return read;
+      }
       for (size_t i = 0; i < runs.size(); ++i) runs[i] = device_.outputSelfTimed(i);
-      if (read) intents_.observeRuns(runs);  // a run found now stays the device's afterwards
+      if (device_.selfTimedRead()) intents_.observeRuns(runs);  // the device's from now on
     }
     const OutputTargets targets = intents_.afterPollTargets(verdict, runs);
     if (!targets.empty()) return writeAndReport(t, targets, trigger, reason, action, {});
@@ -267,7 +282,7 @@ void DeviceFailsafe::externalWriteLost(const Request& request) {
 
 void DeviceFailsafe::timedCommandStopped(uint8_t channel) {
   // The output shows the channel's coil again: the next poll says which level that is.
-  intents_.adoptNextPoll(channel, CommandSource::kTimed);
+  intents_.stoppedNextPoll(channel, CommandSource::kTimed);
   endSafeState();
   timedMaybeChanged();
 }

@@ -194,7 +194,8 @@ struct Chan {
   std::optional<bool> during;  // a timed command's level until its end (none: any)
   TP ends{};
   double duration = 0;
-  bool continuous = false;  // a PWM run with no end: the device's (docs:68, 88)
+  bool continuous = false;     // a PWM run with no end: the device's (docs:68, 88)
+  bool maybe_devices = false;  // read running near the node's run's end: either may be right
   bool from_old_node = false;
   TP at{};
   bool held = false;  // docs:76-80
@@ -335,14 +336,10 @@ class World {
   void commandedTimed(int d, int ch, std::optional<bool> during, bool after, double seconds);
   void unconfirmed(int d, int ch, double not_before_s, bool as_command);
   void hold(int d, int ch);
-  // A client's write (share, raw) whose answer was lost: the device may have acted, the node
-  // did not carry it (docs:35: the reply confirms it). The docs do not say what the intent is
-  // then: nothing is checked on the channel until it is commanded again.
-  void unknownIntent(int d, int ch) {
-    Chan& c = model_[d].ch[ch];
-    c.known = false;
-    c.adopt = false;
-  }
+  // docs:94: a command whose answer was lost (any source) leaves its channel unknown until the
+  // next poll, whose level is taken as found: for a timed command of `seconds`, or a write on a
+  // channel where a timed command still runs, the first poll after that end plus the slack.
+  void lostAnswer(int d, int ch, double seconds);
   void deviceDisturbed(int d, bool justified, double extra = 0);
   bool expected(const Chan& c, TP t, bool* level) const;
   // Invariants checked after each step.
@@ -486,6 +483,8 @@ void World::resetModelForNewNode() {
   const TP now = clock_.now();
   for (int d = 0; d < kDevices; ++d) {
     DevModel& m = model_[d];
+    // A new node has read no PWM registers yet.
+    std::fill(m.pwm_read_running.begin(), m.pwm_read_running.end(), false);
     // docs:169-170: a flash the killed node started cannot be told from a restart. A device
     // whose state the old node did not know may change by itself too.
     // Each of its flashes changes the outputs at its own end (docs:171-172): every report up to
@@ -652,6 +651,16 @@ void World::unconfirmed(int d, int ch, double not_before_s, bool as_command) {
   c.adopt_not_before = clock_.now() + dur(not_before_s);
 }
 
+void World::lostAnswer(int d, int ch, double seconds) {
+  const Chan& c = model_[d].ch[ch];
+  const TP now = clock_.now();
+  // The device may have started it any time since the write went out, which is before now:
+  // 1 s covers the slack (0.5 s + 2 %) of every duration the simulation draws.
+  TP until = seconds > 0 ? now + dur(seconds + 1.0) : now;
+  if (c.known && c.timed) until = std::max(until, c.ends + dur(0.5 + 0.02 * c.duration));
+  unconfirmed(d, ch, secs(until - now), false);
+}
+
 void World::deviceDisturbed(int d, bool justified, double extra) {
   DevModel& m = model_[d];
   m.cause_at = clock_.now();
@@ -673,10 +682,35 @@ void World::onAttempt(const LineEvent& e) {
   if (d == kLd && e.answered && e.request.function == FunctionCode::kReadHoldingRegisters &&
       e.request.address % 0x10 == 0 && e.request.address / 0x10 < kChannels &&
       e.request.count == 3) {
-    m.pwm_read_running[e.request.address / 0x10] =
-        simRegister(kLd, static_cast<uint16_t>(e.request.address + 2)) != 0;
-    m.pwm_read_in_poll[e.request.address / 0x10] = m.poll_running;
+    const int ch = e.request.address / 0x10;
+    const bool runs = e.values.size() == 3 && e.values[2] != 0;  // as the node read it
+    m.pwm_read_running[ch] = runs;
+    m.pwm_read_in_poll[ch] = m.poll_running;
+    // docs:88-90 and "Restart detection needs polls": a run a poll reads that is no timed
+    // command of the node's still running makes the channel the device's until a plain write,
+    // also after the run ended: not compared, not restored.
+    Chan& c = m.ch[ch];
+    const bool node_runs = c.timed && e.at <= c.ends + dur(0.5 + 0.02 * c.duration);
+    // Only a poll's read or the fail-safe's (op 0): a command's read back is not a poll (docs:90).
+    if (runs && c.known && !c.adopt && node_ && node_->currentOp() == 0) {
+      if (!node_runs)
+        c.continuous = true;
+      else if (e.at + dur(1.0) >= c.ends)
+        // Near its end the node may count it ended: its end runs from when the write went out,
+        // the model's from the confirmation, up to a transaction and a read back later.
+        c.maybe_devices = true;
+    }
   }
+  // docs:68: a stop the device confirmed (an enable register written 0: the node's own before
+  // a plain write, or a client's it carried) ends what the node read of that channel's run.
+  if (d == kLd && e.answered && write &&
+      (e.request.function == FunctionCode::kWriteSingleRegister ||
+       e.request.function == FunctionCode::kWriteMultipleRegisters))
+    for (size_t i = 0; i < e.request.values.size(); ++i) {
+      const auto reg = static_cast<uint16_t>(e.request.address + i);
+      if (reg % 0x10 == 2 && reg / 0x10 < kChannels && e.request.values[i] == 0)
+        m.pwm_read_running[reg / 0x10] = false;
+    }
   if (!e.answered) {
     m.unanswered = true;
     // A device that does not answer may be taken offline: its return is a restart (docs:34).
@@ -757,9 +791,11 @@ void World::onPolled(const std::string& device, const Result& r) {
     if (!m.found && !c.known && !c.adopt) {
       // docs:62-63: where the node has commanded nothing, the intent is the state found at its
       // first good poll. A running PWM is the device's (docs:73).
+      // A run as the node last read it (docs:66): an LD58A08 channel's registers, read before
+      // the start's safe write, may be older than this poll.
       c.known = true;
       c.level = outputs[ch];
-      c.continuous = pwm;
+      c.continuous = d == kLd && m.pwm_read_running[ch];
       c.at = clock_.now();
       continue;
     }
@@ -891,7 +927,9 @@ void World::onReport(const FailsafeReport& r) {
       const bool node_runs = c.timed && now <= c.ends + dur(0.5 + 0.02 * c.duration);
       const bool devices_run = d == kLd && !node_runs &&
                                (chs.empty() ? m.pwm_read_running[ch] : m.pwm_read_at_write[ch]);
-      if (!written[ch] && c.known && !c.adopt && !c.continuous && !devices_run)
+      // A restore that wrote nothing and failed (its read before failed) is done again later.
+      if (!r.confirmed && chs.empty()) break;
+      if (!written[ch] && c.known && !c.adopt && !c.continuous && !c.maybe_devices && !devices_run)
         fail("I5", std::string(kNames[d]) + " out" + std::to_string(ch) +
                        ": the restore leaves "
                        "it out, though its intent (" +
@@ -1055,7 +1093,7 @@ void World::doCommandStep(const SimStep& s) {
     }
     pending_.push_back(node_->set(op("set").id, dn, chs, sts, [this, outd, chs](const Result& r) {
       if (answerLost(r.error))
-        for (uint8_t c : chs) unconfirmed(outd, c, 0, false);
+        for (uint8_t c : chs) lostAnswer(outd, c, 0);
     }));
   } else if (k == "command") {
     const bool st = arg(2) != 0;
@@ -1070,7 +1108,7 @@ void World::doCommandStep(const SimStep& s) {
         node_->command(op("command").id, dn, ch, st, [this, outd, ch](const Result& r) {
           // The merged write's channels come through onWritten; a lost answer leaves the channel
           // unknown until the next poll (docs:92-94: a service's or topic's command alike).
-          if (answerLost(r.error)) unknownIntent(outd, ch);
+          if (answerLost(r.error)) lostAnswer(outd, ch, 0);
         }));
   } else if (k == "pulse") {
     const bool st = arg(2) != 0;
@@ -1081,7 +1119,7 @@ void World::doCommandStep(const SimStep& s) {
                                         checkCoils(kLc, {ch}, {st}, "a pulse");
                                         commandedTimed(kLc, ch, st, !st, seconds);
                                       } else if (answerLost(r.error)) {
-                                        unconfirmed(kLc, ch, seconds + 1.0, false);
+                                        lostAnswer(kLc, ch, seconds);
                                       }
                                     }));
   } else if (k == "pwm") {
@@ -1111,7 +1149,7 @@ void World::doCommandStep(const SimStep& s) {
             // docs:66-68: a burst or timed run is the device's until its end, then off.
             commandedTimed(kLd, ch, std::nullopt, false, seconds);
           } else if (answerLost(r.error)) {
-            unconfirmed(kLd, ch, std::max(0.0, seconds) + 1.0, false);
+            lostAnswer(kLd, ch, seconds);
           }
         }));
   } else if (k == "pwm_stop") {
@@ -1125,7 +1163,7 @@ void World::doCommandStep(const SimStep& s) {
             unconfirmed(kLd, ch, 0, true);
             model_[kLd].ch[ch].known = false;
           } else if (answerLost(r.error)) {
-            unconfirmed(kLd, ch, 0, false);
+            lostAnswer(kLd, ch, 0);
           }
         }));
   } else if (k == "share05" || k == "raw05" || k == "share15" || k == "raw15") {
@@ -1166,7 +1204,7 @@ void World::doCommandStep(const SimStep& s) {
           if (runs) model_[kLd].ch[chs[i]].continuous = true;
         }
       } else if (answerLost(r.error)) {
-        for (uint8_t c : chs) unknownIntent(outd, c);
+        for (uint8_t c : chs) lostAnswer(outd, c, 0);
       }
     };
     pending_.push_back(share ? node_->share(op(k).id, req, done) : node_->raw(op(k).id, req, done));
@@ -1181,7 +1219,7 @@ void World::doCommandStep(const SimStep& s) {
         checkCoils(kLc, {ch}, {close}, k);
         commandedTimed(kLc, ch, close, !close, tenths / 10.0);
       } else if (answerLost(r.error)) {
-        unknownIntent(kLc, ch);
+        lostAnswer(kLc, ch, tenths / 10.0);
       }
     };
     pending_.push_back(k[0] == 's' ? node_->share(op(k).id, req, done)
@@ -1198,7 +1236,7 @@ void World::doCommandStep(const SimStep& s) {
         commandedTimed(kLd, c6, std::nullopt, false,
                        pulses == 0xFFFF ? -1.0 : pulses * period / 10.0);
       } else if (answerLost(r.error)) {
-        unknownIntent(kLd, c6);
+        lostAnswer(kLd, c6, pulses == 0xFFFF ? 0.0 : pulses * period / 10.0);
       }
     }));
   } else if (k == "share06_stop") {
@@ -1206,8 +1244,12 @@ void World::doCommandStep(const SimStep& s) {
     const Request req =
         Request::writeSingleRegister(kAddr[kLd], static_cast<uint16_t>(ch * 0x10 + 2), 0);
     pending_.push_back(node_->share(op(k).id, req, [this, ch](const Result& r) {
-      if (r.ok()) unconfirmed(kLd, ch, 0, true);
-      if (answerLost(r.error)) unknownIntent(kLd, ch);
+      if (r.ok()) {
+        unconfirmed(kLd, ch, 0, true);
+        // The run is stopped (docs:68: no longer one the node knows not yet ended).
+        model_[kLd].ch[ch].continuous = model_[kLd].ch[ch].timed = false;
+      }
+      if (answerLost(r.error)) lostAnswer(kLd, ch, 0);
     }));
   } else if (k == "signal") {
     const size_t signal = static_cast<size_t>(arg(0) % 2);

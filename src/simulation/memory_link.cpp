@@ -121,6 +121,7 @@ Result MemoryLink::attempt(const EncodedRequest& request) {
   wire(bytes.size());
   Result r = decodeReply(request, bytes);
   event.answered = r.ok() || r.error == ErrorKind::kException;
+  if (r.ok()) event.values = r.values;
   if (observer_) observer_(event);
   return r;
 }

@@ -4,6 +4,8 @@
 // "item N" tests are issue #32's reproductions, made at the module's level.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/failsafe/channel_intents.h"
@@ -437,4 +439,22 @@ TEST(ChannelIntents, ALostWriteOverARunningFlashIsDecidedAfterTheFlashEnds) {
   clock.advance(1s);
   EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kNormal);  // it ended: found off
   EXPECT_EQ(poll(t, {true, false, false, false}), Verdict::kOutputsChanged);
+}
+
+// docs/failsafe.md, "Timed commands keep their end": a stop the device confirmed ends the run at
+// once, so the next poll gives the channel's level as commanded, before the run's planned end
+// (stop 39: a burst stopped by stop_pwm was left out of a restore until its end plus slack).
+TEST(ChannelIntents, AConfirmedStopIsTakenAtTheNextPollNotAtTheRunsEnd) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, false, false});
+  t.timed(TimedIntent{1, std::nullopt, false, 5.0}, CommandSource::kTimed);  // a 5 s burst
+  clock.advance(200ms);
+  t.stoppedNextPoll(1, CommandSource::kTimed);  // stop_pwm, confirmed
+  clock.advance(200ms);
+  EXPECT_EQ(poll(t, {false, true, false, false}), Verdict::kNormal);           // the coil: on
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kOutputsChanged);  // power cycle
+  const OutputTargets r = t.afterPollTargets(Verdict::kOutputsChanged);
+  EXPECT_EQ(statesOf(r, 4)[1], true);  // restored on, 4.6 s before the burst would have ended
+  EXPECT_NE(std::find(r.channels.begin(), r.channels.end(), 1), r.channels.end());
 }

@@ -68,6 +68,11 @@ class ChannelIntents {
   // before then are not compared and do not count (a timed command whose answer was lost may
   // run until its end).
   void adoptNextPoll(uint8_t channel, CommandSource source, double not_before_s = 0);
+  // A stop of the channel's timed command (a PWM run) that the device confirmed: the run no
+  // longer drives the output, so the next poll's level is taken as commanded by `source`, with
+  // no wait for the run's planned end (adoptNextPoll waits for it: a write whose answer was
+  // lost may not have stopped it).
+  void stoppedNextPoll(uint8_t channel, CommandSource source);
   // A client's confirmed register write that the type decodes as touching `channel` only (an
   // LD58A08 PWM stop): the next poll's level is the intent; if it differs from what the channel
   // should have shown, it is the client's command (it ends a hold from before the write).

@@ -33,7 +33,9 @@ struct MemoryLinkFaults {
 struct LineEvent {
   Request request;
   bool heard = false;
-  bool answered = false;  // a reply the node could decode (a normal one or an exception)
+  bool answered = false;         // a reply the node could decode (a normal one or an exception)
+  std::vector<uint16_t> values;  // a read's answer as the node got it (the device's state
+                                 // at the request, not at the observer's later clock)
   uint64_t execute_id = 0;
   Clock::time_point at{};
 };
