@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Conventions the test command checks: catkin_lint finds nothing (strict), and every C++ file is
+# Conventions the test command checks: catkin_lint finds nothing (strict), includes go only down
+# the layers, every relative link in the Markdown files resolves, and every C++ file is
 # formatted as .clang-format says. One JUnit case each in $1. (clang-tidy: scripts/tidy.sh.)
 set -uo pipefail
 REPO=$(cd "$(dirname "$0")/.." && pwd)
@@ -43,6 +44,13 @@ if [ -z "$layering" ]; then
 else
   echo "$layering"; junit layering_includes_go_down "$layering"; status=1
 fi
+# The docs are the spec and link to each other: a moved section must leave no dead link behind
+# (a file, or a heading's #anchor, that is not there).
+if out=$(/usr/bin/python3 "$REPO/scripts/check_doc_links.py" "$REPO" 2>&1); then
+  junit doc_links_resolve ""
+else
+  echo "$out"; junit doc_links_resolve "$(echo "$out" | head -20)"; status=1
+fi
 # clang-format: the project formats with clang-format 14 (Debian 12's); other versions format
 # the same .clang-format differently (19, Debian 13's, moves several constructs), so the check
 # runs only with 14 (clang-format-14 or a clang-format that is 14) and is SKIPPED, with the
@@ -65,5 +73,5 @@ elif out=$(cd "$REPO" && "$format" --dry-run -Werror $files 2>&1); then
 else
   echo "$out" | head -20; junit clang_format_applied "files differ from .clang-format"; status=1
 fi
-echo "conventions: catkin_lint, layering and clang-format checked, exit $status"
+echo "conventions: catkin_lint, layering, doc links and clang-format checked, exit $status"
 exit $status

@@ -11,7 +11,7 @@ The bus nodes are found by their topics' message types (any namespace); --node k
 Several bags (a bag per bus of one robot, or one recording's split files) make one figure on
 one time axis: each bus node's panels together, its devices labelled with the node's name.
 
-What the figure shows besides the values (the rules, also in README.md "Logging power to a bag"):
+What the figure shows besides the values (the rules, also in docs/recording.md "Plotting"):
 - outage: a series' line is broken, and the stretch shaded grey, where a sample says the value
   is not good (a signal's `valid: false`, an `outputs` message with `stale: true`) or where the
   series has a gap longer than GAP_INTERVALS of its usual intervals (the median time between

@@ -49,7 +49,7 @@ const std::vector<SimInvariant>& simInvariants() {
        "a restart 'outputs changed with no command in between' is reported only after "
        "something did change them without the node's confirmed command (a power cycle, a "
        "write whose reply was lost, a flash of a killed node)"},
-      {"I7", "README (writes that start something are never sent twice)",
+      {"I7", "docs/troubleshooting.md (writes that start something are never sent twice)",
        "a frame that starts something (a flash, a PWM run) reaches the device at most once per "
        "transaction"},
       {"I8", "docs/failsafe.md:140-146",

@@ -3,7 +3,7 @@
 figure draws, read back from its artists. Fail-safe labels that cluster do not overlap as
 rendered; an outage (a gap, a `valid: false` signal, a `stale` outputs message) breaks the
 line and is shaded; a node's stop and restart are marked; a running PWM is hatched, not "on".
-The rules are in plot_bag.py's docstring and README.md "Logging power to a bag"."""
+The rules are in plot_bag.py's docstring and docs/recording.md "Plotting"."""
 import importlib.util
 import os
 import pathlib
