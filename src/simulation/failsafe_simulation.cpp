@@ -67,9 +67,8 @@ const std::vector<SimInvariant>& simInvariants() {
 }
 
 const std::set<std::string>& simKnownOpen() {
-  // I4: relays_restore_after_stop38_fixes; I5: restore_left_out_pwm_channel;
   // I6: ld_restart_after_stop38_fixes (docs/simulation.md, "Known open defects").
-  static const std::set<std::string> known = {"I4", "I5", "I6"};
+  static const std::set<std::string> known = {"I6"};
   return known;
 }
 
@@ -224,6 +223,7 @@ struct DevModel {
   TP reachable_since{};        // no fault, no power cycle, port open, node running since
   uint64_t polls_started = 0;
   uint64_t poll_running = 0;  // the sequence number of the poll running now
+  bool in_poll = false;       // between a poll's start and its end
   bool unanswered = false;    // an attempt went unanswered since its last good poll
   bool found = false;
   // LD58A08: whether a channel's PWM ran when the node last read its registers (docs:88: a
@@ -654,9 +654,9 @@ void World::unconfirmed(int d, int ch, double not_before_s, bool as_command) {
 void World::lostAnswer(int d, int ch, double seconds) {
   const Chan& c = model_[d].ch[ch];
   const TP now = clock_.now();
-  // The device may have started it any time since the write went out, which is before now:
-  // 1 s covers the slack (0.5 s + 2 %) of every duration the simulation draws.
-  TP until = seconds > 0 ? now + dur(seconds + 1.0) : now;
+  // Counted from now, when the caller learns the answer was lost, as the node counts it: the
+  // device, if it heard the write, started it before now and so ends it before the window does.
+  TP until = seconds > 0 ? now + dur(seconds + 0.5 + 0.02 * seconds) : now;
   if (c.known && c.timed) until = std::max(until, c.ends + dur(0.5 + 0.02 * c.duration));
   unconfirmed(d, ch, secs(until - now), false);
 }
@@ -691,8 +691,9 @@ void World::onAttempt(const LineEvent& e) {
     // also after the run ended: not compared, not restored.
     Chan& c = m.ch[ch];
     const bool node_runs = c.timed && e.at <= c.ends + dur(0.5 + 0.02 * c.duration);
-    // Only a poll's read or the fail-safe's (op 0): a command's read back is not a poll (docs:90).
-    if (runs && c.known && !c.adopt && node_ && node_->currentOp() == 0) {
+    // Only a poll's read (docs:90): not a command's read back, and not the reads of the
+    // fail-safe's own write (the read just before a restore counts at its report, below).
+    if (runs && c.known && !c.adopt && m.in_poll && node_ && node_->currentOp() == 0) {
       if (!node_runs)
         c.continuous = true;
       else if (e.at + dur(1.0) >= c.ends)
@@ -777,10 +778,12 @@ void World::onAttempt(const LineEvent& e) {
 void World::onPollStarting(const std::string& device) {
   const int d = devOf(device);
   model_[d].poll_running = ++model_[d].polls_started;
+  model_[d].in_poll = true;
 }
 
 void World::onPolled(const std::string& device, const Result& r) {
   const int d = devOf(device);
+  model_[d].in_poll = false;
   if (d == kGen || !r.ok()) return;
   DevModel& m = model_[d];
   const auto& outputs = node_->device(device)->outputs();
@@ -934,6 +937,9 @@ void World::onReport(const FailsafeReport& r) {
                        ": the restore leaves "
                        "it out, though its intent (" +
                        (c.level ? "on" : "off") + ") is known");
+      // docs:90: a run the read before the restore found stays the device's afterwards.
+      if (!written[ch] && devices_run && m.ch[ch].known && !m.ch[ch].adopt)
+        m.ch[ch].continuous = true;
     }
   }
   if (r.confirmed) {
