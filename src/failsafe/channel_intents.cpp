@@ -282,12 +282,21 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
   std::lock_guard<std::mutex> lock(mutex_);
   if (changed) changed->clear();
   std::fill(held_not_safe_.begin(), held_not_safe_.end(), false);
+  const auto now = clock_.now();
   if (write_during_poll_) {
-    // What it read may predate that write: neither a restart nor an intent to adopt.
+    // What it read may predate that write: neither a restart nor an intent to adopt. A run it
+    // read is still the device's report, on a channel not commanded since the poll started (a
+    // power-down save's run, seen by the one poll in 8 that reads its registers, would be
+    // missed, and its end later taken for a restart).
     write_during_poll_ = false;
+    for (size_t ch = 0; ch < channels_ && ch < self_timed.size(); ++ch) {
+      const auto& in = intent_[ch];
+      if (self_timed[ch] && (ch >= read_now.size() || read_now[ch]) && in && !in->adopt &&
+          in->at <= poll_started_at_)
+        deviceRunsLocked(static_cast<uint8_t>(ch), now);
+    }
     return was_offline ? Verdict::kCameBack : Verdict::kNormal;
   }
-  const auto now = clock_.now();
   bool differs = false;
   for (size_t ch = 0; ch < channels_ && ch < outputs.size(); ++ch) {
     auto& in = intent_[ch];

@@ -89,6 +89,14 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
     if (!back.ok()) {
       w = Result::failure(back.error, "written, but reading back failed: " + back.message);
     } else {
+      // The read back is a poll of the device: a run it shows on a channel this write left
+      // is the device's, as a scheduled poll's would be (it also took that poll's turn).
+      std::vector<bool> runs(device_.outputCount(), false);
+      for (size_t ch = 0; ch < runs.size(); ++ch)
+        runs[ch] = device_.selfTimedReadByLastPoll(ch) && device_.outputSelfTimed(ch) &&
+                   std::find(targets.channels.begin(), targets.channels.end(), ch) ==
+                       targets.channels.end();
+      intents_.observeRuns(runs);
       for (size_t i = 0; i < targets.channels.size(); ++i) {
         if (device_.outputs()[targets.channels[i]] == targets.states[i]) continue;
         w = Result::failure(ErrorKind::kMalformed, "read back: " + names[targets.channels[i]] +

@@ -67,8 +67,8 @@ const std::vector<SimInvariant>& simInvariants() {
 }
 
 const std::set<std::string>& simKnownOpen() {
-  // I6: ld_restart_after_stop38_fixes (docs/simulation.md, "Known open defects").
-  static const std::set<std::string> known = {"I6"};
+  // None since stop 39 (docs/simulation.md, "Known open defects").
+  static const std::set<std::string> known = {};
   return known;
 }
 
@@ -224,7 +224,10 @@ struct DevModel {
   uint64_t polls_started = 0;
   uint64_t poll_running = 0;  // the sequence number of the poll running now
   bool in_poll = false;       // between a poll's start and its end
-  bool unanswered = false;    // an attempt went unanswered since its last good poll
+  // A fail-safe write went out: its read back (docs:90, a read of the device's state) is next.
+  bool readback_pending = false;
+  std::vector<bool> fs_written = std::vector<bool>(8, false);  // ... the channels it wrote
+  bool unanswered = false;  // an attempt went unanswered since its last good poll
   bool found = false;
   // LD58A08: whether a channel's PWM ran when the node last read its registers (docs:88: a
   // restore leaves a run the device reports; the node knows only what it read)
@@ -691,9 +694,16 @@ void World::onAttempt(const LineEvent& e) {
     // also after the run ended: not compared, not restored.
     Chan& c = m.ch[ch];
     const bool node_runs = c.timed && e.at <= c.ends + dur(0.5 + 0.02 * c.duration);
-    // Only a poll's read (docs:90): not a command's read back, and not the reads of the
-    // fail-safe's own write (the read just before a restore counts at its report, below).
-    if (runs && c.known && !c.adopt && m.in_poll && node_ && node_->currentOp() == 0) {
+    // Only a poll's read or a fail-safe write's read back on a channel it left (docs:90):
+    // not a command's read back, and not the reads before the fail-safe's own write (the read
+    // just before a restore counts at its report, below).
+    const bool fs_op = node_ && node_->currentOp() == 0;
+    const bool readback = fs_op && m.readback_pending && !m.fs_written[ch];
+    if (fs_op && m.readback_pending) {
+      m.readback_pending = false;
+      m.fs_written.assign(kChannels, false);
+    }
+    if (runs && c.known && !c.adopt && ((m.in_poll && fs_op) || readback)) {
       if (!node_runs)
         c.continuous = true;
       else if (e.at + dur(1.0) >= c.ends)
@@ -738,6 +748,12 @@ void World::onAttempt(const LineEvent& e) {
                      e.request.function == FunctionCode::kWriteMultipleCoils;
   if (!coils || node_->currentOp() != 0) return;
   m.pwm_read_at_write = m.pwm_read_running;
+  // Its read back follows (a poll of the device: coils, then one channel's PWM registers).
+  if (e.answered) {
+    m.readback_pending = true;
+    for (size_t i = 0; i < e.request.values.size(); ++i)
+      if (e.request.address + i < kChannels) m.fs_written[e.request.address + i] = true;
+  }
   // A write of the fail-safe's own (no command's job runs): I3 and I4.
   for (size_t i = 0; i < e.request.values.size(); ++i) {
     const int ch = e.request.address + static_cast<int>(i);
@@ -779,6 +795,8 @@ void World::onPollStarting(const std::string& device) {
   const int d = devOf(device);
   model_[d].poll_running = ++model_[d].polls_started;
   model_[d].in_poll = true;
+  model_[d].readback_pending = false;
+  model_[d].fs_written.assign(kChannels, false);
 }
 
 void World::onPolled(const std::string& device, const Result& r) {

@@ -458,3 +458,21 @@ TEST(ChannelIntents, AConfirmedStopIsTakenAtTheNextPollNotAtTheRunsEnd) {
   EXPECT_EQ(statesOf(r, 4)[1], true);  // restored on, 4.6 s before the burst would have ended
   EXPECT_NE(std::find(r.channels.begin(), r.channels.end(), 1), r.channels.end());
 }
+
+// docs/failsafe.md, "Restart detection needs polls": a poll during which a write ran is not
+// compared, but a run it read is still the device's report (an LD58A08's registers are read one
+// channel per poll: that poll may be the only one that sees a power-down save's run).
+TEST(ChannelIntents, ARunReadByAPollAWriteRanDuringStillMakesTheChannelTheDevices) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, false, false});  // found: all off
+  clock.advance(500ms);
+  t.pollStarting();
+  t.writeRan();  // a queued write ran between this poll's transactions
+  const std::vector<bool> runs{true, false, false, false}, read{true, true, true, true};
+  EXPECT_EQ(t.observePoll({true, false, false, false}, runs, false, nullptr, read),
+            Verdict::kNormal);
+  clock.advance(5s);  // the run ended on; its level is the device's doing, not a restart
+  t.pollStarting();
+  EXPECT_EQ(t.observePoll({true, false, false, false}, {}, false, nullptr, read), Verdict::kNormal);
+}
