@@ -288,7 +288,15 @@ void DeviceFailsafe::externalWriteLost(const Request& request) {
   timedMaybeChanged();
 }
 
-void DeviceFailsafe::timedCommandStopped(uint8_t channel) {
+void DeviceFailsafe::timedCommandStopped(uint8_t channel, const Result& result) {
+  if (!result.ok()) {
+    // Its answer lost: stopped or not, the next poll that reads the channel tells (docs/
+    // failsafe.md, "A command whose answer was lost"); refused or unsent: nothing changed.
+    if (!answerLost(result.error) && result.error != ErrorKind::kIo) return;
+    intents_.adoptNextPoll(channel, CommandSource::kFound);
+    timedMaybeChanged();
+    return;
+  }
   // The output shows the channel's coil again: the next poll says which level that is.
   intents_.stoppedNextPoll(channel, CommandSource::kTimed);
   endSafeState();

@@ -92,7 +92,7 @@ class Ld58a08Adapter : public DeviceAdapter {
     const Result r = runOnBus([this, channel](Transport& t) {
       timedCommandSending();
       Result w = board().stopPwm(t, channel);
-      if (w.ok()) timedCommandStopped(channel);
+      timedCommandStopped(channel, w);
       if (w.ok() && board().readPwm(t).ok()) publishPwm();
       return w;
     });

@@ -316,7 +316,7 @@ std::future<Result> SimNode::stopPwm(uint64_t op, const std::string& device, uin
     auto& board = static_cast<Ld58a08&>(*e->device);
     e->failsafe->timedCommandSending();
     Result w = board.stopPwm(t, channel);
-    if (w.ok()) e->failsafe->timedCommandStopped(channel);
+    e->failsafe->timedCommandStopped(channel, w);
     if (w.ok()) board.readPwm(t);
     return w;
   });

@@ -107,7 +107,9 @@ class DeviceFailsafe {
   // Around a timed command (flash, pulse, PWM run), and a PWM run stopped.
   void timedCommandSending() { intents_.writeRan(); }
   void timedCommandDone(const TimedIntent& intent, const Result& result);
-  void timedCommandStopped(uint8_t channel);
+  // stop_pwm's outcome: confirmed, the next poll gives the level as commanded; its answer lost
+  // (the device may have stopped it), the channel is unknown until a poll reads it again.
+  void timedCommandStopped(uint8_t channel, const Result& result);
   // Bus thread: a write the node carried for someone else (a share client, a raw write) went
   // out. Confirmed: a command. Its answer lost (or the port dropped mid-frame: the device may
   // have acted): the channels it decodes to are unknown until the next poll, whose level is

@@ -119,7 +119,9 @@ class DeviceAdapter {
     failsafe_.timedCommandDone(intent, result);
   }
   // A PWM run stopped (confirmed): the output shows the channel's coil again.
-  void timedCommandStopped(uint8_t channel) { failsafe_.timedCommandStopped(channel); }
+  void timedCommandStopped(uint8_t channel, const Result& result) {
+    failsafe_.timedCommandStopped(channel, result);
+  }
   // Whether the last poll failed with the device now offline (its states are stale).
   bool offline() const { return !scheduler_.health(device_->name()).online; }
   // Service writes of outputs: checked, then merged with others queued for this device.
