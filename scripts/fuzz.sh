@@ -4,7 +4,7 @@
 #   fuzz.sh --build-only                  build only (test.sh builds while the rostests run)
 #   fuzz.sh --prebuilt SECONDS RESULTS    run what --build-only built
 set -euo pipefail
-# shellcheck source=instrumented_mode.sh
+# shellcheck source=SCRIPTDIR/instrumented_mode.sh
 source "$(dirname "$0")/instrumented_mode.sh"  # MODE from --build-only / --prebuilt; REPO, WS
 SECONDS_TO_RUN=${1:-20}
 RESULTS=${2:-}

@@ -1,3 +1,4 @@
+# shellcheck shell=bash disable=SC2034  # MODE, REPO, WS: for the script that sources this file
 # Sourced by the instrumented builds' scripts, sanitized_tests.sh and fuzz.sh: their first
 # argument, read the same way in both, and the paths both use. Takes the mode off "$@":
 #   --build-only   MODE=build: build only (test.sh builds while the rostests run)

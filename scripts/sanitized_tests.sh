@@ -4,7 +4,7 @@
 #   sanitized_tests.sh --build-only          build only (test.sh builds while the rostests run)
 #   sanitized_tests.sh --prebuilt RESULTS    run what --build-only built (its failure counts)
 set -euo pipefail
-# shellcheck source=instrumented_mode.sh
+# shellcheck source=SCRIPTDIR/instrumented_mode.sh
 source "$(dirname "$0")/instrumented_mode.sh"  # MODE from --build-only / --prebuilt; REPO, WS
 RESULTS=${1:-}
 BUILD="$WS/sanitizers"
