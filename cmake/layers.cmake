@@ -3,8 +3,8 @@
 # ASan + UBSan with gcc, or libFuzzer with clang), so a source file in a layer's folder is in
 # all of them.
 #
-# The includer has found libmodbus (LIBMODBUS_*), yaml-cpp, Threads, nlohmann_json and CLI11, and
-# may set:
+# The includer has included cmake/dependencies.cmake (libmodbus, yaml-cpp, Threads, nlohmann_json,
+# CLI11; MODBUS_RTU_DIR, the repository's root), and may set:
 #   MODBUS_RTU_LIBRARY_TYPE   SHARED in the instrumented builds: device types register through
 #                             static initializers in objects nothing references, which a static
 #                             archive would leave out of the executable. Unset (catkin): catkin's
@@ -20,10 +20,8 @@
 #   node's YAML)
 #   <- ros (adapters, node).   sim and tools sit on core (tools also on devices); simulation
 #   (the fail-safe's deterministic simulation) on failsafe and sim.
-# The repository's root, without "cmake/..": the include path then reads as before (catkin_lint
-# reads the set(), the build the normalised path).
-set(MODBUS_RTU_DIR ${CMAKE_CURRENT_LIST_DIR}/..)
-get_filename_component(MODBUS_RTU_DIR ${MODBUS_RTU_DIR} ABSOLUTE)
+# The executables on these layers: cmake/executables.cmake; the ROS library and the node:
+# cmake/ros_node.cmake; the unit tests: cmake/unit_tests.cmake.
 
 # A layer's sources: every .cpp in its folder, the executables' *_main.cpp aside. A new file (a
 # device type's class, adapter or simulated device, which registers itself) needs no line here;
@@ -103,8 +101,3 @@ add_library(modbus_rtu_commission_lib ${MODBUS_RTU_LIBRARY_TYPE} ${tools_sources
 target_link_libraries(modbus_rtu_commission_lib PUBLIC modbus_rtu_devices nlohmann_json::nlohmann_json
   PRIVATE CLI11::CLI11)
 layer(modbus_rtu_commission_lib)
-
-# The ROS layer's sources (adapters, one small class per device type, and the node). Only a list:
-# each build makes the library with its own ROS (catkin's targets, or pkg-config's in the
-# sanitizer build) on modbus_rtu_config.
-layer_sources(MODBUS_RTU_ROS_SOURCES ros)

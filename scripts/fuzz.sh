@@ -4,15 +4,11 @@
 #   fuzz.sh --build-only                  build only (test.sh builds while the rostests run)
 #   fuzz.sh --prebuilt SECONDS RESULTS    run what --build-only built
 set -euo pipefail
-REPO=$(cd "$(dirname "$0")/.." && pwd)
-MODE=all
-case "${1:-}" in
-  --build-only) MODE=build; shift ;;
-  --prebuilt) MODE=run; shift ;;
-esac
+# shellcheck source=SCRIPTDIR/instrumented_mode.sh
+source "$(dirname "$0")/instrumented_mode.sh"  # MODE from --build-only / --prebuilt; REPO, WS
 SECONDS_TO_RUN=${1:-20}
 RESULTS=${2:-}
-OUT="$("$REPO/scripts/workspace.sh")/fuzz"
+OUT="$WS/fuzz"
 mkdir -p "$OUT/corpus"
 # Three targets (test/fuzz/; what each feeds: test/sanitizers/CMakeLists.txt), built by the
 # instrumented CMake build with -DMODBUS_RTU_FUZZ=ON against the layer libraries of

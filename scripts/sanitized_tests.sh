@@ -4,15 +4,10 @@
 #   sanitized_tests.sh --build-only          build only (test.sh builds while the rostests run)
 #   sanitized_tests.sh --prebuilt RESULTS    run what --build-only built (its failure counts)
 set -euo pipefail
-REPO=$(cd "$(dirname "$0")/.." && pwd)
-MODE=all
-case "${1:-}" in
-  --build-only) MODE=build; shift ;;
-  --prebuilt) MODE=run; shift ;;
-esac
+# shellcheck source=SCRIPTDIR/instrumented_mode.sh
+source "$(dirname "$0")/instrumented_mode.sh"  # MODE from --build-only / --prebuilt; REPO, WS
 RESULTS=${1:-}
-BUILD="$("$REPO/scripts/workspace.sh")/sanitizers"
-WS=$("$REPO/scripts/workspace.sh")
+BUILD="$WS/sanitizers"
 mkdir -p "$BUILD/logs"
 BUILD_STATUS=$BUILD/logs/build.status  # "ok" or "failed", written by the build
 if [ $MODE != run ]; then
@@ -38,16 +33,19 @@ if [ "$(cat "$BUILD_STATUS" 2>/dev/null)" != ok ]; then
   exit 1
 fi
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1
-for t in "$BUILD"/test_*; do
-  [ -f "$t" ] && [ -x "$t" ] || continue
-  name=$(basename "$t")
+# The tests cmake/unit_tests.cmake lists (ctest knows them), not whatever test_* an older build
+# left in the folder; one that is listed but missing fails.
+tests=$(cd "$BUILD" && ctest -N | sed -n 's/^ *Test *#[0-9]*: *//p')
+[ -n "$tests" ] || { junit sanitized-build "build=ctest lists no test in $BUILD"; exit 1; }
+for name in $tests; do
+  t=$BUILD/$name
   echo "sanitized: $name"
   "$t" --gtest_output="xml:$RESULTS/sanitized-$name.xml" >"$BUILD/logs/$name.log" 2>&1 || {
     status=1
     tail -30 "$BUILD/logs/$name.log"
     # A sanitizer report aborts the binary before gtest writes its XML: record the failure.
     [ -s "$RESULTS/sanitized-$name.xml" ] ||
-      junit "sanitized-$name" "$name=sanitizer report or crash, see $BUILD/logs/$name.log"
+      junit "sanitized-$name" "$name=sanitizer report, crash or no binary, see $BUILD/logs/$name.log"
   }
   if grep -qE "ERROR: (AddressSanitizer|LeakSanitizer)|runtime error:" "$BUILD/logs/$name.log"; then
     echo "sanitizer report in $name"; status=1
@@ -63,7 +61,7 @@ set +u
 # shellcheck disable=SC1091
 source "$WS/devel/setup.bash"  # rostest must find the package (test.sh has it already)
 set -u
-export SANITIZED_NODE="$BUILD/modbus_rtu_bus_sanitized"
+export SANITIZED_NODE="$BUILD/modbus_rtu_bus"
 rm -f "$BUILD"/logs/node.* "$SANITIZED_NODE.started"
 if [ -x "$SANITIZED_NODE" ]; then
   echo "sanitized: rostest node_devices.test with $SANITIZED_NODE"

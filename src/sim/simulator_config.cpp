@@ -1,16 +1,14 @@
-// The simulator's configuration file, the registry of the device types it may name, and its state
-// file (what the devices store).
-#include <unistd.h>
+// The simulator's configuration file and the registry of the device types it may name.
+#include "modbus_rtu_driver/sim/simulator_config.h"
+
 #include <yaml-cpp/yaml.h>
 
-#include <cstdio>
 #include <fstream>
 #include <set>
 #include <sstream>
 
 #include "modbus_rtu_driver/core/config/config_yaml.h"
 #include "modbus_rtu_driver/core/config/link_config.h"
-#include "modbus_rtu_driver/sim/simulator.h"
 
 namespace modbus_rtu_driver {
 
@@ -124,39 +122,6 @@ bool loadSimulatorConfig(const std::string& path, SimulatorConfig* out, std::str
   const size_t slash = path.find_last_of('/');
   return parseSimulatorConfig(text.str(), out, error,
                               slash == std::string::npos ? "." : path.substr(0, slash));
-}
-
-// Written only when it changed, through a temporary file, so a crash never leaves half a file.
-void Simulator::saveState() {
-  if (options_.state_file.empty()) return;
-  YAML::Node root;
-  for (auto& d : devices_) {
-    YAML::Node n;
-    n["type"] = d->type();
-    d->saveState(n);
-    root["devices"].push_back(n);
-  }
-  YAML::Emitter emitter;
-  emitter << root;
-  const std::string text = std::string(emitter.c_str()) + "\n";
-  if (text == state_text_) return;
-  const std::string tmp = options_.state_file + ".tmp";
-  std::ofstream(tmp) << text;
-  if (std::rename(tmp.c_str(), options_.state_file.c_str()) == 0) state_text_ = text;
-}
-
-// Devices are matched by index and type; a device whose entry does not fit keeps the config.
-void Simulator::loadState(SimClock::time_point now) {
-  if (options_.state_file.empty() || access(options_.state_file.c_str(), R_OK) != 0) return;
-  try {
-    const YAML::Node root = YAML::LoadFile(options_.state_file);
-    const YAML::Node list = root["devices"];
-    for (size_t i = 0; list.IsSequence() && i < devices_.size() && i < list.size(); ++i)
-      if (list[i]["type"].as<std::string>("") == devices_[i]->type())
-        devices_[i]->loadState(list[i], now);
-  } catch (const YAML::Exception& e) {
-    std::fprintf(stderr, "ignoring the state file %s: %s\n", options_.state_file.c_str(), e.what());
-  }
 }
 
 }  // namespace modbus_rtu_driver
