@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/config/link_config.h"
-#include "modbus_rtu_driver/core/server/share_gateway.h"
+#include "modbus_rtu_driver/core/config/share_config.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace YAML {
