@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "modbus_rtu_driver/core/link/make_link.h"
-#include "modbus_rtu_driver/core/link/tcp_link.h"
+#include "modbus_rtu_driver/core/link/rtu_over_tcp_link.h"
 #include "tcp_test_server.h"
 #include "wait_for.h"
 

@@ -1,7 +1,8 @@
 #include "modbus_rtu_driver/core/link/make_link.h"
 
+#include "modbus_rtu_driver/core/link/modbus_tcp_link.h"
 #include "modbus_rtu_driver/core/link/rtu_link.h"
-#include "modbus_rtu_driver/core/link/tcp_link.h"
+#include "modbus_rtu_driver/core/link/rtu_over_tcp_link.h"
 
 namespace modbus_rtu_driver {
 

@@ -1,7 +1,8 @@
-// The Modbus TCP transport: RTU requests carried as MBAP frames (core/modbus/mbap.h).
+// RTU requests carried as MBAP frames (core/modbus/mbap.h).
+#include "modbus_rtu_driver/core/link/modbus_tcp_link.h"
+
 #include <chrono>
 
-#include "modbus_rtu_driver/core/link/tcp_link.h"
 #include "modbus_rtu_driver/core/link/tcp_socket.h"
 #include "modbus_rtu_driver/core/modbus/mbap.h"
 

@@ -1,4 +1,4 @@
-// The connection the TCP transports share, and the RTU-over-TCP transport.
+// The connection the TCP links share.
 #include "modbus_rtu_driver/core/link/tcp_link.h"
 
 #include <unistd.h>
@@ -56,29 +56,6 @@ Result TcpLink::send(const Request& request, const Bytes& frame) {
   }
   return Result::failure(
       ErrorKind::kIo, request.describe() + ": not sent, " + medium() + ": " + std::strerror(errno));
-}
-
-// The late-reply guard and the gap, as on a serial port; then what is waiting (a late reply,
-// the gateway's noise) belongs to nobody.
-bool RtuOverTcpLink::prepareLine(const EncodedRequest& request) {
-  settleLine(fd_, request);
-  keepGap();
-  const long stale = discardWaiting(fd_);
-  if (stale < 0) return false;
-  addStaleBytes(static_cast<uint64_t>(stale));
-  return true;
-}
-
-Result RtuOverTcpLink::attempt(const EncodedRequest& request) {
-  if (!prepareLine(request)) return closedUnsent(request.request());
-  Result sent = send(request.request(), request.adu());
-  if (!sent.ok()) return sent;
-  return readRtuReply(fd_, request, gatewayByteTimeout(config_), medium());
-}
-
-Result RtuOverTcpLink::sendBroadcast(const EncodedRequest& request) {
-  if (!prepareLine(request)) return closedUnsent(request.request());
-  return send(request.request(), request.adu());
 }
 
 }  // namespace modbus_rtu_driver
