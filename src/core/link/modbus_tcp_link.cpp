@@ -58,4 +58,24 @@ Result ModbusTcpLink::sendBroadcast(const EncodedRequest& request) {
   return send(request.request(), rtuToMbap(++next_transaction_, request.adu()));
 }
 
+namespace {
+
+std::unique_ptr<Link> make(const LinkConfig& config, const LinkTarget& target) {
+  return std::make_unique<ModbusTcpLink>(config, target);
+}
+
+const LinkType kModbusTcpLink{
+    "tcp://",
+    "Modbus TCP",
+    "tcp://HOST:PORT",
+    "tcp://",
+    "MBAP frames to a Modbus TCP device or gateway, the device's address as unit id",
+    /*networked=*/true,
+    /*answers_for_silence=*/true,
+    parseHostPort,
+    make};
+const bool kRegistered = linkTypes().add(kModbusTcpLink);
+
+}  // namespace
+
 }  // namespace modbus_rtu_driver

@@ -27,4 +27,24 @@ Result RtuOverTcpLink::sendBroadcast(const EncodedRequest& request) {
   return send(request.request(), request.adu());
 }
 
+namespace {
+
+std::unique_ptr<Link> make(const LinkConfig& config, const LinkTarget& target) {
+  return std::make_unique<RtuOverTcpLink>(config, target);
+}
+
+const LinkType kRtuOverTcpLink{
+    "rtu+tcp://",
+    "RTU over TCP",
+    "rtu+tcp://HOST:PORT",
+    "rtu+tcp://",
+    "RTU frames, byte for byte, through a transparent RS485-Ethernet gateway",
+    /*networked=*/true,
+    /*answers_for_silence=*/false,
+    parseHostPort,
+    make};
+const bool kRegistered = linkTypes().add(kRtuOverTcpLink);
+
+}  // namespace
+
 }  // namespace modbus_rtu_driver

@@ -11,9 +11,8 @@
 
 namespace modbus_rtu_driver {
 
-TcpLink::TcpLink(LinkConfig config) : Link(std::move(config)) {
-  parsePortAddress(config_.port, &address_, nullptr);
-}
+TcpLink::TcpLink(LinkConfig config, LinkTarget target)
+    : Link(std::move(config), std::move(target)) {}
 
 TcpLink::~TcpLink() {
   disconnect();
@@ -21,7 +20,7 @@ TcpLink::~TcpLink() {
 
 bool TcpLink::connect(std::string* error) {
   disconnect();
-  fd_ = connectTcp(address_.host, address_.tcp_port, error);
+  fd_ = connectTcp(target_.host, target_.host_port, error);
   if (fd_ < 0) return false;
   noteConnected();
   return true;
@@ -34,7 +33,7 @@ void TcpLink::disconnect() {
 }
 
 std::string TcpLink::medium() const {
-  return "gateway " + address_.host + ":" + std::to_string(address_.tcp_port);
+  return "gateway " + target_.host + ":" + std::to_string(target_.host_port);
 }
 
 double TcpLink::responseTimeout(const EncodedRequest& request) const {

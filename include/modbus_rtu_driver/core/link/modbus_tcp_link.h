@@ -9,7 +9,6 @@ namespace modbus_rtu_driver {
 class ModbusTcpLink : public TcpLink {
  public:
   using TcpLink::TcpLink;
-  PortKind kind() const override { return PortKind::kModbusTcp; }
 
  protected:
   Result attempt(const EncodedRequest& request) override;

@@ -11,7 +11,6 @@ namespace modbus_rtu_driver {
 class RtuOverTcpLink : public TcpLink {
  public:
   using TcpLink::TcpLink;
-  PortKind kind() const override { return PortKind::kRtuOverTcp; }
 
  protected:
   Result attempt(const EncodedRequest& request) override;

@@ -13,7 +13,7 @@ namespace modbus_rtu_driver {
 
 class TcpLink : public Link {
  public:
-  explicit TcpLink(LinkConfig config);
+  explicit TcpLink(LinkConfig config, LinkTarget target = {});
   ~TcpLink() override;
   bool connect(std::string* error) override;
   bool connected() const override { return fd_ >= 0; }
@@ -29,9 +29,6 @@ class TcpLink : public Link {
   Result closedUnsent(const Request& request) const;
 
   int fd_ = -1;
-
- private:
-  PortAddress address_;
 };
 
 }  // namespace modbus_rtu_driver
