@@ -84,20 +84,26 @@ TEST(LinkConfig, PortForms) {
   ASSERT_TRUE(parseLinkTarget("tcp://[fd00::5]:502", &a, &error));
   EXPECT_EQ(a.host, "fd00::5");
   for (const char* bad : {"tcp://host", "tcp://:502", "tcp://host:0", "tcp://host:65536",
-                          "rtu+tcp://host:50x", "udp://host:502", "tcp://a/b:502"}) {
+                          "rtu+tcp://host:50x", "mqtt://host:502", "tcp://a/b:502"}) {
     EXPECT_FALSE(parseLinkTarget(bad, &a, &error)) << bad;
     EXPECT_NE(error.find(std::string("'") + bad + "'"), std::string::npos) << error;
   }
-  EXPECT_FALSE(parseLinkTarget("udp://host:502", &a, &error));
-  EXPECT_NE(error.find("not a device path, tcp:// or rtu+tcp://"), std::string::npos) << error;
+  // An unknown scheme's message lists the registered ones, the device path and tcp:// first (a
+  // kind added in its own files joins the list: no exact list here).
+  EXPECT_FALSE(parseLinkTarget("mqtt://host:502", &a, &error));
+  EXPECT_EQ(error.rfind("port: 'mqtt://host:502' is not a device path, tcp://", 0), 0u) << error;
+  EXPECT_NE(error.find(" or "), std::string::npos) << error;
+  EXPECT_NE(error.find("rtu+tcp://"), std::string::npos) << error;
   LinkConfig c;
   c.port = "tcp://host:99999";
   EXPECT_NE(validateLink(c, &a).find("tcp://HOST:PORT (port 1-65535)"), std::string::npos)
       << validateLink(c, &a);
   c.port = "";
-  EXPECT_EQ(validateLink(c, &a),
-            "port: must name a serial device such as /dev/ttyUSB0, tcp://HOST:PORT or "
-            "rtu+tcp://HOST:PORT");
+  error = validateLink(c, &a);
+  EXPECT_EQ(error.rfind("port: must name a serial device such as /dev/ttyUSB0, tcp://HOST:PORT", 0),
+            0u)
+      << error;
+  EXPECT_NE(error.find("rtu+tcp://HOST:PORT"), std::string::npos) << error;
 }
 
 TEST(LinkConfig, NetworkAllowanceIsRangeChecked) {
