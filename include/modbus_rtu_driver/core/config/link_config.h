@@ -36,7 +36,8 @@ struct LinkConfig {
   double min_gap = 0.0;  // s, silence kept between frames; 0 = t3.5 of the baud
   DirectionControl direction = DirectionControl::kAuto;
   bool low_latency = true;  // ask the USB adapter driver for ASYNC_LOW_LATENCY
-  // s added to every timeout of a tcp:// or rtu+tcp:// port for the network and the gateway.
+  // s added to every timeout of a networked port (tcp://, rtu+tcp://: LinkType::networked) for
+  // the network and the gateway.
   double network_allowance = 0.1;
 };
 
