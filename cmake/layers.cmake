@@ -40,9 +40,9 @@ function(layer target)
 endfunction()
 
 # Core, one library per job, each linked only on the ones before it (the same one-way rule):
-#   modbus (framing: ADU, CRC, MBAP, request framer) <- config (link, slave role and signal
-#   settings and their YAML; the device type descriptors and their registry) <- link (serial and
-#   TCP links, our own reply reader) <- bus (the bus thread, its queue, rates, real-time) <-
+#   modbus (framing: ADU, CRC, MBAP, request framer) <- config (link, slave role, share and
+#   signal settings and their YAML; the device type descriptors and their registry) <- link (the
+#   kinds of link, each registered from its own file, and our own reply reader) <- bus (the bus thread, its queue, rates, real-time) <-
 #   server (the slave role, the Modbus TCP server, the share gateway).
 # modbus_rtu_core is all five, for the layers above.
 set(MODBUS_RTU_CORE_JOBS modbus config link bus server)

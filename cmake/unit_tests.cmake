@@ -28,6 +28,9 @@ unit_test(test_table_names modbus_rtu_core)
 unit_test(test_mbap modbus_rtu_core)
 unit_test(test_realtime modbus_rtu_core)
 unit_test(test_link_config modbus_rtu_core)
+# Issue 34 item 3: a kind of link registered from a test file reaches the node's configuration,
+# the factory and the commissioning tool's checks and help.
+unit_test(test_link_types "modbus_rtu_config;modbus_rtu_commission_lib")
 # Issue 26 item 3: enum names and their parse from one table, and the one join.
 unit_test(test_text modbus_rtu_core)
 unit_test(test_request_framer modbus_rtu_core)

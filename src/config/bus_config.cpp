@@ -256,7 +256,10 @@ void checkSecondAddresses(const std::vector<DeviceConfig>& devices) {
 void parse(const YAML::Node& root, BusConfig* out) {
   if (!root.IsMap()) fail("(root)", "the configuration is not a map of settings");
   checkKeys(root, "", with(kLinkKeys, kBusKeys));
-  parseLink(root, &out->link);
+  // The port first (its kind, registered with the links, parses it), then the line settings.
+  readLink(root, &out->link);
+  const std::string link_problem = validateLink(out->link, &out->link_target);
+  if (!link_problem.empty()) throw ConfigError{link_problem};
   if (root["allow_raw_writes"])
     out->allow_raw_writes = getSwitch(root["allow_raw_writes"], "allow_raw_writes");
   if (root["role"]) {

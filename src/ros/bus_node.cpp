@@ -151,7 +151,7 @@ bool BusNode::start() {
     ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());
     return false;
   }
-  link_ = makeLink(config_.link);
+  link_ = makeLink(config_.link, config_.link_target);
   // Only what needs it starts the publishing thread (see rosPublishing()).
   if (!config_.wire_log.empty() || config_.realtime_priority > 0)
     publish_queue_ = std::make_unique<TaskQueue>();
@@ -228,7 +228,7 @@ bool BusNode::start() {
              config_.share.read_only ? "read only" : "reads and writes");
   }
   ROS_INFO("bus %s (%s) at %d baud, %s parity: %zu device(s)", config_.link.port.c_str(),
-           portKindName(link_->kind()), config_.link.baud, parityName(config_.link.parity),
+           link_->target().type->name, config_.link.baud, parityName(config_.link.parity),
            adapters_.size());
   return true;
 }
@@ -308,12 +308,12 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
     status.summary(DiagnosticStatus::OK, "link up");
   }
   status.add("port", config_.link.port);
-  status.add("transport", portKindName(link_->kind()));
+  status.add("transport", link_->target().type->name);
   status.add("baud", config_.link.baud);
   status.add("parity", parityName(config_.link.parity));
   // Whether the adapter took ASYNC_LOW_LATENCY: without it an FTDI adapter holds replies up to
   // its latency timer (16 ms by default).
-  if (link_->kind() == PortKind::kSerial)
+  if (!link_->target().type->networked)
     status.add("low latency",
                link_->lowLatency() ? "yes" : "no (the adapter refused it or it is off)");
   else

@@ -9,7 +9,7 @@ SimulatorTcp::SimulatorTcp(const SimulatorConfig& config, const std::string& lin
   line.parity = config.factory.parity;
   line.stop_bits = config.factory.stop_bits;
   line.response_timeout = 0.5;
-  link_ = std::make_unique<RtuLink>(line);
+  link_ = makeLink(line);  // the pty: a serial link, by its path
   scheduler_ = std::make_unique<BusScheduler>(*link_);
 }
 

@@ -28,9 +28,8 @@ Cli::Cli() {
   app.fallthrough();
   app.require_subcommand(0, 1);
   app.set_help_all_flag("--help-all", "help of every command");
-  app.add_option(
-         "--port", w.port,
-         "the serial device (/dev/ttyUSB0), tcp://HOST:PORT or rtu+tcp://HOST:PORT (needed)")
+  // The kinds of link register themselves (core/link/link_types.h): the help lists them.
+  app.add_option("--port", w.port, linkTypes().formList() + " (needed; see below)")
       ->type_name("PORT");
   app.add_option("--baud", w.baud, "line speed (default 9600)")
       ->type_name("B")

@@ -12,9 +12,8 @@ namespace modbus_rtu_driver::commission_args {
 void parseLink(const Parsed& p, CommissionCommand& c) {
   if (!p.top.count("--port")) bad("--port: missing (the serial device, e.g. /dev/ttyUSB0)");
   c.link.port = p.w.port;
-  PortAddress address;
   std::string port_error;
-  if (!parsePortAddress(c.link.port, &address, &port_error)) bad("--" + port_error);
+  if (!parseLinkTarget(c.link.port, &c.target, &port_error)) bad("--" + port_error);
   if (p.top.count("--baud")) c.link.baud = p.w.baud;
   if (p.top.count("--parity")) c.link.parity = static_cast<Parity>(p.w.parity);
   c.link.retries = 0;
@@ -28,7 +27,7 @@ void parseLink(const Parsed& p, CommissionCommand& c) {
   c.link.response_timeout = 0.05 + (c.command == "scan" ? 0 : longest_delay_ms / 1000.0) + wire;
   // Through a Modbus TCP gateway a silent address costs the gateway's time, not ours: wait for
   // its answer (kGatewayScanTimeout says why).
-  if (c.command == "scan" && address.kind == PortKind::kModbusTcp)
+  if (c.command == "scan" && c.target.type->answers_for_silence)
     c.link.response_timeout = std::max(c.link.response_timeout, kGatewayScanTimeout);
   if (p.top.count("--timeout")) c.link.response_timeout = p.w.timeout;
 }

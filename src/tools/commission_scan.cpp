@@ -94,7 +94,7 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
     config.baud = cmd.bauds[i / cmd.parities.size()];
     config.parity = cmd.parities[i % cmd.parities.size()];
     const std::string line = lineName(config.baud, config.parity);
-    const std::unique_ptr<Link> owned = makeLink(config);
+    const std::unique_ptr<Link> owned = makeLink(config, cmd.target);
     Link& link = *owned;
     std::string error;
     if (!link.connect(&error)) return out.fail(kExitBusError, error);
@@ -104,10 +104,10 @@ int runScan(const CommissionCommand& cmd, Output& out, const std::atomic<bool>& 
       const uint64_t stale_before = link.stats().stale_bytes;
       const Identity id = identifyDevice(link, static_cast<uint8_t>(address));
       if (!id.note.empty() && notes.insert(id.note).second) out.note(id.note);  // once each
-      // Over tcp:// a stale answer is the gateway's to a request given up (dropped by its
-      // transaction id): the gateway still works through those, and each address waits behind
-      // them, so a device there may be missed.
-      if (link.kind() == PortKind::kModbusTcp && link.stats().stale_bytes > stale_before) {
+      // Through a gateway that answers for silence (tcp://) a stale answer is the gateway's to a
+      // request given up (dropped by its transaction id): the gateway still works through
+      // those, and each address waits behind them, so a device there may be missed.
+      if (link.target().type->answers_for_silence && link.stats().stale_bytes > stale_before) {
         const std::string note =
             "the gateway answered earlier requests after --timeout (its own response timeout "
             "is longer): scan with a --timeout above it, or devices may be missed";

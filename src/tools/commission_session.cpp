@@ -23,7 +23,7 @@ bool Session::confirm(const std::string& question) {
 int runCommission(const CommissionCommand& cmd, const CommissionIo& io) {
   Output out(cmd.json, io.out, io.err);
   if (cmd.command == "scan") return runScan(cmd, out, io.stop, io.err_is_terminal);
-  const std::unique_ptr<Link> link = makeLink(cmd.link);
+  const std::unique_ptr<Link> link = makeLink(cmd.link, cmd.target);
   std::string error;
   if (!link->connect(&error)) return out.fail(kExitBusError, error);
   Session session{cmd, *link, out, io.in, io.stop};

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "modbus_rtu_driver/core/config/link_config.h"
+#include "modbus_rtu_driver/core/link/link_types.h"
 #include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/commissioning.h"
 #include "modbus_rtu_driver/tools/commission.h"
@@ -178,7 +179,9 @@ Numbers may be decimal or 0x-hex. Changes to how a device answers (address, baud
 return delay, factory reset) and protection limits ask for confirmation on stdin unless --yes;
 without a "y" (or at end of input) nothing is changed.
 Baud and parity take effect after the device is powered off and on.
---timeout: wait for a reply, default 0.05 s + 30 characters for scans (3 s through tcp://),
+--port: one of
+)" + linkTypesHelp() +
+         R"(--timeout: wait for a reply, default 0.05 s + 30 characters for scans (3 s through tcp://),
 and for other commands more by the longest return delay below (a board with a return delay
 waits that long before answering; scan such a board with a --timeout above its return delay).
 

@@ -36,7 +36,6 @@ static_assert(!std::is_constructible_v<EncodedRequest, Request> &&
 class RecordingLink : public Link {
  public:
   explicit RecordingLink(LinkConfig config) : Link(std::move(config)) {}
-  PortKind kind() const override { return PortKind::kSerial; }
 
   std::deque<Bytes> replies;
   std::vector<const EncodedRequest*> handed;  // the object each attempt got

@@ -4,7 +4,7 @@
 
 #include <atomic>
 
-#include "modbus_rtu_driver/core/link/tcp_link.h"
+#include "modbus_rtu_driver/core/link/modbus_tcp_link.h"
 #include "tcp_test_server.h"
 #include "wait_for.h"
 

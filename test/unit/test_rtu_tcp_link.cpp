@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include "modbus_rtu_driver/core/link/make_link.h"
-#include "modbus_rtu_driver/core/link/tcp_link.h"
+#include "modbus_rtu_driver/core/link/modbus_tcp_link.h"
+#include "modbus_rtu_driver/core/link/rtu_link.h"
+#include "modbus_rtu_driver/core/link/rtu_over_tcp_link.h"
 #include "tcp_test_server.h"
 #include "wait_for.h"
 
@@ -32,11 +34,14 @@ Bytes holdingReply(const Request& r) {
 TEST(RtuOverTcpLink, FactoryChoosesByPortForm) {
   LinkConfig c;
   c.port = "rtu+tcp://gw:502";
-  EXPECT_EQ(makeLink(c)->kind(), PortKind::kRtuOverTcp);
+  EXPECT_NE(dynamic_cast<RtuOverTcpLink*>(makeLink(c).get()), nullptr);
+  EXPECT_STREQ(makeLink(c)->target().type->name, "RTU over TCP");
   c.port = "tcp://gw:502";
-  EXPECT_EQ(makeLink(c)->kind(), PortKind::kModbusTcp);
+  EXPECT_NE(dynamic_cast<ModbusTcpLink*>(makeLink(c).get()), nullptr);
+  EXPECT_STREQ(makeLink(c)->target().type->name, "Modbus TCP");
   c.port = "/dev/ttyUSB0";
-  EXPECT_EQ(makeLink(c)->kind(), PortKind::kSerial);
+  EXPECT_NE(dynamic_cast<RtuLink*>(makeLink(c).get()), nullptr);
+  EXPECT_STREQ(makeLink(c)->target().type->name, "serial RTU");
 }
 
 TEST(RtuOverTcpLink, SendsTheRtuFrameByteForByteAndReadsTheReply) {

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include "modbus_rtu_driver/core/link/tcp_link.h"
+#include "modbus_rtu_driver/core/link/rtu_over_tcp_link.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 #include "wait_for.h"
 

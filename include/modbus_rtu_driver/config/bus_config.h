@@ -7,7 +7,8 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/config/link_config.h"
-#include "modbus_rtu_driver/core/server/share_gateway.h"
+#include "modbus_rtu_driver/core/config/share_config.h"
+#include "modbus_rtu_driver/core/link/link_types.h"
 #include "modbus_rtu_driver/devices/device.h"
 
 namespace YAML {
@@ -22,6 +23,7 @@ constexpr double kMaxShutdownTimeout = 10.0;  // s
 
 struct BusConfig {
   LinkConfig link;
+  LinkTarget link_target;          // link.port, parsed (makeLink takes it)
   std::string role = "master";     // master: the node polls devices; slave: a master polls the node
   double diagnostic_period = 1.0;  // s
   // State topics (outputs, inputs): false = an array message every poll; true = only when a

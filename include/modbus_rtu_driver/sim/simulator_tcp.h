@@ -1,7 +1,7 @@
 // The simulator's devices over Modbus TCP (`--tcp HOST:PORT`): a gateway in front of the
 // simulated line, as a Modbus TCP/RTU gateway stands in front of an RS485 bus. It opens the
-// pty as any master does (RtuLink at the devices' factory line settings, 0.5 s response
-// timeout) and serves it with the node's share code (ShareGateway: a bus thread, the
+// pty as any master does (makeLink: an RtuLink at the devices' factory line settings, 0.5 s
+// response timeout) and serves it with the node's share code (ShareGateway: a bus thread, the
 // ModbusTcpServer). While it runs the line is its own (the port is claimed): clients reach the
 // devices through TCP only. Everyone may connect (a simulator: `allow` is 0.0.0.0/0).
 #pragma once
@@ -10,7 +10,7 @@
 #include <string>
 
 #include "modbus_rtu_driver/core/bus/bus_scheduler.h"
-#include "modbus_rtu_driver/core/link/rtu_link.h"
+#include "modbus_rtu_driver/core/link/make_link.h"
 #include "modbus_rtu_driver/core/server/share_gateway.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
@@ -29,7 +29,7 @@ class SimulatorTcp {
   uint16_t port() const;
 
  private:
-  std::unique_ptr<RtuLink> link_;
+  std::unique_ptr<Link> link_;
   std::unique_ptr<BusScheduler> scheduler_;
   std::unique_ptr<ShareGateway> gateway_;
 };

@@ -75,7 +75,6 @@ class MemoryLink : public Link {
   bool connected() const override { return connected_; }
   void disconnect() override { connected_ = false; }
   void awaitLineFree() override {}
-  PortKind kind() const override { return PortKind::kSerial; }
 
  protected:
   Result attempt(const EncodedRequest& request) override;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/config/link_config.h"
+#include "modbus_rtu_driver/core/link/link_types.h"
 #include "modbus_rtu_driver/core/modbus/types.h"
 
 namespace modbus_rtu_driver {
@@ -32,7 +33,8 @@ enum CommissionExit {
 constexpr double kGatewayScanTimeout = 3.0;
 
 struct CommissionCommand {
-  LinkConfig link;  // --port, --baud, --parity, --timeout; no retries: say what happened
+  LinkConfig link;    // --port, --baud, --parity, --timeout; no retries: say what happened
+  LinkTarget target;  // --port, parsed
   bool json = false, yes = false;
   std::string command;  // scan, get-address, set-address, ...
   std::string type;     // a registered type with the command's setting (devices/commissioning.h)

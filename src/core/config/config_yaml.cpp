@@ -79,6 +79,12 @@ std::set<std::string> with(std::set<std::string> keys, const std::set<std::strin
 }
 
 void parseLink(const YAML::Node& root, LinkConfig* out) {
+  readLink(root, out);
+  const std::string link_problem = validateLinkConfig(*out);
+  if (!link_problem.empty()) throw ConfigError{link_problem};
+}
+
+void readLink(const YAML::Node& root, LinkConfig* out) {
   LinkConfig& link = *out;
   if (root["port"]) link.port = get<std::string>(root["port"], "port", "a device path");
   if (root["baud"]) link.baud = getInt(root["baud"], "baud");
@@ -103,8 +109,6 @@ void parseLink(const YAML::Node& root, LinkConfig* out) {
   if (root["low_latency"]) link.low_latency = getSwitch(root["low_latency"], "low_latency");
   if (root["direction"])
     link.direction = getNamed(root["direction"], "direction", kDirectionControlNames);
-  const std::string link_problem = validateLinkConfig(link);
-  if (!link_problem.empty()) throw ConfigError{link_problem};
 }
 
 double parseDiagnosticPeriod(const YAML::Node& root) {

@@ -37,55 +37,7 @@ std::string lineName(int baud, Parity parity) {
   return std::to_string(baud) + " 8" + parityLetter(parity) + "1";
 }
 
-const char* portKindName(PortKind kind) {
-  static constexpr NameTable<PortKind, 3> kPortKindNames{{{PortKind::kSerial, "serial RTU"},
-                                                          {PortKind::kModbusTcp, "Modbus TCP"},
-                                                          {PortKind::kRtuOverTcp, "RTU over TCP"}}};
-  return nameIn(kPortKindNames, kind).data();  // the names are literals: terminated
-}
-
-bool parsePortAddress(const std::string& port, PortAddress* out, std::string* error) {
-  static const std::pair<const char*, PortKind> kSchemes[] = {
-      {"tcp://", PortKind::kModbusTcp}, {"rtu+tcp://", PortKind::kRtuOverTcp}};
-  *out = PortAddress{};
-  std::string rest;
-  for (const auto& [scheme, kind] : kSchemes) {
-    if (port.rfind(scheme, 0) != 0) continue;
-    out->kind = kind;
-    rest = port.substr(std::string(scheme).size());
-  }
-  if (out->kind == PortKind::kSerial) {
-    if (port.find("://") == std::string::npos) return true;
-    if (error) *error = "port: '" + port + "' is not a device path, tcp:// or rtu+tcp://";
-    return false;
-  }
-  const std::string form = "port: '" + port + "' is not ";
-  const std::string expected = port.substr(0, port.find("://") + 3) + "HOST:PORT (port 1-65535)";
-  const size_t colon = rest.rfind(':');
-  std::string host = colon == std::string::npos ? "" : rest.substr(0, colon);
-  if (host.size() >= 2 && host.front() == '[' && host.back() == ']')
-    host = host.substr(1, host.size() - 2);  // [::1]
-  const std::string number = colon == std::string::npos ? "" : rest.substr(colon + 1);
-  const bool digits = !number.empty() && number.size() <= 5 &&
-                      number.find_first_not_of("0123456789") == std::string::npos;
-  const int tcp_port = digits ? std::stoi(number) : 0;
-  if (host.empty() || host.find_first_of("/[] ") != std::string::npos || tcp_port < 1 ||
-      tcp_port > 65535) {
-    if (error) *error = form + expected;
-    return false;
-  }
-  out->host = host;
-  out->tcp_port = tcp_port;
-  return true;
-}
-
 std::string validateLinkConfig(const LinkConfig& c) {
-  if (c.port.empty())
-    return "port: must name a serial device such as /dev/ttyUSB0, tcp://HOST:PORT or "
-           "rtu+tcp://HOST:PORT";
-  PortAddress address;
-  std::string port_error;
-  if (!parsePortAddress(c.port, &address, &port_error)) return port_error;
   if (!(c.network_allowance >= 0.0 && c.network_allowance <= 10.0))
     return "network_allowance: " + std::to_string(c.network_allowance) + " s is outside 0-10 s";
   if (!isStandardBaud(c.baud))

@@ -61,6 +61,7 @@ void parseSlave(const YAML::Node& root, SlaveConfig* out) {
   parseLink(root, &out->link);
   const std::string role = root["role"] ? get<std::string>(root["role"], "role", "slave") : "";
   if (role != "slave") fail("role", "'" + role + "' is not slave");
+  if (out->link.port.empty()) fail("port", "must name a serial device such as /dev/ttyUSB0");
   if (out->link.port.find("://") != std::string::npos)
     fail("port", "'" + out->link.port + "': the slave role serves a serial port only");
   out->diagnostic_period = parseDiagnosticPeriod(root);

@@ -1,22 +1,16 @@
 #include "modbus_rtu_driver/core/link/make_link.h"
 
-#include "modbus_rtu_driver/core/link/rtu_link.h"
-#include "modbus_rtu_driver/core/link/tcp_link.h"
-
 namespace modbus_rtu_driver {
 
+std::unique_ptr<Link> makeLink(const LinkConfig& config, const LinkTarget& target) {
+  if (!target.type) return makeLink(config);  // a config built by hand, its port not parsed yet
+  return target.type->make(config, target);
+}
+
 std::unique_ptr<Link> makeLink(const LinkConfig& config) {
-  PortAddress address;
-  parsePortAddress(config.port, &address, nullptr);
-  switch (address.kind) {
-    case PortKind::kModbusTcp:
-      return std::make_unique<ModbusTcpLink>(config);
-    case PortKind::kRtuOverTcp:
-      return std::make_unique<RtuOverTcpLink>(config);
-    case PortKind::kSerial:
-      break;
-  }
-  return std::make_unique<RtuLink>(config);
+  LinkTarget target;
+  if (!parseLinkTarget(config.port, &target, nullptr)) return nullptr;
+  return makeLink(config, target);
 }
 
 }  // namespace modbus_rtu_driver

@@ -1,7 +1,8 @@
-// The Modbus TCP transport: RTU requests carried as MBAP frames (core/modbus/mbap.h).
+// RTU requests carried as MBAP frames (core/modbus/mbap.h).
+#include "modbus_rtu_driver/core/link/modbus_tcp_link.h"
+
 #include <chrono>
 
-#include "modbus_rtu_driver/core/link/tcp_link.h"
 #include "modbus_rtu_driver/core/link/tcp_socket.h"
 #include "modbus_rtu_driver/core/modbus/mbap.h"
 
@@ -56,5 +57,25 @@ Result ModbusTcpLink::sendBroadcast(const EncodedRequest& request) {
   if (closedByPeer(fd_)) return closedUnsent(request.request());
   return send(request.request(), rtuToMbap(++next_transaction_, request.adu()));
 }
+
+namespace {
+
+std::unique_ptr<Link> make(const LinkConfig& config, const LinkTarget& target) {
+  return std::make_unique<ModbusTcpLink>(config, target);
+}
+
+const LinkType kModbusTcpLink{
+    "tcp://",
+    "Modbus TCP",
+    "tcp://HOST:PORT",
+    "tcp://",
+    "MBAP frames to a Modbus TCP device or gateway, the device's address as unit id",
+    /*networked=*/true,
+    /*answers_for_silence=*/true,
+    parseHostPort,
+    make};
+const bool kRegistered = linkTypes().add(kModbusTcpLink);
+
+}  // namespace
 
 }  // namespace modbus_rtu_driver

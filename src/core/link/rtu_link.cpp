@@ -98,4 +98,30 @@ void RtuLink::prepareLine(const EncodedRequest& request) {
   }
 }
 
+namespace {
+
+bool parseDevicePath(const std::string& port, const std::string& /*rest*/, LinkTarget* out,
+                     std::string* /*error*/) {
+  out->path = port;  // whatever opens: the open says what is wrong with it
+  return true;
+}
+
+std::unique_ptr<Link> make(const LinkConfig& config, const LinkTarget& target) {
+  return std::make_unique<RtuLink>(config, target);
+}
+
+// A port without a scheme.
+const LinkType kSerialLink{"",
+                           "serial RTU",
+                           "a serial device such as /dev/ttyUSB0",
+                           "a device path",
+                           "RTU frames on a local serial port (an RS485 adapter)",
+                           /*networked=*/false,
+                           /*answers_for_silence=*/false,
+                           parseDevicePath,
+                           make};
+const bool kRegistered = linkTypes().add(kSerialLink);
+
+}  // namespace
+
 }  // namespace modbus_rtu_driver

@@ -1,4 +1,4 @@
-// The connection the TCP transports share, and the RTU-over-TCP transport.
+// The connection the TCP links share.
 #include "modbus_rtu_driver/core/link/tcp_link.h"
 
 #include <unistd.h>
@@ -11,9 +11,8 @@
 
 namespace modbus_rtu_driver {
 
-TcpLink::TcpLink(LinkConfig config) : Link(std::move(config)) {
-  parsePortAddress(config_.port, &address_, nullptr);
-}
+TcpLink::TcpLink(LinkConfig config, LinkTarget target)
+    : Link(std::move(config), std::move(target)) {}
 
 TcpLink::~TcpLink() {
   disconnect();
@@ -21,7 +20,7 @@ TcpLink::~TcpLink() {
 
 bool TcpLink::connect(std::string* error) {
   disconnect();
-  fd_ = connectTcp(address_.host, address_.tcp_port, error);
+  fd_ = connectTcp(target_.host, target_.host_port, error);
   if (fd_ < 0) return false;
   noteConnected();
   return true;
@@ -34,7 +33,7 @@ void TcpLink::disconnect() {
 }
 
 std::string TcpLink::medium() const {
-  return "gateway " + address_.host + ":" + std::to_string(address_.tcp_port);
+  return "gateway " + target_.host + ":" + std::to_string(target_.host_port);
 }
 
 double TcpLink::responseTimeout(const EncodedRequest& request) const {
@@ -56,29 +55,6 @@ Result TcpLink::send(const Request& request, const Bytes& frame) {
   }
   return Result::failure(
       ErrorKind::kIo, request.describe() + ": not sent, " + medium() + ": " + std::strerror(errno));
-}
-
-// The late-reply guard and the gap, as on a serial port; then what is waiting (a late reply,
-// the gateway's noise) belongs to nobody.
-bool RtuOverTcpLink::prepareLine(const EncodedRequest& request) {
-  settleLine(fd_, request);
-  keepGap();
-  const long stale = discardWaiting(fd_);
-  if (stale < 0) return false;
-  addStaleBytes(static_cast<uint64_t>(stale));
-  return true;
-}
-
-Result RtuOverTcpLink::attempt(const EncodedRequest& request) {
-  if (!prepareLine(request)) return closedUnsent(request.request());
-  Result sent = send(request.request(), request.adu());
-  if (!sent.ok()) return sent;
-  return readRtuReply(fd_, request, gatewayByteTimeout(config_), medium());
-}
-
-Result RtuOverTcpLink::sendBroadcast(const EncodedRequest& request) {
-  if (!prepareLine(request)) return closedUnsent(request.request());
-  return send(request.request(), request.adu());
 }
 
 }  // namespace modbus_rtu_driver

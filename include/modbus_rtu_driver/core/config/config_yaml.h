@@ -55,7 +55,10 @@ std::set<std::string> with(std::set<std::string> keys, const std::set<std::strin
 
 // The serial line's keys, shared by both roles.
 extern const std::set<std::string> kLinkKeys;
+// The link's keys, then validateLinkConfig (the line settings: the port is the role's to check).
 void parseLink(const YAML::Node& root, LinkConfig* out);
+// The link's keys alone (their types checked, not their values).
+void readLink(const YAML::Node& root, LinkConfig* out);
 double parseDiagnosticPeriod(const YAML::Node& root);
 
 // Runs a parser; its first error becomes the message.

@@ -18,6 +18,8 @@ inline constexpr NameTable<DirectionControl, 3> kDirectionControlNames{
      {DirectionControl::kRtsLow, "rts_low"}}};
 
 struct LinkConfig {
+  // A serial device, or another kind of link by its scheme (tcp://HOST:PORT, ...): the kinds
+  // register themselves with the links, which parse and check it (core/link/link_types.h).
   std::string port = "/dev/ttyUSB0";
   int baud = 9600;  // 1200-115200
   Parity parity = Parity::kNone;
@@ -34,27 +36,17 @@ struct LinkConfig {
   double min_gap = 0.0;  // s, silence kept between frames; 0 = t3.5 of the baud
   DirectionControl direction = DirectionControl::kAuto;
   bool low_latency = true;  // ask the USB adapter driver for ASYNC_LOW_LATENCY
-  // s added to every timeout of a tcp:// or rtu+tcp:// port for the network and the gateway.
+  // s added to every timeout of a networked port (tcp://, rtu+tcp://: LinkType::networked) for
+  // the network and the gateway.
   double network_allowance = 0.1;
 };
-
-// What `port` names: a serial device, a Modbus TCP server (tcp://HOST:PORT) or a transparent
-// gateway carrying RTU frames over TCP (rtu+tcp://HOST:PORT).
-enum class PortKind { kSerial, kModbusTcp, kRtuOverTcp };
-struct PortAddress {
-  PortKind kind = PortKind::kSerial;
-  std::string host;  // TCP forms only; an IPv6 address without its brackets
-  int tcp_port = 0;  // 1-65535
-};
-// False with a message naming the port and the expected form when it does not parse.
-bool parsePortAddress(const std::string& port, PortAddress* out, std::string* error);
-const char* portKindName(PortKind kind);  // "serial RTU", "Modbus TCP", "RTU over TCP"
 
 // What a device may take to start answering once a request is on the wire, USB adapters' latency
 // included: the auto response timeout's allowance.
 constexpr double kTurnaroundAllowance = 0.05;
 
-// Empty when valid, else one message naming the field, the value and the allowed range.
+// Empty when valid, else one message naming the field, the value and the allowed range. The
+// line settings only: the port is its kind's to check (validateLink, core/link/link_types.h).
 std::string validateLinkConfig(const LinkConfig& config);
 
 // Parity's one name in YAML and options; its letter only where a line is written 8N1 and for

@@ -15,6 +15,7 @@
 
 #include "modbus_rtu_driver/core/config/link_config.h"
 #include "modbus_rtu_driver/core/link/fd_io.h"
+#include "modbus_rtu_driver/core/link/link_types.h"
 #include "modbus_rtu_driver/core/link/transport.h"
 #include "modbus_rtu_driver/core/modbus/frame.h"
 
@@ -67,7 +68,11 @@ std::string formatWireEvent(const WireEvent& event);
 
 class Link : public Transport {
  public:
-  explicit Link(LinkConfig config) : config_(std::move(config)) {}
+  // `target` is config.port parsed (makeLink passes the one it parsed); without one, the link
+  // parses the port itself (a link built from its config alone, as tests do).
+  explicit Link(LinkConfig config, LinkTarget target = {})
+      : config_(std::move(config)),
+        target_(target.type ? std::move(target) : linkTargetOf(config_.port)) {}
   Link(const Link&) = delete;
   Link& operator=(const Link&) = delete;
 
@@ -82,7 +87,8 @@ class Link : public Transport {
   void setReplyDelay(uint8_t slave, double seconds) { reply_delay_[slave] = seconds; }
   const LinkConfig& config() const { return config_; }
   LinkStats stats() const;
-  virtual PortKind kind() const = 0;
+  // What the port names: its kind (LinkType: name, traits) and address.
+  const LinkTarget& target() const { return target_; }
   // True when a USB adapter accepted ASYNC_LOW_LATENCY (serial only). Any thread.
   virtual bool lowLatency() const { return false; }
   // Called on the bus thread with every frame sent and every reply read; set it before the bus
@@ -129,6 +135,7 @@ class Link : public Transport {
                 std::chrono::steady_clock::time_point last, const Bytes& frame, double cpu);
 
   LinkConfig config_;
+  LinkTarget target_;
   double reply_delay_[256] = {};
   std::chrono::steady_clock::time_point last_activity_{};
 

@@ -20,13 +20,13 @@ namespace modbus_rtu_driver {
 
 class RtuLink : public Link {
  public:
-  explicit RtuLink(LinkConfig config) : Link(std::move(config)) {}
+  explicit RtuLink(LinkConfig config, LinkTarget target = {})
+      : Link(std::move(config), std::move(target)) {}
   ~RtuLink() override;
 
   bool connect(std::string* error) override;
   bool connected() const override { return ctx_ != nullptr; }
   void disconnect() override;
-  PortKind kind() const override { return PortKind::kSerial; }
   // True when the port accepted ASYNC_LOW_LATENCY (USB adapters; ptys do not support it).
   // Any thread.
   bool lowLatency() const override { return low_latency_.load(); }

@@ -1,11 +1,6 @@
-// The TCP transports: a link whose frames go through a socket to a gateway (or a Modbus TCP
-// device). The base holds the connection; the two forms differ in what they put on it.
-//   RtuOverTcpLink (rtu+tcp://): RTU frames as on the wire, for transparent RS485-Ethernet
-//     gateways. The serial rules hold on the far side: one transaction at a time, stale bytes
-//     dropped before a request, the reply read by its announced length and its CRC checked,
-//     the late-reply guard, addresses 0 and 248-255.
-//   ModbusTcpLink (tcp://): MBAP frames (core/modbus/mbap.h), the device address as the unit id
-//     (0-255); a reply is matched by its transaction id, others (late replies) are dropped.
+// The base of the TCP links: a link whose frames go through a socket to a gateway (or a Modbus
+// TCP device). It holds the connection; its two forms differ in what they put on it:
+// RtuOverTcpLink (rtu_over_tcp_link.h) and ModbusTcpLink (modbus_tcp_link.h).
 // Timeouts are the serial line's at `baud` plus network_allowance. A closed or failed
 // connection is an i/o error (kIo): the link disconnects and the bus reconnects with backoff.
 #pragma once
@@ -18,7 +13,7 @@ namespace modbus_rtu_driver {
 
 class TcpLink : public Link {
  public:
-  explicit TcpLink(LinkConfig config);
+  explicit TcpLink(LinkConfig config, LinkTarget target = {});
   ~TcpLink() override;
   bool connect(std::string* error) override;
   bool connected() const override { return fd_ >= 0; }
@@ -34,36 +29,6 @@ class TcpLink : public Link {
   Result closedUnsent(const Request& request) const;
 
   int fd_ = -1;
-
- private:
-  PortAddress address_;
-};
-
-class RtuOverTcpLink : public TcpLink {
- public:
-  using TcpLink::TcpLink;
-  PortKind kind() const override { return PortKind::kRtuOverTcp; }
-
- protected:
-  Result attempt(const EncodedRequest& request) override;
-  Result sendBroadcast(const EncodedRequest& request) override;
-
- private:
-  bool prepareLine(const EncodedRequest& request);  // false: the connection is gone
-};
-
-class ModbusTcpLink : public TcpLink {
- public:
-  using TcpLink::TcpLink;
-  PortKind kind() const override { return PortKind::kModbusTcp; }
-
- protected:
-  Result attempt(const EncodedRequest& request) override;
-  Result sendBroadcast(const EncodedRequest& request) override;
-  double minGap() const override { return 0; }  // the gateway paces its own line
-
- private:
-  uint16_t next_transaction_ = 0;
 };
 
 }  // namespace modbus_rtu_driver

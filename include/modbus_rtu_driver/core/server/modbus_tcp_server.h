@@ -31,34 +31,14 @@
 #include <thread>
 #include <vector>
 
+#include "modbus_rtu_driver/core/config/share_config.h"
 #include "modbus_rtu_driver/core/modbus/frame.h"
 
 namespace modbus_rtu_driver {
 
-struct TcpServerOptions {
-  std::string host = "127.0.0.1";  // IPv4 address to listen on (0.0.0.0: every interface)
-  uint16_t port = 1502;            // 0: any free port (tests; see ModbusTcpServer::port())
-  // Clients allowed to connect: IPv4 addresses or CIDR blocks ("10.0.0.0/8", "0.0.0.0/0" for
-  // everyone). Others are closed at accept.
-  std::vector<std::string> allow{"127.0.0.1"};
-  int max_clients = 4;  // connections at once; a further one is closed at accept
-  // s a client with no answer pending may stay silent before it is closed; 0 = never.
-  double idle_timeout = 60.0;
-  // Every write function code answered with exception 01 before it is decoded (the share's
-  // read_only; not a YAML key of its own).
-  bool refuse_writes = false;
-};
-
 // Keep-alive on an accepted socket: first probe after 30 s of silence, then every 10 s, the
 // connection dropped after 3 unanswered probes.
 constexpr int kKeepAliveIdle = 30, kKeepAliveInterval = 10, kKeepAliveCount = 3;
-
-// "127.0.0.1:1502" -> host and port (1-65535). False with a message.
-bool parseListenAddress(const std::string& text, std::string* host, uint16_t* port,
-                        std::string* error);
-// An allow-list entry: "a.b.c.d" or "a.b.c.d/n" (n 0-32). False with a message.
-bool parseAllowEntry(const std::string& entry, uint32_t* network, uint32_t* mask,
-                     std::string* error);
 
 class ModbusTcpServer {
  public:

@@ -28,17 +28,6 @@
 
 namespace modbus_rtu_driver {
 
-struct ShareConfig {
-  bool enabled = false;
-  TcpServerOptions server;  // listen, allow, max_clients
-  // Write functions (05, 06, 15, 16) answered with exception 01 before any check of their
-  // fields (the server's refuse_writes).
-  bool read_only = false;
-  int max_queue = 16;                 // requests waiting for or on the bus, all clients together
-  double broadcast_turnaround = 0.1;  // s of silence on the bus after a broadcast, 0-1
-};
-constexpr double kMaxBroadcastTurnaround = 1.0;  // s
-
 // The gateway exception for a failed transaction, or the device's own exception code.
 uint8_t shareExceptionFor(const Result& result);
 // What the client gets for `request` once it ran with `result`: an RTU ADU (reply or exception).
