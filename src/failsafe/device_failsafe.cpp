@@ -176,7 +176,7 @@ void DeviceFailsafe::afterPoll() {
       // Unread, a restore could stop a run the device restarted (a power-down save) where the
       // snapshot, up to 8 polls old, says none runs: nothing is written now, and the next poll
       // that answers decides again (the change, and what is owed, are still there).
-      const Result read = device_.refreshSelfTimed(t);
+      Result read = device_.refreshSelfTimed(t);  // not const: returned by move
       if (!read.ok()) {
         FailsafeReport r;
         r.device = device_.name();
