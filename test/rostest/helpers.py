@@ -1,10 +1,14 @@
 """Shared pieces of the rostests: the simulator's control socket and waiting helpers."""
 import os
+import signal
 import socket
 import struct
+import subprocess
 import sys
+import tempfile
 import time
 
+import rosparam
 import rospy
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
@@ -57,6 +61,44 @@ class Latest:
     def wait(self, timeout=10.0, predicate=lambda m: True, what="a message"):
         return wait_until(lambda: self.msg if self.msg is not None and predicate(self.msg) else None,
                           timeout, what + " on " + self.sub.name)
+
+
+class BusNode:
+    """The bus node run by the test itself, to start it on outputs left set and to stop it with
+    a signal; `output` is what it printed, kept after the stop for the test to read."""
+
+    def __init__(self, name):
+        self.name = name
+        self.process = None
+        self.output = ""
+        self._log = None
+
+    @property
+    def running(self):
+        return self.process is not None
+
+    def start(self, config, fresh=False):
+        """Uploads `config` as the node's parameters (fresh: the previous ones deleted first, so
+        no key of an earlier start stays) and starts the node."""
+        if fresh and rospy.has_param("/" + self.name):
+            rosparam.delete_param("/" + self.name)
+        rosparam.upload_params("/" + self.name, config)
+        self._log = tempfile.TemporaryFile(mode="w+")
+        self.process = subprocess.Popen(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus",
+                                         "__name:=" + self.name],
+                                        stdout=self._log, stderr=subprocess.STDOUT)
+
+    def stop(self, sig=signal.SIGINT):
+        """Sends `sig` and waits (30 s at most) for the exit: its code, None when not running."""
+        if self.process is None:
+            return None
+        self.process.send_signal(sig)
+        code = self.process.wait(30)
+        self.process = None
+        self._log.seek(0)
+        self.output = self._log.read()
+        print(self.output)
+        return code
 
 
 def service(name, srv_type, timeout=20.0):

@@ -9,13 +9,10 @@ import copy
 import os
 import signal
 import struct
-import subprocess
-import tempfile
 import threading
 import time
 import unittest
 
-import rosparam
 import rospkg
 import rospy
 import rostest
@@ -55,7 +52,7 @@ class GenericFailsafeTest(unittest.TestCase):
         cls.beating = threading.Event()
         cls.beating.set()
         threading.Thread(target=cls.heartbeat, daemon=True).start()
-        cls.node = None
+        cls.node = helpers.BusNode(NODE)
 
     @classmethod
     def heartbeat(cls):
@@ -76,28 +73,16 @@ class GenericFailsafeTest(unittest.TestCase):
 
     @classmethod
     def start_node(cls):
-        if rospy.has_param("/" + NODE):
-            rosparam.delete_param("/" + NODE)
-        rosparam.upload_params("/" + NODE, cls.config)
-        cls.log = tempfile.TemporaryFile(mode="w+")
-        cls.node = subprocess.Popen(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus",
-                                     "__name:=" + NODE], stdout=cls.log, stderr=subprocess.STDOUT)
+        # Fresh: a key the previous config had and this one has not must not stay.
+        cls.node.start(cls.config, fresh=True)
         return helpers.service(NS + "drive/speed/set", SetValue, timeout=30)
 
     @classmethod
     def stop_node(cls, sig):
-        if cls.node is None:
-            return None
-        cls.node.send_signal(sig)
-        code = cls.node.wait(30)
-        cls.node = None
-        cls.log.seek(0)
-        cls.output = cls.log.read()
-        print(cls.output)
-        return code
+        return cls.node.stop(sig)
 
     def ensure_node(self):
-        if self.node is None:
+        if not self.node.running:
             self.start_node()
 
     def event(self, trigger, since=0):
@@ -228,7 +213,8 @@ class GenericFailsafeTest(unittest.TestCase):
         code = self.stop_node(signal.SIGINT)
         self.assertEqual(code, 0)
         self.assertEqual(self.board(), (SAFE_SPEED, 0))
-        self.assertIn("drive: fail-safe shutdown (node stops): speed -2.5 Hz, run off", self.output)
+        self.assertIn("drive: fail-safe shutdown (node stops): speed -2.5 Hz, run off",
+                      self.node.output)
 
     def test_6_bus_heartbeat_lost_reaches_the_generic_device(self):
         self.stop_node(signal.SIGINT)
