@@ -6,10 +6,14 @@ import struct
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 import rosparam
+import rospkg
 import rospy
+import yaml
+from std_msgs.msg import String
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
@@ -61,6 +65,34 @@ class Latest:
     def wait(self, timeout=10.0, predicate=lambda m: True, what="a message"):
         return wait_until(lambda: self.msg if self.msg is not None and predicate(self.msg) else None,
                           timeout, what + " on " + self.sub.name)
+
+
+def bus_config(filename):
+    """The bus configuration test/rostest/<filename>, on the port of this test's line (~port)."""
+    path = os.path.join(rospkg.RosPack().get_path("modbus_rtu_driver"), "test", "rostest",
+                        filename)
+    with open(path) as f:
+        config = yaml.safe_load(f)
+    config["port"] = rospy.get_param("~port")
+    return config
+
+
+def heartbeat(topics, interval=0.05):
+    """Publishes "alive" on each of `topics` every `interval` s from a daemon thread while the
+    returned Event is set (set at the start; clear it to lose the heartbeat)."""
+    publishers = [rospy.Publisher(topic, String, queue_size=1) for topic in topics]
+    beating = threading.Event()
+    beating.set()
+
+    def beat():
+        while not rospy.is_shutdown():
+            if beating.is_set():
+                for pub in publishers:
+                    pub.publish(String("alive"))
+            time.sleep(interval)
+
+    threading.Thread(target=beat, daemon=True).start()
+    return beating
 
 
 class BusNode:

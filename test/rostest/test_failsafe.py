@@ -2,18 +2,14 @@
 """Fail-safe outputs against the real node and the simulator: each trigger is checked in the
 simulator's coils, not only in the node's topics. The test runs the bus node itself, so it can
 start it on outputs left on and stop it with SIGINT or SIGTERM."""
-import os
 import signal
-import threading
 import time
 import unittest
 
-import rospkg
 import rospy
 import rostest
-import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from std_msgs.msg import Bool, String
+from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
 
 from modbus_rtu_driver.msg import DigitalStates, FailsafeEvent
@@ -30,26 +26,12 @@ class FailsafeTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node("test_failsafe")
         cls.sim = helpers.sim()
-        path = os.path.join(rospkg.RosPack().get_path("modbus_rtu_driver"), "test", "rostest",
-                            "failsafe_bus.yaml")
-        with open(path) as f:
-            cls.config = yaml.safe_load(f)
-        cls.config["port"] = rospy.get_param("~port")
+        cls.config = helpers.bus_config("failsafe_bus.yaml")
         cls.events = []
         rospy.Subscriber(NS + "failsafe", FailsafeEvent, cls.events.append)
-        cls.alive = rospy.Publisher("/robot/alive", String, queue_size=1)
-        cls.beating = threading.Event()
-        cls.beating.set()
-        threading.Thread(target=cls.heartbeat, daemon=True).start()
+        cls.beating = helpers.heartbeat(["/robot/alive"])
         cls.diag = helpers.Latest("/diagnostics", DiagnosticArray)
         cls.node = helpers.BusNode(NODE)
-
-    @classmethod
-    def heartbeat(cls):
-        while not rospy.is_shutdown():
-            if cls.beating.is_set():
-                cls.alive.publish(String("alive"))
-            time.sleep(0.05)
 
     @classmethod
     def tearDownClass(cls):

@@ -6,19 +6,15 @@ generic device has. Also: a NaN reading is published once, not on every poll, an
 the device refuses with exception 03 (too long, as Eastron meters answer) is split. The test
 runs the bus node itself, so it can start it on values left set and stop it."""
 import copy
-import os
 import signal
 import struct
-import threading
 import time
 import unittest
 
-import rospkg
 import rospy
 import rostest
-import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from std_msgs.msg import Float64, String
+from std_msgs.msg import Float64
 from std_srvs.srv import SetBool
 
 from modbus_rtu_driver.msg import FailsafeEvent, SignalValues
@@ -37,30 +33,14 @@ class GenericFailsafeTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node("test_generic_failsafe")
         cls.sim = helpers.sim()
-        path = os.path.join(rospkg.RosPack().get_path("modbus_rtu_driver"), "test", "rostest",
-                            "generic_failsafe_bus.yaml")
-        with open(path) as f:
-            cls.base_config = yaml.safe_load(f)
-        cls.base_config["port"] = rospy.get_param("~port")
+        cls.base_config = helpers.bus_config("generic_failsafe_bus.yaml")
         cls.config = cls.base_config
         cls.events = []
         rospy.Subscriber(NS + "failsafe", FailsafeEvent, cls.events.append)
         cls.statuses = {}
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls.on_diag)
-        cls.beats = {topic: rospy.Publisher(topic, String, queue_size=1)
-                     for topic in ("/robot/drive_alive", "/robot/alive")}
-        cls.beating = threading.Event()
-        cls.beating.set()
-        threading.Thread(target=cls.heartbeat, daemon=True).start()
+        cls.beating = helpers.heartbeat(["/robot/drive_alive", "/robot/alive"])
         cls.node = helpers.BusNode(NODE)
-
-    @classmethod
-    def heartbeat(cls):
-        while not rospy.is_shutdown():
-            if cls.beating.is_set():
-                for pub in cls.beats.values():
-                    pub.publish(String("alive"))
-            time.sleep(0.05)
 
     @classmethod
     def on_diag(cls, msg):
