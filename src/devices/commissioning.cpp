@@ -38,6 +38,13 @@ std::string baudCodeText(int code) {
               : "code " + std::to_string(code) + " (not a baud rate)";
 }
 
+DeviceConfig boardConfig(const DeviceDescriptor& type, int address) {
+  DeviceConfig d;
+  d.name = d.type = type.name;
+  d.address = address;
+  return d;
+}
+
 std::string parityCodeText(int code) {
   // The stored codes 0 none, 1 even, 2 odd are Parity's order (enum class Parity).
   return code >= 0 && code <= 2 ? std::string(parityName(static_cast<Parity>(code)))
@@ -47,6 +54,15 @@ std::string parityCodeText(int code) {
 // The defaults answer for a feature the type does not have: has() keeps the tool from asking.
 Result Commissioning::unsupported() {
   return Result::failure(ErrorKind::kInvalidArgument, "not a setting of this device type");
+}
+Probe Commissioning::probeByRead(
+    Transport& bus, const Request& read,
+    const std::function<void(const std::vector<uint16_t>& values, Probe* probe)>& judge) {
+  Probe p;
+  const Result r = bus.execute(read);
+  p.unclear = !answered(r);
+  if (r.ok()) judge(r.values, &p);
+  return p;
 }
 Result Commissioning::readAddress(Transport&, int, uint16_t*) const {
   return unsupported();

@@ -10,10 +10,7 @@ namespace modbus_rtu_driver {
 namespace {
 
 LcRelay8 boardAt(int address) {
-  DeviceConfig d;
-  d.name = d.type = kLcRelay8Type.name;
-  d.address = address;
-  return LcRelay8(d);
+  return LcRelay8(boardConfig(kLcRelay8Type, address));
 }
 
 class LcRelay8Commissioning : public Commissioning {
@@ -23,13 +20,11 @@ class LcRelay8Commissioning : public Commissioning {
   int probeOrder() const override { return 30; }
 
   Probe probe(Transport& bus, uint8_t address) const override {
-    Probe p;
-    const Result r =
-        bus.execute(Request::readHoldingRegisters(address, LcRelay8::kBaudReadRegister, 1));
-    p.unclear = !answered(r);
     const auto [lo, hi] = baudCodes();
-    if (r.ok() && r.values[0] >= lo && r.values[0] <= hi) p.kind = Probe::kYes;
-    return p;
+    return probeByRead(bus, Request::readHoldingRegisters(address, LcRelay8::kBaudReadRegister, 1),
+                       [lo = lo, hi = hi](const std::vector<uint16_t>& values, Probe* p) {
+                         if (values[0] >= lo && values[0] <= hi) p->kind = Probe::kYes;
+                       });
   }
 
   Result report(Transport& bus, uint8_t address, InfoReport* out) const override {

@@ -9,10 +9,7 @@ namespace modbus_rtu_driver {
 namespace {
 
 DeviceConfig at(int address) {
-  DeviceConfig d;
-  d.name = d.type = kLd58a08Type.name;
-  d.address = address == kBlind ? kLd58a08Type.also_answers : address;
-  return d;
+  return boardConfig(kLd58a08Type, address == kBlind ? kLd58a08Type.also_answers : address);
 }
 
 Ld58a08Setting registerOf(BoardFeature which) {
@@ -37,18 +34,18 @@ class Ld58a08Commissioning : public Commissioning {
   int probeOrder() const override { return 10; }
 
   Probe probe(Transport& bus, uint8_t address) const override {
-    Probe p;
-    const Result r =
-        bus.execute(Request::readHoldingRegisters(address, Ld58a08::kAddressRegister, 1));
-    p.unclear = !answered(r);
-    if (r.ok() && r.values[0] == address) {
-      p.kind = Probe::kYes;
-    } else if (r.ok() && address == kLd58a08Type.also_answers) {
-      // It answers 0xFF as "whoever you are": it is at its own address, not at 255.
-      p.kind = Probe::kElsewhere;
-      p.note = "an LD58A08 answered for its address " + std::to_string(r.values[0]);
-    }
-    return p;
+    return probeByRead(bus, Request::readHoldingRegisters(address, Ld58a08::kAddressRegister, 1),
+                       [address](const std::vector<uint16_t>& values, Probe* p) {
+                         if (values[0] == address) {
+                           p->kind = Probe::kYes;
+                         } else if (address == kLd58a08Type.also_answers) {
+                           // It answers 0xFF as "whoever you are": it is at its own address, not at
+                           // 255.
+                           p->kind = Probe::kElsewhere;
+                           p->note =
+                               "an LD58A08 answered for its address " + std::to_string(values[0]);
+                         }
+                       });
   }
 
   Result report(Transport& bus, uint8_t address, InfoReport* out) const override {

@@ -12,10 +12,7 @@ namespace modbus_rtu_driver {
 namespace {
 
 YespeedPdu pduAt(int address) {
-  DeviceConfig d;
-  d.name = d.type = kYespeedPduType.name;
-  d.address = address;
-  return YespeedPdu(d);
+  return YespeedPdu(boardConfig(kYespeedPduType, address));
 }
 
 PduLimitRegisters asRegisters(const std::vector<uint16_t>& regs) {
@@ -30,11 +27,8 @@ class YespeedPduCommissioning : public Commissioning {
   int probeOrder() const override { return 20; }
 
   Probe probe(Transport& bus, uint8_t address) const override {
-    Probe p;
-    const Result r = bus.execute(Request::readInputRegisters(address, 0, 5));
-    p.unclear = !answered(r);
-    if (r.ok()) p.kind = Probe::kYes;
-    return p;
+    return probeByRead(bus, Request::readInputRegisters(address, 0, 5),
+                       [](const std::vector<uint16_t>&, Probe* p) { p->kind = Probe::kYes; });
   }
 
   Result report(Transport& bus, uint8_t address, InfoReport* out) const override {

@@ -1,11 +1,19 @@
 """Shared pieces of the rostests: the simulator's control socket and waiting helpers."""
 import os
+import signal
 import socket
 import struct
+import subprocess
 import sys
+import tempfile
+import threading
 import time
 
+import rosparam
+import rospkg
 import rospy
+import yaml
+from std_msgs.msg import String
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
@@ -57,6 +65,72 @@ class Latest:
     def wait(self, timeout=10.0, predicate=lambda m: True, what="a message"):
         return wait_until(lambda: self.msg if self.msg is not None and predicate(self.msg) else None,
                           timeout, what + " on " + self.sub.name)
+
+
+def bus_config(filename):
+    """The bus configuration test/rostest/<filename>, on the port of this test's line (~port)."""
+    path = os.path.join(rospkg.RosPack().get_path("modbus_rtu_driver"), "test", "rostest",
+                        filename)
+    with open(path) as f:
+        config = yaml.safe_load(f)
+    config["port"] = rospy.get_param("~port")
+    return config
+
+
+def heartbeat(topics, interval=0.05):
+    """Publishes "alive" on each of `topics` every `interval` s from a daemon thread while the
+    returned Event is set (set at the start; clear it to lose the heartbeat)."""
+    publishers = [rospy.Publisher(topic, String, queue_size=1) for topic in topics]
+    beating = threading.Event()
+    beating.set()
+
+    def beat():
+        while not rospy.is_shutdown():
+            if beating.is_set():
+                for pub in publishers:
+                    pub.publish(String("alive"))
+            time.sleep(interval)
+
+    threading.Thread(target=beat, daemon=True).start()
+    return beating
+
+
+class BusNode:
+    """The bus node run by the test itself, to start it on outputs left set and to stop it with
+    a signal; `output` is what it printed, kept after the stop for the test to read."""
+
+    def __init__(self, name):
+        self.name = name
+        self.process = None
+        self.output = ""
+        self._log = None
+
+    @property
+    def running(self):
+        return self.process is not None
+
+    def start(self, config, fresh=False):
+        """Uploads `config` as the node's parameters (fresh: the previous ones deleted first, so
+        no key of an earlier start stays) and starts the node."""
+        if fresh and rospy.has_param("/" + self.name):
+            rosparam.delete_param("/" + self.name)
+        rosparam.upload_params("/" + self.name, config)
+        self._log = tempfile.TemporaryFile(mode="w+")
+        self.process = subprocess.Popen(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus",
+                                         "__name:=" + self.name],
+                                        stdout=self._log, stderr=subprocess.STDOUT)
+
+    def stop(self, sig=signal.SIGINT):
+        """Sends `sig` and waits (30 s at most) for the exit: its code, None when not running."""
+        if self.process is None:
+            return None
+        self.process.send_signal(sig)
+        code = self.process.wait(30)
+        self.process = None
+        self._log.seek(0)
+        self.output = self._log.read()
+        print(self.output)
+        return code
 
 
 def service(name, srv_type, timeout=20.0):

@@ -2,21 +2,14 @@
 """Fail-safe outputs against the real node and the simulator: each trigger is checked in the
 simulator's coils, not only in the node's topics. The test runs the bus node itself, so it can
 start it on outputs left on and stop it with SIGINT or SIGTERM."""
-import os
 import signal
-import tempfile
-import subprocess
-import threading
 import time
 import unittest
 
-import rosparam
-import rospkg
 import rospy
 import rostest
-import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from std_msgs.msg import Bool, String
+from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
 
 from modbus_rtu_driver.msg import DigitalStates, FailsafeEvent
@@ -33,26 +26,12 @@ class FailsafeTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node("test_failsafe")
         cls.sim = helpers.sim()
-        path = os.path.join(rospkg.RosPack().get_path("modbus_rtu_driver"), "test", "rostest",
-                            "failsafe_bus.yaml")
-        with open(path) as f:
-            cls.config = yaml.safe_load(f)
-        cls.config["port"] = rospy.get_param("~port")
+        cls.config = helpers.bus_config("failsafe_bus.yaml")
         cls.events = []
         rospy.Subscriber(NS + "failsafe", FailsafeEvent, cls.events.append)
-        cls.alive = rospy.Publisher("/robot/alive", String, queue_size=1)
-        cls.beating = threading.Event()
-        cls.beating.set()
-        threading.Thread(target=cls.heartbeat, daemon=True).start()
+        cls.beating = helpers.heartbeat(["/robot/alive"])
         cls.diag = helpers.Latest("/diagnostics", DiagnosticArray)
-        cls.node = None
-
-    @classmethod
-    def heartbeat(cls):
-        while not rospy.is_shutdown():
-            if cls.beating.is_set():
-                cls.alive.publish(String("alive"))
-            time.sleep(0.05)
+        cls.node = helpers.BusNode(NODE)
 
     @classmethod
     def tearDownClass(cls):
@@ -60,23 +39,12 @@ class FailsafeTest(unittest.TestCase):
 
     @classmethod
     def start_node(cls):
-        rosparam.upload_params("/" + NODE, cls.config)
-        cls.log = tempfile.TemporaryFile(mode="w+")
-        cls.node = subprocess.Popen(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus",
-                                     "__name:=" + NODE], stdout=cls.log, stderr=subprocess.STDOUT)
+        cls.node.start(cls.config)
         return helpers.service(NS + "relays/pump/set", SetBool, timeout=30)
 
     @classmethod
     def stop_node(cls, sig):
-        if cls.node is None:
-            return None
-        cls.node.send_signal(sig)
-        code = cls.node.wait(30)
-        cls.node = None
-        cls.log.seek(0)
-        cls.output = cls.log.read()
-        print(cls.output)
-        return code
+        return cls.node.stop(sig)
 
     def coils(self, dev, n=8):
         return self.sim.get(dev, "coil", 0, n)
@@ -180,7 +148,7 @@ class FailsafeTest(unittest.TestCase):
             self.assertEqual(self.coils(RELAYS, 4), [0, 0, 1, 1], "after %s" % sig)
             self.assertEqual(self.coils(PWM, 2), [0, 1], "after %s" % sig)
             self.assertIn("relays: fail-safe shutdown (node stops): pump off, valve off, lamp on",
-                          self.output)
+                          self.node.output)
             self.start_node()
 
     def test_6_a_device_that_cannot_be_reached_at_stop_is_logged_and_the_node_exits(self):
@@ -195,8 +163,8 @@ class FailsafeTest(unittest.TestCase):
             self.sim.silence(RELAYS, False)
         self.assertEqual(code, 0)
         self.assertLess(took, self.config["shutdown_timeout"] + 10, "bounded")
-        self.assertIn("relays: fail-safe shutdown (node stops)", self.output)
-        self.assertIn("NOT confirmed", self.output)
+        self.assertIn("relays: fail-safe shutdown (node stops)", self.node.output)
+        self.assertIn("NOT confirmed", self.node.output)
         self.assertEqual(self.coils(RELAYS, 1), [1], "the silent board kept its state")
         # The other boards still got theirs.
         self.assertEqual(self.coils(PWM, 2), [0, 1])
@@ -208,7 +176,7 @@ class FailsafeTest(unittest.TestCase):
         # power-cycled. The restore must write the last confirmed states with the held
         # channels safe: pump stays off with no heartbeat, lamp (on only by the fail-safe) and
         # fan (the user's) come back on.
-        if self.node is None:
+        if not self.node.running:
             self.start_node()
         self.set("relays/pump", True)
         self.set("relays/fan", True)

@@ -6,22 +6,15 @@ generic device has. Also: a NaN reading is published once, not on every poll, an
 the device refuses with exception 03 (too long, as Eastron meters answer) is split. The test
 runs the bus node itself, so it can start it on values left set and stop it."""
 import copy
-import os
 import signal
 import struct
-import subprocess
-import tempfile
-import threading
 import time
 import unittest
 
-import rosparam
-import rospkg
 import rospy
 import rostest
-import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from std_msgs.msg import Float64, String
+from std_msgs.msg import Float64
 from std_srvs.srv import SetBool
 
 from modbus_rtu_driver.msg import FailsafeEvent, SignalValues
@@ -40,30 +33,14 @@ class GenericFailsafeTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node("test_generic_failsafe")
         cls.sim = helpers.sim()
-        path = os.path.join(rospkg.RosPack().get_path("modbus_rtu_driver"), "test", "rostest",
-                            "generic_failsafe_bus.yaml")
-        with open(path) as f:
-            cls.base_config = yaml.safe_load(f)
-        cls.base_config["port"] = rospy.get_param("~port")
+        cls.base_config = helpers.bus_config("generic_failsafe_bus.yaml")
         cls.config = cls.base_config
         cls.events = []
         rospy.Subscriber(NS + "failsafe", FailsafeEvent, cls.events.append)
         cls.statuses = {}
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls.on_diag)
-        cls.beats = {topic: rospy.Publisher(topic, String, queue_size=1)
-                     for topic in ("/robot/drive_alive", "/robot/alive")}
-        cls.beating = threading.Event()
-        cls.beating.set()
-        threading.Thread(target=cls.heartbeat, daemon=True).start()
-        cls.node = None
-
-    @classmethod
-    def heartbeat(cls):
-        while not rospy.is_shutdown():
-            if cls.beating.is_set():
-                for pub in cls.beats.values():
-                    pub.publish(String("alive"))
-            time.sleep(0.05)
+        cls.beating = helpers.heartbeat(["/robot/drive_alive", "/robot/alive"])
+        cls.node = helpers.BusNode(NODE)
 
     @classmethod
     def on_diag(cls, msg):
@@ -76,28 +53,16 @@ class GenericFailsafeTest(unittest.TestCase):
 
     @classmethod
     def start_node(cls):
-        if rospy.has_param("/" + NODE):
-            rosparam.delete_param("/" + NODE)
-        rosparam.upload_params("/" + NODE, cls.config)
-        cls.log = tempfile.TemporaryFile(mode="w+")
-        cls.node = subprocess.Popen(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus",
-                                     "__name:=" + NODE], stdout=cls.log, stderr=subprocess.STDOUT)
+        # Fresh: a key the previous config had and this one has not must not stay.
+        cls.node.start(cls.config, fresh=True)
         return helpers.service(NS + "drive/speed/set", SetValue, timeout=30)
 
     @classmethod
     def stop_node(cls, sig):
-        if cls.node is None:
-            return None
-        cls.node.send_signal(sig)
-        code = cls.node.wait(30)
-        cls.node = None
-        cls.log.seek(0)
-        cls.output = cls.log.read()
-        print(cls.output)
-        return code
+        return cls.node.stop(sig)
 
     def ensure_node(self):
-        if self.node is None:
+        if not self.node.running:
             self.start_node()
 
     def event(self, trigger, since=0):
@@ -228,7 +193,8 @@ class GenericFailsafeTest(unittest.TestCase):
         code = self.stop_node(signal.SIGINT)
         self.assertEqual(code, 0)
         self.assertEqual(self.board(), (SAFE_SPEED, 0))
-        self.assertIn("drive: fail-safe shutdown (node stops): speed -2.5 Hz, run off", self.output)
+        self.assertIn("drive: fail-safe shutdown (node stops): speed -2.5 Hz, run off",
+                      self.node.output)
 
     def test_6_bus_heartbeat_lost_reaches_the_generic_device(self):
         self.stop_node(signal.SIGINT)

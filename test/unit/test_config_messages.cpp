@@ -4,31 +4,18 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
-#include "modbus_rtu_driver/config/bus_config.h"
+#include "bus_config_fixtures.h"
 #include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/core/config/slave_config.h"
 
 using namespace modbus_rtu_driver;
+using namespace modbus_rtu_driver::configtest;
 
 namespace {
-
-std::string parseError(const std::string& yaml) {
-  BusConfig c;
-  std::string error;
-  EXPECT_FALSE(parseBusConfig(YAML::Load(yaml), &c, &error)) << yaml;
-  return error;
-}
 
 // A bus with one relay board: `device` adds to its settings, `bus` to the bus's.
 std::string relays(const std::string& device, const std::string& bus = "") {
   return "{devices: {r: {type: lc_relay8, address: 1" + device + "}}" + bus + "}";
-}
-
-BusConfig parsed(const std::string& yaml) {
-  BusConfig c;
-  std::string error;
-  EXPECT_TRUE(parseBusConfig(YAML::Load(yaml), &c, &error)) << yaml << ": " << error;
-  return c;
 }
 
 }  // namespace

@@ -4,35 +4,22 @@
 #include <algorithm>
 #include <cmath>
 
+#include "device_fixtures.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"
-#include "scripted_transport.h"
 
 using namespace modbus_rtu_driver;
+using namespace modbus_rtu_driver::devtest;
 
 namespace {
-
-DeviceConfig config(const std::string& type, int address) {
-  DeviceConfig c;
-  c.name = "dev";
-  c.type = type;
-  c.address = address;
-  return c;
-}
 
 // Before an output write the LD58A08 reads the channel's PWM registers: here stopped.
 void expectPwmOff(ScriptedTransport& bus, uint8_t ch) {
   const Request read = Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3);
   bus.expect(toHex(encodeRequest(read)), toHex(encodeReply(read, {0, 0, 0})));
 }
-
-#define EXPECT_SCRIPT_DONE(bus)        \
-  do {                                 \
-    EXPECT_EQ((bus).mismatches(), ""); \
-    EXPECT_TRUE((bus).usedUp());       \
-  } while (0)
 
 }  // namespace
 

@@ -2,21 +2,14 @@
 // found, and never sends again what would start something twice. Scripted transport.
 #include <gtest/gtest.h>
 
+#include "device_fixtures.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
-#include "scripted_transport.h"
 
 using namespace modbus_rtu_driver;
+using namespace modbus_rtu_driver::devtest;
 
 namespace {
-
-DeviceConfig config(const std::string& type, int address) {
-  DeviceConfig c;
-  c.name = "dev";
-  c.type = type;
-  c.address = address;
-  return c;
-}
 
 std::string frame(const Request& r) {
   return toHex(encodeRequest(r));

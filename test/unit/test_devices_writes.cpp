@@ -4,24 +4,17 @@
 // PWM). Checked byte for byte against a scripted transport.
 #include <gtest/gtest.h>
 
+#include "device_fixtures.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/devices/output_batch.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"
-#include "scripted_transport.h"
 
 using namespace modbus_rtu_driver;
+using namespace modbus_rtu_driver::devtest;
 
 namespace {
-
-DeviceConfig config(const std::string& type, int address) {
-  DeviceConfig c;
-  c.name = "dev";
-  c.type = type;
-  c.address = address;
-  return c;
-}
 
 std::string hexOf(const Request& r) {
   return toHex(encodeRequest(r));
@@ -36,12 +29,6 @@ void expectPwm(ScriptedTransport& bus, uint8_t ch, uint16_t enable) {
   const Request read = Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3);
   bus.expect(hexOf(read), toHex(encodeReply(read, {10, 5, enable})));
 }
-
-#define EXPECT_SCRIPT_DONE(bus)        \
-  do {                                 \
-    EXPECT_EQ((bus).mismatches(), ""); \
-    EXPECT_TRUE((bus).usedUp());       \
-  } while (0)
 
 }  // namespace
 

@@ -3,20 +3,10 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
-#include "modbus_rtu_driver/config/bus_config.h"
+#include "bus_config_fixtures.h"
 
 using namespace modbus_rtu_driver;
-
-namespace {
-
-std::string parseError(const std::string& yaml) {
-  BusConfig c;
-  std::string error;
-  EXPECT_FALSE(parseBusConfig(YAML::Load(yaml), &c, &error)) << yaml;
-  return error;
-}
-
-}  // namespace
+using namespace modbus_rtu_driver::configtest;
 
 TEST(GenericConfig, TheExampleParsesWithItsTemplates) {
   const std::string file = std::string(REPO_DIR) + "/config/generic.yaml";

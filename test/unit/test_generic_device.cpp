@@ -5,9 +5,9 @@
 
 #include <cmath>
 
+#include "device_fixtures.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/devices/registry.h"
-#include "scripted_transport.h"
 
 using namespace modbus_rtu_driver;
 
@@ -42,12 +42,6 @@ void expectRefused(ScriptedTransport& bus, const Request& r, uint8_t code) {
   bus.expect(toHex(encodeRequest(r)),
              toHex(encodeException(r.slave, static_cast<uint8_t>(r.function), code)));
 }
-
-#define EXPECT_SCRIPT_DONE(bus)        \
-  do {                                 \
-    EXPECT_EQ((bus).mismatches(), ""); \
-    EXPECT_TRUE((bus).usedUp());       \
-  } while (0)
 
 const auto kH = Table::kHoldingRegister;
 const auto kI = Table::kInputRegister;

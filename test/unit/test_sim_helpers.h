@@ -11,7 +11,9 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "modbus_rtu_driver/core/modbus/frame.h"
 #include "modbus_rtu_driver/sim/sim_lc_relay8.h"
@@ -70,6 +72,20 @@ class ScratchDir {
  private:
   std::string path_;
 };
+
+// A simulator of `d` started in `dir`, its link and its state file there.
+inline std::unique_ptr<Simulator> started(const ScratchDir& dir,
+                                          std::vector<SimulatorConfig::Entry> d) {
+  SimulatorConfig config;
+  config.devices = std::move(d);
+  SimulatorOptions options;
+  options.link = dir / "tty";
+  options.state_file = dir / "state.yaml";
+  auto sim = std::make_unique<Simulator>(config, options);
+  std::string error;
+  EXPECT_TRUE(sim->start(&error)) << error;
+  return sim;
+}
 
 // A master on the simulator's link, with the settings a driver would set.
 class PtyClient {

@@ -2,29 +2,11 @@
 // (pending settings apply, outputs off), the others keep their state.
 #include <gtest/gtest.h>
 
-#include <memory>
-
 #include "modbus_rtu_driver/sim/simulator.h"
 #include "test_sim_helpers.h"
 
 using namespace modbus_rtu_driver;
 using namespace modbus_rtu_driver::simtest;
-
-namespace {
-
-std::unique_ptr<Simulator> started(const ScratchDir& dir, std::vector<SimulatorConfig::Entry> d) {
-  SimulatorConfig config;
-  config.devices = std::move(d);
-  SimulatorOptions options;
-  options.link = dir / "tty";
-  options.state_file = dir / "state.yaml";
-  auto sim = std::make_unique<Simulator>(config, options);
-  std::string error;
-  EXPECT_TRUE(sim->start(&error)) << error;
-  return sim;
-}
-
-}  // namespace
 
 TEST(SimPowerCycleOne, OnlyTheNamedDeviceRestarts) {
   ScratchDir dir;

@@ -30,18 +30,6 @@ std::string fileText(const std::string& path) {
   return text.str();
 }
 
-std::unique_ptr<Simulator> started(const ScratchDir& dir, std::vector<SimulatorConfig::Entry> d) {
-  SimulatorConfig config;
-  config.devices = std::move(d);
-  SimulatorOptions options;
-  options.link = dir / "tty";
-  options.state_file = dir / "state.yaml";
-  auto sim = std::make_unique<Simulator>(config, options);
-  std::string error;
-  EXPECT_TRUE(sim->start(&error)) << error;
-  return sim;
-}
-
 }  // namespace
 
 TEST(SimConfig, TheShippedConfigLoads) {

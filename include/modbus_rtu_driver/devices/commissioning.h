@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <variant>
@@ -15,6 +16,7 @@
 #include "modbus_rtu_driver/core/config/type_registry.h"
 #include "modbus_rtu_driver/core/link/transport.h"
 #include "modbus_rtu_driver/core/modbus/types.h"
+#include "modbus_rtu_driver/devices/device.h"
 
 namespace modbus_rtu_driver {
 
@@ -141,6 +143,11 @@ class Commissioning {
 
  protected:
   static Result unsupported();
+  // A probe by one harmless read: an answer with data goes to `judge`, which sets the kind (and
+  // the note); any other answer only decides whether the type stays open (unclear).
+  static Probe probeByRead(
+      Transport& bus, const Request& read,
+      const std::function<void(const std::vector<uint16_t>& values, Probe* probe)>& judge);
 };
 
 // Registered per type from the type's own file; the registry holds a pointer to a static
@@ -166,6 +173,10 @@ inline bool gatewayHeardNothing(const Result& r) {
 inline bool answered(const Result& r) {
   return r.ok() || (r.error == ErrorKind::kException && !gatewayHeardNothing(r));
 }
+
+// The settings of a board of `type` at `address`, named after its type, as the classes build
+// the type's device to ask it.
+DeviceConfig boardConfig(const DeviceDescriptor& type, int address);
 
 // A registered type's class with its descriptor.
 struct CommissioningType {
