@@ -169,7 +169,9 @@ class RobotBagTest(unittest.TestCase):
             return [a for a in ax.get_children() if a.get_gid() == gid]
 
         def spans(ax, gid):
-            return [(min(x for x, _ in a.get_xy()) + t0, max(x for x, _ in a.get_xy()) + t0)
+            # An axvspan is a Rectangle since matplotlib 3.9 (Debian 13), a Polygon before.
+            return [(a.get_x() + t0, a.get_x() + a.get_width() + t0) if hasattr(a, "get_width")
+                    else (min(x for x, _ in a.get_xy()) + t0, max(x for x, _ in a.get_xy()) + t0)
                     for a in artists(ax, gid)]
         power = panel["power [W]"]
         outages = spans(power, "outage")

@@ -56,6 +56,14 @@ def times(start, end, rate):
     return [start + i / rate for i in range(n)]
 
 
+def x_extent(span):
+    """An axvspan's x range: a Rectangle since matplotlib 3.9 (Debian 13), a Polygon before."""
+    if hasattr(span, "get_width"):
+        return span.get_x(), span.get_x() + span.get_width()
+    xs = [x for x, _ in span.get_xy()]
+    return min(xs), max(xs)
+
+
 class PlotBagTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -93,8 +101,8 @@ class PlotBagTest(unittest.TestCase):
         """(from, to) in bag time of the axvspans with this gid."""
         out = []
         for a in self.artists(ax, gid):
-            xs = [x for x, _ in a.get_xy()]
-            out.append((round(min(xs) + drawn.t0, 3), round(max(xs) + drawn.t0, 3)))
+            x0, x1 = x_extent(a)
+            out.append((round(x0 + drawn.t0, 3), round(x1 + drawn.t0, 3)))
         return sorted(out)
 
     def assert_line_broken(self, ax, start, end, drawn):
