@@ -1,5 +1,6 @@
 """Shared pieces of the rostests: the simulator's control socket and waiting helpers."""
 import os
+import random
 import signal
 import socket
 import struct
@@ -31,8 +32,26 @@ def sim():
 
 
 def free_port():
-    """A TCP port free on 127.0.0.1 now (the kernel picks it), for a server the test starts."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+    """A TCP port free on 127.0.0.1 now, for a server the test starts (and may start again).
+    Chosen below the kernel's ephemeral range: a port the kernel gives for port 0 comes from that
+    range, where any outgoing connection (ROS opens many) may take it as its local port before
+    the server binds it ("address in use": the scenario test's seed 126919435 in stop 39)."""
+    low = 32768
+    try:
+        with open("/proc/sys/net/ipv4/ip_local_port_range") as f:
+            low = int(f.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        pass
+    chooser = random.SystemRandom()
+    for _ in range(200):
+        port = chooser.randrange(max(1024, low - 16384), low)
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+            try:
+                s.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:  # the kernel's choice, then
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
 
