@@ -170,6 +170,18 @@ void DeviceFailsafe::afterPoll() {
   }
   // What to write is read when the write runs: a command confirmed before then is not undone.
   scheduler_.submit(device_.name(), [this, verdict, trigger, reason, action](Transport& t) {
+    // A report of this restart when nothing is written.
+    auto nothingWritten = [&](bool confirmed, const std::string& message) {
+      FailsafeReport r;
+      r.device = device_.name();
+      r.trigger = trigger;
+      r.reason = reason;
+      r.action = action;
+      r.confirmed = confirmed;
+      r.message = message;
+      r.note_only = confirmed && action == "leave" && !hasSafeStates();
+      report(r);
+    };
     std::vector<bool> runs(device_.outputCount(), false);
     if (verdict != ChannelIntents::Verdict::kNormal && config().on_restart == OnRestart::kRestore) {
       // What runs is read just before the restore (docs/failsafe.md, "What restore writes").
@@ -178,15 +190,9 @@ void DeviceFailsafe::afterPoll() {
       // that answers decides again (the change, and what is owed, are still there).
       Result read = device_.refreshSelfTimed(t);  // not const: returned by move
       if (!read.ok()) {
-        FailsafeReport r;
-        r.device = device_.name();
-        r.trigger = trigger;
-        r.reason = reason;
-        r.action = action;
-        r.confirmed = false;
-        r.message = "nothing written: reading which PWM runs before the restore failed (" +
-                    read.message + "); the next poll decides again";
-        report(r);
+        nothingWritten(false,
+                       "nothing written: reading which PWM runs before the restore failed (" +
+                           read.message + "); the next poll decides again");
         return read;
       }
       for (size_t i = 0; i < runs.size(); ++i) runs[i] = device_.outputSelfTimed(i);
@@ -195,15 +201,7 @@ void DeviceFailsafe::afterPoll() {
     const OutputTargets targets = intents_.afterPollTargets(verdict, runs);
     if (!targets.empty()) return writeAndReport(t, targets, trigger, reason, action, {});
     if (verdict == ChannelIntents::Verdict::kNormal) return Result::success();
-    FailsafeReport r;
-    r.device = device_.name();
-    r.trigger = "restart";
-    r.reason = reason;
-    r.action = action;
-    r.confirmed = true;
-    r.message = "outputs left as they are";
-    r.note_only = action == "leave" && !hasSafeStates();
-    report(r);
+    nothingWritten(true, "outputs left as they are");  // trigger is "restart" here
     return Result::success();
   });
 }
