@@ -118,8 +118,17 @@ Result Ld58a08::setPwm(Transport& bus, const PwmSettings& s) {
   Request write = Request::writeMultipleRegisters(address(), pwmRegister(s.channel), regs);
   write.repeatable = false;  // a second copy would restart the run: more pulses than asked for
   Result r = bus.execute(write);
-  if (r.ok() || !mayHaveActed(r)) return r;
-  return confirmPwm(bus, std::move(r), s.channel, regs);
+  if (!r.ok() && mayHaveActed(r)) r = confirmPwm(bus, std::move(r), s.channel, regs);
+  if (r.ok() && regs[2] == kContinuous) noteContinuousRun(s.channel);
+  return r;
+}
+
+void Ld58a08::noteContinuousRun(uint8_t channel) {
+  PwmState& p = pwm_[channel];
+  p.enable = kContinuous;
+  p.running = p.continuous = true;
+  p.remaining_pulses = 0;
+  p.remaining_time = 0.0;
 }
 
 // A PWM write whose reply was lost: the channel's registers tell whether it runs with what was
@@ -378,9 +387,13 @@ std::vector<TimedIntent> Ld58a08::timedWrittenBy(const Request& request) const {
 
 void Ld58a08::noteCarriedWrite(const Request& request) {
   for (uint8_t ch = 0; ch < kChannels; ++ch) {
-    // Only a stop: a run a client started is a timed command the fail-safe knows (with its
-    // end), while a snapshot that says "running" would outlive a short burst until re-read.
-    if (registerWritten(request, pwmRegister(ch) + 2) != uint16_t{0}) continue;
+    // A stop, and a continuous run: a timed run a client started is a timed command the
+    // fail-safe knows (with its end), while a snapshot that says "running" would outlive a
+    // short burst until re-read; a continuous run has no end, and the snapshot says it runs
+    // until a read says otherwise (docs/failsafe.md: a client's coil write does not stop it).
+    const auto enable = registerWritten(request, pwmRegister(ch) + 2);
+    if (enable == kContinuous) noteContinuousRun(ch);
+    if (enable != uint16_t{0}) continue;
     PwmState& p = pwm_[ch];
     p.enable = 0;
     p.running = p.continuous = false;

@@ -59,18 +59,25 @@ std::future<Result> DeviceFailsafe::applySafe(const std::string& trigger, const 
     }
   }
   if (targets.empty()) return readyResult(Result::success());
-  return scheduler_.submit(
-      device_.name(), [this, lasting, only, targets, trigger, reason, since](Transport& t) {
-        const OutputTargets now = lasting ? intents_.heldTargets(only) : targets;
-        if (now.empty()) return Result::success();  // commanded again before the bus got to it
-        return writeAndReport(t, now, trigger, reason, "safe", since);
-      });
+  return scheduler_.submit(device_.name(), [this, lasting, only, targets, trigger, reason,
+                                            since](Transport& t) {
+    const OutputTargets now = lasting ? intents_.heldTargets(only) : targets;
+    if (now.empty()) return Result::success();  // commanded again before the bus got to it
+    if (!lasting) return writeAndReport(t, now, trigger, reason, "safe", since);
+    // A device silent since its last answer costs the other devices' safe writes (queued
+    // behind this one) its write alone: the read that tells whether the write got through
+    // anyway goes after them (docs/failsafe.md, "Timing").
+    UntilSilentTransport until_silent(t);
+    return writeAndReport(until_silent, now, trigger, reason, "safe", since, &until_silent, only);
+  });
 }
 
 Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets,
                                       const std::string& trigger, const std::string& reason,
                                       const std::string& action,
-                                      std::optional<Clock::time_point> owe_since) {
+                                      std::optional<Clock::time_point> owe_since,
+                                      const UntilSilentTransport* until_silent,
+                                      const std::vector<uint8_t>& held_only) {
   const auto names = device_.outputNames();
   FailsafeReport r;
   r.device = device_.name();
@@ -83,43 +90,96 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
   }
   intents_.writeRan();
   Result w = device_.setOutputs(t, targets.channels, targets.states);
-  if (w.ok()) {
-    // Read back: the outputs as the device reports them now, not as the write's echo said.
-    const Result back = device_.poll(t);
-    if (!back.ok()) {
-      w = Result::failure(back.error, "written, but reading back failed: " + back.message);
-    } else {
-      // The read back is a poll of the device: a run it shows on a channel this write left
-      // is the device's, as a scheduled poll's would be (it also took that poll's turn).
-      std::vector<bool> runs(device_.outputCount(), false);
-      for (size_t ch = 0; ch < runs.size(); ++ch)
-        runs[ch] = device_.selfTimedReadByLastPoll(ch) && device_.outputSelfTimed(ch) &&
-                   std::find(targets.channels.begin(), targets.channels.end(), ch) ==
-                       targets.channels.end();
-      intents_.observeRuns(runs);
+  if (until_silent && until_silent->refused()) {
+    // The device gave no reply: its read back waits behind the queued safe writes (the bus
+    // runs writes in the order queued), and this write's event comes with it.
+    scheduler_.submit(device_.name(), [this, targets, r, w, owe_since,
+                                       only = held_only](Transport& later) mutable {
+      // Only the channels still held: one commanded meanwhile is its caller's now.
+      const OutputTargets held = intents_.heldTargets(only);
+      OutputTargets still;
       for (size_t i = 0; i < targets.channels.size(); ++i) {
-        if (device_.outputs()[targets.channels[i]] == targets.states[i]) continue;
-        w = Result::failure(ErrorKind::kMalformed, "read back: " + names[targets.channels[i]] +
-                                                       " is still " +
-                                                       (targets.states[i] ? "off" : "on"));
-        break;
+        if (std::find(held.channels.begin(), held.channels.end(), targets.channels[i]) ==
+            held.channels.end())
+          continue;
+        still.channels.push_back(targets.channels[i]);
+        still.states.push_back(targets.states[i]);
       }
-    }
+      if (still.empty()) return Result::success();
+      // The event names the channels it settles (confirmed, or owed).
+      const auto names = device_.outputNames();
+      r.channels.clear();
+      r.states.clear();
+      for (size_t i = 0; i < still.channels.size(); ++i) {
+        r.channels.push_back(names[still.channels[i]]);
+        r.states.push_back(still.states[i]);
+      }
+      bool answered = false;
+      const Result back = readBack(later, still, &answered);
+      // It answers now, with channels not yet safe (the write's later frames were not sent, or
+      // it was not done): the safe write again, as any write, read back.
+      if (!back.ok() && answered)
+        return writeAndReport(later, still, r.trigger, r.reason, r.action, owe_since);
+      if (back.ok()) {
+        return settle(still, Result::success(), std::move(r), owe_since,
+                      "confirmed by reading the outputs back after the other devices' safe "
+                      "writes (the write: " +
+                          w.message + ")");
+      }
+      w.message += "; then the read: " + back.message;
+      return settle(still, std::move(w), std::move(r), owe_since);
+    });
+    return w;
   }
+  if (w.ok()) {
+    bool answered = false;
+    const Result back = readBack(t, targets, &answered);
+    if (!back.ok())
+      w = answered ? back : Result::failure(back.error, "written, but " + back.message);
+  }
+  return settle(targets, std::move(w), std::move(r), owe_since);
+}
+
+Result DeviceFailsafe::readBack(Transport& t, const OutputTargets& targets, bool* answered) {
+  const auto names = device_.outputNames();
+  // The outputs as the device reports them now, not as the write's echo said.
+  const Result back = device_.poll(t);
+  if (!back.ok()) return Result::failure(back.error, "reading back failed: " + back.message);
+  if (answered) *answered = true;
+  // The read back is a poll of the device: a run it shows on a channel this write left is the
+  // device's, as a scheduled poll's would be (it also took that poll's turn).
+  std::vector<bool> runs(device_.outputCount(), false);
+  for (size_t ch = 0; ch < runs.size(); ++ch)
+    runs[ch] =
+        device_.selfTimedReadByLastPoll(ch) && device_.outputSelfTimed(ch) &&
+        std::find(targets.channels.begin(), targets.channels.end(), ch) == targets.channels.end();
+  intents_.observeRuns(runs);
+  for (size_t i = 0; i < targets.channels.size(); ++i) {
+    if (device_.outputs()[targets.channels[i]] == targets.states[i]) continue;
+    return Result::failure(ErrorKind::kMalformed, "read back: " + names[targets.channels[i]] +
+                                                      " is still " +
+                                                      (targets.states[i] ? "off" : "on"));
+  }
+  return Result::success();
+}
+
+Result DeviceFailsafe::settle(const OutputTargets& targets, Result w, FailsafeReport r,
+                              std::optional<Clock::time_point> owe_since,
+                              const std::string& confirmed_text) {
   if (w.ok()) {
     // A safe write is a command like any other: a restore writes it again.
     intents_.commanded(targets.channels, targets.states,
-                       action == "restore" ? CommandSource::kRestore : CommandSource::kSafe);
+                       r.action == "restore" ? CommandSource::kRestore : CommandSource::kSafe);
     if (outputs_written_) outputs_written_();
     // A restore with no channel held safe put back what users had: no longer in a safe state.
-    if (action == "restore" && !intents_.anyHeld()) endSafeState();
+    if (r.action == "restore" && !intents_.anyHeld()) endSafeState();
     timedMaybeChanged();
   } else if (owe_since) {
     // Owed per channel: written when the device answers again, unless commanded before that.
-    intents_.owe(targets, *owe_since, trigger);
+    intents_.owe(targets, *owe_since, r.trigger);
   }
   r.confirmed = w.ok();
-  r.message = w.ok() ? "confirmed by reading the outputs back" : w.message;
+  r.message = w.ok() ? confirmed_text : w.message;
   report(r);
   return w;
 }
@@ -308,12 +368,17 @@ void DeviceFailsafe::externalWriteConfirmed(const Request& request, CommandSourc
   // keeps it): a command (it ends holds) whose channel stays the device's (docs/failsafe.md:
   // a run read so, or one the node knows). A channel never read is commanded: if a run shows
   // at the next poll, the channel becomes the device's then (ChannelIntents::observePoll).
+  // Runs: as the node last read them (a continuous run the device confirmed, and a run a coil
+  // write kept, count as read running), and the node's timed commands before their end. A run
+  // the device drives with no end (the device's, or a continuous one) counts from the intents
+  // only while no read is known: a read since that shows it ended makes the write a plain one.
   std::vector<bool> runs(device_.outputCount(), false);
   if (device_.coilWriteKeepsRun()) {
-    if (device_.selfTimedRead())
+    const bool read = device_.selfTimedRead();
+    if (read)
       for (size_t ch = 0; ch < runs.size(); ++ch) runs[ch] = device_.outputSelfTimed(ch);
     for (const TimedIntent& t : intents_.runningTimed())
-      if (t.channel < runs.size()) runs[t.channel] = true;
+      if (t.channel < runs.size() && (t.seconds >= 0 || !read)) runs[t.channel] = true;
   }
   for (size_t i = 0; i < set.channels.size(); ++i) {
     const uint8_t ch = set.channels[i];
@@ -326,6 +391,7 @@ void DeviceFailsafe::externalWriteConfirmed(const Request& request, CommandSourc
     run.after = set.states[i];
     run.seconds = -1.0;
     intents_.timed(run, source);
+    device_.noteRunKept(ch);  // a later coil write finds it running too, until a read
   }
   const std::vector<TimedIntent> timed = device_.timedWrittenBy(request);
   for (const TimedIntent& t : timed) intents_.timed(t, source);

@@ -67,9 +67,8 @@ const std::vector<SimInvariant>& simInvariants() {
 }
 
 const std::set<std::string>& simKnownOpen() {
-  // I2: pdu_held_safe_late_after_stop39; I5: restore_left_out_after_stop39 (docs/simulation.md,
-  // "Known open defects").
-  static const std::set<std::string> known = {"I2", "I5"};
+  // I2: held_safe_late_behind_silent_board_jobs (docs/simulation.md, "Known open defects").
+  static const std::set<std::string> known = {"I2"};
   return known;
 }
 
@@ -196,6 +195,9 @@ struct Chan {
   double duration = 0;
   bool continuous = false;     // a PWM run with no end: the device's (docs:68, 88)
   bool maybe_devices = false;  // read running near the node's run's end: either may be right
+  // A set_pwm's end counted from when the device answered its write (the node's end); `ends`
+  // counts from the model's callback, a read back later.
+  TP ends_earliest{};
   bool from_old_node = false;
   TP at{};
   bool held = false;  // docs:76-80
@@ -238,6 +240,10 @@ struct DevModel {
   // ... and the poll that read each channel's registers (docs:92: a lost answer's channel is
   // taken at the first poll after its time that also reads them)
   std::vector<uint64_t> pwm_read_in_poll = std::vector<uint64_t>(8, 0);
+  // ... and when the device last answered a PWM write (FC16 of a channel's three registers):
+  // the node counts a set_pwm's end from there (docs:68), the model's op from its later callback
+  std::vector<TP> pwm_write_answered = std::vector<TP>(8, TP{});
+  std::vector<bool> pwm_confirm_pending = std::vector<bool>(8, false);
   // generic (I8)
   bool gen_unanswered = false;  // an attempt to it went unanswered since its last report
   bool gen_prev_silent = true;  // ... before its previous report
@@ -634,12 +640,14 @@ void World::commandedTimed(int d, int ch, std::optional<bool> during, bool after
   Chan& c = model_[d].ch[ch];
   if (seconds < 0) {
     c.continuous = true;
+    // docs:71: a continuous run the device confirmed counts as read running until a read.
+    if (d == kLd) model_[d].pwm_read_running[ch] = true;
     return;
   }
   c.timed = true;
   c.during = during;
   c.duration = seconds;
-  c.ends = clock_.now() + dur(seconds);
+  c.ends = c.ends_earliest = clock_.now() + dur(seconds);
 }
 
 void World::unconfirmed(int d, int ch, double not_before_s, bool as_command) {
@@ -712,6 +720,21 @@ void World::onAttempt(const LineEvent& e) {
         // the model's from the confirmation, up to a transaction and a read back later.
         c.maybe_devices = true;
     }
+  }
+  // When the device confirmed a PWM write: its answer, or (answer lost) the read that confirmed
+  // it (Ld58a08::confirmPwm reads the channel back).
+  if (d == kLd && write && e.request.function == FunctionCode::kWriteMultipleRegisters &&
+      e.request.values.size() == 3 && e.request.address % 0x10 == 0 &&
+      e.request.address / 0x10 < kChannels) {
+    const int ch = e.request.address / 0x10;
+    m.pwm_write_answered[ch] = e.answered ? e.at : TP{};
+    m.pwm_confirm_pending[ch] = !e.answered;
+  }
+  if (d == kLd && e.answered && e.request.function == FunctionCode::kReadHoldingRegisters &&
+      e.request.address % 0x10 == 0 && e.request.address / 0x10 < kChannels &&
+      m.pwm_confirm_pending[e.request.address / 0x10]) {
+    m.pwm_write_answered[e.request.address / 0x10] = e.at;
+    m.pwm_confirm_pending[e.request.address / 0x10] = false;
   }
   // docs:68: a stop the device confirmed (an enable register written 0: the node's own before
   // a plain write, or a client's it carried) ends what the node read of that channel's run.
@@ -947,7 +970,10 @@ void World::onReport(const FailsafeReport& r) {
       // docs:88: a channel the device runs a PWM on that is no timed command of the node's is
       // the device's: the restore leaves it (as the node read it just before the restore).
       const bool node_runs = c.timed && now <= c.ends + dur(0.5 + 0.02 * c.duration);
-      const bool devices_run = d == kLd && !node_runs &&
+      // docs:68-72: a poll after the end showing the final level ended the node's command, and
+      // a run read after it is the device's; the model does not follow which poll that was.
+      const bool maybe_ended = node_runs && now > c.ends_earliest;
+      const bool devices_run = d == kLd && (!node_runs || maybe_ended) &&
                                (chs.empty() ? m.pwm_read_running[ch] : m.pwm_read_at_write[ch]);
       // A restore that wrote nothing and failed (its read before failed) is done again later.
       if (!r.confirmed && chs.empty()) break;
@@ -1173,6 +1199,9 @@ void World::doCommandStep(const SimStep& s) {
             // (A burst shorter than a lost answer's timeouts and read back may have ended.)
             // docs:66-68: a burst or timed run is the device's until its end, then off.
             commandedTimed(kLd, ch, std::nullopt, false, seconds);
+            Chan& c = model_[kLd].ch[ch];
+            if (c.timed && model_[kLd].pwm_write_answered[ch] != TP{})
+              c.ends_earliest = std::min(c.ends, model_[kLd].pwm_write_answered[ch] + dur(seconds));
           } else if (answerLost(r.error)) {
             lostAnswer(kLd, ch, seconds);
           }
@@ -1222,11 +1251,20 @@ void World::doCommandStep(const SimStep& s) {
           // docs:35: the coils a write names are taken as commanded at once; docs:68: on an
           // LD58A08 channel the node last read as running a PWM the run goes on: the device's.
           const Chan& was = model_[outd].ch[chs[i]];
-          const bool runs =
-              outd == kLd && (model_[kLd].pwm_read_running[chs[i]] || was.continuous ||
-                              (was.timed && clock_.now() < was.ends));
+          // (docs:71: as the node last read it, a continuous run the device confirmed counting
+          // as read running; or a timed run of the node's before its end.)
+          const bool runs = outd == kLd && (model_[kLd].pwm_read_running[chs[i]] ||
+                                            (was.timed && clock_.now() < was.ends_earliest));
+          // The node's run ends its duration after the device answered the write; the model's
+          // op learns it later (after the read back): in between, either may be right.
+          const bool may_run = outd == kLd && !runs && was.timed && clock_.now() < was.ends;
           commanded(outd, chs[i], sts[i]);
-          if (runs) model_[kLd].ch[chs[i]].continuous = true;
+          if (runs) {
+            // docs:71: the run goes on, and counts as read running until a read.
+            model_[kLd].ch[chs[i]].continuous = true;
+            model_[kLd].pwm_read_running[chs[i]] = true;
+          }
+          if (may_run) model_[kLd].ch[chs[i]].maybe_devices = true;
         }
       } else if (answerLost(r.error)) {
         for (uint8_t c : chs) lostAnswer(outd, c, 0);

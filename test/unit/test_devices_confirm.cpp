@@ -5,6 +5,7 @@
 #include "device_fixtures.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/failsafe/until_silent_transport.h"
 
 using namespace modbus_rtu_driver;
 using namespace modbus_rtu_driver::devtest;
@@ -109,5 +110,37 @@ TEST(ConfirmByReadBack, ALostFlashReplyIsNotConfirmedAndNotSentAgain) {
   EXPECT_FALSE(r.ok());
   EXPECT_NE(r.message.find("not confirmed"), std::string::npos) << r.message;
   EXPECT_EQ(bus.executed(), 1);
+  EXPECT_TRUE(bus.usedUp());
+}
+
+// A lasting trigger's safe write goes through an UntilSilentTransport (docs/failsafe.md,
+// "Timing"): a write the device gave no reply to costs the other devices' safe writes that
+// transaction alone; its read back is refused unsent, to be run after them.
+TEST(ConfirmByReadBack, AfterNoReplyTheUntilSilentTransportRefusesTheReadBackUnsent) {
+  LcRelay8 board(config("lc_relay8", 255));
+  ScriptedTransport bus;
+  bus.expect(frame(Request::writeMultipleCoils(255, 0, {false, false})));  // no reply
+  UntilSilentTransport until_silent(bus);
+  const Result r = board.setOutputs(until_silent, {0, 1}, {false, false});
+  EXPECT_EQ(r.error, ErrorKind::kTimeout);
+  EXPECT_NE(r.message.find("not sent yet: read after the other devices' safe writes"),
+            std::string::npos)
+      << r.message;
+  EXPECT_TRUE(until_silent.refused());
+  EXPECT_EQ(bus.executed(), 1);  // the read back never reached the line
+  EXPECT_EQ(bus.mismatches(), "");
+  EXPECT_TRUE(bus.usedUp());
+}
+
+TEST(ConfirmByReadBack, AGarbledReplyIsAnAnswerTheUntilSilentTransportStillReadsBack) {
+  LcRelay8 board(config("lc_relay8", 255));
+  ScriptedTransport bus;
+  bus.expect(frame(Request::writeSingleCoil(255, 3, false)), "FF01020304");  // garbled
+  bus.expect(frame(Request::readCoils(255, 0, 8)), coilsReply(255, 0x00));
+  UntilSilentTransport until_silent(bus);
+  const Result r = board.setOutputs(until_silent, {3}, {false});
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_FALSE(until_silent.refused());
+  EXPECT_EQ(bus.mismatches(), "");
   EXPECT_TRUE(bus.usedUp());
 }

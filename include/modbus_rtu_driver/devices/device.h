@@ -115,6 +115,10 @@ class Device {
   // Whether a coil write leaves a run the device times by itself going (an LD58A08's PWM: its
   // outputs apply only with the channel's enable register at 0).
   virtual bool coilWriteKeepsRun() const { return false; }
+  // Bus thread: a coil write the device confirmed on `channel` kept a run going there (per
+  // coilWriteKeepsRun and what the node knew of it): the snapshot says it runs until a read says
+  // otherwise, as a read showing it would.
+  virtual void noteRunKept(uint8_t channel) { (void)channel; }
   // Reads again what outputSelfTimed() answers from (an LD58A08's PWM registers, otherwise
   // read one channel per poll), so a restore decides on the device's state now.
   virtual Result refreshSelfTimed(Transport& bus) {

@@ -88,6 +88,9 @@ class Ld58a08 : public Device {
   void noteCarriedWrite(const Request& request) override;
   Result refreshSelfTimed(Transport& bus) override { return readPwm(bus); }
   bool coilWriteKeepsRun() const override { return true; }
+  void noteRunKept(uint8_t channel) override {
+    if (channel < kChannels) pwm_[channel].running = true;
+  }
   // Writes 0 to the channel's enable register (0x00n2); a lost reply is confirmed by reading
   // the channel back.
   Result stopPwm(Transport& bus, uint8_t channel);
@@ -124,6 +127,9 @@ class Ld58a08 : public Device {
                       const std::vector<bool>& states) override;
 
  private:
+  // A continuous run the device confirmed (set_pwm's, or a client's write the node carried):
+  // the snapshot says it runs until a read says otherwise.
+  void noteContinuousRun(uint8_t channel);
   Result readPwmChannel(Transport& bus, uint8_t channel, PwmState* out);
   Result confirmPwm(Transport& bus, Result failed, uint8_t channel,
                     const std::vector<uint16_t>& written);

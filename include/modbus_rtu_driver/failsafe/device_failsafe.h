@@ -21,6 +21,7 @@
 #include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/failsafe/channel_intents.h"
+#include "modbus_rtu_driver/failsafe/until_silent_transport.h"
 
 namespace modbus_rtu_driver {
 
@@ -125,10 +126,23 @@ class DeviceFailsafe {
   void externalWriteConfirmed(const Request& request, CommandSource source);
   void externalWriteLost(const Request& request);
   // Writes `targets`, reads back, reports. `owe_since`: the write carries a trigger's safe
-  // states (fired then), owed per channel when it does not get through.
+  // states (fired then), owed per channel when it does not get through. `until_silent`: a
+  // lasting trigger's write goes through it (`t`; `held_only` is its channel filter): when it
+  // refused the read back (no reply to the write), the read and the report come from a job
+  // queued behind the other writes, for the channels still held then.
   Result writeAndReport(Transport& t, const OutputTargets& targets, const std::string& trigger,
                         const std::string& reason, const std::string& action,
-                        std::optional<Clock::time_point> owe_since);
+                        std::optional<Clock::time_point> owe_since,
+                        const UntilSilentTransport* until_silent = nullptr,
+                        const std::vector<uint8_t>& held_only = {});
+  // Reads the outputs (a poll of the device) and checks `targets` there: success, or why not
+  // (`answered`: the read itself got through).
+  Result readBack(Transport& t, const OutputTargets& targets, bool* answered = nullptr);
+  // After a write and its read back (`w`): takes it as commanded, or owes it (`owe_since`), and
+  // reports `r` with the outcome.
+  Result settle(const OutputTargets& targets, Result w, FailsafeReport r,
+                std::optional<Clock::time_point> owe_since,
+                const std::string& confirmed_text = "confirmed by reading the outputs back");
   void report(const FailsafeReport& r);
   void endSafeState();       // a user's confirmed command: no longer "in their safe state"
   void timedMaybeChanged();  // tells timed_changed_ when timed commands run or did
