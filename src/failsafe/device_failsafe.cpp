@@ -114,18 +114,12 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
         r.channels.push_back(names[still.channels[i]]);
         r.states.push_back(still.states[i]);
       }
+      // Whether it answers now: then the safe write again, confirmed by its answer and a read
+      // back. A read alone cannot confirm a write that got no reply: a flash the write would
+      // have ended may still show the same level.
       bool answered = false;
       const Result back = readBack(later, still, &answered);
-      // It answers now, with channels not yet safe (the write's later frames were not sent, or
-      // it was not done): the safe write again, as any write, read back.
-      if (!back.ok() && answered)
-        return writeAndReport(later, still, r.trigger, r.reason, r.action, owe_since);
-      if (back.ok()) {
-        return settle(still, Result::success(), std::move(r), owe_since,
-                      "confirmed by reading the outputs back after the other devices' safe "
-                      "writes (the write: " +
-                          w.message + ")");
-      }
+      if (answered) return writeAndReport(later, still, r.trigger, r.reason, r.action, owe_since);
       w.message += "; then the read: " + back.message;
       return settle(still, std::move(w), std::move(r), owe_since);
     });
