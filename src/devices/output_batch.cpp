@@ -21,7 +21,8 @@ std::shared_ptr<OutputBatch::Entry> OutputBatch::add(const Device& device,
 }
 
 Result OutputBatch::complete(Device& device, Transport& bus, const std::shared_ptr<Entry>& entry,
-                             const WrittenCallback& on_written) {
+                             const WrittenCallback& on_written,
+                             const NotConfirmedCallback& on_not_confirmed) {
   if (entry->result) return *entry->result;
   std::vector<std::shared_ptr<Entry>> batch;
   {
@@ -42,6 +43,7 @@ Result OutputBatch::complete(Device& device, Transport& bus, const std::shared_p
   // once (the map), a state for each. It goes to the type's write without a second check.
   Result r = device.writeOutputs(bus, channels, states);
   if (r.ok() && on_written) on_written(channels, states);
+  if (!r.ok() && on_not_confirmed) on_not_confirmed(channels, r);
   if (batch.size() > 1 && r.ok())
     r.message = (r.message.empty() ? "" : r.message + "; ") + "merged with " +
                 std::to_string(batch.size() - 1) + " other request(s) into one write";

@@ -152,11 +152,15 @@ Result DeviceAdapter::completeBatch(Transport& t,
                                     const std::shared_ptr<OutputBatch::Entry>& entry) {
   const bool sent = !entry->result;
   if (sent) failsafe_.userWriteSending();
-  Result w = batch_.complete(*device_, t, entry,
-                             [this](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
-                               failsafe_.userWriteConfirmed(chs, sts);
-                             });
-  if (sent && !w.ok()) failsafe_.userWriteNotConfirmed(entry->channels, w);
+  // Outcomes per merged write: every channel it carried, not only this entry's.
+  Result w = batch_.complete(
+      *device_, t, entry,
+      [this](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
+        failsafe_.userWriteConfirmed(chs, sts);
+      },
+      [this](const std::vector<uint8_t>& chs, const Result& r) {
+        failsafe_.userWriteNotConfirmed(chs, r);
+      });
   if (sent && w.ok()) publishOutputs();
   return w;
 }

@@ -238,13 +238,15 @@ Result SimNode::completeBatch(Entry& e, Transport& t,
   // DeviceAdapter::completeBatch.
   const bool sent = !entry->result;
   if (sent) e.failsafe->userWriteSending();
-  Result w =
-      e.batch.complete(*e.device, t, entry,
-                       [this, &e](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
-                         e.failsafe->userWriteConfirmed(chs, sts);
-                         if (hooks_.written) hooks_.written(e.device->name(), chs, sts);
-                       });
-  if (sent && !w.ok()) e.failsafe->userWriteNotConfirmed(entry->channels, w);
+  Result w = e.batch.complete(
+      *e.device, t, entry,
+      [this, &e](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
+        e.failsafe->userWriteConfirmed(chs, sts);
+        if (hooks_.written) hooks_.written(e.device->name(), chs, sts);
+      },
+      [&e](const std::vector<uint8_t>& chs, const Result& r) {
+        e.failsafe->userWriteNotConfirmed(chs, r);
+      });
   return w;
 }
 

@@ -60,6 +60,32 @@ TEST(OutputBatch, AFailedWriteFailsEveryMergedRequest) {
   EXPECT_TRUE(bus.usedUp());
 }
 
+// docs/failsafe.md, "A command whose answer was lost": every channel a merged write carried is
+// unknown until the next poll, not only the channels of the request whose job sent it (seed
+// 12016 of the fail-safe simulation: a set merged into a command's write was left as before).
+TEST(OutputBatch, AWriteNotConfirmedNamesEveryMergedChannelOnce) {
+  LcRelay8 board(relays());
+  OutputBatch batch;
+  auto command = batch.add(board, {1}, {true});
+  auto set = batch.add(board, {0}, {true});
+  ScriptedTransport bus;
+  bus.expect(toHex(encodeRequest(Request::writeMultipleCoils(255, 0, {true, true}))));
+  bus.expect(toHex(encodeRequest(Request::readCoils(255, 0, 8))));  // the read back: no reply too
+  int calls = 0;
+  std::vector<uint8_t> unknown;
+  const auto not_confirmed = [&](const std::vector<uint8_t>& chs, const Result& r) {
+    ++calls;
+    unknown = chs;
+    EXPECT_EQ(r.error, ErrorKind::kTimeout);
+  };
+  EXPECT_FALSE(batch.complete(board, bus, command, {}, not_confirmed).ok());
+  EXPECT_FALSE(batch.complete(board, bus, set, {}, not_confirmed).ok());
+  EXPECT_EQ(calls, 1);
+  EXPECT_EQ(unknown, (std::vector<uint8_t>{0, 1}));
+  EXPECT_TRUE(bus.usedUp());
+  EXPECT_EQ(bus.mismatches(), "");
+}
+
 TEST(OutputBatch, ALoneRequestIsOneFc05) {
   LcRelay8 board(relays());
   OutputBatch batch;

@@ -34,10 +34,17 @@ class OutputBatch {
   using WrittenCallback =
       std::function<void(const std::vector<uint8_t>& channels, const std::vector<bool>& states)>;
 
+  // What a write that was sent but not confirmed carried: every channel merged into it (the
+  // callers of each were told it failed; the device may have acted on any of them).
+  using NotConfirmedCallback =
+      std::function<void(const std::vector<uint8_t>& channels, const Result& result)>;
+
   // Bus thread: the outcome of `entry`, writing the pending requests first if it is among them.
-  // `device` is the one they were added for. `on_written` runs once per confirmed write.
+  // `device` is the one they were added for. `on_written` runs once per confirmed write,
+  // `on_not_confirmed` once per write that failed.
   Result complete(Device& device, Transport& bus, const std::shared_ptr<Entry>& entry,
-                  const WrittenCallback& on_written = {});
+                  const WrittenCallback& on_written = {},
+                  const NotConfirmedCallback& on_not_confirmed = {});
 
  private:
   std::mutex mutex_;
