@@ -54,7 +54,7 @@ unit_test(test_signal modbus_rtu_core)
 
 # Devices against a scripted transport (byte exact), merged writes, read-back confirmation.
 unit_test(test_devices modbus_rtu_devices)
-unit_test(test_devices_confirm modbus_rtu_failsafe)
+unit_test(test_devices_confirm modbus_rtu_devices)
 unit_test(test_output_batch modbus_rtu_devices)
 # Writes touch only the channels asked for (issue 24, item 4), also against the simulator.
 unit_test(test_devices_writes modbus_rtu_devices)

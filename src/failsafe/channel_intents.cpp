@@ -340,6 +340,11 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
       in->ends.reset();
       in->during.reset();
       in->adopt = in->adopt_change = false;
+      // A level taken as found ends no hold: a held channel shown otherwise (a command whose
+      // answer was lost) is written safe again (docs/failsafe.md, precedence 1).
+      if (held_[ch] != 0 && held_written_[ch] &&
+          (in->driven || level != (config_.safeStateOf(ch) == SafeState::kOn)))
+        held_not_safe_[ch] = true;
       continue;
     }
     if (held_[ch] != 0 && held_written_[ch] &&

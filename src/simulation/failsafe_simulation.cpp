@@ -31,7 +31,7 @@ const std::vector<SimInvariant>& simInvariants() {
       {"I1", "docs/failsafe.md:35,59; README (writes are confirmed)",
        "a command reported as done (service, topic, pulse, PWM, share, raw write) is on the "
        "device when its answer comes"},
-      {"I2", "docs/failsafe.md:32-33,76,173-175",
+      {"I2", "docs/failsafe.md:32-33,81,188-197",
        "a channel held safe (heartbeat lost, command timeout) shows its safe state on a device "
        "that answers, within the timeout's tenth plus the bus transactions before it"},
       {"I3", "docs/failsafe.md:34,76-80,85",
@@ -67,7 +67,7 @@ const std::vector<SimInvariant>& simInvariants() {
 }
 
 const std::set<std::string>& simKnownOpen() {
-  // I2: held_safe_late_behind_silent_board_jobs (docs/simulation.md, "Known open defects").
+  // I2: silent_board_job_costs_one_transaction (docs/simulation.md, "Known open defects").
   static const std::set<std::string> known = {"I2"};
   return known;
 }
@@ -202,8 +202,9 @@ struct Chan {
   TP at{};
   bool held = false;  // docs:76-80
   TP held_since{};
-  bool owed = false;       // docs:81-84
-  bool triggered = false;  // a trigger covered it (start, shutdown, heartbeat, command timeout)
+  size_t queued_at_hold = 0;  // jobs queued on the bus when the hold began
+  bool owed = false;          // docs:81-84
+  bool triggered = false;     // a trigger covered it (start, shutdown, heartbeat, command timeout)
   TP trigger_at{};
   std::optional<TP> deadline;  // the dead man (docs:33)
   bool adopt = false;          // take the level of a poll started after `adopt_after_poll`
@@ -242,6 +243,9 @@ struct DevModel {
   std::vector<uint64_t> pwm_read_in_poll = std::vector<uint64_t>(8, 0);
   // ... and when the device last answered a PWM write (FC16 of a channel's three registers):
   // the node counts a set_pwm's end from there (docs:68), the model's op from its later callback
+  // Jobs queued on the bus when it became reachable (checkHeld notes it once per spell).
+  size_t queued_at_reachable = 0;
+  bool queued_noted = false;
   std::vector<TP> pwm_write_answered = std::vector<TP>(8, TP{});
   std::vector<bool> pwm_confirm_pending = std::vector<bool>(8, false);
   // generic (I8)
@@ -481,7 +485,11 @@ void World::tick() {
 void World::hold(int d, int ch) {
   Chan& c = model_[d].ch[ch];
   const TP now = clock_.now();
-  if (!c.held) c.held_since = now;
+  // docs:188-197: one transaction for each output write queued before the trigger.
+  if (!c.held) {
+    c.held_since = now;
+    c.queued_at_hold = node_ ? node_->queuedJobs() : 0;
+  }
   c.held = true;
   c.triggered = true;
   c.trigger_at = now;
@@ -517,6 +525,7 @@ void World::resetModelForNewNode() {
     }
     m.found = false;
     m.reachable_since = std::max(m.reachable_since, now);
+    m.queued_noted = false;
     m.gen_unanswered = false;
     m.gen_prev_silent = true;
   }
@@ -680,6 +689,7 @@ void World::deviceDisturbed(int d, bool justified, double extra) {
   // A device that stopped answering is probed again with backoff, up to backoff_max (5 s,
   // bus_scheduler.h); an owed write goes when it answers a poll again (docs:37).
   m.reachable_since = std::max(m.reachable_since, clock_.now() + dur(5.0 + extra));
+  m.queued_noted = false;
   if (justified) {
     m.justified = true;
     m.justified_at = clock_.now();
@@ -1047,16 +1057,27 @@ void World::onGenericReport(const FailsafeReport& r) {
 void World::checkHeld() {
   if (!node_ || !node_->started() || port_lost_) return;
   const TP now = clock_.now();
-  const double budget =
-      node_->checkPeriod() + worstTransaction() + kDevices * 6 * normalTransaction();
+  // The timer's period, the transaction in progress (a silent device's, with its retries), one
+  // transaction for each output write queued ahead (docs:188-197; a silent device's is one
+  // with its retries, an answering LD58A08's a few: its PWM reads, the write, its read back),
+  // and the safe writes of each device.
+  const auto budget = [this](size_t queued) {
+    return node_->checkPeriod() + static_cast<double>(1 + queued) * worstTransaction() +
+           static_cast<double>(kDevices + queued) * 6 * normalTransaction();
+  };
   for (int d = 0; d < kGen; ++d) {
-    const DevModel& m = model_[d];
+    DevModel& m = model_[d];
     const MemoryLinkFaults& f = link_.faults(kAddr[d]);
     if (f.silent || f.lost || f.late || f.garbled) continue;
-    if (now - m.reachable_since < dur(budget + pollPeriod(d))) continue;
+    // An owed write goes when the device answers a poll again, behind what is queued then.
+    if (now >= m.reachable_since && !m.queued_noted) {
+      m.queued_at_reachable = node_->queuedJobs();
+      m.queued_noted = true;
+    }
+    if (now - m.reachable_since < dur(budget(m.queued_at_reachable) + pollPeriod(d))) continue;
     for (int ch = 0; ch < kChannels; ++ch) {
       const Chan& c = m.ch[ch];
-      if (!c.held || now - c.held_since < dur(budget)) continue;
+      if (!c.held || now - c.held_since < dur(budget(c.queued_at_hold))) continue;
       if (simCoil(d, ch) != safeLevel(d, ch))
         fail("I2", std::string(kNames[d]) + " out" + std::to_string(ch) + " is held safe (" +
                        safeStateName(safeOf(d, ch)) +

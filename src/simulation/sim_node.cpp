@@ -324,6 +324,10 @@ std::future<Result> SimNode::stopPwm(uint64_t op, const std::string& device, uin
   });
 }
 
+size_t SimNode::queuedJobs() const {
+  return scheduler_ ? scheduler_->queuedJobs() : 0;
+}
+
 void SimNode::externalWrite(const Request& request, const Result& result, CommandSource source) {
   // BusNode::externalWrite and DeviceAdapter::externalWrite.
   for (auto& e : entries_)

@@ -368,6 +368,25 @@ TEST(ChannelIntents, AHoldPutsItsChannelBackWhateverOnRestartSays) {
   EXPECT_TRUE(t.afterPollTargets(Verdict::kNormal).empty());
 }
 
+// docs/failsafe.md, precedence 1: once a hold's safe write is confirmed, a poll that shows the
+// held channel otherwise writes it safe again, also when the level comes from a command whose
+// answer was lost (taken as found: no command, so the hold stands). Found in stop 40's search.
+TEST(ChannelIntents, ALostCommandsLevelOnAHeldChannelIsWrittenSafeAgain) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kLeave), 4, clock);
+  poll(t, {true, true, true, false});
+  t.hold({}, HoldTrigger::kHeartbeat);
+  t.commanded({0, 1, 2}, {false, false, true}, CommandSource::kSafe);
+  EXPECT_EQ(poll(t, {false, false, true, false}), Verdict::kNormal);
+  // A command on the lamp whose answer was lost: unknown until the next poll, which shows it off.
+  t.adoptNextPoll(2, CommandSource::kFound);
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kNormal);  // taken as found
+  EXPECT_EQ(t.heldNotSafe(), (std::vector<uint8_t>{2}));
+  const OutputTargets w = t.afterPollTargets(Verdict::kNormal);
+  EXPECT_EQ(w.channels, (std::vector<uint8_t>{2}));
+  EXPECT_EQ(w.states, (std::vector<bool>{true}));
+}
+
 // docs/failsafe.md line 92: a timed command whose answer was lost is not compared (and not
 // restored) until its end plus the slack; the first poll after it gives the channel's level.
 TEST(ChannelIntents, ALostAnswersTimedCommandIsUnknownUntilItsEnd) {

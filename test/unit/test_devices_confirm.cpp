@@ -3,9 +3,9 @@
 #include <gtest/gtest.h>
 
 #include "device_fixtures.h"
+#include "modbus_rtu_driver/core/link/until_silent_transport.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
-#include "modbus_rtu_driver/failsafe/until_silent_transport.h"
 
 using namespace modbus_rtu_driver;
 using namespace modbus_rtu_driver::devtest;
@@ -113,9 +113,9 @@ TEST(ConfirmByReadBack, ALostFlashReplyIsNotConfirmedAndNotSentAgain) {
   EXPECT_TRUE(bus.usedUp());
 }
 
-// A lasting trigger's safe write goes through an UntilSilentTransport (docs/failsafe.md,
-// "Timing"): a write the device gave no reply to costs the other devices' safe writes that
-// transaction alone; its read back is refused unsent, to be run after them.
+// A job of a device that gives no reply goes through an UntilSilentTransport (docs/failsafe.md,
+// "Timing"): a write the device gave no reply to costs the bus that transaction alone; its read
+// back is refused unsent.
 TEST(ConfirmByReadBack, AfterNoReplyTheUntilSilentTransportRefusesTheReadBackUnsent) {
   LcRelay8 board(config("lc_relay8", 255));
   ScriptedTransport bus;
@@ -123,7 +123,7 @@ TEST(ConfirmByReadBack, AfterNoReplyTheUntilSilentTransportRefusesTheReadBackUns
   UntilSilentTransport until_silent(bus);
   const Result r = board.setOutputs(until_silent, {0, 1}, {false, false});
   EXPECT_EQ(r.error, ErrorKind::kTimeout);
-  EXPECT_NE(r.message.find("not sent yet: read after the other devices' safe writes"),
+  EXPECT_NE(r.message.find("not sent: the device gave no reply to this job's request before"),
             std::string::npos)
       << r.message;
   EXPECT_TRUE(until_silent.refused());

@@ -69,6 +69,9 @@ class SimNode {
   BusScheduler& scheduler() { return *scheduler_; }
   // The deadline timer's period (a tenth of the shortest timeout, at most 0.5 s; 0: no timer).
   double checkPeriod() const { return check_period_; }
+  // Output writes and other jobs queued on the bus now (the docs' timing counts one
+  // transaction for each write ahead of a safe write).
+  size_t queuedJobs() const;
   void checkDeadlines();                                // BusNode::checkDeadlines
   void feedHeartbeat();                                 // a message on the heartbeat topic
   void feedDeviceHeartbeat(const std::string& device);  // on a device's own heartbeat topic

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 
+#include "modbus_rtu_driver/core/link/until_silent_transport.h"
+
 namespace modbus_rtu_driver {
 
 namespace {
@@ -179,6 +181,11 @@ DeviceHealth BusScheduler::health(const std::string& device) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = health_.find(device);
   return it == health_.end() ? DeviceHealth{} : it->second;
+}
+
+size_t BusScheduler::queuedJobs() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return writes_.size() + shared_.size();
 }
 
 bool BusScheduler::connected() const {

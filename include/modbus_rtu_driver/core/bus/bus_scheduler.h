@@ -120,6 +120,8 @@ class BusScheduler {
   void openShared();
 
   DeviceHealth health(const std::string& device) const;
+  // Jobs queued and not yet running (writes and shared requests).
+  size_t queuedJobs() const;
   bool connected() const;
   std::string connectionError() const;
   PortReopens portReopens() const;

@@ -1,4 +1,4 @@
-#include "modbus_rtu_driver/failsafe/until_silent_transport.h"
+#include "modbus_rtu_driver/core/link/until_silent_transport.h"
 
 namespace modbus_rtu_driver {
 
@@ -6,8 +6,9 @@ Result UntilSilentTransport::execute(const Request& request) {
   if (silent_) {
     refused_ = true;
     // Counted as the silence it follows: the caller reads it as "no reply" (not confirmed).
-    return Result::failure(ErrorKind::kTimeout,
-                           "not sent yet: read after the other devices' safe writes");
+    return Result::failure(ErrorKind::kTimeout, request.describe() +
+                                                    ": not sent: the device gave no reply to "
+                                                    "this job's request before");
   }
   Result r = inner_.execute(request);
   if (r.error == ErrorKind::kTimeout) silent_ = true;

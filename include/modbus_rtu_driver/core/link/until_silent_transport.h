@@ -1,8 +1,8 @@
-// The transport a lasting trigger's safe write goes through (docs/failsafe.md, "Timing"): it
-// passes requests on until one gets no reply at all (the link's retries spent), then refuses the
-// rest of that job unsent. A device that went silent since its last answer so costs the other
-// devices' safe writes one transaction, not two: the read that would tell whether its write got
-// through anyway is refused here, and DeviceFailsafe runs it after the others' safe writes.
+// A transport for one bus job: it passes requests on until one gets no reply at all (the link's
+// retries spent), then refuses the rest of that job unsent. A device that does not answer so
+// costs the bus one transaction for that job, not one per request (a write and the read that
+// would confirm it): the fail-safe runs a trigger's safe write through it, so that the other
+// devices' safe writes go first (docs/failsafe.md, "Timing").
 #pragma once
 
 #include "modbus_rtu_driver/core/link/transport.h"
