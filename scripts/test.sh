@@ -5,10 +5,18 @@
 # ASan/UBSan, short fuzz runs and an install-space check) and ends with
 # "N passed, N failed". Exit code 0 only when all passed.
 source "$(dirname "$0")/common.sh"
+# Wall time per step, printed before the summary (what to shorten when the command grows).
+PHASE_START=$SECONDS
+PHASES=()
+phase_done() {
+  PHASES+=("$(printf '%5d s  %s' $((SECONDS - PHASE_START)) "$1")")
+  PHASE_START=$SECONDS
+}
 install_deps
 build_workspace
 cd "$WS"
 catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" tests
+phase_done "install, build, build the tests"
 rm -rf "$WS/build/test_results"
 # Everything used (Python modules, executables, headers the compiler read) comes from a package
 # on scripts/debian_packages.txt or its closure; and the check fails on an older list that lacked
@@ -29,6 +37,7 @@ tail -n 1 "$WS/rosdep_check.log"
 /usr/bin/python3 "$REPO/scripts/check_rosdep.py" "$ROSDEP_RESULTS" --self-test \
   --work "$WS/build/rosdep_check" >"$WS/rosdep_self_test.log" 2>&1 || true
 "$REPO/scripts/check_ros_choice.sh" "$DEPS_RESULTS" >/dev/null || true
+phase_done "dependencies and rosdep checks"
 # The sanitizer and fuzz builds run at the lowest CPU priority while the tests below run: the
 # tests mostly wait on the line, and this halves the wall time of the whole command.
 (nice -n 19 "$REPO/scripts/sanitized_tests.sh" --build-only
@@ -40,7 +49,9 @@ background_builds=$!
 # -j1: rostests each start their own master and must not run in parallel.
 catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests 2>&1 | tee "$WS/run_tests.log" |
   grep -E '^\[ *(RUN|FAILED|PASSED|OK) |^\[Testcase|FAILURE|ERROR:|^Ran |testcase|^\[ROSUNIT\]|^ *\* ' || true
+phase_done "unit tests and rostests (sanitizer, fuzz and tidy builds beside them)"
 wait $background_builds || true
+phase_done "waiting for the builds beside them"
 # The fail-safe's deterministic simulation (docs/simulation.md): 60 s of seeds from 1 on one core,
 # no ROS; the known open defects' invariants are counted, not failed (scripts/simulate.sh for
 # hours).
@@ -48,17 +59,24 @@ mkdir -p "$WS/build/test_results/simulation"
 "$WS/devel/lib/modbus_rtu_driver/failsafe_simulation" --seed 1 --seconds 60 --quiet \
   --cases "$WS/build/test_results/simulation" \
   --junit "$WS/build/test_results/simulation/failsafe_simulation.xml" || true
+phase_done "fail-safe simulation"
 # The ROS-free unit tests again under AddressSanitizer + UndefinedBehaviorSanitizer, and a short
 # fuzz run of the frame, request and share handling (scripts/fuzz.sh 3600 for a long one).
 "$REPO/scripts/sanitized_tests.sh" --prebuilt "$WS/build/test_results/sanitizers" || true
+phase_done "sanitized tests"
 "$REPO/scripts/fuzz.sh" --prebuilt 15 "$WS/build/test_results/fuzz" || true
+phase_done "fuzz"
 # catkin_lint (strict) and clang-format applied to every C++ file.
 "$REPO/scripts/check_conventions.sh" "$WS/build/test_results/conventions" || true
+phase_done "conventions"
 # Every benchmark program runs to its end with the least work (tables, no figures asserted;
 # scripts/benchmark.sh measures).
 "$REPO/scripts/benchmark.sh" --smoke "$WS/build/test_results/bench_smoke" >"$WS/bench_smoke.log" 2>&1 || true
+phase_done "benchmark smoke run"
 # catkin_make install gives an install space that works on its own.
 "$REPO/scripts/check_install.sh" "$WS/build/test_results/install" || true
+phase_done "install space"
+printf '%s\n' "${PHASES[@]}"
 # Each step above writes its results into a folder of its own; one that wrote nothing failed.
 exec /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$WS/build/test_results" \
   --expect modbus_rtu_driver --expect dependencies --expect rosdep --expect sanitizers \
