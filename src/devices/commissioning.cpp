@@ -56,10 +56,10 @@ Result Commissioning::unsupported() {
   return Result::failure(ErrorKind::kInvalidArgument, "not a setting of this device type");
 }
 Probe Commissioning::probeByRead(
-    Transport& bus, const Request& read,
+    Transport& link, const Request& read,
     const std::function<void(const std::vector<uint16_t>& values, Probe* probe)>& judge) {
   Probe p;
-  const Result r = bus.execute(read);
+  const Result r = link.execute(read);
   p.unclear = !answered(r);
   if (r.ok()) judge(r.values, &p);
   return p;

@@ -67,14 +67,14 @@ OutputTargets Device::outputsWrittenBy(const Request& request) const {
   return set;
 }
 
-Result Device::setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+Result Device::setOutputs(Transport& link, const std::vector<uint8_t>& channels,
                           const std::vector<bool>& states) {
   const std::string problem = validateChannels(channels, states);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
-  return writeOutputs(bus, channels, states);
+  return writeOutputs(link, channels, states);
 }
 
-Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+Result Device::writeCoilOutputs(Transport& link, const std::vector<uint8_t>& channels,
                                 const std::vector<bool>& states) {
   // Only the channels asked for go on the wire: one frame per run of adjacent channels, so a
   // channel between two requested ones is never rewritten (a rewrite would cancel its flash
@@ -87,9 +87,9 @@ Result Device::writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& chan
     for (size_t i = 0; i < run.states.size(); ++i)
       run_channels.push_back(static_cast<uint8_t>(run.first + i));
     Result r = run.states.size() == 1
-                   ? bus.execute(Request::writeSingleCoil(address(), run.first, run.states[0]))
-                   : bus.execute(Request::writeMultipleCoils(address(), run.first, run.states));
-    if (!r.ok()) r = confirmCoils(bus, std::move(r), run_channels, run.states);
+                   ? link.execute(Request::writeSingleCoil(address(), run.first, run.states[0]))
+                   : link.execute(Request::writeMultipleCoils(address(), run.first, run.states));
+    if (!r.ok()) r = confirmCoils(link, std::move(r), run_channels, run.states);
     if (!r.ok()) {
       if (!written.empty())
         r.message += "; outputs " +
@@ -120,10 +120,10 @@ bool Device::mayHaveActed(const Result& r) {
 
 // A write whose reply was lost may still have been done: the coils read back tell. Success
 // only when they show every requested state; the snapshot takes what was read.
-Result Device::confirmCoils(Transport& bus, Result failed, const std::vector<uint8_t>& channels,
+Result Device::confirmCoils(Transport& link, Result failed, const std::vector<uint8_t>& channels,
                             const std::vector<bool>& states) {
   if (!mayHaveActed(failed)) return failed;
-  Result now = bus.execute(Request::readCoils(address(), 0, static_cast<uint16_t>(outputCount())));
+  Result now = link.execute(Request::readCoils(address(), 0, static_cast<uint16_t>(outputCount())));
   if (!now.ok()) {
     failed.message += "; not confirmed: reading the outputs back failed too (" + now.message + ")";
     return failed;

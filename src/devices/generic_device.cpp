@@ -53,8 +53,8 @@ void GenericDevice::setFromWords(size_t i, const uint16_t* words) {
   st.valid = st.known = true;
 }
 
-bool GenericDevice::readSpan(Transport& bus, const ReadSpan& span, Result* first_failure) {
-  Result r = bus.execute(span.request(address()));
+bool GenericDevice::readSpan(Transport& link, const ReadSpan& span, Result* first_failure) {
+  Result r = link.execute(span.request(address()));
   if (r.ok() && r.values.size() == span.count) {
     for (size_t i : span.signals) setFromWords(i, &r.values[signals()[i].address - span.address]);
     return true;
@@ -67,7 +67,7 @@ bool GenericDevice::readSpan(Transport& bus, const ReadSpan& span, Result* first
       r.error == ErrorKind::kException &&
       (r.exception_code == kIllegalDataAddress || r.exception_code == kIllegalDataValue);
   if (refused_span && planner_.split(span, &a, &b, r.exception_code)) {
-    if (readSpan(bus, a, first_failure)) return readSpan(bus, b, first_failure);
+    if (readSpan(link, a, first_failure)) return readSpan(link, b, first_failure);
     for (size_t i : b.signals) states_[i].valid = false;
     return false;
   }
@@ -79,11 +79,11 @@ bool GenericDevice::readSpan(Transport& bus, const ReadSpan& span, Result* first
   return !noProperAnswer(r.error);
 }
 
-Result GenericDevice::pollGroup(Transport& bus, size_t group) {
+Result GenericDevice::pollGroup(Transport& link, size_t group) {
   Result failure = Result::success();
   const std::vector<ReadSpan> spans = planner_.plan(groups_.at(group).signals);
   for (size_t k = 0; k < spans.size(); ++k) {
-    if (readSpan(bus, spans[k], &failure)) continue;
+    if (readSpan(link, spans[k], &failure)) continue;
     for (size_t rest = k + 1; rest < spans.size(); ++rest)  // not answering: stale, not asked
       for (size_t i : spans[rest].signals) states_[i].valid = false;
     break;
@@ -115,13 +115,13 @@ std::string GenericDevice::encodeWrite(size_t i, double value, std::vector<uint1
   return problem.empty() ? problem : s.name + ": " + problem;
 }
 
-Result GenericDevice::writeSignal(Transport& bus, size_t i, double value) {
+Result GenericDevice::writeSignal(Transport& link, size_t i, double value) {
   std::vector<uint16_t> words;
   const std::string problem = encodeWrite(i, value, &words);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
   const SignalConfig& s = signals()[i];
   const bool coil = s.table == Table::kCoil;
-  Result r = bus.execute(writeRequest(s, words));
+  Result r = link.execute(writeRequest(s, words));
   if (r.ok()) {
     setFromWords(i, words.data());
     return r;
@@ -130,7 +130,7 @@ Result GenericDevice::writeSignal(Transport& bus, size_t i, double value) {
   // The reply was lost: the device may have done it. Read it back to tell.
   const Request back = coil ? Request::readCoils(address(), s.address, 1)
                             : Request::readHoldingRegisters(address(), s.address, s.words());
-  const Result now = bus.execute(back);
+  const Result now = link.execute(back);
   if (!now.ok()) {
     r.message += "; not confirmed: reading " + s.name + " back failed too (" + now.message + ")";
     return r;
@@ -152,12 +152,12 @@ std::vector<size_t> GenericDevice::safeSignals() const {
   return out;
 }
 
-Result GenericDevice::writeSafeValues(Transport& bus, bool* silent) {
+Result GenericDevice::writeSafeValues(Transport& link, bool* silent) {
   Result first = Result::success();
   if (silent) *silent = false;
   for (size_t i : safeSignals()) {
     bool answered = true;
-    const Result r = writeSafeValue(bus, i, &answered);
+    const Result r = writeSafeValue(link, i, &answered);
     if (r.ok()) continue;
     if (first.ok()) first = r;
     if (!answered) {
@@ -168,13 +168,13 @@ Result GenericDevice::writeSafeValues(Transport& bus, bool* silent) {
   return first;
 }
 
-Result GenericDevice::writeSafeValue(Transport& bus, size_t i, bool* answered) {
+Result GenericDevice::writeSafeValue(Transport& link, size_t i, bool* answered) {
   *answered = true;
   const SignalConfig& s = signals()[i];
   std::vector<uint16_t> words;
   const std::string problem = encodeWrite(i, *s.safe_value, &words);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
-  Result w = writeSignal(bus, i, *s.safe_value);
+  Result w = writeSignal(link, i, *s.safe_value);
   if (!w.ok()) {
     *answered = !noProperAnswer(w.error);
     w.message = s.name + ": " + w.message;
@@ -183,7 +183,7 @@ Result GenericDevice::writeSafeValue(Transport& bus, size_t i, bool* answered) {
   const Request back = s.table == Table::kCoil
                            ? Request::readCoils(address(), s.address, 1)
                            : Request::readHoldingRegisters(address(), s.address, s.words());
-  Result now = bus.execute(back);
+  Result now = link.execute(back);
   if (!now.ok()) {
     *answered = !noProperAnswer(now.error);
     now.message = s.name + ": written, but reading back failed: " + now.message;

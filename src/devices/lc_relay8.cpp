@@ -12,19 +12,19 @@ namespace modbus_rtu_driver {
 [[maybe_unused]] const bool kLcRelay8Registered =
     deviceClasses().add(kLcRelay8Type, makeDevice<LcRelay8>);
 
-Result LcRelay8::poll(Transport& bus) {
-  Result relays = bus.execute(Request::readCoils(address(), 0, kChannels));
+Result LcRelay8::poll(Transport& link) {
+  Result relays = link.execute(Request::readCoils(address(), 0, kChannels));
   if (!relays.ok()) return relays;
   outputs_.assign(relays.values.begin(), relays.values.end());
-  Result inputs = bus.execute(Request::readDiscreteInputs(address(), 0, kChannels));
+  Result inputs = link.execute(Request::readDiscreteInputs(address(), 0, kChannels));
   if (!inputs.ok()) return inputs;
   inputs_.assign(inputs.values.begin(), inputs.values.end());
   return inputs;
 }
 
-Result LcRelay8::writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+Result LcRelay8::writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
                               const std::vector<bool>& states) {
-  return writeCoilOutputs(bus, channels, states);
+  return writeCoilOutputs(link, channels, states);
 }
 
 std::string LcRelay8::pulseTenths(uint8_t channel, double duration, uint16_t* tenths) {
@@ -46,46 +46,46 @@ std::string LcRelay8::validatePulse(uint8_t channel, double duration) {
   return pulseTenths(channel, duration, nullptr);
 }
 
-Result LcRelay8::pulse(Transport& bus, uint8_t channel, bool state, double duration) {
+Result LcRelay8::pulse(Transport& link, uint8_t channel, bool state, double duration) {
   uint16_t tenths = 0;
   const std::string problem = pulseTenths(channel, duration, &tenths);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
   Request write = Request::writeMultipleRegisters(address(), flashRegister(channel),
                                                   {state ? kFlashClose : kFlashOpen, tenths});
   write.repeatable = false;  // a second copy would start the timed flash again
-  Result r = bus.execute(write);
+  Result r = link.execute(write);
   if (!r.ok() && mayHaveActed(r))
     r.message += "; not confirmed: the board may have started the flash, so it is not sent again";
   return r;
 }
 
-Result LcRelay8::readBaudCode(Transport& bus, uint16_t* code) {
-  Result r = bus.execute(Request::readHoldingRegisters(address(), kBaudReadRegister, 1));
+Result LcRelay8::readBaudCode(Transport& link, uint16_t* code) {
+  Result r = link.execute(Request::readHoldingRegisters(address(), kBaudReadRegister, 1));
   if (r.ok()) *code = r.values[0];
   return r;
 }
 
-Result LcRelay8::writeBaudCode(Transport& bus, uint16_t code) {
+Result LcRelay8::writeBaudCode(Transport& link, uint16_t code) {
   if (code < 2 || code > 4)
     return Result::failure(
         ErrorKind::kInvalidArgument,
         "baud code: " + std::to_string(code) + " is outside 2-4 (4800, 9600, 19200 baud)");
-  return bus.execute(Request::writeMultipleRegisters(address(), kBaudWriteRegister, {code}));
+  return link.execute(Request::writeMultipleRegisters(address(), kBaudWriteRegister, {code}));
 }
 
-Result LcRelay8::readAddressAtZero(Transport& bus) {
+Result LcRelay8::readAddressAtZero(Transport& link) {
   Request r = Request::readHoldingRegisters(kBroadcastAddress, 0, 1);
   r.single_device_at_zero = true;
-  return bus.execute(r);
+  return link.execute(r);
 }
 
-Result LcRelay8::setAddressAtZero(Transport& bus, uint8_t new_address) {
+Result LcRelay8::setAddressAtZero(Transport& link, uint8_t new_address) {
   if (new_address < 1)
     return Result::failure(ErrorKind::kInvalidArgument, "address: 0 is outside 1-255");
   Request r = Request::writeMultipleRegisters(kBroadcastAddress, 0, {new_address});
   r.single_device_at_zero = true;
   r.reply_echoes_request = true;
-  return bus.execute(r);
+  return link.execute(r);
 }
 
 std::vector<TimedIntent> LcRelay8::timedWrittenBy(const Request& request) const {

@@ -19,17 +19,17 @@ class LcRelay8Commissioning : public Commissioning {
   // least specific sign.
   int probeOrder() const override { return 30; }
 
-  Probe probe(Transport& bus, uint8_t address) const override {
+  Probe probe(Transport& link, uint8_t address) const override {
     const auto [lo, hi] = baudCodes();
-    return probeByRead(bus, Request::readHoldingRegisters(address, LcRelay8::kBaudReadRegister, 1),
+    return probeByRead(link, Request::readHoldingRegisters(address, LcRelay8::kBaudReadRegister, 1),
                        [lo = lo, hi = hi](const std::vector<uint16_t>& values, Probe* p) {
                          if (values[0] >= lo && values[0] <= hi) p->kind = Probe::kYes;
                        });
   }
 
-  Result report(Transport& bus, uint8_t address, InfoReport* out) const override {
+  Result report(Transport& link, uint8_t address, InfoReport* out) const override {
     uint16_t code = 0;
-    Result r = boardAt(address).readBaudCode(bus, &code);
+    Result r = boardAt(address).readBaudCode(link, &code);
     if (!r.ok()) return r;
     out->human = "\n  baud rate: " + baudCodeText(code);
     out->fields = {{"baud_code", int{code}}, {"baud", baudOfCode(code)}};
@@ -43,18 +43,18 @@ class LcRelay8Commissioning : public Commissioning {
 
   std::string addressPath() const override { return "through address 0"; }
   bool addressReadableAt() const override { return false; }
-  Result readAddress(Transport& bus, int, uint16_t* value) const override {
-    Result r = LcRelay8::readAddressAtZero(bus);
+  Result readAddress(Transport& link, int, uint16_t* value) const override {
+    Result r = LcRelay8::readAddressAtZero(link);
     if (r.ok()) *value = r.values[0];
     return r;
   }
-  Result writeAddress(Transport& bus, int, uint16_t value) const override {
-    return LcRelay8::setAddressAtZero(bus, static_cast<uint8_t>(value));
+  Result writeAddress(Transport& link, int, uint16_t value) const override {
+    return LcRelay8::setAddressAtZero(link, static_cast<uint8_t>(value));
   }
   // It has no address register there: reading its baud code is the harmless question.
-  Result answersAt(Transport& bus, int address) const override {
+  Result answersAt(Transport& link, int address) const override {
     uint16_t code = 0;
-    return boardAt(address).readBaudCode(bus, &code);
+    return boardAt(address).readBaudCode(link, &code);
   }
   std::string addressPathWarning() const override {
     return "Every LC board on the bus takes it, and other devices see a write to their register "
@@ -65,15 +65,15 @@ class LcRelay8Commissioning : public Commissioning {
   std::string powerCycleAdvice() const override {
     return " (the manual advises about 30 s without power)";
   }
-  Result readSetting(Transport& bus, int address, BoardFeature which,
+  Result readSetting(Transport& link, int address, BoardFeature which,
                      uint16_t* value) const override {
     if (which != BoardFeature::kBaud) return unsupported();
-    return boardAt(address).readBaudCode(bus, value);
+    return boardAt(address).readBaudCode(link, value);
   }
-  Result writeSetting(Transport& bus, int address, BoardFeature which,
+  Result writeSetting(Transport& link, int address, BoardFeature which,
                       uint16_t value) const override {
     if (which != BoardFeature::kBaud) return unsupported();
-    return boardAt(address).writeBaudCode(bus, value);
+    return boardAt(address).writeBaudCode(link, value);
   }
 };
 

@@ -94,7 +94,7 @@ std::string Ld58a08::validatePwm(const PwmSettings& s) {
   return {};
 }
 
-Result Ld58a08::setPwm(Transport& bus, const PwmSettings& s) {
+Result Ld58a08::setPwm(Transport& link, const PwmSettings& s) {
   const std::string problem = validatePwm(s);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
   std::vector<uint16_t> regs;
@@ -117,8 +117,8 @@ Result Ld58a08::setPwm(Transport& bus, const PwmSettings& s) {
   }
   Request write = Request::writeMultipleRegisters(address(), pwmRegister(s.channel), regs);
   write.repeatable = false;  // a second copy would restart the run: more pulses than asked for
-  Result r = bus.execute(write);
-  if (!r.ok() && mayHaveActed(r)) r = confirmPwm(bus, std::move(r), s.channel, regs);
+  Result r = link.execute(write);
+  if (!r.ok() && mayHaveActed(r)) r = confirmPwm(link, std::move(r), s.channel, regs);
   if (r.ok() && regs[2] == kContinuous) noteContinuousRun(s.channel);
   return r;
 }
@@ -133,10 +133,10 @@ void Ld58a08::noteContinuousRun(uint8_t channel) {
 
 // A PWM write whose reply was lost: the channel's registers tell whether it runs with what was
 // written (a burst counts its pulses down, a timed fast run its time). Never sent again.
-Result Ld58a08::confirmPwm(Transport& bus, Result failed, uint8_t ch,
+Result Ld58a08::confirmPwm(Transport& link, Result failed, uint8_t ch,
                            const std::vector<uint16_t>& written) {
   PwmState state;
-  Result now = readPwmChannel(bus, ch, &state);
+  Result now = readPwmChannel(link, ch, &state);
   if (!now.ok()) {
     failed.message += "; not confirmed: reading channel " + std::to_string(ch) +
                       " back failed too (" + now.message + "); not sent again";
@@ -158,15 +158,15 @@ Result Ld58a08::confirmPwm(Transport& bus, Result failed, uint8_t ch,
   return ok;
 }
 
-Result Ld58a08::stopPwm(Transport& bus, uint8_t channel) {
+Result Ld58a08::stopPwm(Transport& link, uint8_t channel) {
   if (channel >= kChannels)
     return Result::failure(ErrorKind::kInvalidArgument,
                            "channel: " + std::to_string(channel) + " is outside 0-7");
-  Result r = bus.execute(Request::writeSingleRegister(address(), pwmRegister(channel) + 2, 0));
+  Result r = link.execute(Request::writeSingleRegister(address(), pwmRegister(channel) + 2, 0));
   if (r.ok() || !mayHaveActed(r)) return r;
   // The reply was lost: the enable register tells (0 = stopped, by this write or by itself).
   PwmState state;
-  Result now = readPwmChannel(bus, channel, &state);
+  Result now = readPwmChannel(link, channel, &state);
   if (!now.ok()) {
     r.message += "; not confirmed: reading channel " + std::to_string(channel) +
                  " back failed too (" + now.message + ")";
@@ -183,8 +183,8 @@ Result Ld58a08::stopPwm(Transport& bus, uint8_t channel) {
   return ok;
 }
 
-Result Ld58a08::readPwmChannel(Transport& bus, uint8_t ch, PwmState* out) {
-  Result r = bus.execute(Request::readHoldingRegisters(address(), pwmRegister(ch), 3));
+Result Ld58a08::readPwmChannel(Transport& link, uint8_t ch, PwmState* out) {
+  Result r = link.execute(Request::readHoldingRegisters(address(), pwmRegister(ch), 3));
   if (!r.ok()) return r;
   PwmState& p = *out;
   p = PwmState{};
@@ -207,10 +207,10 @@ Result Ld58a08::readPwmChannel(Transport& bus, uint8_t ch, PwmState* out) {
   return r;
 }
 
-Result Ld58a08::readPwm(Transport& bus) {
+Result Ld58a08::readPwm(Transport& link) {
   std::array<PwmState, kChannels> states{};
   for (uint8_t ch = 0; ch < kChannels; ++ch) {
-    Result r = readPwmChannel(bus, ch, &states[ch]);
+    Result r = readPwmChannel(link, ch, &states[ch]);
     if (!r.ok()) return r;
   }
   pwm_ = states;
@@ -218,13 +218,13 @@ Result Ld58a08::readPwm(Transport& bus) {
   return Result::success();
 }
 
-Result Ld58a08::poll(Transport& bus) {
+Result Ld58a08::poll(Transport& link) {
   pwm_read_by_poll_.fill(false);
-  Result r = bus.execute(Request::readCoils(address(), 0, kChannels));
+  Result r = link.execute(Request::readCoils(address(), 0, kChannels));
   if (!r.ok()) return r;
   outputs_.assign(r.values.begin(), r.values.end());
   if (!pwm_known_) {
-    r = readPwm(bus);
+    r = readPwm(link);
     if (r.ok()) pwm_read_by_poll_.fill(true);
     return r;
   }
@@ -232,7 +232,7 @@ Result Ld58a08::poll(Transport& bus) {
   // transactions, and a burst that ends on the board shows within 8 polls.
   const uint8_t ch = poll_cursor_;
   poll_cursor_ = static_cast<uint8_t>((poll_cursor_ + 1) % kChannels);
-  r = readPwmChannel(bus, ch, &pwm_[ch]);
+  r = readPwmChannel(link, ch, &pwm_[ch]);
   pwm_read_by_poll_[ch] = r.ok();
   return r;
 }
@@ -241,7 +241,7 @@ Result Ld58a08::poll(Transport& bus) {
 // (manual, 0x0080): while the PWM runs, the board acknowledges the write and the output keeps
 // following the PWM. So the requested channels' PWM registers are read first (the snapshot may
 // be 8 polls old), a running PWM is stopped (confirmed), and then the outputs are written.
-Result Ld58a08::writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+Result Ld58a08::writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
                              const std::vector<bool>& states) {
   std::vector<uint8_t> stopped;
   auto list = [](const std::vector<uint8_t>& chs) {
@@ -252,7 +252,7 @@ Result Ld58a08::writeOutputs(Transport& bus, const std::vector<uint8_t>& channel
   auto stoppedNote = [&] { return "PWM on " + list(stopped) + " stopped first"; };
   for (uint8_t ch : channels) {
     PwmState state;
-    Result read = readPwmChannel(bus, ch, &state);
+    Result read = readPwmChannel(link, ch, &state);
     if (!read.ok()) {
       read.message += "; outputs not written: whether PWM runs on channel " + std::to_string(ch) +
                       " is unknown";
@@ -261,7 +261,7 @@ Result Ld58a08::writeOutputs(Transport& bus, const std::vector<uint8_t>& channel
     }
     pwm_[ch] = state;
     if (!state.running) continue;
-    Result stop = stopPwm(bus, ch);
+    Result stop = stopPwm(link, ch);
     if (!stop.ok()) {
       stop.message = "PWM runs on channel " + std::to_string(ch) + " and stopping it failed (" +
                      stop.message + "); outputs not written";
@@ -274,7 +274,7 @@ Result Ld58a08::writeOutputs(Transport& bus, const std::vector<uint8_t>& channel
     pwm_[ch].enable = 0;
     stopped.push_back(ch);
   }
-  Result r = writeCoilOutputs(bus, channels, states);
+  Result r = writeCoilOutputs(link, channels, states);
   if (stopped.empty()) return r;
   if (r.ok())
     r.message = stoppedNote() + (r.message.empty() ? "" : "; " + r.message);
@@ -283,8 +283,8 @@ Result Ld58a08::writeOutputs(Transport& bus, const std::vector<uint8_t>& channel
   return r;
 }
 
-Result Ld58a08::readSettings(Transport& bus, Ld58a08Settings* out) {
-  Result r = bus.execute(Request::readHoldingRegisters(address(), kPowerDownSaveRegister, 6));
+Result Ld58a08::readSettings(Transport& link, Ld58a08Settings* out) {
+  Result r = link.execute(Request::readHoldingRegisters(address(), kPowerDownSaveRegister, 6));
   if (!r.ok()) return r;
   out->power_down_save = r.values[0];
   out->return_delay = r.values[2];
@@ -316,22 +316,22 @@ std::string Ld58a08::validateSetting(Ld58a08Setting setting, uint16_t value) {
   return "unknown setting";
 }
 
-Result Ld58a08::readSetting(Transport& bus, Ld58a08Setting setting, uint16_t* value) {
+Result Ld58a08::readSetting(Transport& link, Ld58a08Setting setting, uint16_t* value) {
   Result r =
-      bus.execute(Request::readHoldingRegisters(address(), static_cast<uint16_t>(setting), 1));
+      link.execute(Request::readHoldingRegisters(address(), static_cast<uint16_t>(setting), 1));
   if (r.ok()) *value = r.values[0];
   return r;
 }
 
-Result Ld58a08::writeSetting(Transport& bus, Ld58a08Setting setting, uint16_t value) {
+Result Ld58a08::writeSetting(Transport& link, Ld58a08Setting setting, uint16_t value) {
   const std::string problem = validateSetting(setting, value);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
-  return bus.execute(
+  return link.execute(
       Request::writeSingleRegister(address(), static_cast<uint16_t>(setting), value));
 }
 
-Result Ld58a08::factoryReset(Transport& bus) {
-  return bus.execute(Request::writeSingleRegister(address(), kFactoryResetRegister, 0));
+Result Ld58a08::factoryReset(Transport& link) {
+  return link.execute(Request::writeSingleRegister(address(), kFactoryResetRegister, 0));
 }
 
 TimedIntent Ld58a08::pwmIntent(const PwmSettings& s) {

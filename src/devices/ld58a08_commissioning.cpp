@@ -33,8 +33,8 @@ class Ld58a08Commissioning : public Commissioning {
   // an LD58A08 answering 0xFF must be known before others are asked there.
   int probeOrder() const override { return 10; }
 
-  Probe probe(Transport& bus, uint8_t address) const override {
-    return probeByRead(bus, Request::readHoldingRegisters(address, Ld58a08::kAddressRegister, 1),
+  Probe probe(Transport& link, uint8_t address) const override {
+    return probeByRead(link, Request::readHoldingRegisters(address, Ld58a08::kAddressRegister, 1),
                        [address](const std::vector<uint16_t>& values, Probe* p) {
                          if (values[0] == address) {
                            p->kind = Probe::kYes;
@@ -48,10 +48,10 @@ class Ld58a08Commissioning : public Commissioning {
                        });
   }
 
-  Result report(Transport& bus, uint8_t address, InfoReport* out) const override {
+  Result report(Transport& link, uint8_t address, InfoReport* out) const override {
     Ld58a08 board(at(address));
     Ld58a08Settings st;
-    Result r = board.readSettings(bus, &st);
+    Result r = board.readSettings(link, &st);
     if (!r.ok()) return r;
     out->human = "\n  stored baud rate: " + baudCodeText(st.baud_code) +
                  "\n  stored parity: " + parityCodeText(st.parity) +
@@ -69,15 +69,15 @@ class Ld58a08Commissioning : public Commissioning {
   std::string title() const override { return "the LD58A08"; }
 
   std::string addressPath() const override { return "through 0xFF"; }
-  Result readAddress(Transport& bus, int address, uint16_t* value) const override {
-    return Ld58a08(at(address)).readSetting(bus, Ld58a08Setting::kAddress, value);
+  Result readAddress(Transport& link, int address, uint16_t* value) const override {
+    return Ld58a08(at(address)).readSetting(link, Ld58a08Setting::kAddress, value);
   }
-  Result writeAddress(Transport& bus, int address, uint16_t value) const override {
-    return Ld58a08(at(address)).writeSetting(bus, Ld58a08Setting::kAddress, value);
+  Result writeAddress(Transport& link, int address, uint16_t value) const override {
+    return Ld58a08(at(address)).writeSetting(link, Ld58a08Setting::kAddress, value);
   }
-  Result answersAt(Transport& bus, int address) const override {
+  Result answersAt(Transport& link, int address) const override {
     uint16_t there = 0;
-    Result r = readAddress(bus, address, &there);
+    Result r = readAddress(link, address, &there);
     if (r.ok() && there != address)
       return Result::failure(ErrorKind::kMalformed,
                              "it reports address " + std::to_string(there) + " there");
@@ -104,22 +104,22 @@ class Ld58a08Commissioning : public Commissioning {
   int returnDelayStepMs() const override { return 40; }
   int returnDelayMaxUnits() const override { return 25; }
 
-  Result readSetting(Transport& bus, int address, BoardFeature which,
+  Result readSetting(Transport& link, int address, BoardFeature which,
                      uint16_t* value) const override {
-    return Ld58a08(at(address)).readSetting(bus, registerOf(which), value);
+    return Ld58a08(at(address)).readSetting(link, registerOf(which), value);
   }
-  Result writeSetting(Transport& bus, int address, BoardFeature which,
+  Result writeSetting(Transport& link, int address, BoardFeature which,
                       uint16_t value) const override {
-    return Ld58a08(at(address)).writeSetting(bus, registerOf(which), value);
+    return Ld58a08(at(address)).writeSetting(link, registerOf(which), value);
   }
 
   std::string factoryResetAlsoText() const override {
     return ", no return delay, PWM settings cleared";
   }
-  std::string factoryResetPathWarning() const override { return " (every LD58A08 on the bus)"; }
+  std::string factoryResetPathWarning() const override { return " (every LD58A08 on the link)"; }
   // FF 06 00 FB 00 00 ED E5 through 0xFF, as the manual prints it.
-  Result factoryReset(Transport& bus, int address) const override {
-    return Ld58a08(at(address)).factoryReset(bus);
+  Result factoryReset(Transport& link, int address) const override {
+    return Ld58a08(at(address)).factoryReset(link);
   }
 };
 

@@ -20,7 +20,7 @@ std::shared_ptr<OutputBatch::Entry> OutputBatch::add(const Device& device,
   return entry;
 }
 
-Result OutputBatch::complete(Device& device, Transport& bus, const std::shared_ptr<Entry>& entry,
+Result OutputBatch::complete(Device& device, Transport& link, const std::shared_ptr<Entry>& entry,
                              const WrittenCallback& on_written,
                              const NotConfirmedCallback& on_not_confirmed) {
   if (entry->result) return *entry->result;
@@ -41,7 +41,7 @@ Result OutputBatch::complete(Device& device, Transport& bus, const std::shared_p
   }
   // Every entry was checked by add(), so their merge is a valid write: each channel in range and
   // once (the map), a state for each. It goes to the type's write without a second check.
-  Result r = device.writeOutputs(bus, channels, states);
+  Result r = device.writeOutputs(link, channels, states);
   if (r.ok() && on_written) on_written(channels, states);
   if (!r.ok() && on_not_confirmed) on_not_confirmed(channels, r);
   if (batch.size() > 1 && r.ok())

@@ -44,24 +44,24 @@ std::string ownRule(size_t which, long reg, const std::string& name) {
 
 }  // namespace
 
-Result YespeedPdu::poll(Transport& bus) {
+Result YespeedPdu::poll(Transport& link) {
   reading_fresh_ = false;  // a poll that stops at the relays read has no telemetry either
-  Result relays = bus.execute(Request::readCoils(address(), 0, kRelays));
+  Result relays = link.execute(Request::readCoils(address(), 0, kRelays));
   if (mayHaveActed(relays)) return relays;  // silent or garbled: do not spend more of the line
   if (relays.ok()) outputs_.assign(relays.values.begin(), relays.values.end());
-  Result telemetry = readTelemetry(bus);
-  if (relays.ok() && telemetry.ok() && !limits_known_) readLimits(bus);
+  Result telemetry = readTelemetry(link);
+  if (relays.ok() && telemetry.ok() && !limits_known_) readLimits(link);
   return relays.ok() ? telemetry : relays;
 }
 
-Result YespeedPdu::writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+Result YespeedPdu::writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
                                 const std::vector<bool>& states) {
-  return writeCoilOutputs(bus, channels, states);
+  return writeCoilOutputs(link, channels, states);
 }
 
-Result YespeedPdu::readTelemetry(Transport& bus) {
+Result YespeedPdu::readTelemetry(Transport& link) {
   reading_fresh_ = false;
-  Result r = bus.execute(Request::readInputRegisters(address(), 0, 5));
+  Result r = link.execute(Request::readInputRegisters(address(), 0, 5));
   if (!r.ok()) return r;
   reading_.temperature = static_cast<int16_t>(r.values[0]) / 10.0;
   reading_.humidity = r.values[1] / 10.0;
@@ -72,8 +72,8 @@ Result YespeedPdu::readTelemetry(Transport& bus) {
   return r;
 }
 
-Result YespeedPdu::readLimits(Transport& bus) {
-  Result r = bus.execute(Request::readHoldingRegisters(address(), 0, 3));
+Result YespeedPdu::readLimits(Transport& link) {
+  Result r = link.execute(Request::readHoldingRegisters(address(), 0, 3));
   if (!r.ok()) return r;
   limit_registers_ = {r.values[0], r.values[1], r.values[2]};
   limits_ = limitValues(limit_registers_);
@@ -146,21 +146,21 @@ std::string YespeedPdu::limitsText(const PduLimitRegisters& regs) {
   return regText(0, regs[0]) + " / " + regText(1, regs[1]) + " / " + regText(2, regs[2]);
 }
 
-Result YespeedPdu::setLimits(Transport& bus, const PduLimitValues& l) {
+Result YespeedPdu::setLimits(Transport& link, const PduLimitValues& l) {
   PduLimitRegisters regs{};
   const std::string problem = validateLimits(l, &regs);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
-  return writeLimitRegisters(bus, regs);
+  return writeLimitRegisters(link, regs);
 }
 
-Result YespeedPdu::writeLimitRegisters(Transport& bus, const PduLimitRegisters& regs) {
+Result YespeedPdu::writeLimitRegisters(Transport& link, const PduLimitRegisters& regs) {
   const std::string problem = checkLimitRegisters(regs);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
   Result w =
-      bus.execute(Request::writeMultipleRegisters(address(), 0, {regs[0], regs[1], regs[2]}));
+      link.execute(Request::writeMultipleRegisters(address(), 0, {regs[0], regs[1], regs[2]}));
   if (!w.ok()) return w;
   // Read back so the latched limits show what the device holds, not what was asked.
-  Result r = readLimits(bus);
+  Result r = readLimits(link);
   if (!r.ok()) {
     r.message += " (reading the limits back after writing them)";
     return r;
@@ -171,11 +171,11 @@ Result YespeedPdu::writeLimitRegisters(Transport& bus, const PduLimitRegisters& 
   return w;
 }
 
-Result YespeedPdu::changeLimits(Transport& bus, const PduLimitChange& change) {
+Result YespeedPdu::changeLimits(Transport& link, const PduLimitChange& change) {
   PduLimitRegisters current{};
   const bool partial = !change[0] || !change[1] || !change[2];
   if (partial) {
-    Result r = readLimits(bus);  // the limits not given stay as the device holds them
+    Result r = readLimits(link);  // the limits not given stay as the device holds them
     if (!r.ok()) {
       r.message += " (reading the current limits; nothing was written)";
       return r;
@@ -189,7 +189,7 @@ Result YespeedPdu::changeLimits(Transport& bus, const PduLimitChange& change) {
                            partial ? problem + " (merged with the limits the device holds: " +
                                          limitsText(merged) + "; nothing was written)"
                                    : problem);
-  return writeLimitRegisters(bus, merged);
+  return writeLimitRegisters(link, merged);
 }
 
 }  // namespace modbus_rtu_driver

@@ -26,15 +26,15 @@ class YespeedPduCommissioning : public Commissioning {
   // After the LD58A08's probe (more specific), before the LC board's (less specific).
   int probeOrder() const override { return 20; }
 
-  Probe probe(Transport& bus, uint8_t address) const override {
-    return probeByRead(bus, Request::readInputRegisters(address, 0, 5),
+  Probe probe(Transport& link, uint8_t address) const override {
+    return probeByRead(link, Request::readInputRegisters(address, 0, 5),
                        [](const std::vector<uint16_t>&, Probe* p) { p->kind = Probe::kYes; });
   }
 
-  Result report(Transport& bus, uint8_t address, InfoReport* out) const override {
+  Result report(Transport& link, uint8_t address, InfoReport* out) const override {
     YespeedPdu pdu = pduAt(address);
-    Result r = pdu.readTelemetry(bus);
-    if (r.ok()) r = pdu.readLimits(bus);
+    Result r = pdu.readTelemetry(link);
+    if (r.ok()) r = pdu.readLimits(link);
     if (!r.ok()) return r;
     const PduReading& m = pdu.reading();
     const PduLimitValues& l = pdu.limits();
@@ -72,17 +72,17 @@ class YespeedPduCommissioning : public Commissioning {
     if (regs.size() != 3) return "limits: 3 values needed";
     return YespeedPdu::checkLimitRegisters(asRegisters(regs));
   }
-  Result readLimits(Transport& bus, int address, std::vector<uint16_t>* regs) const override {
+  Result readLimits(Transport& link, int address, std::vector<uint16_t>* regs) const override {
     YespeedPdu pdu = pduAt(address);
-    Result r = pdu.readLimits(bus);
+    Result r = pdu.readLimits(link);
     if (r.ok()) regs->assign(pdu.limitRegisters().begin(), pdu.limitRegisters().end());
     return r;
   }
-  Result writeLimits(Transport& bus, int address,
+  Result writeLimits(Transport& link, int address,
                      const std::vector<uint16_t>& regs) const override {
     if (regs.size() != 3)
       return Result::failure(ErrorKind::kInvalidArgument, "limits: 3 values needed");
-    return pduAt(address).writeLimitRegisters(bus, asRegisters(regs));
+    return pduAt(address).writeLimitRegisters(link, asRegisters(regs));
   }
 };
 

@@ -73,9 +73,9 @@ class Commissioning {
   // kYes names the type. A type whose probe another type's board could also pass goes after
   // that type.
   virtual int probeOrder() const = 0;
-  virtual Probe probe(Transport& bus, uint8_t address) const = 0;
+  virtual Probe probe(Transport& link, uint8_t address) const = 0;
   // The settings and readings `info` shows.
-  virtual Result report(Transport& bus, uint8_t address, InfoReport* out) const = 0;
+  virtual Result report(Transport& link, uint8_t address, InfoReport* out) const = 0;
 
   virtual bool has(BoardFeature feature) const = 0;
   // The board in a sentence: "the LC relay board".
@@ -87,12 +87,12 @@ class Commissioning {
   // False when the board has no address register at its own address (only addressPath()):
   // `get-address --address A` then only checks that it answers at A.
   virtual bool addressReadableAt() const { return true; }
-  virtual Result readAddress(Transport& bus, int at, uint16_t* address) const;
-  virtual Result writeAddress(Transport& bus, int at, uint16_t address) const;
+  virtual Result readAddress(Transport& link, int at, uint16_t* address) const;
+  virtual Result writeAddress(Transport& link, int at, uint16_t address) const;
   // A harmless read at `address`: success when the board answers there (and, where it can
   // tell, says that is its address); after a change, and for a board whose address cannot be
   // read at its own address.
-  virtual Result answersAt(Transport& bus, int address) const;
+  virtual Result answersAt(Transport& link, int address) const;
   // The question's warning for a change through addressPath(): who else takes it.
   virtual std::string addressPathWarning() const { return ""; }
   // Said after the question: how the board behaves once changed ("" if nothing to add).
@@ -114,9 +114,9 @@ class Commissioning {
   virtual int returnDelayMaxUnits() const { return 0; }
 
   // kBaud, kParity, kReturnDelay, kPowerDownSave at `address`, as the register holds them.
-  virtual Result readSetting(Transport& bus, int address, BoardFeature which,
+  virtual Result readSetting(Transport& link, int address, BoardFeature which,
                              uint16_t* value) const;
-  virtual Result writeSetting(Transport& bus, int address, BoardFeature which,
+  virtual Result writeSetting(Transport& link, int address, BoardFeature which,
                               uint16_t value) const;
 
   // --- limits (kLimits), as the registers hold them, in limitList()'s order ---
@@ -129,24 +129,24 @@ class Commissioning {
                                       const std::string& option) const;
   // All the rules, on the register values of every limit; empty when they hold.
   virtual std::string checkLimits(const std::vector<uint16_t>& regs) const;
-  virtual Result readLimits(Transport& bus, int address, std::vector<uint16_t>* regs) const;
+  virtual Result readLimits(Transport& link, int address, std::vector<uint16_t>* regs) const;
   // Checked first (nothing is sent when a rule is broken), then written and read back: a
   // device that holds other values afterwards is a failure.
-  virtual Result writeLimits(Transport& bus, int address, const std::vector<uint16_t>& regs) const;
+  virtual Result writeLimits(Transport& link, int address, const std::vector<uint16_t>& regs) const;
 
   // --- factory reset (kFactoryReset); the factory settings are the descriptor's ---
   // What else the reset restores, for the question: ", no return delay, PWM settings cleared".
   virtual std::string factoryResetAlsoText() const { return ""; }
   // " (every LD58A08 on the bus)": who takes a reset through addressPath().
   virtual std::string factoryResetPathWarning() const { return ""; }
-  virtual Result factoryReset(Transport& bus, int at) const;
+  virtual Result factoryReset(Transport& link, int at) const;
 
  protected:
   static Result unsupported();
   // A probe by one harmless read: an answer with data goes to `judge`, which sets the kind (and
   // the note); any other answer only decides whether the type stays open (unclear).
   static Probe probeByRead(
-      Transport& bus, const Request& read,
+      Transport& link, const Request& read,
       const std::function<void(const std::vector<uint16_t>& values, Probe* probe)>& judge);
 };
 

@@ -77,12 +77,12 @@ class Device {
 
   // Reads everything the device reports (outputs, inputs, telemetry, settings) into the
   // snapshot. On failure the snapshot keeps its previous values and the Result says why.
-  virtual Result poll(Transport& bus) = 0;
+  virtual Result poll(Transport& link) = 0;
   // Sets channels[i] to states[i] and touches no other channel: one frame per run of adjacent
   // channels (FC05 for a run of one, FC15 otherwise); checks the arguments first, here and only
   // here (nothing is sent when they are bad), then has the type write them (writeOutputs). On
   // success the snapshot holds the confirmed states.
-  Result setOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+  Result setOutputs(Transport& link, const std::vector<uint8_t>& channels,
                     const std::vector<bool>& states);
 
   // Empty when setOutputs would accept these arguments, else a message naming the field.
@@ -121,8 +121,8 @@ class Device {
   virtual void noteRunKept(uint8_t channel) { (void)channel; }
   // Reads again what outputSelfTimed() answers from (an LD58A08's PWM registers, otherwise
   // read one channel per poll), so a restore decides on the device's state now.
-  virtual Result refreshSelfTimed(Transport& bus) {
-    (void)bus;
+  virtual Result refreshSelfTimed(Transport& link) {
+    (void)link;
     return Result::success();
   }
 
@@ -137,7 +137,7 @@ class Device {
  protected:
   // The type's write of outputs setOutputs (or OutputBatch::add, for the batch's merged write)
   // has checked; it checks nothing again.
-  virtual Result writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+  virtual Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
                               const std::vector<bool>& states) = 0;
   // Shared check of setOutputs arguments: sizes match, channels in range, no duplicates.
   std::string validateChannels(const std::vector<uint8_t>& channels,
@@ -146,13 +146,13 @@ class Device {
   // FC15 per run of adjacent channels; a channel nobody asked for is never written. Stops at
   // the first run that fails (the message says which outputs were written before). For
   // writeOutputs: the arguments are setOutputs' checked ones.
-  Result writeCoilOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+  Result writeCoilOutputs(Transport& link, const std::vector<uint8_t>& channels,
                           const std::vector<bool>& states);
   // True for failures after which the device may have done the write (its reply was lost or
   // garbled), as opposed to refusing it or never being asked.
   static bool mayHaveActed(const Result& result);
   // After a failed coil write: reads the coils back; success if they show `states`.
-  Result confirmCoils(Transport& bus, Result failed, const std::vector<uint8_t>& channels,
+  Result confirmCoils(Transport& link, Result failed, const std::vector<uint8_t>& channels,
                       const std::vector<bool>& states);
 
   std::vector<bool> outputs_;

@@ -40,21 +40,21 @@ class GenericDevice : public Device {
   const char* type() const override { return kGenericType.name; }
   size_t outputCount() const override { return 0; }
   // Reads group 0 (the signals at the device's own poll_rate).
-  Result poll(Transport& bus) override { return pollGroup(bus, 0); }
+  Result poll(Transport& link) override { return pollGroup(link, 0); }
   const std::vector<SignalConfig>& signals() const { return planner_.signals(); }
   const std::vector<SignalState>& states() const { return states_; }
   // Group 0 always exists (it may be empty); one more per distinct signal poll_rate.
   const std::vector<PollGroup>& groups() const { return groups_; }
   // Reads the group's signals. A span refused with exception 02 or 03 is split and both parts
   // read again at once. Signals whose read failed turn invalid; the Result is the first failure.
-  Result pollGroup(Transport& bus, size_t group);
+  Result pollGroup(Transport& link, size_t group);
 
   // The registers (or the bit) that `value` of `signal` becomes, or a message naming the
   // signal and the allowed range (min/max, then the type's, then min/max again for the value
   // the rounded raw number stands for). Nothing is sent here.
   std::string encodeWrite(size_t signal, double value, std::vector<uint16_t>* words) const;
   // Checks (encodeWrite), writes and confirms; on success the state holds the written value.
-  Result writeSignal(Transport& bus, size_t signal, double value);
+  Result writeSignal(Transport& link, size_t signal, double value);
 
   // Fail-safe: the signals with a safe_value (indices), in configuration order.
   std::vector<size_t> safeSignals() const;
@@ -64,24 +64,24 @@ class GenericDevice : public Device {
   // message naming the signal; the states hold what was read back.
   // `silent` (when given): whether the device stopped answering, so that the rest were not
   // tried; a value it refused or did not keep (read back differs) does not stop the others.
-  Result writeSafeValues(Transport& bus, bool* silent = nullptr);
+  Result writeSafeValues(Transport& link, bool* silent = nullptr);
 
   // Merged spans split after exception 02 or 03, in words (diagnostics).
   const std::vector<std::string>& splits() const { return planner_.splits(); }
 
  protected:
   // Never reached: setOutputs refuses first (no outputs; a generic device's signals are written).
-  Result writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+  Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
                       const std::vector<bool>& states) override;
 
  private:
   // Reads one span; false when the device did not answer (the rest of the poll is skipped).
-  bool readSpan(Transport& bus, const ReadSpan& span, Result* first_failure);
+  bool readSpan(Transport& link, const ReadSpan& span, Result* first_failure);
   // The write of `words` (encodeWrite's) with the signal's write function.
   Request writeRequest(const SignalConfig& s, const std::vector<uint16_t>& words) const;
   void setFromWords(size_t signal, const uint16_t* words);
   // `answered`: the device answered every transaction (a refusal or a value not kept included).
-  Result writeSafeValue(Transport& bus, size_t signal, bool* answered);
+  Result writeSafeValue(Transport& link, size_t signal, bool* answered);
 
   ReadPlanner planner_;
   std::vector<PollGroup> groups_;

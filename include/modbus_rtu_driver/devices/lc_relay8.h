@@ -24,26 +24,26 @@ class LcRelay8 : public Device {
   size_t inputCount() const override { return kChannels; }
 
   // FC01 relays then FC02 inputs.
-  Result poll(Transport& bus) override;
+  Result poll(Transport& link) override;
   // Empty when valid: channel 0-7, duration 0.1-6553.5 s. The duration is converted to the
   // delay register's 0.1 s steps first (the nearest step, float noise allowed); the range is
   // checked on that integer (0x0001-0xFFFF), which goes to `tenths` when not null.
   static std::string pulseTenths(uint8_t channel, double duration, uint16_t* tenths);
   static std::string validatePulse(uint8_t channel, double duration);
   // state true = flash-close (on for duration, then off); false = flash-open.
-  Result pulse(Transport& bus, uint8_t channel, bool state, double duration);
+  Result pulse(Transport& link, uint8_t channel, bool state, double duration);
   // A client's FC16 over a relay's mode and delay registers: that relay's flash.
   std::vector<TimedIntent> timedWrittenBy(const Request& request) const override;
 
-  Result readBaudCode(Transport& bus, uint16_t* code);
-  Result writeBaudCode(Transport& bus, uint16_t code);  // 2, 3, 4 = 4800, 9600, 19200
+  Result readBaudCode(Transport& link, uint16_t* code);
+  Result writeBaudCode(Transport& link, uint16_t code);  // 2, 3, 4 = 4800, 9600, 19200
 
   // "Single device on the bus" operations at address 0 (any LC board answers them).
-  static Result readAddressAtZero(Transport& bus);                  // values[0] = address
-  static Result setAddressAtZero(Transport& bus, uint8_t address);  // 1-255
+  static Result readAddressAtZero(Transport& link);                  // values[0] = address
+  static Result setAddressAtZero(Transport& link, uint8_t address);  // 1-255
 
  protected:
-  Result writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+  Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
                       const std::vector<bool>& states) override;
 };
 

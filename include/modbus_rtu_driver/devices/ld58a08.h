@@ -72,11 +72,11 @@ class Ld58a08 : public Device {
   size_t outputCount() const override { return kChannels; }
 
   // Polls the outputs (FC01) and the PWM registers of one channel (all on the first poll).
-  Result poll(Transport& bus) override;
+  Result poll(Transport& link) override;
   // Empty when valid, else a message naming the field and its range.
   static std::string validatePwm(const PwmSettings& settings);
   // One FC16 write of the channel's three registers.
-  Result setPwm(Transport& bus, const PwmSettings& settings);
+  Result setPwm(Transport& link, const PwmSettings& settings);
   // What a PWM run does to its output: the device drives it until the burst or the timed run
   // ends, then it is off; a continuous run has no end.
   static TimedIntent pwmIntent(const PwmSettings& settings);
@@ -86,15 +86,15 @@ class Ld58a08 : public Device {
   std::vector<uint8_t> timedStoppedBy(const Request& request) const override;
   // A client's write of 0 to a channel's enable register: that channel's run stopped.
   void noteCarriedWrite(const Request& request) override;
-  Result refreshSelfTimed(Transport& bus) override { return readPwm(bus); }
+  Result refreshSelfTimed(Transport& link) override { return readPwm(link); }
   bool coilWriteKeepsRun() const override { return true; }
   void noteRunKept(uint8_t channel) override {
     if (channel < kChannels) pwm_[channel].running = true;
   }
   // Writes 0 to the channel's enable register (0x00n2); a lost reply is confirmed by reading
   // the channel back.
-  Result stopPwm(Transport& bus, uint8_t channel);
-  Result readPwm(Transport& bus);  // fills pwm()
+  Result stopPwm(Transport& link, uint8_t channel);
+  Result readPwm(Transport& link);  // fills pwm()
   const std::array<PwmState, kChannels>& pwm() const { return pwm_; }
   bool outputSelfTimed(size_t channel) const override {
     return !pwm_known_ || (channel < kChannels && pwm_[channel].running);
@@ -105,33 +105,33 @@ class Ld58a08 : public Device {
     return channel < kChannels && pwm_read_by_poll_[channel];
   }
 
-  Result readSettings(Transport& bus, Ld58a08Settings* out);
+  Result readSettings(Transport& link, Ld58a08Settings* out);
   // Empty when `value` is in the setting's range, else a message naming it and the range.
   static std::string validateSetting(Ld58a08Setting setting, uint16_t value);
-  Result readSetting(Transport& bus, Ld58a08Setting setting, uint16_t* value);
+  Result readSetting(Transport& link, Ld58a08Setting setting, uint16_t* value);
   // FC06 to the setting's register, refused unsent outside its range. A new address is not
   // taken by this object (it keeps asking at the configured one).
-  Result writeSetting(Transport& bus, Ld58a08Setting setting, uint16_t value);
-  Result setReturnDelay(Transport& bus, uint16_t units_of_40ms) {
-    return writeSetting(bus, Ld58a08Setting::kReturnDelay, units_of_40ms);
+  Result writeSetting(Transport& link, Ld58a08Setting setting, uint16_t value);
+  Result setReturnDelay(Transport& link, uint16_t units_of_40ms) {
+    return writeSetting(link, Ld58a08Setting::kReturnDelay, units_of_40ms);
   }
   // FC06 0 to 0x00FB: address 1 at once, 9600 8N1 after a power cycle, PWM cleared. The manual
   // sends it through 0xFF (every LD58A08 on the bus takes it).
-  Result factoryReset(Transport& bus);
+  Result factoryReset(Transport& link);
 
  protected:
   // The outputs drive a channel only while its PWM is off (manual, 0x0080): reads the requested
   // channels' PWM registers, stops (FC06 0 to 0x00n2, confirmed) those that run, then writes the
   // outputs (FC05 / FC15). The message then says "PWM on channel N stopped first".
-  Result writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+  Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
                       const std::vector<bool>& states) override;
 
  private:
   // A continuous run the device confirmed (set_pwm's, or a client's write the node carried):
   // the snapshot says it runs until a read says otherwise.
   void noteContinuousRun(uint8_t channel);
-  Result readPwmChannel(Transport& bus, uint8_t channel, PwmState* out);
-  Result confirmPwm(Transport& bus, Result failed, uint8_t channel,
+  Result readPwmChannel(Transport& link, uint8_t channel, PwmState* out);
+  Result confirmPwm(Transport& link, Result failed, uint8_t channel,
                     const std::vector<uint16_t>& written);
 
   std::array<PwmState, kChannels> pwm_{};

@@ -42,7 +42,7 @@ class OutputBatch {
   // Bus thread: the outcome of `entry`, writing the pending requests first if it is among them.
   // `device` is the one they were added for. `on_written` runs once per confirmed write,
   // `on_not_confirmed` once per write that failed.
-  Result complete(Device& device, Transport& bus, const std::shared_ptr<Entry>& entry,
+  Result complete(Device& device, Transport& link, const std::shared_ptr<Entry>& entry,
                   const WrittenCallback& on_written = {},
                   const NotConfirmedCallback& on_not_confirmed = {});
 

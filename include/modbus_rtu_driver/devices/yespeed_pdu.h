@@ -39,9 +39,9 @@ class YespeedPdu : public Device {
   size_t outputCount() const override { return kRelays; }
 
   // FC01 relays, then one FC04 for all five readings. Limits are read once (and after writes).
-  Result poll(Transport& bus) override;
-  Result readTelemetry(Transport& bus);  // fills reading()
-  Result readLimits(Transport& bus);     // fills limits()
+  Result poll(Transport& link) override;
+  Result readTelemetry(Transport& link);  // fills reading()
+  Result readLimits(Transport& link);     // fills limits()
   static constexpr const char* kLimitNames[3] = {"over_voltage", "under_voltage", "over_current"};
   static constexpr const char* kLimitUnits[3] = {"V", "V", "A"};
   static constexpr double kLimitSteps[3] = {0.1, 0.1, 0.01};
@@ -67,11 +67,11 @@ class YespeedPdu : public Device {
 
   // One FC16 write of registers 0-2 (checked first: nothing is sent when a rule is broken),
   // then a read back, which must show what was written.
-  Result setLimits(Transport& bus, const PduLimitValues& limits);
-  Result writeLimitRegisters(Transport& bus, const PduLimitRegisters& regs);
+  Result setLimits(Transport& link, const PduLimitValues& limits);
+  Result writeLimitRegisters(Transport& link, const PduLimitRegisters& regs);
   // Some of the limits: reads the others from the device first, checks the rules on the merged
   // values, then writes all three as above.
-  Result changeLimits(Transport& bus, const PduLimitChange& change);
+  Result changeLimits(Transport& link, const PduLimitChange& change);
 
   const PduReading& reading() const { return reading_; }
   bool readingFresh() const { return reading_fresh_; }  // the last poll's read succeeded
@@ -80,7 +80,7 @@ class YespeedPdu : public Device {
   bool limitsKnown() const { return limits_known_; }
 
  protected:
-  Result writeOutputs(Transport& bus, const std::vector<uint8_t>& channels,
+  Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
                       const std::vector<bool>& states) override;
 
  private:
