@@ -639,6 +639,20 @@ class Scenario(RuleBasedStateMachine):
         self.check(what)
 
     @precondition(lambda self: self.m.node_running and not self.m.port_gone)
+    @rule(pdu=st.booleans(), chs=st.lists(CHANNELS, min_size=2, max_size=3, unique=True),
+          states=st.lists(st.integers(0, 1), min_size=3, max_size=3))
+    def other_set_outputs(self, pdu, chs, states):
+        """`set_outputs` on the LD58A08 (each requested channel's PWM stopped first) or the
+        PDU; channels between requested ones are not written."""
+        dev, model = (PDU_DEV, self.pdu) if pdu else (LD_DEV, self.ld)
+        chs, states = sorted(chs), states[:len(chs)]
+        what = "%s set_outputs %s %s" % (dev, chs, states)
+        res = rospy.ServiceProxy(NS + dev + "/set_outputs", SetOutputs)(chs, [bool(x) for x in states])
+        self.note("%s -> %s %s" % (what, res.success, res.message))
+        model.user_write(chs, states, res.success, what)
+        self.check(what)
+
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone)
     @rule(ch=CHANNELS, state=st.integers(0, 1))
     def pdu_set(self, ch, state):
         what = "pdu %s/set %d" % (PDU_NAMES[ch], state)
