@@ -1,5 +1,7 @@
-"""What the LC board's coils must be, written from docs/failsafe.md (the spec) and the rules of
-issue 24, not from the node's code. Each channel's expectation carries the invariant it comes
+"""What the LC board's coils (Model), the LD58A08's outputs and PWM enable registers (LdModel)
+and the PDU's relays (Model with on_restart: safe) must be, written from docs/failsafe.md (the
+spec), docs/devices/ld58a08.md for the board itself, and the rules of issue 24, not from the
+node's code. Each channel's expectation carries the invariant it comes
 from, so a mismatch names the invariant that failed.
 
 Invariants (issue 24, "Prove it by randomized scenarios"):
@@ -9,6 +11,9 @@ Invariants (issue 24, "Prove it by randomized scenarios"):
   I4 after a node stop, every output with a safe state is in it
   I5 no write touches a channel it was not asked to
   I6 what /diagnostics and ~failsafe claim matches the board
+  I7 a PWM run the device drives is not undone by a restore ("What restore writes")
+  I8 a node killed during a flash or timed run and started again under the same roscore takes
+     its end for no restart ("A node started during a flash")
 and docs/failsafe.md's "port lost" row: the node reports the port not open, cannot write
 anything meanwhile (a write answers success:false, I2), and once the port is back compares the
 outputs at the next poll: a restart (on_restart: restore) when they changed, and pending safe
