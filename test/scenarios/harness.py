@@ -21,7 +21,7 @@ from modbus_rtu_driver.msg import DigitalStates, FailsafeEvent
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
 
-from model import NAMES  # noqa: E402
+from model import LD_NAMES, NAMES  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "rostest"))
 import helpers  # noqa: E402  (test/rostest/helpers.py)
@@ -31,7 +31,10 @@ import user_paths  # noqa: E402  (test/rostest/user_paths.py: Process)
 NODE = "scenbus"
 NS = "/" + NODE + "/"
 DEV = "relays"
-BOARD = "255"
+BOARD = "1"
+LD_DEV, LD_BOARD = "pwm", "2"   # the LD58A08 (bus.yaml, sim.yaml)
+PDU_DEV, PDU_BOARD = "pdu", "3"  # the Yespeed PDU
+DEVICES = (DEV, LD_DEV, PDU_DEV)
 
 
 class Timeout(AssertionError):
@@ -74,13 +77,25 @@ class Harness:
         self.output = ""
         self.events = []
         self.polls = 0
+        self.dev_polls = {d: 0 for d in DEVICES}  # outputs messages per device (one a poll)
         self.diag = None  # (time received, relays status)
         self.bus_diag = None  # (time received, the bus's status: "port not open: ...", ...)
         rospy.Subscriber(NS + "failsafe", FailsafeEvent, self.events.append, queue_size=100)
+        # Each device's latched ~<device>/failsafe too: the node publishes its start events
+        # before this test's subscription to a new node connects, and the latched ~failsafe
+        # keeps only the newest of all devices (docs/failsafe.md). An event may come twice.
+        for d in DEVICES:
+            rospy.Subscriber(NS + d + "/failsafe", FailsafeEvent, self.events.append,
+                             queue_size=100)
         rospy.Subscriber(NS + DEV + "/outputs", DigitalStates, self._on_outputs, queue_size=100)
+        for d in (LD_DEV, PDU_DEV):
+            rospy.Subscriber(NS + d + "/outputs", DigitalStates, self._on_dev_outputs, d,
+                             queue_size=100)
         rospy.Subscriber("/diagnostics", DiagnosticArray, self._on_diag, queue_size=100)
         self.commands = {n: rospy.Publisher(NS + DEV + "/" + n + "/command", Bool, queue_size=10)
                          for n in NAMES}
+        self.ld_commands = {n: rospy.Publisher(NS + LD_DEV + "/" + n + "/command", Bool,
+                                               queue_size=10) for n in LD_NAMES}
         self.alive = rospy.Publisher(self.config["heartbeat"]["topic"], String, queue_size=1)
         self.beats = 0
         self.beating = threading.Event()
@@ -96,6 +111,10 @@ class Harness:
 
     def _on_outputs(self, msg):
         self.polls += 1
+        self.dev_polls[DEV] += 1
+
+    def _on_dev_outputs(self, msg, dev):
+        self.dev_polls[dev] += 1
 
     def _on_diag(self, msg):
         for s in msg.status:
@@ -165,13 +184,24 @@ class Harness:
                           % (self.node.poll(), self.log.read()[-3000:]))
             raise AssertionError(errors[-1])
         # The command topics are connected before a step publishes on them.
-        for name, pub in self.commands.items():
+        for name, pub in list(self.commands.items()) + list(self.ld_commands.items()):
             wait_until(lambda: pub.get_num_connections() > 0, 15, name + "/command subscribed")
+
+    def publishers_disconnected(self, timeout=2.0):
+        """After a SIGKILL: the command topics' connections to the dead node are gone (bounded;
+        a connection still counted then is left to the new node's subscription)."""
+        pubs = list(self.commands.values()) + list(self.ld_commands.values())
+        try:
+            wait_until(lambda: all(p.get_num_connections() == 0 for p in pubs), timeout,
+                       "the command topics' connections to the killed node to close")
+        except Timeout:
+            pass
 
     @staticmethod
     def _advertised():
         try:
-            rospy.wait_for_service(NS + DEV + "/pump/set", timeout=0.2)
+            for service in (DEV + "/pump/set", LD_DEV + "/set_pwm", PDU_DEV + "/r0/set"):
+                rospy.wait_for_service(NS + service, timeout=0.2)
             return True
         except rospy.ROSException:
             return False
@@ -194,17 +224,21 @@ class Harness:
         return code
 
     # --- the board and the node's answers ----------------------------------------------------
-    def coils(self):
-        return self.sim.get(BOARD, "coil", 0, 8)
+    def coils(self, board=BOARD):
+        return self.sim.get(board, "coil", 0, 8)
 
-    def event(self, trigger, since, timeout):
+    def enable(self, ch):
+        """The LD58A08's enable register of channel `ch` (0x00n2), in the simulator."""
+        return self.sim.get(LD_BOARD, "holding_register", ch * 16 + 2, 1)[0]
+
+    def event(self, trigger, since, timeout, dev=DEV):
         return wait_until(lambda: next((e for e in self.events[since:]
-                                        if e.trigger == trigger and e.device == DEV), None),
-                          timeout, "a %s event of %s on ~failsafe" % (trigger, DEV))
+                                        if e.trigger == trigger and e.device == dev), None),
+                          timeout, "a %s event of %s on ~failsafe" % (trigger, dev))
 
-    def wait_polls(self, n, timeout=5.0):
-        target = self.polls + n
-        wait_until(lambda: self.polls >= target, timeout, "%d polls of the node" % n)
+    def wait_polls(self, n, timeout=5.0, dev=DEV):
+        target = self.dev_polls[dev] + n
+        wait_until(lambda: self.dev_polls[dev] >= target, timeout, "%d polls of %s" % (n, dev))
 
     def refused_unsent(self):
         """The device's "writes refused unsent (port not open)" count, in its newest status."""

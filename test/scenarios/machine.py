@@ -14,11 +14,11 @@ from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
 import rospy
 
-from modbus_rtu_driver.srv import Pulse, SetOutputs
+from modbus_rtu_driver.srv import Pulse, SetOutputs, SetPwm, StopPwm
 
 import harness
-from harness import DEV, NS, Timeout, wait_until
-from model import BOTH, DEAD_MAN, NAMES, SAFE, Model
+from harness import DEV, LD_BOARD, LD_DEV, NS, PDU_BOARD, PDU_DEV, Timeout, wait_until
+from model import BOTH, DEAD_MAN, LD_NAMES, NAMES, PDU_NAMES, PDU_SAFE, LdModel, Model
 from share_client import ShareClient, ShareError
 
 CHANNELS = st.integers(0, 7)
@@ -55,6 +55,11 @@ class Scenario(RuleBasedStateMachine):
         super().__init__()
         self.h = Run.harness
         self.m = Model(Run.known)
+        self.ld = LdModel(Run.known)  # the LD58A08 (bus.yaml `pwm`)
+        self.pdu = Model(Run.known, PDU_NAMES, PDU_SAFE, on_restart="safe")
+        # (device, board address, model, names) of every device the board checks compare
+        self.devices = [(DEV, harness.BOARD, self.m, NAMES), (LD_DEV, LD_BOARD, self.ld, LD_NAMES),
+                        (PDU_DEV, PDU_BOARD, self.pdu, PDU_NAMES)]
         self.share = ShareClient(self.h.share_port, int(harness.BOARD))
         self.started = False
 
@@ -62,30 +67,44 @@ class Scenario(RuleBasedStateMachine):
         Run.log("  [%6.1f] %s" % (time.time() % 1000, text))
 
     # --- start of an example: a powered-up board with random outputs, the node started -------
-    @initialize(coils=st.lists(st.integers(0, 1), min_size=8, max_size=8))
-    def start(self, coils):
+    @initialize(coils=st.lists(st.integers(0, 1), min_size=8, max_size=8),
+                ld_coils=st.lists(st.integers(0, 1), min_size=8, max_size=8),
+                pdu_coils=st.lists(st.integers(0, 1), min_size=8, max_size=8))
+    def start(self, coils, ld_coils, pdu_coils):
         # The budget is spent: the examples left are invalid and cost nothing (not in the
         # final replay of a failure, which must run as it did).
         if not current_build_context().is_final:
             assume(time.time() < Run.deadline)
         Run.examples += 1
-        self.note("example %d: board %s, node starts (on_start: safe)" % (Run.examples, coils))
+        self.note("example %d: board %s, LD58A08 %s, PDU %s, node starts (on_start: safe)"
+                  % (Run.examples, coils, ld_coils, pdu_coils))
         self.h.stop_node()
         self.h.forget_kept_state()  # each example is a robot of its own
         self.h.start_simulator()  # an earlier example may have ended with the port gone
         self.h.beating.set()
         self.h.sim.silence(harness.BOARD, False)
-        self.h.sim.power_cycle()
-        self.h.sim.set(harness.BOARD, "coil", 0, *coils)
-        for i, v in enumerate(coils):
-            self.m.ch[i].values, self.m.ch[i].why = {v}, "the board as the example set it"
+        self.h.sim.set(LD_BOARD, "holding_register", 0xFA, 0)  # power-down save off
+        self.h.sim.power_cycle()  # every device: LD58A08 PWM registers cleared
+        for (_, board, model, _), values in zip(self.devices, (coils, ld_coils, pdu_coils)):
+            self.h.sim.set(board, "coil", 0, *values)
+            for i, v in enumerate(values):
+                model.ch[i].values, model.ch[i].why = {v}, "the board as the example set it"
         since = len(self.h.events)
         self.h.start_node()
         self.started = True
-        self.m.node_started(time.time())
-        self.expect_event("start", since, confirmed=True)
+        self.node_started(since)
         self.heartbeat_at_start(since)
         self.check("node start")
+
+    def models(self):
+        return [model for _, _, model, _ in self.devices]
+
+    def node_started(self, since):
+        """Every device's on_start: safe (docs/failsafe.md: confirmed before the services)."""
+        for model in self.models():
+            model.node_started(time.time())
+        for dev, _, _, _ in self.devices:
+            self.expect_event("start", since, confirmed=True, dev=dev)
 
     def heartbeat_at_start(self, since):
         """The node counts the heartbeat's timeout from its start: on a loaded machine its
@@ -96,8 +115,9 @@ class Scenario(RuleBasedStateMachine):
                    10, "heartbeats published to the node")
         if any(e.trigger == "heartbeat" and e.device == DEV for e in self.h.events[since:]):
             self.note("heartbeat lost at start (the node's subscription connected late)")
-            self.m.heartbeat_lost_event()
-            self.m.heartbeat_back()
+            for model in self.models():
+                model.heartbeat_lost_event()
+                model.heartbeat_back()
 
     def teardown(self):
         if self.started:
@@ -108,10 +128,21 @@ class Scenario(RuleBasedStateMachine):
 
     # --- checks ------------------------------------------------------------------------------
     def board_mismatch(self):
+        """[(device, model, names, channel, board value, allowed, why)] where a device's coils
+        (or an LD58A08 enable register, "enN") differ from its model."""
         now = time.time()
-        coils = self.h.coils()
-        bad = [(i, coils[i]) for i in range(8) if coils[i] not in self.m.allowed(i, now)]
-        return coils, bad
+        bad, boards = [], {}
+        for dev, board, model, names in self.devices:
+            coils = boards[dev] = self.h.coils(board)
+            bad += [(dev, model, names[i], coils[i], sorted(model.allowed(i, now)),
+                     model.ch[i].why, i) for i in range(8) if coils[i] not in model.allowed(i, now)]
+        for i in range(8):
+            allowed, why = self.ld.enable_allowed(i, now)
+            if allowed is not None:
+                value = self.h.enable(i)
+                if value not in allowed:
+                    bad.append((LD_DEV, None, "en%d" % i, value, sorted(allowed), why, i))
+        return boards, bad
 
     def check(self, step):
         """The board matches the model (bounded wait for the node's writes to land), and still
@@ -123,24 +154,29 @@ class Scenario(RuleBasedStateMachine):
             try:
                 wait_until(lambda: not self.board_mismatch()[1], 4.0, "the board to match")
             except Timeout:
-                coils, bad = self.board_mismatch()
-                now = time.time()
-                text = "; ".join("%s is %d, expected %s by %s%s" % (
-                    NAMES[i], v, sorted(self.m.allowed(i, now)), self.m.ch[i].why,
-                    self.refused_text(i, v)) for i, v in bad)
-                first = bad[0][0]
-                refused = self.m.ch[first].refused
-                invariant = ("I2" if refused and refused[0] == bad[0][1]
-                             else self.m.ch[first].why.split(" ")[0])
-                fail(invariant, "after %s (%s): board %s: %s" % (step, phase, coils, text))
-            if phase == "settle" and self.m.node_running and not self.m.unreachable():
-                self.h.wait_polls(2)
-        self.m.settle_flashes(time.time())
+                boards, bad = self.board_mismatch()
+                if not bad:  # it matched just after the deadline
+                    continue
+                text = "; ".join("%s/%s is %d, expected %s by %s%s" % (
+                    dev, name, v, allowed, why, self.refused_text(model, i, v) if model else "")
+                    for dev, model, name, v, allowed, why, i in bad)
+                dev, model, _, value, _, why, i = bad[0]
+                refused = model.ch[i].refused if model else None
+                invariant = "I2" if refused and refused[0] == value else why.split(" ")[0]
+                fail(invariant, "after %s (%s): boards %s: %s" % (step, phase, boards, text))
+            if phase == "settle" and self.m.node_running and not self.m.port_gone:
+                if not self.m.silenced:
+                    self.h.wait_polls(2)
+                self.h.wait_polls(2, dev=LD_DEV)
+                self.h.wait_polls(2, dev=PDU_DEV)
+        for model in self.models():
+            model.settle_flashes(time.time())
         if self.m.node_running:
             self.check_diagnostics(step)
 
-    def refused_text(self, i, value):
-        refused = self.m.ch[i].refused
+    @staticmethod
+    def refused_text(model, i, value):
+        refused = model.ch[i].refused
         if refused and refused[0] == value:
             return " (I2: %s answered success:false earlier)" % refused[1]
         return ""
@@ -170,9 +206,9 @@ class Scenario(RuleBasedStateMachine):
             fail("I6", "after %s: /diagnostics says %r but %s not safe on the board %s"
                  % (step, status.message, ", ".join(wrong), coils))
 
-    def expect_event(self, trigger, since, confirmed, timeout=10.0):
+    def expect_event(self, trigger, since, confirmed, timeout=10.0, dev=DEV):
         try:
-            e = self.h.event(trigger, since, timeout)
+            e = self.h.event(trigger, since, timeout, dev)
         except Timeout as t:
             fail("I6", str(t))
         if e.confirmed != confirmed:
@@ -332,12 +368,15 @@ class Scenario(RuleBasedStateMachine):
         since = len(self.h.events)
         self.h.beating.clear()
         self.note("heartbeat stops")
-        e = self.expect_event("heartbeat", since, confirmed=not self.m.unreachable(), timeout=15.0)
-        wrong = [(c, s) for c, s in zip(e.channels, e.states)
-                 if NAMES.index(c) not in SAFE or SAFE[NAMES.index(c)] != int(s)]
-        if wrong:
-            fail("I6", "heartbeat event wrote %s, not the safe states" % wrong)
-        self.m.heartbeat_lost_event()
+        for dev, _, model, names in self.devices:
+            e = self.expect_event("heartbeat", since, confirmed=not model.unreachable(),
+                                  timeout=15.0, dev=dev)
+            wrong = [(c, s) for c, s in zip(e.channels, e.states)
+                     if names.index(c) not in model.safe or model.safe[names.index(c)] != int(s)]
+            if wrong:
+                fail("I6", "heartbeat event of %s wrote %s, not the safe states" % (dev, wrong))
+        for model in self.models():
+            model.heartbeat_lost_event()
         self.check("heartbeat lost")
 
     @precondition(lambda self: self.m.node_running and not self.h.beating.is_set())
@@ -351,14 +390,15 @@ class Scenario(RuleBasedStateMachine):
                    5, "heartbeats published to the node")
         if not self.m.unreachable():
             self.h.wait_polls(3)
-        self.m.heartbeat_back()
+        for model in self.models():
+            model.heartbeat_back()
         self.check("heartbeat back")
 
     @precondition(lambda self: self.m.node_running and not self.m.port_gone)
     @rule()
     def power_cycle(self):
         since = len(self.h.events)
-        self.h.sim.power_cycle()
+        self.h.sim.power_cycle(harness.BOARD)  # the LC board alone (its own supply)
         seen = self.m.power_cycle(time.time())
         self.note("power cycle (restart to be seen: %s)" % seen)
         if seen:
@@ -399,18 +439,20 @@ class Scenario(RuleBasedStateMachine):
         self.note("node stopped (SIGINT%s), exit %s" % (", after 5 share writes of pump on" if sockets else "", code))
         if burst and sockets:
             self.m.ch[0].values = set(BOTH)  # the share writes may have run before the stop
-        self.m.node_stopped(reached=True)
+        for model in self.models():
+            model.node_stopped(reached=True)
         if code != 0:
             fail("I4", "the node exited with %s on SIGINT:\n%s" % (code, self.h.output[-2000:]))
         self.check("node stop")
         # Flashes end before the next start (a flash ending under a new node is a restart).
-        wait_until(lambda: not self.m.flash_running(time.time()), 10, "running pulses to end")
+        # (LD58A08 timed runs too; a continuous run goes on: the next node finds it running.)
+        wait_until(lambda: not self.m.flash_running(time.time()) and not self.ld_timed_running(),
+                   10, "running pulses and timed PWM runs to end")
         self.h.beating.set()
         since = len(self.h.events)
         self.h.start_node()
-        self.m.node_started(time.time())
         self.note("node started")
-        self.expect_event("start", since, confirmed=True)
+        self.node_started(since)
         self.heartbeat_at_start(since)
         self.check("node start")
 
@@ -458,7 +500,8 @@ class Scenario(RuleBasedStateMachine):
         (test/rostest/test_recoveries.py test_4). The node must say "port not open" on the bus's
         /diagnostics; a write tried at once must fail and never reach the board later."""
         self.h.stop_simulator()
-        self.m.port_lost()
+        for model in self.models():
+            model.port_lost()
         self.note("port lost (simulator stopped)")
         try:
             status = self.h.fresh_bus_status(lambda s: s.message.startswith("port not open"),
@@ -479,7 +522,9 @@ class Scenario(RuleBasedStateMachine):
         since = len(self.h.events)
         pending = any(c.pending_safe for c in self.m.ch)
         self.h.start_simulator()
-        seen = self.m.port_back(time.time())
+        now = time.time()
+        seen = self.m.port_back(now)
+        others = [(dev, model, model.port_back(now)) for dev, _, model, _ in self.devices[1:]]
         self.note("port back (new simulator, board all off; restart to be seen: %s)" % seen)
         try:
             self.h.fresh_bus_status(lambda s: not s.message.startswith("port not open"), 40,
@@ -497,4 +542,211 @@ class Scenario(RuleBasedStateMachine):
                 fail("I6", "restart event with action %r, on_restart is restore" % e.action)
         else:
             self.h.wait_polls(3, timeout=30.0)
+        for dev, model, seen_there in others:
+            if seen_there:
+                e = self.expect_event("restart", since, confirmed=True, timeout=30.0, dev=dev)
+                self.note("restart event of %s: %s" % (dev, e.message))
+            else:
+                self.h.wait_polls(3, timeout=30.0, dev=dev)
         self.check("port back")
+
+    # --- the LD58A08: outputs and PWM (docs/devices/ld58a08.md); the PDU's relays -------------
+    def ld_timed_running(self):
+        """LD58A08 channels whose timed run (burst, timed fast run) may still go."""
+        now = time.time()
+        return [i for i, c in enumerate(self.ld.ch)
+                if c.kind == "timed" and c.flash is not None and now <= c.flash.done_after]
+
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone)
+    @rule(ch=CHANNELS, state=st.integers(0, 1))
+    def ld_set(self, ch, state):
+        what = "pwm %s/set %d" % (LD_NAMES[ch], state)
+        res = rospy.ServiceProxy(NS + LD_DEV + "/" + LD_NAMES[ch] + "/set", SetBool)(bool(state))
+        self.note("%s -> %s %s" % (what, res.success, res.message))
+        self.ld.user_write([ch], [state], res.success, what)
+        self.check(what)
+
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone)
+    @rule(ch=CHANNELS, state=st.integers(0, 1))
+    def ld_command(self, ch, state):
+        """Fire and forget: done when the board shows the level with the channel's PWM off
+        (docs/devices/ld58a08.md: C/command stops the channel's PWM first)."""
+        what = "pwm %s/command %d" % (LD_NAMES[ch], state)
+        self.h.ld_commands[LD_NAMES[ch]].publish(Bool(bool(state)))
+        self.note(what)
+        try:
+            wait_until(lambda: self.h.coils(LD_BOARD)[ch] == state and self.h.enable(ch) == 0,
+                       5.0, what + " on the board")
+            ok = True
+        except Timeout:
+            ok = False
+        self.ld.user_write([ch], [state], True, what)
+        if not ok:
+            fail("I1", "%s never reached the board (level %d, enable %d)"
+                 % (what, self.h.coils(LD_BOARD)[ch], self.h.enable(ch)))
+        self.check(what)
+
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone)
+    @rule(ch=CHANNELS, period=st.integers(2, 5), on=st.integers(1, 4), pulses=st.integers(2, 6),
+          duty=st.sampled_from([0, 50, 100]), tenths=st.one_of(st.just(0), st.integers(10, 30)))
+    def ld_set_pwm(self, ch, period, on, pulses, duty, tenths):
+        """A burst on a slow channel (0-5), a timed or continuous run on a fast one (6-7)."""
+        if ch < 6:
+            on = min(on, period - 1)
+            req = dict(channel=ch, period=period / 10.0, on_time=on / 10.0, pulses=pulses)
+            what = "set_pwm %s burst %d x %.1f s (on %.1f s)" % (LD_NAMES[ch], pulses,
+                                                                   period / 10.0, on / 10.0)
+            during, duration = set(BOTH), pulses * period / 10.0
+        else:
+            req = dict(channel=ch, frequency=1000.0, duty_cycle=float(duty),
+                       duration=tenths / 10.0)
+            what = "set_pwm %s 1 kHz %d %% %s" % (LD_NAMES[ch], duty, "for %.1f s" % (tenths / 10.0)
+                                                 if tenths else "continuous")
+            # A wave the poll cannot sample: any level while it toggles (docs/failsafe.md).
+            during = {0} if duty == 0 else {1} if duty == 100 else set(BOTH)
+            duration = tenths / 10.0 if tenths else None
+        sent = time.time()
+        res = rospy.ServiceProxy(NS + LD_DEV + "/set_pwm", SetPwm)(**req)
+        answered = time.time()
+        self.note("%s -> %s %s" % (what, res.success, res.message))
+        self.ld.set_pwm(ch, res.success, during, sent, answered, duration, what)
+        self.check(what)
+
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone
+                  and self.h.beating.is_set())
+    @rule(fast=st.booleans())
+    def pwm_then_heartbeat_lost(self, fast):
+        """A PWM run on a channel with a safe state when the heartbeat goes. docs/failsafe.md's
+        table, heartbeat lost: "safe state until commanded again" on each output (I3)."""
+        if fast:
+            self.ld_set_pwm(6, 2, 1, 2, 100, 0)  # p6 (safe off) on continuously
+        else:
+            self.ld_set_pwm(0, 5, 2, 6, 0, 0)  # p0 (safe off): 6 x 0.5 s
+        self.heartbeat_lost()
+
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone)
+    @rule(ch=CHANNELS)
+    def ld_stop_pwm(self, ch):
+        what = "stop_pwm %s" % LD_NAMES[ch]
+        res = rospy.ServiceProxy(NS + LD_DEV + "/stop_pwm", StopPwm)(ch)
+        self.note("%s -> %s %s" % (what, res.success, res.message))
+        self.ld.stop_pwm(ch, res.success, what)
+        if res.success:
+            # docs/failsafe.md: the next poll that reads the channel's PWM registers takes its
+            # level as commanded; a poll reads one channel's, all 8 within 8 polls (ld58a08.md).
+            self.h.wait_polls(9, timeout=10.0, dev=LD_DEV)
+            self.ld.taken(ch, self.h.coils(LD_BOARD)[ch])
+        self.check(what)
+
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone)
+    @rule(pdu=st.booleans(), chs=st.lists(CHANNELS, min_size=2, max_size=3, unique=True),
+          states=st.lists(st.integers(0, 1), min_size=3, max_size=3))
+    def other_set_outputs(self, pdu, chs, states):
+        """`set_outputs` on the LD58A08 (each requested channel's PWM stopped first) or the
+        PDU; channels between requested ones are not written."""
+        dev, model = (PDU_DEV, self.pdu) if pdu else (LD_DEV, self.ld)
+        chs, states = sorted(chs), states[:len(chs)]
+        what = "%s set_outputs %s %s" % (dev, chs, states)
+        res = rospy.ServiceProxy(NS + dev + "/set_outputs", SetOutputs)(chs, [bool(x) for x in states])
+        self.note("%s -> %s %s" % (what, res.success, res.message))
+        model.user_write(chs, states, res.success, what)
+        self.check(what)
+
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone)
+    @rule(ch=CHANNELS, state=st.integers(0, 1))
+    def pdu_set(self, ch, state):
+        what = "pdu %s/set %d" % (PDU_NAMES[ch], state)
+        res = rospy.ServiceProxy(NS + PDU_DEV + "/" + PDU_NAMES[ch] + "/set", SetBool)(bool(state))
+        self.note("%s -> %s %s" % (what, res.success, res.message))
+        self.pdu.user_write([ch], [state], res.success, what)
+        self.check(what)
+
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone)
+    @rule(save=st.booleans())
+    def ld_power_cycle(self, save):
+        """The LD58A08 alone off and on; with `save`, its power-down save on for that cycle
+        (0x00FA, written through the simulator's control socket): the PWM registers as last
+        written run again (docs/devices/ld58a08.md, "Power cycle")."""
+        since = len(self.h.events)
+        if save:
+            # A node's timed run that a save starts again before its end: whether the node takes
+            # the rerun for its own command (restore writes its final level) or the device's
+            # is not said by docs/failsafe.md (open question): not drawn, the runs end first.
+            wait_until(lambda: not self.ld_timed_running(), 10, "the LD58A08's timed runs to end")
+            self.ld.settle_flashes(time.time())
+            self.h.sim.set(LD_BOARD, "holding_register", 0xFA, 1)
+        self.h.sim.power_cycle(LD_BOARD)
+        if save:
+            self.h.sim.set(LD_BOARD, "holding_register", 0xFA, 0)
+        seen = self.ld.power_cycle(time.time(), save)
+        self.note("LD58A08 power cycle%s (restart to be seen: %s)"
+                  % (" with power-down save" if save else "", seen))
+        if seen:
+            e = self.expect_event("restart", since, confirmed=True, dev=LD_DEV)
+            if e.action != "restore":
+                fail("I6", "LD58A08 restart event with action %r, on_restart is restore" % e.action)
+        self.check("LD58A08 power cycle")
+
+    @precondition(lambda self: self.m.node_running and not self.m.port_gone)
+    @rule()
+    def pdu_power_cycle(self):
+        since = len(self.h.events)
+        self.h.sim.power_cycle(PDU_BOARD)
+        seen = self.pdu.power_cycle(time.time())
+        self.note("PDU power cycle (restart to be seen: %s)" % seen)
+        if seen:
+            e = self.expect_event("restart", since, confirmed=True, dev=PDU_DEV)
+            if e.action != "safe":
+                fail("I6", "PDU restart event with action %r, on_restart is safe" % e.action)
+        self.check("PDU power cycle")
+
+    # --- the node killed (SIGKILL) and started again under the same roscore -----------------
+    @precondition(lambda self: self.m.node_running and not self.m.unreachable())
+    @rule(before=st.sampled_from(["nothing", "flash", "burst", "fast run", "continuous run"]),
+          ch=st.integers(0, 3))
+    def kill_and_restart(self, before, ch):
+        """docs/failsafe.md, "node killed": no code runs, the boards keep their outputs (flashes
+        and PWM runs go on); the next node's on_start: safe puts them safe. "A node started
+        during a flash": the killed node's `~running_timed` stays on the parameter server (the
+        per-example reset is not called here) and the next node resumes them, so a flash's or
+        timed run's end is not taken for a restart (I8). `before`: a timed command started
+        just before the kill on a channel without a safe state (the next node's on_start: safe
+        would end it on a safe one), so that its end comes under the next node."""
+        # 6 s each: the next node starts 2-3 s after the kill, so the end comes under it.
+        if before == "flash":
+            self.pulse([1, 4, 5, 7][ch], ch % 2, 60)
+        elif before == "burst":
+            self.ld_set_pwm([1, 3, 4, 5][ch], 10, 5, 6, 0, 0)  # 6 x 1.0 s, on 0.5 s
+        elif before in ("fast run", "continuous run"):
+            self.ld_set_pwm(7, 2, 1, 2, [50, 100, 100, 100][ch], 60 if before == "fast run" else 0)
+        now = time.time()
+        running = ([NAMES[i] for i in self.m.flash_running(now)]
+                   + [LD_NAMES[i] for i in self.ld_timed_running()])
+        code = self.h.stop_node(signal.SIGKILL)
+        self.note("node killed (SIGKILL), exit %s; timed commands running: %s"
+                  % (code, ", ".join(running) or "none"))
+        for model in self.models():
+            model.node_running = False
+        self.check("node killed")  # nothing wrote: the boards as they were
+        self.h.publishers_disconnected()
+        self.h.beating.set()
+        since = len(self.h.events)
+        self.h.start_node()
+        self.note("node started again (same roscore, ~running_timed kept)")
+        self.node_started(since)
+        self.heartbeat_at_start(since)
+        self.check("node start after SIGKILL")
+        ends = [c.flash.done_after for model in (self.m, self.ld) for c in model.ch
+                if c.flash is not None and not getattr(c.flash, "continuous", False)]
+        if ends:
+            wait_until(lambda: time.time() > max(ends), 15,
+                       "the timed commands running at the kill to end")
+            self.h.wait_polls(3)
+            self.h.wait_polls(9, timeout=10.0, dev=LD_DEV)
+        restarts = [e for e in self.h.events[since:] if e.trigger == "restart"]
+        if restarts:
+            fail("I8", "after a SIGKILL and a new node (timed commands running at the kill: %s), "
+                 "restart events with no restart: %s" % (", ".join(running) or "none",
+                                                         "; ".join("%s: %s" % (e.device, e.message)
+                                                                   for e in restarts)))
+        self.check("timed commands of the killed node ended")

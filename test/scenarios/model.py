@@ -1,5 +1,7 @@
-"""What the LC board's coils must be, written from docs/failsafe.md (the spec) and the rules of
-issue 24, not from the node's code. Each channel's expectation carries the invariant it comes
+"""What the LC board's coils (Model), the LD58A08's outputs and PWM enable registers (LdModel)
+and the PDU's relays (Model with on_restart: safe) must be, written from docs/failsafe.md (the
+spec), docs/devices/ld58a08.md for the board itself, and the rules of issue 24, not from the
+node's code. Each channel's expectation carries the invariant it comes
 from, so a mismatch names the invariant that failed.
 
 Invariants (issue 24, "Prove it by randomized scenarios"):
@@ -9,11 +11,15 @@ Invariants (issue 24, "Prove it by randomized scenarios"):
   I4 after a node stop, every output with a safe state is in it
   I5 no write touches a channel it was not asked to
   I6 what /diagnostics and ~failsafe claim matches the board
+  I7 a PWM run the device drives is not undone by a restore ("What restore writes")
+  I8 a node killed during a flash or timed run and started again under the same roscore takes
+     its end for no restart ("A node started during a flash")
 and docs/failsafe.md's "port lost" row: the node reports the port not open, cannot write
 anything meanwhile (a write answers success:false, I2), and once the port is back compares the
 outputs at the next poll: a restart (on_restart: restore) when they changed, and pending safe
 writes done with a restart event.
 """
+import time
 
 NAMES = ["pump", "fan", "lamp", "valve", "out4", "out5", "out6", "out7"]
 SAFE = {0: 0, 2: 1, 3: 0}  # pump off, lamp on, valve off; fan and out4-7 hold (bus.yaml)
@@ -71,9 +77,10 @@ class Channel:
 
 
 class Model:
-    def __init__(self, known=()):
+    def __init__(self, known=(), names=NAMES, safe=SAFE, on_restart="restore"):
         self.known = set(known)
-        self.ch = [Channel() for _ in NAMES]
+        self.names, self.safe, self.on_restart = list(names), dict(safe), on_restart
+        self.ch = [Channel() for _ in self.names]
         self.heartbeat_lost = False
         self.silenced = False
         self.port_gone = False  # the simulator stopped: no board, no pty (USB adapter pulled)
@@ -152,16 +159,16 @@ class Model:
                 c.pending_safe = True
                 c.why = "%s (safe write pending: the device is silent)" % why
             else:
-                self._set(i, {SAFE[i]}, why)
+                self._set(i, {self.safe[i]}, why)
                 c.settled = True
                 c.lost_answer = False
-            c.restore, c.by_failsafe, c.held, c.commanded_in_loss = {SAFE[i]}, True, hold, False
+            c.restore, c.by_failsafe, c.held, c.commanded_in_loss = {self.safe[i]}, True, hold, False
         if "span_rewrites_between" in self.known and not self.unreachable():
             self._span_may_rewrite(min(channels), max(channels), channels)
 
     def heartbeat_lost_event(self):
         self.heartbeat_lost = True
-        self.failsafe(sorted(SAFE), "I3 (heartbeat lost: safe until commanded again)")
+        self.failsafe(sorted(self.safe), "I3 (heartbeat lost: safe until commanded again)")
 
     def heartbeat_back(self):
         self.heartbeat_lost = False
@@ -172,16 +179,22 @@ class Model:
         """What on_restart: restore leaves on channel i (issue 24's rule: the last state the node
         confirmed, user or fail-safe; safe while a trigger holds it)."""
         c = self.ch[i]
+        if self.on_restart == "safe":
+            # docs/failsafe.md, device restart: `safe` writes the safe states; a hold channel is
+            # left as the restart left it (the caller has set that in c.values).
+            if i in self.safe:
+                return {self.safe[i]}, "I6 (on_restart: safe writes the safe state)"
+            return set(c.values), "on_restart: safe leaves a hold channel as the restart left it"
         if c.pending_safe or c.held:
-            values, why = {SAFE[i]}, "I3 (restore keeps a channel a trigger holds safe)"
+            values, why = {self.safe[i]}, "I3 (restore keeps a channel a trigger holds safe)"
         elif not c.settled:
             values, why = set(BOTH), "unknown (pulsed channel: not compared by the node)"
         elif c.by_failsafe:
             values, why = set(c.restore), "I3 (restore writes the state the fail-safe confirmed)"
         else:
             values, why = set(c.restore), "I1 (restore writes the last confirmed state)"
-            if c.commanded_in_loss and i in SAFE:
-                values.add(SAFE[i])  # the spec does not say whether the loss still holds it
+            if c.commanded_in_loss and i in self.safe:
+                values.add(self.safe[i])  # the spec does not say whether the loss still holds it
         if c.by_failsafe and "restore_after_failsafe" in self.known:
             values, why = set(BOTH), "known defect restore_after_failsafe"
             c.relaxed = True  # and /diagnostics' claim on it is not checked either
@@ -207,27 +220,30 @@ class Model:
         changed), None when that is uncertain."""
         self.settle_flashes(now)
         if self.silenced:
-            for i in range(len(NAMES)):
+            for i in range(len(self.names)):
                 self._set(i, {0}, "power cycle of a silent device: all off")
             return False
-        before = [set(self.allowed(i, now)) for i in range(len(NAMES))]
+        before = [set(self.allowed(i, now)) for i in range(len(self.names))]
         # settled None: a restore may have written the channel (then the node compares it) or not.
         settled = [self.ch[i].settled if self.ch[i].flash is None else False
-                   for i in range(len(NAMES))]
+                   for i in range(len(self.names))]
         sure = any(s is True and b == {1} for s, b in zip(settled, before))
         maybe = any(s is not False and 1 in b for s, b in zip(settled, before))
-        off = [{0} for _ in NAMES]
-        for i in range(len(NAMES)):
+        off = [{0} for _ in self.names]
+        for i in range(len(self.names)):
             self.ch[i].flash = None
+        if self.on_restart == "safe":
+            for i in range(len(self.names)):
+                self.ch[i].values = {0}
         if sure or maybe:
-            restored = [self.restore_values(i) for i in range(len(NAMES))]
+            restored = [self.restore_values(i) for i in range(len(self.names))]
             for i, (values, why) in enumerate(restored):
                 if not self.ch[i].settled:
                     values = set(BOTH)
                     self.ch[i].settled = None  # the restore may have written it, or not
                 self._set(i, values if sure else values | off[i], why)
         else:
-            for i in range(len(NAMES)):
+            for i in range(len(self.names)):
                 self._set(i, {0}, "power cycle with nothing on: all off, no restart seen")
         return True if sure else (None if maybe else False)
 
@@ -261,7 +277,7 @@ class Model:
             # Nothing compared was on, but polls that failed as the port went may have put the
             # device offline: then it "answers again after being offline", a restart too
             # (docs/failsafe.md), whose restore may write what a pulse left. Either is accepted.
-            for i in range(len(NAMES)):
+            for i in range(len(self.names)):
                 values, why = self.restore_values(i)
                 self._set(i, values | {0}, why + ", or all off (no restart seen)")
             return None
@@ -269,7 +285,7 @@ class Model:
 
     def node_stopped(self, reached):
         if reached:
-            self.failsafe(sorted(SAFE), "I4 (node stopped: safe states)", hold=True)
+            self.failsafe(sorted(self.safe), "I4 (node stopped: safe states)", hold=True)
         self.node_running = False
 
     def node_started(self, now):
@@ -278,9 +294,203 @@ class Model:
         self.heartbeat_lost = False
         self.node_running = True
         for i, c in enumerate(self.ch):
-            if i not in SAFE:
+            if i not in self.safe:
                 # Read at start, never commanded: docs/failsafe.md has restore write "the last
                 # states users commanded", issue 24 "the last state the node confirmed". Either
                 # way (restored, or left at the power-on state) is accepted until that is settled.
                 c.restore, c.by_failsafe, c.held, c.settled = set(c.values) | {0}, False, False, True
-        self.failsafe(sorted(SAFE), "on_start: safe", hold=False)
+        self.failsafe(sorted(self.safe), "on_start: safe", hold=False)
+
+
+# --- the LD58A08 (bus.yaml `pwm`) and the Yespeed PDU (bus.yaml `pdu`) ----------------------
+LD_NAMES = ["p0", "p1", "p2", "p3", "p4", "p5", "p6", "p7"]
+LD_SAFE = {0: 0, 2: 1, 6: 0}  # p0 off, p2 on (slow channels), p6 off (fast); the others hold
+PDU_NAMES = ["r0", "r1", "r2", "r3", "r4", "r5", "r6", "r7"]
+PDU_SAFE = {0: 0, 1: 1}       # r0 off, r1 on; r2-r7 hold; on_restart: safe
+CONTINUOUS = 0xFFFF           # an enable register's "run continuously" (docs/devices/ld58a08.md)
+INF = float("inf")
+
+
+class Run:
+    """An LD58A08 PWM run (docs/failsafe.md, "Timed commands keep their end and final level"):
+    a burst or timed fast run is driven by the device until its end, then off; a continuous run
+    (duration None) is the device's until it is stopped. `during`: the levels it may show."""
+
+    def __init__(self, during, sent, answered, duration):
+        self.during = set(during)
+        self.continuous = duration is None
+        self.sure_until = INF if self.continuous else sent + duration - 0.15
+        self.done_after = INF if self.continuous else answered + duration + 0.3
+
+    def allowed(self, now):
+        if now < self.sure_until:
+            return set(self.during)
+        if now > self.done_after:
+            return {0}
+        return self.during | {0}
+
+    def final(self):
+        return 0
+
+
+class LdModel(Model):
+    """The LD58A08's outputs with their PWM runs. Per channel, besides Model's: `kind` (None, a
+    node's "timed" run, a "continuous" run, or "device": a run the node takes for the device's,
+    not compared and not restored until a plain write), `stored` (what power-down save would
+    start again: True, False, None = unknown) and `enable` (allowed enable register values, or
+    None when not checked) with `enable_why`."""
+
+    def __init__(self, known=()):
+        super().__init__(known, LD_NAMES, LD_SAFE, "restore")
+        for c in self.ch:
+            c.kind, c.stored, c.enable, c.enable_why = None, False, {0}, "power-on: PWM off"
+
+    def node_started(self, now):
+        super().node_started(now)
+        for i, c in enumerate(self.ch):
+            if i not in self.safe and c.kind is None and c.flash is None:
+                # docs/failsafe.md, "One intent per channel": where the node has commanded
+                # nothing, the intent is the state it found at its first good poll (restored
+                # after a power cycle). (Model accepts either on the LC board, older wording.)
+                c.restore = set(c.values)
+
+    def enable_allowed(self, i, now):
+        c = self.ch[i]
+        if c.kind == "timed" and c.flash is not None and now > c.flash.done_after:
+            return {0}, "I1 (a timed PWM run ends by itself: enable 0 after its end)"
+        return c.enable, c.enable_why
+
+    def _stops_run(self, i, now, why):
+        """A write that the node makes over a run (docs/devices/ld58a08.md, "Outputs and PWM":
+        every output write stops the channel's PWM first when it runs)."""
+        c = self.ch[i]
+        running = c.flash is not None and (c.flash.continuous or now < c.flash.sure_until)
+        if c.kind == "device" or (c.flash is not None and not running):
+            c.stored = None  # an ended run's registers stay stored: the node need not stop it
+        elif running:
+            c.stored = False
+        c.kind = None
+        c.enable, c.enable_why = {0}, why
+
+    def user_write(self, channels, states, ok, why):
+        if ok:
+            for i in channels:
+                self._stops_run(i, time.time(), "I1 (%s: an output write stops the channel's "
+                                "PWM first, docs/devices/ld58a08.md)" % why)
+        super().user_write(channels, states, ok, why)
+
+    def set_pwm(self, i, ok, during, sent, answered, duration, why):
+        c = self.ch[i]
+        if not ok:
+            c.why = "I2 (%s answered success:false: must never reach the board)" % why
+            c.lost_answer = self.unreachable()
+            return
+        c.refused = None
+        c.flash = Run(during, sent, answered, duration)
+        c.kind = "continuous" if duration is None else "timed"
+        c.why = "I1 (%s answered success:true: the device drives the run)" % why
+        # docs/failsafe.md: a PWM command ends a hold (precedence 2); restore writes the final
+        # level of a timed command; a continuous run is the device's (not compared).
+        c.settled, c.restore, c.by_failsafe, c.held, c.pending_safe = False, {0}, False, False, False
+        c.commanded_in_loss = self.heartbeat_lost
+        c.lost_answer = False
+        c.stored = True
+        if duration is None:
+            c.enable, c.enable_why = {CONTINUOUS}, "I1 (%s: a continuous run until stopped)" % why
+        else:
+            c.enable, c.enable_why = None, "counting down"
+
+    def stop_pwm(self, i, ok, why):
+        """docs/failsafe.md: a stop the device confirmed ends the run at once; the next poll that
+        reads the channel's PWM registers gives its level, taken as commanded (taken())."""
+        c = self.ch[i]
+        if not ok:
+            c.why = "I2 (%s answered success:false)" % why
+            return
+        c.refused = None
+        self._set(i, set(BOTH), "docs (after a stop the level is the device's until a poll reads it)")
+        c.kind, c.stored = None, False
+        c.enable, c.enable_why = {0}, "I1 (%s answered success:true: enable 0)" % why
+        c.settled, c.by_failsafe, c.held, c.pending_safe = False, False, False, False
+        c.commanded_in_loss = self.heartbeat_lost
+
+    def taken(self, i, level):
+        """The level a stop left, read by the node's polls since (its intent from then on)."""
+        c = self.ch[i]
+        self._set(i, {level}, "I1 (the level a confirmed stop_pwm left, taken as commanded)")
+        c.restore, c.settled = {level}, True
+
+    def failsafe(self, channels, why, hold=True):
+        # docs/failsafe.md's table: "each output: safe state". Whether the node's safe write
+        # stops a running PWM first (as its output writes do) is not said: the level is checked
+        # (I3/I4), the enable register and what power-down save keeps are not (open question).
+        for i in channels:
+            c = self.ch[i]
+            if c.flash is not None or c.kind is not None:
+                c.stored = None
+                c.enable, c.enable_why = None, "open question: does a safe write stop a PWM run?"
+            if not self.unreachable():
+                c.kind = None
+        super().failsafe(channels, why, hold)
+
+    def settle_flashes(self, now):
+        for c in self.ch:
+            if c.kind == "timed" and c.flash is not None and now > c.flash.done_after:
+                # "A poll after the end that shows the final level ends the command there"
+                c.kind, c.settled, c.restore = None, True, {0}
+                c.enable, c.enable_why = {0}, "I1 (a timed PWM run ended: enable 0)"
+        super().settle_flashes(now)
+
+    def restore_values(self, i):
+        c = self.ch[i]
+        if not (c.pending_safe or c.held):
+            if c.kind == "timed":
+                # "What restore writes": the final level of a timed command (not started again).
+                return {0}, "I1 (restore writes a timed PWM run's final level, off)"
+            if c.kind in ("device", "continuous") and c.flash is not None:
+                # "A restore does not write a channel the device reports running a PWM that is
+                # no timed command of the node's" (continuous runs, found runs, saved runs).
+                return set(c.flash.during), "I7 (a restore does not undo a PWM run the device drives)"
+        return super().restore_values(i)
+
+    def power_cycle(self, now, save=False):
+        """Every output off, PWM registers cleared, or with power-down save on (`save`) the
+        registers as last written run again (docs/devices/ld58a08.md, "Power cycle")."""
+        self.settle_flashes(now)
+        before = [(c.kind, c.flash, c.stored) for c in self.ch]
+        seen = super().power_cycle(now)
+        for i, (kind, flash, stored) in enumerate(before):
+            c = self.ch[i]
+            if c.held or c.pending_safe:
+                if save and stored is not False:
+                    # precedence 1: a held channel the poll shows otherwise (a PWM run someone
+                    # else started) is written safe again. Whether that stops the run: open.
+                    c.stored, c.enable, c.enable_why = None, None, "held channel under a saved run"
+                elif not save:
+                    c.stored, c.enable, c.enable_why = False, {0}, "power cycle: PWM off"
+                continue
+            if save and stored is True and kind == "continuous":
+                c.flash, c.kind = Run(flash.during, now, now, None), "continuous"
+                c.values, c.why = set(flash.during), "I7 (a saved continuous run runs again; a " \
+                    "restore does not undo a PWM run the device drives)"
+                c.enable, c.enable_why = {CONTINUOUS}, "I7 (a restore does not stop a saved run)"
+                c.settled = False
+            elif save and stored is not False:
+                # A saved burst or timed run starts again: the device's ("a run that a
+                # power-down save restarts ends at a level that is the device's doing").
+                c.flash, c.kind = Run(BOTH, now, now, None), "device"
+                c.values, c.why = set(BOTH), "I7 (a run power-down save started again: the device's)"
+                c.enable, c.enable_why, c.settled = None, "a saved run", False
+            else:
+                if not save:
+                    c.stored = False
+                c.enable, c.enable_why = {0}, "power cycle: PWM registers off (no save)"
+                if kind in ("continuous", "device"):
+                    # "a continuous PWM run is not restarted by a restore (not built yet: the
+                    # channel is left as the restart left it)"; the device's until a plain write
+                    c.flash, c.kind = Run({0}, now, now, None), "device"
+                    c.values, c.why, c.settled = {0}, "I7 (a PWM run a restart ended stays off)", False
+                elif kind == "timed":
+                    c.kind, c.settled, c.restore = None, True, {0}
+                    self._set(i, {0}, "I1 (restore writes a timed run's final level, off)")
+        return seen

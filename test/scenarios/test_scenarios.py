@@ -1,11 +1,18 @@
 #!/usr/bin/env python3
 """Randomized fail-safe scenarios (issue 24) on the real node and the simulator, as a rostest.
 
-The events (machine.py): service writes, command topics, the valve's dead man, pulses, share
-reads and writes, heartbeat lost and back, board power cycles, a silenced board, port loss and
-return (the test stops the simulator: its pty goes away, as an unplugged USB adapter; a new one
-comes back on the same link), node stop and start. The board is checked against model.py
-(written from docs/failsafe.md) after each step; test/scenarios/KNOWN.md lists the invariants.
+Three devices on one bus (bus.yaml, sim.yaml): an LC relay board, an LD58A08 and a Yespeed PDU.
+The events (machine.py): on the LC board service writes, command topics, the valve's dead man,
+pulses, share reads and writes, power cycles and a silenced board; on the LD58A08 `C/set`,
+`set_outputs`, `C/command`, `set_pwm` (a burst on channels 0-5, a timed or continuous run on
+6-7), `stop_pwm` and power cycles, with or without its power-down save; on the PDU `C/set`,
+`set_outputs` and power cycles (on_restart: safe); for all, the bus heartbeat lost and back,
+port loss and return (the test stops the simulator: its pty goes away, as an unplugged USB
+adapter; a new one comes back on the same link), node stop (SIGINT) and start, and the node
+killed (SIGKILL) and started again under the same roscore (its `~running_timed` kept). Every
+device's outputs (and the LD58A08's enable registers) are checked in the simulator against
+model.py (written from docs/failsafe.md) after each step; test/scenarios/KNOWN.md lists the
+invariants.
 
 Parameters (scenarios.test passes them): ~seed (0: draw one and print it), ~seconds (budget:
 examples start until it is spent), ~steps (steps per example), ~shrink (shrink a failure to its
