@@ -19,9 +19,9 @@
 #include "modbus_rtu_driver/core/bus/bus_scheduler.h"
 #include "modbus_rtu_driver/core/bus/clock.h"
 #include "modbus_rtu_driver/core/bus/watchdog.h"
+#include "modbus_rtu_driver/core/link/until_silent_transport.h"
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/failsafe/channel_intents.h"
-#include "modbus_rtu_driver/core/link/until_silent_transport.h"
 
 namespace modbus_rtu_driver {
 
