@@ -78,16 +78,12 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
                                       std::optional<Clock::time_point> owe_since,
                                       const UntilSilentTransport* until_silent,
                                       const std::vector<uint8_t>& held_only) {
-  const auto names = device_.outputNames();
   FailsafeReport r;
   r.device = device_.name();
   r.trigger = trigger;
   r.reason = reason;
   r.action = action;
-  for (size_t i = 0; i < targets.channels.size(); ++i) {
-    r.channels.push_back(names[targets.channels[i]]);
-    r.states.push_back(targets.states[i]);
-  }
+  nameTargets(targets, &r);
   intents_.writeRan();
   Result w = device_.setOutputs(t, targets.channels, targets.states);
   if (until_silent && until_silent->refused()) {
@@ -106,14 +102,7 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
         still.states.push_back(targets.states[i]);
       }
       if (still.empty()) return Result::success();
-      // The event names the channels it settles (confirmed, or owed).
-      const auto names = device_.outputNames();
-      r.channels.clear();
-      r.states.clear();
-      for (size_t i = 0; i < still.channels.size(); ++i) {
-        r.channels.push_back(names[still.channels[i]]);
-        r.states.push_back(still.states[i]);
-      }
+      nameTargets(still, &r);  // the event names the channels it settles (confirmed, or owed)
       // Whether it answers now: then the safe write again, confirmed by its answer and a read
       // back. A read alone cannot confirm a write that got no reply: a flash the write would
       // have ended may still show the same level.
@@ -132,6 +121,16 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
       w = answered ? back : Result::failure(back.error, "written, but " + back.message);
   }
   return settle(targets, std::move(w), std::move(r), owe_since);
+}
+
+void DeviceFailsafe::nameTargets(const OutputTargets& targets, FailsafeReport* r) const {
+  const auto names = device_.outputNames();
+  r->channels.clear();
+  r->states.clear();
+  for (size_t i = 0; i < targets.channels.size(); ++i) {
+    r->channels.push_back(names[targets.channels[i]]);
+    r->states.push_back(targets.states[i]);
+  }
 }
 
 Result DeviceFailsafe::readBack(Transport& t, const OutputTargets& targets, bool* answered) {

@@ -135,6 +135,8 @@ class DeviceFailsafe {
                         std::optional<Clock::time_point> owe_since,
                         const UntilSilentTransport* until_silent = nullptr,
                         const std::vector<uint8_t>& held_only = {});
+  // The report's channels and states: `targets`, by the outputs' names.
+  void nameTargets(const OutputTargets& targets, FailsafeReport* r) const;
   // Reads the outputs (a poll of the device) and checks `targets` there: success, or why not
   // (`answered`: the read itself got through).
   Result readBack(Transport& t, const OutputTargets& targets, bool* answered = nullptr);
