@@ -560,10 +560,14 @@ class Scenario(RuleBasedStateMachine):
     @precondition(lambda self: self.m.node_running and not self.m.port_gone)
     @rule(ch=CHANNELS, state=st.integers(0, 1))
     def ld_set(self, ch, state):
-        what = "pwm %s/set %d" % (LD_NAMES[ch], state)
-        res = rospy.ServiceProxy(NS + LD_DEV + "/" + LD_NAMES[ch] + "/set", SetBool)(bool(state))
+        self.output_set("pwm", LD_DEV, LD_NAMES[ch], self.ld, ch, state)
+
+    def output_set(self, label, dev, name, model, ch, state):
+        """`C/set` on one output of the LD58A08 or the PDU, checked against its model."""
+        what = "%s %s/set %d" % (label, name, state)
+        res = rospy.ServiceProxy(NS + dev + "/" + name + "/set", SetBool)(bool(state))
         self.note("%s -> %s %s" % (what, res.success, res.message))
-        self.ld.user_write([ch], [state], res.success, what)
+        model.user_write([ch], [state], res.success, what)
         self.check(what)
 
     @precondition(lambda self: self.m.node_running and not self.m.port_gone)
@@ -655,11 +659,7 @@ class Scenario(RuleBasedStateMachine):
     @precondition(lambda self: self.m.node_running and not self.m.port_gone)
     @rule(ch=CHANNELS, state=st.integers(0, 1))
     def pdu_set(self, ch, state):
-        what = "pdu %s/set %d" % (PDU_NAMES[ch], state)
-        res = rospy.ServiceProxy(NS + PDU_DEV + "/" + PDU_NAMES[ch] + "/set", SetBool)(bool(state))
-        self.note("%s -> %s %s" % (what, res.success, res.message))
-        self.pdu.user_write([ch], [state], res.success, what)
-        self.check(what)
+        self.output_set("pdu", PDU_DEV, PDU_NAMES[ch], self.pdu, ch, state)
 
     @precondition(lambda self: self.m.node_running and not self.m.port_gone)
     @rule(save=st.booleans())
