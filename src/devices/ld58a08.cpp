@@ -1,5 +1,6 @@
 #include "modbus_rtu_driver/devices/ld58a08.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -138,6 +139,7 @@ Result Ld58a08::confirmPwm(Transport& link, Result failed, uint8_t ch,
   PwmState state;
   Result now = readPwmChannel(link, ch, &state);
   if (!now.ok()) {
+    pwm_unsure_[ch] = true;
     failed.message += "; not confirmed: reading channel " + std::to_string(ch) +
                       " back failed too (" + now.message + "); not sent again";
     return failed;
@@ -168,6 +170,7 @@ Result Ld58a08::stopPwm(Transport& link, uint8_t channel) {
   PwmState state;
   Result now = readPwmChannel(link, channel, &state);
   if (!now.ok()) {
+    pwm_unsure_[channel] = true;
     r.message += "; not confirmed: reading channel " + std::to_string(channel) +
                  " back failed too (" + now.message + ")";
     return r;
@@ -225,15 +228,25 @@ Result Ld58a08::poll(Transport& link) {
   outputs_.assign(r.values.begin(), r.values.end());
   if (!pwm_known_) {
     r = readPwm(link);
-    if (r.ok()) pwm_read_by_poll_.fill(true);
+    if (r.ok()) {
+      pwm_read_by_poll_.fill(true);
+      pwm_unsure_.fill(false);
+    }
     return r;
   }
   // The manual allows reading 1-3 registers at a time: one channel per poll keeps a poll at two
-  // transactions, and a burst that ends on the board shows within 8 polls.
-  const uint8_t ch = poll_cursor_;
-  poll_cursor_ = static_cast<uint8_t>((poll_cursor_ + 1) % kChannels);
+  // transactions, and a burst that ends on the board shows within 8 polls. A channel whose PWM
+  // write went unconfirmed goes first, out of turn.
+  const auto unsure = std::find(pwm_unsure_.begin(), pwm_unsure_.end(), true);
+  uint8_t ch = poll_cursor_;
+  if (unsure != pwm_unsure_.end()) {
+    ch = static_cast<uint8_t>(unsure - pwm_unsure_.begin());
+  } else {
+    poll_cursor_ = static_cast<uint8_t>((poll_cursor_ + 1) % kChannels);
+  }
   r = readPwmChannel(link, ch, &pwm_[ch]);
   pwm_read_by_poll_[ch] = r.ok();
+  if (r.ok()) pwm_unsure_[ch] = false;
   return r;
 }
 

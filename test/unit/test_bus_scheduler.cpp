@@ -631,3 +631,78 @@ TEST(BusSchedulerStepMode, RunsOneThingPerStepOnTheCallersThread) {
   EXPECT_FALSE(scheduler.step(&next));
   EXPECT_EQ(next, Clock::time_point::max());
 }
+
+// docs/failsafe.md "Timing", docs/ros_api.md: a device that gave no reply at all to its last
+// request costs one transaction per job: the job stops at its first request that again gets
+// none (a write is not read back), and the rest is not sent. A garbled reply or one that comes
+// is an answer: the next job runs whole (its read back included).
+TEST(BusSchedulerStepMode, AJobForASilentDeviceStopsAtItsFirstUnansweredRequest) {
+  struct Line : Transport {
+    std::vector<std::string> log;
+    std::map<uint8_t, ErrorKind> fails;  // slave -> how each request to it fails
+    Result execute(const Request& r) override {
+      log.push_back(std::to_string(r.slave) + (isReadFunction(r.function) ? "r" : "w"));
+      auto f = fails.find(r.slave);
+      if (f != fails.end()) return Result::failure(f->second, "fails");
+      return Result::success({0});
+    }
+  } line;
+  ManualClock clock;
+  BusScheduler scheduler(line, {}, clock);
+  scheduler.startStepping();
+  // A write and the read that would confirm it, as the device classes do after a lost answer.
+  auto writeThenReadBack = [](Transport& t) {
+    Result r = t.execute(Request::writeSingleCoil(1, 0, true));
+    if (r.ok()) return r;
+    Result back = t.execute(Request::readCoils(1, 0, 8));
+    return back.ok() ? back : r;
+  };
+  auto runJob = [&]() {
+    auto done = scheduler.submit("a", writeThenReadBack);
+    Clock::time_point next{};
+    EXPECT_TRUE(scheduler.step(&next));
+    EXPECT_EQ(done.wait_for(0s), std::future_status::ready);
+    return done.get();
+  };
+  line.fails[1] = ErrorKind::kTimeout;
+  // The device answered before: the whole job runs (the write, then its read back).
+  EXPECT_EQ(runJob().error, ErrorKind::kTimeout);
+  EXPECT_EQ(line.log, (std::vector<std::string>{"1w", "1r"}));
+  // Its last request got no reply: the next job stops at its write.
+  line.log.clear();
+  const Result second = runJob();
+  EXPECT_EQ(second.error, ErrorKind::kTimeout);
+  EXPECT_EQ(line.log, (std::vector<std::string>{"1w"}));
+  // A garbled reply is an answer (the device is there): the read back goes, and the job after
+  // it runs whole.
+  line.fails[1] = ErrorKind::kCrc;
+  line.log.clear();
+  runJob();
+  EXPECT_EQ(line.log, (std::vector<std::string>{"1w", "1r"}));
+  line.fails[1] = ErrorKind::kTimeout;
+  line.log.clear();
+  runJob();
+  EXPECT_EQ(line.log, (std::vector<std::string>{"1w", "1r"}));
+  // A poll with no reply marks the device too; one that answers clears it. (The device is
+  // offline by now: its polls wait out the backoff.)
+  scheduler.addPoll(
+      "a", 10.0, [](Transport& t) { return t.execute(Request::readCoils(1, 0, 1)); }, nullptr);
+  auto runPoll = [&] {
+    Clock::time_point next{};
+    while (!scheduler.step(&next)) clock.advanceTo(next);
+  };
+  line.fails.erase(1);
+  runPoll();  // answers
+  line.fails[1] = ErrorKind::kTimeout;
+  runPoll();  // no reply
+  line.log.clear();
+  runJob();
+  EXPECT_EQ(line.log, (std::vector<std::string>{"1w"}));
+  line.fails.erase(1);
+  runPoll();  // answers
+  line.fails[1] = ErrorKind::kTimeout;
+  line.log.clear();
+  runJob();
+  EXPECT_EQ(line.log, (std::vector<std::string>{"1w", "1r"}));
+  scheduler.stop();
+}

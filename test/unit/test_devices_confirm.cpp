@@ -144,3 +144,36 @@ TEST(ConfirmByReadBack, AGarbledReplyIsAnAnswerTheUntilSilentTransportStillReads
   EXPECT_EQ(bus.mismatches(), "");
   EXPECT_TRUE(bus.usedUp());
 }
+
+// docs/failsafe.md "Timing": a PWM write left unconfirmed (its read back not sent to a silent
+// device) is read at the next poll, out of turn, not up to 8 polls later when the poll's
+// round comes to its channel; then the round goes on where it was.
+TEST(ConfirmByReadBack, AnUnconfirmedPwmWritesChannelIsReadByTheNextPollFirst) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  const std::vector<uint16_t> idle = {0, 0, 0};
+  // The first poll reads every channel's PWM registers; the next one channel 0 (its round).
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
+  for (uint16_t ch = 0; ch < 8; ++ch)
+    bus.expect(frame(Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3)),
+               registersReply(1, static_cast<uint16_t>(ch * 0x10), idle));
+  ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
+  bus.expect(frame(Request::writeMultipleRegisters(1, 0x0020, {10, 5, 5})));  // no reply
+  UntilSilentTransport until_silent(bus);
+  EXPECT_EQ(board.setPwm(until_silent, burst()).error, ErrorKind::kTimeout);
+  EXPECT_TRUE(until_silent.refused());  // its read back was not sent
+  // The next poll reads channel 2 (not channel 0, the round's next) ...
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x04));
+  bus.expect(frame(Request::readHoldingRegisters(1, 0x0020, 3)),
+             registersReply(1, 0x0020, {10, 5, 4}));
+  ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
+  EXPECT_TRUE(board.selfTimedReadByLastPoll(2));
+  EXPECT_TRUE(board.pwm()[2].running);
+  // ... and the one after goes on with the round at channel 0.
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x04));
+  bus.expect(frame(Request::readHoldingRegisters(1, 0x0000, 3)), registersReply(1, 0x0000, idle));
+  ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
+  EXPECT_TRUE(board.selfTimedReadByLastPoll(0));
+  EXPECT_EQ(bus.mismatches(), "");
+  EXPECT_TRUE(bus.usedUp());
+}

@@ -137,6 +137,10 @@ class Ld58a08 : public Device {
   std::array<PwmState, kChannels> pwm_{};
   std::array<bool, kChannels> pwm_read_by_poll_{};  // the channels the newest poll read
   uint8_t poll_cursor_ = 0;
+  // Channels whose PWM write or stop went unconfirmed (its answer and the read back lost, or the
+  // read back not sent to a device that gave no reply): the next poll reads them first, so the
+  // fail-safe learns what the channel does at the next poll, not up to 8 polls later.
+  std::array<bool, kChannels> pwm_unsure_{};
   bool pwm_known_ = false;
 };
 

@@ -63,6 +63,13 @@ bool BusScheduler::stopBy(std::chrono::steady_clock::time_point deadline) {
   return true;
 }
 
+Result BusScheduler::NotingTransport::execute(const Request& request) {
+  Result r = inner.execute(request);
+  sent = true;
+  last_unanswered = r.error == ErrorKind::kTimeout;
+  return r;
+}
+
 Result BusScheduler::ClosedTransport::execute(const Request& /*request*/) {
   return Result::failure(ErrorKind::kNotConnected, reason);
 }
@@ -267,9 +274,18 @@ bool BusScheduler::runOneQueued(std::unique_lock<std::mutex>& lock) {
   if (queue.empty()) return false;
   Pending p = std::move(queue.front());
   queue.pop_front();
+  const bool was_unanswered = unanswered_.count(p.device) > 0;
   lock.unlock();
-  Result r = p.job(transport_);
+  NotingTransport noted(transport_);
+  UntilSilentTransport until_silent(noted);
+  Result r = p.job(was_unanswered ? static_cast<Transport&>(until_silent) : noted);
   lock.lock();
+  if (noted.sent && !p.device.empty()) {
+    if (noted.last_unanswered)
+      unanswered_.insert(p.device);
+    else
+      unanswered_.erase(p.device);
+  }
   record(p.device, r, p.shared ? Kind::kShared : Kind::kWrite);
   if (r.error == ErrorKind::kIo) transport_.disconnect();
   lock.unlock();  // `done` may take its caller's locks
@@ -399,6 +415,11 @@ bool BusScheduler::stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_po
   lock.lock();
   starving_poll_running_ = false;
   record(next->device, r, Kind::kPoll);
+  // A poll stops at its first request that fails: its outcome is its last request's.
+  if (r.error == ErrorKind::kTimeout)
+    unanswered_.insert(next->device);
+  else if (!noProperAnswer(r.error) || answerLost(r.error))
+    unanswered_.erase(next->device);
   if (r.error == ErrorKind::kIo) transport_.disconnect();
   // Keep the schedule, so a poll delayed by a slow transaction (an offline device's probe)
   // is caught up and the average rate holds. Lagging more than 1 s means the bus cannot carry

@@ -16,6 +16,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <utility>
@@ -154,6 +155,18 @@ class BusScheduler {
     BusScheduler& owner;
   };
 
+  // What a queued job sees: the link, noting whether the job's last request got no reply at
+  // all (every retry timed out).
+  struct NotingTransport : Transport {
+    explicit NotingTransport(Transport& link) : inner(link) {}
+    Result execute(const Request& request) override;
+    bool connected() const override { return inner.connected(); }
+    void awaitLineFree() override { inner.awaitLineFree(); }
+    Transport& inner;
+    bool sent = false;
+    bool last_unanswered = false;
+  };
+
   // What jobs see while the port is not open: every request fails with `reason`, unsent.
   struct ClosedTransport : Transport {
     Result execute(const Request& request) override;
@@ -205,6 +218,10 @@ class BusScheduler {
       0;  // s, doubling up to reconnect_max  // set while the port is lost (or never opened)
   PortReopens reopens_;
   std::map<std::string, Clock::time_point> offline_since_;
+  // Devices whose last request got no reply at all: a job for one stops at its first request
+  // that again gets none (docs/failsafe.md "Timing": one transaction per job, not a write and
+  // then its read back, each with every retry).
+  std::set<std::string> unanswered_;
   std::thread thread_;
 };
 
