@@ -98,6 +98,10 @@ std::string Ld58a08::validatePwm(const PwmSettings& s) {
 Result Ld58a08::setPwm(Transport& link, const PwmSettings& s) {
   const std::string problem = validatePwm(s);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
+  return writePwm(link, pwmWrite(s));
+}
+
+Request Ld58a08::pwmWrite(const PwmSettings& s) const {
   std::vector<uint16_t> regs;
   long t = 0;
   if (s.channel < 6) {
@@ -118,10 +122,28 @@ Result Ld58a08::setPwm(Transport& link, const PwmSettings& s) {
   }
   Request write = Request::writeMultipleRegisters(address(), pwmRegister(s.channel), regs);
   write.repeatable = false;  // a second copy would restart the run: more pulses than asked for
+  return write;
+}
+
+Result Ld58a08::writePwm(Transport& link, const Request& write) {
+  const auto ch = static_cast<uint8_t>(write.address / 0x10);
   Result r = link.execute(write);
-  if (!r.ok() && mayHaveActed(r)) r = confirmPwm(link, std::move(r), s.channel, regs);
-  if (r.ok() && regs[2] == kContinuous) noteContinuousRun(s.channel);
+  if (!r.ok() && mayHaveActed(r)) r = confirmPwm(link, std::move(r), ch, write.values);
+  if (r.ok() && write.values[2] == kContinuous) noteContinuousRun(ch);
   return r;
+}
+
+Result Ld58a08::startAgain(Transport& link, const Request& write) {
+  // Only what pwmIntent and timedWrittenBy give as a run's restart: one channel's three
+  // registers, a continuous run.
+  if (write.slave != address() || write.function != FunctionCode::kWriteMultipleRegisters ||
+      write.address % 0x10 != 0 || write.address / 0x10 >= kChannels || write.values.size() != 3 ||
+      write.values[2] != kContinuous)
+    return Result::failure(ErrorKind::kInvalidArgument,
+                           "not a continuous PWM run of this board: " + write.describe());
+  Request once = write;
+  once.repeatable = false;
+  return writePwm(link, once);
 }
 
 void Ld58a08::noteContinuousRun(uint8_t channel) {
@@ -347,7 +369,7 @@ Result Ld58a08::factoryReset(Transport& link) {
   return link.execute(Request::writeSingleRegister(address(), kFactoryResetRegister, 0));
 }
 
-TimedIntent Ld58a08::pwmIntent(const PwmSettings& s) {
+TimedIntent Ld58a08::pwmIntent(const PwmSettings& s) const {
   TimedIntent t;
   t.channel = s.channel;
   t.after = false;
@@ -356,6 +378,7 @@ TimedIntent Ld58a08::pwmIntent(const PwmSettings& s) {
   } else {
     t.seconds = s.duration == 0.0 ? -1.0 : s.duration;
   }
+  if (t.seconds < 0) t.restart = pwmWrite(s);
   return t;
 }
 
@@ -383,6 +406,15 @@ std::vector<TimedIntent> Ld58a08::timedWrittenBy(const Request& request) const {
     t.after = false;
     if (*enable == kContinuous) {
       t.seconds = -1.0;
+      // Its settings written with it: a restore can start it again (not a write of the enable
+      // register alone, whose settings the node may not know).
+      const auto first = written(pwmRegister(ch)), second = written(pwmRegister(ch) + 1);
+      if (first && second) {
+        Request again =
+            Request::writeMultipleRegisters(address(), pwmRegister(ch), {*first, *second, *enable});
+        again.repeatable = false;
+        t.restart = again;
+      }
     } else if (ch < 6) {
       // Pulses of the period written with it, or of the one the board already has.
       const double period =

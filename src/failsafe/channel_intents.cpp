@@ -90,6 +90,7 @@ void ChannelIntents::timed(const TimedIntent& timed, CommandSource source) {
   in.during = timed.during;
   if (timed.seconds < 0) {
     in.driven = true;
+    in.restart = timed.restart;
   } else {
     in.ends = now + seconds(timed.seconds);
   }
@@ -350,6 +351,21 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
     if (held_[ch] != 0 && held_written_[ch] &&
         (device_runs || outputs[ch] != (config_.safeStateOf(ch) == SafeState::kOn)))
       held_not_safe_[ch] = true;
+    if (in->restart && !device_runs && (ch >= read_now.size() || read_now[ch])) {
+      // The node's continuous run, read stopped with no stop carried (that would have replaced
+      // the intent): the LD58A08 does not stop one by itself, a power cycle does
+      // (docs/failsafe.md, "Restart detection needs polls"). A restore starts it again; under
+      // the other policies the level is taken as it is, so the next poll does not count it again.
+      differs = true;
+      if (changed) changed->push_back(static_cast<uint8_t>(ch));
+      if (config_.on_restart != OnRestart::kRestore) {
+        Intent found;
+        found.at = now;
+        found.level = outputs[ch];
+        in = found;
+      }
+      continue;
+    }
     if (device_runs) {
       // The device's PWM drives it. A run that is no timed command of the node's still running
       // (one a power-down save restarted, one someone else started) has no end the node knows:
@@ -474,6 +490,24 @@ OutputTargets ChannelIntents::afterPollTargets(Verdict verdict,
     t.states.push_back(state);
   }
   return t;
+}
+
+std::vector<TimedIntent> ChannelIntents::runsToStartAgain(
+    Verdict verdict, const std::vector<bool>& device_runs) const {
+  std::vector<TimedIntent> again;
+  if (verdict == Verdict::kNormal || config_.on_restart != OnRestart::kRestore) return again;
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (size_t ch = 0; ch < channels_ && ch < device_runs.size(); ++ch) {
+    const auto& in = intent_[ch];
+    if (!in || !in->driven || !in->restart || device_runs[ch] || held_[ch] != 0 || owed_[ch])
+      continue;
+    TimedIntent t;
+    t.channel = static_cast<uint8_t>(ch);
+    t.after = in->level;
+    t.restart = in->restart;
+    again.push_back(t);
+  }
+  return again;
 }
 
 std::vector<TimedIntent> ChannelIntents::runningTimed() const {

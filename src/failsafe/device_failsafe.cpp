@@ -7,11 +7,20 @@
 
 namespace modbus_rtu_driver {
 
+std::string FailsafeReport::runsStartedText() const {
+  std::vector<std::string> started;
+  for (size_t i = 0; i < channels.size() && i < runs.size(); ++i)
+    if (runs[i]) started.push_back(channels[i]);
+  return "PWM run started again on " + join(started);
+}
+
 std::string FailsafeReport::text() const {
   std::string t = trigger + " (" + reason + "): ";
   std::vector<std::string> changes;
   for (size_t i = 0; i < channels.size() && i < states.size(); ++i)
-    changes.push_back(channels[i] + (states[i] ? " on" : " off"));
+    changes.push_back(channels[i] + (i < runs.size() && runs[i] ? " PWM run started again"
+                                     : states[i]                ? " on"
+                                                                : " off"));
   t += join(changes);
   if (channels.empty()) t += action;
   if (!confirmed) t += "; NOT confirmed: " + message;
@@ -77,13 +86,23 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
                                       const std::string& action,
                                       std::optional<Clock::time_point> owe_since,
                                       const UntilSilentTransport* until_silent,
-                                      const std::vector<uint8_t>& held_only) {
+                                      const std::vector<uint8_t>& held_only,
+                                      const FailsafeReport* runs_started) {
   FailsafeReport r;
   r.device = device_.name();
   r.trigger = trigger;
   r.reason = reason;
   r.action = action;
   nameTargets(targets, &r);
+  if (runs_started) {
+    r.runs.assign(r.channels.size(), false);
+    for (size_t i = 0; i < runs_started->channels.size(); ++i) {
+      r.channels.push_back(runs_started->channels[i]);
+      r.states.push_back(true);
+      r.runs.push_back(true);
+    }
+    r.runs_failed = runs_started->runs_failed;
+  }
   intents_.writeRan();
   Result w = device_.setOutputs(t, targets.channels, targets.states);
   if (until_silent && until_silent->refused()) {
@@ -171,8 +190,14 @@ Result DeviceFailsafe::settle(const OutputTargets& targets, Result w, FailsafeRe
     // Owed per channel: written when the device answers again, unless commanded before that.
     intents_.owe(targets, *owe_since, r.trigger);
   }
-  r.confirmed = w.ok();
+  // A restore's runs started again count too (FailsafeReport::runs).
+  r.levels_confirmed = w.ok();
+  r.confirmed = w.ok() && r.runs_failed.empty();
   r.message = w.ok() ? confirmed_text : w.message;
+  if (!r.runs_failed.empty())
+    r.message += (r.message.empty() ? "" : "; ") + std::string("PWM run ") + r.runs_failed;
+  else if (std::count(r.runs.begin(), r.runs.end(), true) > 0)
+    r.message += (r.message.empty() ? "" : "; ") + r.runsStartedText();
   report(r);
   return w;
 }
@@ -230,7 +255,7 @@ void DeviceFailsafe::afterPoll() {
       r.trigger = trigger;
       r.reason = reason;
       r.action = action;
-      r.confirmed = confirmed;
+      r.confirmed = r.levels_confirmed = confirmed;
       r.message = message;
       r.note_only = confirmed && action == "leave" && !hasSafeStates();
       report(r);
@@ -251,12 +276,54 @@ void DeviceFailsafe::afterPoll() {
       for (size_t i = 0; i < runs.size(); ++i) runs[i] = device_.outputSelfTimed(i);
       if (device_.selfTimedRead()) intents_.observeRuns(runs);  // the device's from now on
     }
+    // The node's continuous runs a power cycle stopped go first: the read back of the restore's
+    // plain write then shows them running, as the node's.
+    // One report names them with the plain writes (FailsafeReport::runs).
+    const std::vector<TimedIntent> again = intents_.runsToStartAgain(verdict, runs);
+    FailsafeReport started;
+    if (!again.empty()) startRunsAgain(t, again, &started);
     const OutputTargets targets = intents_.afterPollTargets(verdict, runs);
-    if (!targets.empty()) return writeAndReport(t, targets, trigger, reason, action, {});
+    if (!targets.empty())
+      return writeAndReport(t, targets, trigger, reason, action, {}, nullptr, {}, &started);
+    if (!again.empty()) {
+      started.device = device_.name();
+      started.trigger = trigger;
+      started.reason = reason;
+      started.action = action;
+      started.levels_confirmed = true;  // none
+      started.confirmed = started.runs_failed.empty();
+      started.message = started.confirmed ? started.runsStartedText() : started.runs_failed;
+      report(started);
+      return started.confirmed ? Result::success()
+                               : Result::failure(ErrorKind::kTimeout, started.runs_failed);
+    }
     if (verdict == ChannelIntents::Verdict::kNormal) return Result::success();
     nothingWritten(true, "outputs left as they are");  // trigger is "restart" here
     return Result::success();
   });
+}
+
+void DeviceFailsafe::startRunsAgain(Transport& t, const std::vector<TimedIntent>& runs,
+                                    FailsafeReport* r) {
+  const auto names = device_.outputNames();
+  for (const TimedIntent& run : runs) {
+    intents_.writeRan();
+    const Result w = device_.startAgain(t, *run.restart);
+    r->channels.push_back(names[run.channel]);
+    r->states.push_back(true);
+    r->runs.resize(r->channels.size() - 1, false);
+    r->runs.push_back(true);
+    if (w.ok()) {
+      intents_.timed(run, CommandSource::kRestore);
+      continue;
+    }
+    // Its answer lost and the read back too: it may run or not; the next poll that reads the
+    // channel tells (docs/failsafe.md, "A command whose answer was lost").
+    if (answerLost(w.error) || w.error == ErrorKind::kIo) adoptAfterLost(run);
+    r->runs_failed += (r->runs_failed.empty() ? "" : "; ") + names[run.channel] + ": " + w.message;
+  }
+  timedMaybeChanged();
+  if (outputs_written_) outputs_written_();
 }
 
 std::vector<DeviceFailsafe::Fired> DeviceFailsafe::firedTriggers() {

@@ -72,7 +72,7 @@ class Ld58a08Adapter : public DeviceAdapter {
       Result w = board().setPwm(t, s);
       // The PWM drives the output from now on: for a burst or a timed run until its end, then
       // off; a continuous run until stopped.
-      timedCommandDone(Ld58a08::pwmIntent(s), w);
+      timedCommandDone(board().pwmIntent(s), w);
       if (w.ok() && board().readPwm(t).ok()) publishPwm();
       return w;
     });

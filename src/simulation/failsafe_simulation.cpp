@@ -41,10 +41,12 @@ const std::vector<SimInvariant>& simInvariants() {
        "a fail-safe write changes a channel from its intent (the newest confirmed command, or "
        "the found state) only for a reason: a trigger since, or a restart of the device since "
        "(on_restart: safe writes safe, restore the timed command's final level)"},
-      {"I5", "docs/failsafe.md:34,62-63,85-89",
+      {"I5", "docs/failsafe.md:34,62-63,85-101,176-186",
        "a restore writes, channel by channel, the safe state of a held or owed channel, else a "
        "timed command's final level, else the intent's level (found states included); never a "
-       "continuous PWM channel; and every channel whose intent is known"},
+       "continuous PWM channel as a level; and every channel whose intent is known; it starts "
+       "again, as written, the node's continuous PWM run the read before shows stopped, and a "
+       "power cycle that stopped one is seen within 8 polls of the device answering"},
       {"I6", "docs/failsafe.md:34-35,66-74,169-172",
        "a restart 'outputs changed with no command in between' is reported only after "
        "something did change them without the node's confirmed command (a power cycle, a "
@@ -194,7 +196,15 @@ struct Chan {
   std::optional<bool> during;  // a timed command's level until its end (none: any)
   TP ends{};
   double duration = 0;
-  bool continuous = false;     // a PWM run with no end: the device's (docs:68, 88)
+  bool continuous = false;  // a PWM run with no end: the device's (docs:68, 88)
+  // docs "What restore writes": a continuous run this node started (set_pwm, a client's FC16 of
+  // the channel's three registers), its registers; a restore starts it again when the read just
+  // before shows it stopped. Empty otherwise.
+  std::vector<uint16_t> node_run;
+  // ... and a power cycle may have stopped it since: the poll that reads its registers (one
+  // channel per poll) reports a restart for it (docs "Restart detection needs polls").
+  bool run_stop_unseen = false;
+  TP run_stopped_at{};
   bool maybe_devices = false;  // read running near the node's run's end: either may be right
   // A set_pwm's end counted from when the device answered its write (the node's end); `ends`
   // counts from the model's callback, a read back later.
@@ -248,6 +258,9 @@ struct DevModel {
   size_t queued_at_reachable = 0;
   bool queued_noted = false;
   std::vector<TP> pwm_write_answered = std::vector<TP>(8, TP{});
+  // ... and whether it ran as last read when the fail-safe's write starting it again went out
+  // (docs "What restore writes": started again only when the read just before shows it stopped)
+  std::vector<bool> run_read_at_start = std::vector<bool>(8, false);
   std::vector<bool> pwm_confirm_pending = std::vector<bool>(8, false);
   // generic (I8)
   bool gen_unanswered = false;  // an attempt to it went unanswered since its last report
@@ -348,7 +361,8 @@ class World {
                  const std::vector<bool>& sts);
   // Model updates.
   void commanded(int d, int ch, bool level);
-  void commandedTimed(int d, int ch, std::optional<bool> during, bool after, double seconds);
+  void commandedTimed(int d, int ch, std::optional<bool> during, bool after, double seconds,
+                      const std::vector<uint16_t>& run = {});
   void unconfirmed(int d, int ch, double not_before_s, bool as_command);
   void hold(int d, int ch);
   // docs:94: a command whose answer was lost (any source) leaves its channel unknown until the
@@ -645,11 +659,13 @@ void World::commanded(int d, int ch, bool level) {
   // it no longer covers it.
 }
 
-void World::commandedTimed(int d, int ch, std::optional<bool> during, bool after, double seconds) {
+void World::commandedTimed(int d, int ch, std::optional<bool> during, bool after, double seconds,
+                           const std::vector<uint16_t>& run) {
   commanded(d, ch, after);
   Chan& c = model_[d].ch[ch];
   if (seconds < 0) {
     c.continuous = true;
+    c.node_run = run;
     // docs:71: a continuous run the device confirmed counts as read running until a read.
     if (d == kLd) model_[d].pwm_read_running[ch] = true;
     return;
@@ -708,6 +724,7 @@ void World::onAttempt(const LineEvent& e) {
     const int ch = e.request.address / 0x10;
     const bool runs = e.values.size() == 3 && e.values[2] != 0;  // as the node read it
     m.pwm_read_running[ch] = runs;
+    if (runs) m.ch[ch].run_stop_unseen = false;  // running: a power-down save restarted it
     m.pwm_read_in_poll[ch] = m.poll_running;
     // docs:88-90 and "Restart detection needs polls": a run a poll reads that is no timed
     // command of the node's still running makes the channel the device's until a plain write,
@@ -738,6 +755,17 @@ void World::onAttempt(const LineEvent& e) {
       e.request.values.size() == 3 && e.request.address % 0x10 == 0 &&
       e.request.address / 0x10 < kChannels) {
     const int ch = e.request.address / 0x10;
+    if (node_ && node_->currentOp() == 0) {
+      // The fail-safe's own PWM write: a restore starting a continuous run again, as it was
+      // written (docs "What restore writes").
+      m.run_read_at_start[ch] = m.pwm_read_running[ch];
+      const Chan& c = m.ch[ch];
+      if (c.node_run.empty() || e.request.values != c.node_run)
+        fail("I5", "pwm out" + std::to_string(ch) + ": the fail-safe writes " +
+                       e.request.describe() +
+                       (c.node_run.empty() ? ", which is no continuous run the node started"
+                                           : ", not the run as the node started it"));
+    }
     m.pwm_write_answered[ch] = e.answered ? e.at : TP{};
     m.pwm_confirm_pending[ch] = !e.answered;
   }
@@ -926,8 +954,21 @@ void World::onReport(const FailsafeReport& r) {
     // I6 (docs:34-35, 66-74): the outputs changed only if something changed them. A change in
     // the window of a justified one (a flash's end) may be seen by any later poll: only a good
     // poll after the window that showed nothing closes it (the port may be lost meanwhile).
+    // A continuous run of the node's that a power cycle stopped shows at the poll that reads
+    // its registers, up to 8 polls later (docs "Restart detection needs polls").
+    bool run_stopped = false;
+    const auto names_at = r.reason.find("outputs ");
+    const auto names_end = r.reason.find(" changed with no command");
+    if (names_at != std::string::npos && names_end != std::string::npos)
+      for (int ch = 0; ch < kChannels; ++ch) {
+        const std::string name = "out" + std::to_string(ch);
+        const auto at = r.reason.find(name, names_at);
+        if (at == std::string::npos || at > names_end) continue;
+        run_stopped = run_stopped || m.ch[ch].run_stop_unseen;
+        m.ch[ch].run_stop_unseen = false;
+      }
     if (r.reason.find("changed with no command") != std::string::npos && !m.justified &&
-        m.prev_poll_at >= m.justified_until)
+        m.prev_poll_at >= m.justified_until && !run_stopped)
       fail("I6", std::string(kNames[d]) + ": restart reported (" + r.reason +
                      ") though nothing changed its outputs without a confirmed command");
     // docs:34, 90-92: the restart is what the poll that saw it showed; on_restart's writes may
@@ -948,6 +989,11 @@ void World::onReport(const FailsafeReport& r) {
         fail("I11", std::string(kNames[d]) + " out" + std::to_string(chs[i]) +
                         " (safe state hold) is written by a safe write (" + r.trigger + ")");
   }
+  // A restore's entries that started a continuous PWM run again (FailsafeReport::runs), and
+  // whether it wrote plain levels too.
+  auto isRun = [&r](size_t i) { return i < r.runs.size() && r.runs[i]; };
+  bool plain = false;
+  for (size_t i = 0; i < chs.size(); ++i) plain = plain || !isRun(i);
   if (r.action == "restore") {
     // I5 (docs:85-89): what a restore writes, channel by channel.
     std::vector<bool> written(kChannels, false);
@@ -957,6 +1003,18 @@ void World::onReport(const FailsafeReport& r) {
       const Chan& c = m.ch[ch];
       const std::string name = std::string(kNames[d]) + " out" + std::to_string(ch);
       const bool v = r.states[i];
+      if (i < r.runs.size() && r.runs[i]) {
+        // docs "What restore writes": the node's continuous run (its write checked as it went
+        // out), read stopped just before, on a channel neither held nor owed.
+        if (d != kLd || m.run_read_at_start[ch])
+          fail("I5", name +
+                         ": the restore starts a PWM run again that the read just before "
+                         "showed running");
+        if ((c.held || c.owed) && hasSafe(d, ch))
+          fail("I5", name + " is " + (c.held ? "held" : "owed") +
+                         " safe but the restore starts its PWM run again");
+        continue;
+      }
       if ((c.held || c.owed) && hasSafe(d, ch)) {
         if (v != safeLevel(d, ch))
           fail("I5", name + " is " + (c.held ? "held" : "owed") + " safe but the restore writes " +
@@ -993,14 +1051,42 @@ void World::onReport(const FailsafeReport& r) {
                        ": the restore leaves "
                        "it out, though its intent (" +
                        (c.level ? "on" : "off") + ") is known");
+      // docs "What restore writes": the node's continuous run that the read just before showed
+      // stopped is started again.
+      const bool read_running = plain ? m.pwm_read_at_write[ch] : m.pwm_read_running[ch];
+      if (!written[ch] && d == kLd && c.known && !c.adopt && !c.node_run.empty() && !read_running &&
+          !((c.held || c.owed) && hasSafe(d, ch)))
+        fail("I5", std::string(kNames[d]) + " out" + std::to_string(ch) +
+                       ": the restore leaves out the continuous PWM run the node started, "
+                       "though the read just before showed it stopped");
       // docs:90: a run the read before the restore found stays the device's afterwards.
       if (!written[ch] && devices_run && m.ch[ch].known && !m.ch[ch].adopt)
         m.ch[ch].continuous = true;
     }
   }
-  if (r.confirmed) {
+  for (size_t i = 0; i < chs.size(); ++i) {
+    if (!isRun(i)) continue;
+    // A continuous run started again: the node's again (docs "What restore writes"), as the
+    // device shows it (I1); one not confirmed leaves the channel unknown until a poll reads it.
+    const int ch = chs[i];
+    const std::string name = std::string(kNames[d]) + " out" + std::to_string(ch);
+    const std::vector<uint16_t> run = m.ch[ch].node_run;
+    if (r.runs_failed.find(name.substr(4) + ":") != std::string::npos || run.size() != 3) {
+      lostAnswer(kLd, ch, 0);
+      continue;
+    }
+    for (uint16_t k = 0; k < 3; ++k)
+      if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + k)) != run[k])
+        fail("I1", name + ": its PWM run was reported started again, but register " +
+                       std::to_string(ch * 0x10 + k) + " reads " +
+                       std::to_string(simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + k))));
+    commandedTimed(kLd, ch, std::nullopt, false, -1.0, run);
+    m.ch[ch].command = false;
+  }
+  if (r.levels_confirmed) {
     // docs:62: a restore or a safe write is a command like any other (not a hold's end).
     for (size_t i = 0; i < chs.size(); ++i) {
+      if (isRun(i)) continue;
       Chan& c = m.ch[chs[i]];
       const bool held = c.held, triggered = c.triggered;
       const TP held_since = c.held_since, trigger_at = c.trigger_at;
@@ -1088,6 +1174,24 @@ void World::checkHeld() {
                        std::to_string(secs(m.reachable_since - start_)) + ", shows it " +
                        (simCoil(d, ch) ? "on" : "off"));
     }
+    // I5 (docs "What restore writes", "Restart detection needs polls"; #32 item 7): with
+    // on_restart: restore, the node's continuous run a power cycle stopped runs again once the
+    // device answers: the poll that reads its registers (one channel a poll, so within 8 polls)
+    // sees the restart, and the restore starts it. Not on a channel held or owed safe.
+    if (d != kLd || onRestart(d) != OnRestart::kRestore) continue;
+    for (int ch = 0; ch < kChannels; ++ch) {
+      const Chan& c = m.ch[ch];
+      if (!c.run_stop_unseen || c.node_run.empty() || !c.known || c.adopt || c.held || c.owed)
+        continue;
+      const TP from = std::max(c.run_stopped_at, m.reachable_since);
+      if (now - from < dur(10 * pollPeriod(d) + 3.0 + budget(node_->queuedJobs()))) continue;
+      if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0) continue;
+      fail("I5", "pwm out" + std::to_string(ch) +
+                     ": the continuous PWM run the node started, stopped by a power cycle at t=" +
+                     std::to_string(secs(c.run_stopped_at - start_)) +
+                     ", does not run again though the device answers since t=" +
+                     std::to_string(secs(m.reachable_since - start_)) + " (on_restart: restore)");
+    }
   }
 }
 
@@ -1120,6 +1224,11 @@ bool World::step(const SimStep& s, size_t index) {
     const int d = arg(0) % kDevices;
     sim(d)->powerCycle(clock_.now());
     deviceDisturbed(d, true);
+    for (Chan& c : model_[d].ch)
+      if (!c.node_run.empty()) {
+        c.run_stop_unseen = true;
+        c.run_stopped_at = clock_.now();
+      }
     // It may restart saved PWM runs (LD58A08 power-down save) and it ended the timed commands
     // the node expects: their ends may show as more changes. The docs do not say what the
     // intent of an interrupted timed command is with on_restart: leave; nothing is checked.
@@ -1212,15 +1321,24 @@ void World::doCommandStep(const SimStep& s) {
       if (mode == 0) seconds = p.duration;
     }
     pending_.push_back(
-        node_->setPwm(op("pwm").id, kNames[kLd], p, [this, ch, seconds](const Result& r) {
+        node_->setPwm(op("pwm").id, kNames[kLd], p, [this, ch, seconds, p](const Result& r) {
           if (r.ok()) {
             if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) == 0 && seconds > 1.5)
               fail("I1", "pwm out" + std::to_string(ch) +
                              ": set_pwm was confirmed but the channel "
                              "does not run");
             // (A burst shorter than a lost answer's timeouts and read back may have ended.)
-            // docs:66-68: a burst or timed run is the device's until its end, then off.
-            commandedTimed(kLd, ch, std::nullopt, false, seconds);
+            // docs:66-68: a burst or timed run is the device's until its end, then off. A
+            // continuous one is the node's to start again (docs "What restore writes"): its
+            // registers as the manual encodes them.
+            const std::vector<uint16_t> regs =
+                ch < 6 ? std::vector<uint16_t>{static_cast<uint16_t>(std::lround(p.period * 10)),
+                                               static_cast<uint16_t>(std::lround(p.on_time * 10)),
+                                               0xFFFF}
+                       : std::vector<uint16_t>{static_cast<uint16_t>(p.frequency),
+                                               static_cast<uint16_t>(p.duty_cycle), 0xFFFF};
+            commandedTimed(kLd, ch, std::nullopt, false, seconds,
+                           seconds < 0 ? regs : std::vector<uint16_t>{});
             Chan& c = model_[kLd].ch[ch];
             if (c.timed && model_[kLd].pwm_write_answered[ch] != TP{})
               c.ends_earliest = std::min(c.ends, model_[kLd].pwm_write_answered[ch] + dur(seconds));
@@ -1318,8 +1436,9 @@ void World::doCommandStep(const SimStep& s) {
         kAddr[kLd], static_cast<uint16_t>(c6 * 0x10), {period, 1, pulses});
     pending_.push_back(node_->share(op(k).id, req, [this, c6, period, pulses](const Result& r) {
       if (r.ok()) {
-        commandedTimed(kLd, c6, std::nullopt, false,
-                       pulses == 0xFFFF ? -1.0 : pulses * period / 10.0);
+        commandedTimed(
+            kLd, c6, std::nullopt, false, pulses == 0xFFFF ? -1.0 : pulses * period / 10.0,
+            pulses == 0xFFFF ? std::vector<uint16_t>{period, 1, pulses} : std::vector<uint16_t>{});
       } else if (answerLost(r.error)) {
         lostAnswer(kLd, c6, pulses == 0xFFFF ? 0.0 : pulses * period / 10.0);
       }

@@ -119,7 +119,7 @@ Result SimNode::genericWriteSafe(Entry& e, Transport& t, const std::string& trig
   bool silent = false;
   Result w = generic.writeSafeValues(t, &silent);
   e.generic_safe_pending = silent;
-  r.confirmed = w.ok();
+  r.confirmed = r.levels_confirmed = w.ok();
   r.message = w.ok() ? "confirmed by reading the signals back" : w.message;
   if (hooks_.report) hooks_.report(r);
   return w;
@@ -304,7 +304,7 @@ std::future<Result> SimNode::setPwm(uint64_t op, const std::string& device, cons
     auto& board = static_cast<Ld58a08&>(*e->device);
     e->failsafe->timedCommandSending();
     Result w = board.setPwm(t, s);
-    e->failsafe->timedCommandDone(Ld58a08::pwmIntent(s), w);
+    e->failsafe->timedCommandDone(board.pwmIntent(s), w);
     if (w.ok()) board.readPwm(t);
     return w;
   });

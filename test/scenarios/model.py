@@ -485,9 +485,21 @@ class LdModel(Model):
                 if not save:
                     c.stored = False
                 c.enable, c.enable_why = {0}, "power cycle: PWM registers off (no save)"
-                if kind in ("continuous", "device"):
-                    # "a continuous PWM run is not restarted by a restore (not built yet: the
-                    # channel is left as the restart left it)"; the device's until a plain write
+                if kind == "continuous":
+                    # "a continuous PWM run the node started is started again by a restore when
+                    # the read just before the restore shows it stopped" (docs/failsafe.md,
+                    # "What restore writes"): at the poll that reads its registers (up to 8
+                    # polls), so either until then; a node started since (a SIGKILL) did not
+                    # start it and leaves it off.
+                    c.flash, c.kind = Run(flash.during | {0}, now, now, None), "continuous"
+                    c.values, c.why, c.settled = flash.during | {0}, "I7 (a restore starts the " \
+                        "node's continuous run again)", False
+                    c.stored = None
+                    c.enable, c.enable_why = {0, CONTINUOUS}, "I7 (off after the power cycle, " \
+                        "then started again by the restore)"
+                elif kind == "device":
+                    # A run the node took for the device's is not started again; the device's
+                    # until a plain write.
                     c.flash, c.kind = Run({0}, now, now, None), "device"
                     c.values, c.why, c.settled = {0}, "I7 (a PWM run a restart ended stays off)", False
                 elif kind == "timed":

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 
+#include "device_fixtures.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/failsafe/channel_intents.h"
@@ -161,7 +162,7 @@ TEST(ChannelIntents, Item4RestoreAfterAPwmBurstWritesItsFinalLevel) {
   s.period = 1.0;
   s.on_time = 0.5;
   s.pulses = 3;
-  t.timed(Ld58a08::pwmIntent(s), CommandSource::kTimed);
+  t.timed(Ld58a08(devtest::config("ld58a08", 2)).pwmIntent(s), CommandSource::kTimed);
   clock.advance(1500ms);
   EXPECT_EQ(poll(t, std::vector<bool>(8, false)), Verdict::kNormal);  // toggling: any level
   clock.advance(5s);
@@ -494,4 +495,93 @@ TEST(ChannelIntents, ARunReadByAPollAWriteRanDuringStillMakesTheChannelTheDevice
   clock.advance(5s);  // the run ended on; its level is the device's doing, not a restart
   t.pollStarting();
   EXPECT_EQ(t.observePoll({true, false, false, false}, {}, false, nullptr, read), Verdict::kNormal);
+}
+
+// docs/failsafe.md "Restart detection needs polls" and "What restore writes" (#32 item 7): a
+// continuous run the node started, read stopped with no stop carried, is a restart; a restore
+// starts it again with the write that started it, unless the read just before shows it running
+// (a power-down save restarted it) or the channel is held. A run the node did not start (a
+// client's coil write kept one going) is the device's: its end is no restart.
+TEST(ChannelIntents, TheNodesContinuousRunReadStoppedIsARestartAndARestoreStartsItAgain) {
+  ManualClock clock;
+  FailsafeConfig config;
+  config.safe_state = std::vector<SafeState>(8, SafeState::kHold);
+  config.safe_state[6] = SafeState::kOff;
+  config.on_restart = OnRestart::kRestore;
+  ChannelIntents t(config, 8, clock);
+  const std::vector<bool> none(8, false);
+  std::vector<bool> fan_runs = none;
+  fan_runs[6] = true;
+  t.pollStarting();
+  t.observePoll(none, none, false, nullptr, std::vector<bool>(8, true));
+  PwmSettings fan;
+  fan.channel = 6;
+  fan.frequency = 500;
+  fan.duty_cycle = 40;
+  fan.duration = 0;  // continuous
+  const TimedIntent run = Ld58a08(devtest::config("ld58a08", 2)).pwmIntent(fan);
+  ASSERT_TRUE(run.restart.has_value());
+  t.timed(run, CommandSource::kTimed);
+  clock.advance(1s);
+  std::vector<bool> read6 = none;
+  read6[6] = true;
+  std::vector<uint8_t> changed;
+  t.pollStarting();
+  EXPECT_EQ(t.observePoll(none, fan_runs, false, &changed, read6), Verdict::kNormal);
+  // A poll that does not read channel 6's registers says nothing of it.
+  clock.advance(1s);
+  t.pollStarting();
+  EXPECT_EQ(t.observePoll(none, none, false, &changed, none), Verdict::kNormal);
+  // One that reads them stopped: a restart on channel 6.
+  clock.advance(1s);
+  t.pollStarting();
+  EXPECT_EQ(t.observePoll(none, none, false, &changed, read6), Verdict::kOutputsChanged);
+  EXPECT_EQ(changed, (std::vector<uint8_t>{6}));
+  // The restore starts it again with its write; not when the read before shows it running.
+  const auto again = t.runsToStartAgain(Verdict::kOutputsChanged, none);
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_EQ(again[0].channel, 6);
+  ASSERT_TRUE(again[0].restart.has_value());
+  EXPECT_EQ(again[0].restart->values, (std::vector<uint16_t>{500, 40, 65535}));
+  EXPECT_FALSE(again[0].restart->repeatable);
+  EXPECT_TRUE(t.runsToStartAgain(Verdict::kOutputsChanged, fan_runs).empty());
+  EXPECT_TRUE(t.runsToStartAgain(Verdict::kNormal, none).empty());
+  const OutputTargets levels = t.afterPollTargets(Verdict::kOutputsChanged, none);
+  EXPECT_EQ(std::count(levels.channels.begin(), levels.channels.end(), 6), 0)
+      << "a run is started again, never written as a level";
+  // A held channel is not started again.
+  t.hold({6}, HoldTrigger::kHeartbeat);
+  EXPECT_TRUE(t.runsToStartAgain(Verdict::kOutputsChanged, none).empty());
+}
+
+TEST(ChannelIntents, UnderLeaveAStoppedContinuousRunCountsOnceAndAKeptRunsEndIsNoRestart) {
+  ManualClock clock;
+  FailsafeConfig config;
+  config.on_restart = OnRestart::kLeave;
+  ChannelIntents t(config, 8, clock);
+  const std::vector<bool> none(8, false), all(8, true);
+  std::vector<bool> runs = none;
+  runs[6] = runs[7] = true;
+  t.pollStarting();
+  t.observePoll(none, runs, false, nullptr, all);
+  PwmSettings fan;
+  fan.channel = 6;
+  fan.frequency = 500;
+  fan.duty_cycle = 40;
+  t.timed(Ld58a08(devtest::config("ld58a08", 2)).pwmIntent(fan), CommandSource::kTimed);
+  // Channel 7: a client's coil write kept a run going (no settings the node knows).
+  TimedIntent kept;
+  kept.channel = 7;
+  kept.after = true;
+  t.timed(kept, CommandSource::kShare);
+  clock.advance(1s);
+  std::vector<uint8_t> changed;
+  t.pollStarting();
+  EXPECT_EQ(t.observePoll(none, none, false, &changed, all), Verdict::kOutputsChanged);
+  EXPECT_EQ(changed, (std::vector<uint8_t>{6}));
+  EXPECT_TRUE(t.runsToStartAgain(Verdict::kOutputsChanged, none).empty()) << "leave";
+  clock.advance(1s);
+  t.pollStarting();
+  EXPECT_EQ(t.observePoll(none, none, false, &changed, all), Verdict::kNormal)
+      << "taken as it is: the next poll does not count it again";
 }

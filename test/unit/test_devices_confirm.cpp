@@ -177,3 +177,40 @@ TEST(ConfirmByReadBack, AnUnconfirmedPwmWritesChannelIsReadByTheNextPollFirst) {
   EXPECT_EQ(bus.mismatches(), "");
   EXPECT_TRUE(bus.usedUp());
 }
+
+// docs/failsafe.md "What restore writes" (#32 item 7): a restore starts a continuous run again
+// with the write that started it, sent once; a lost answer is read back, as for set_pwm. Only a
+// continuous run of this board's channel is taken: anything else is refused unsent.
+TEST(ConfirmByReadBack, AContinuousRunStartedAgainIsSentOnceAndReadBackWhenItsAnswerIsLost) {
+  Ld58a08 board(config("ld58a08", 1));
+  PwmSettings fan;
+  fan.channel = 6;
+  fan.frequency = 500;
+  fan.duty_cycle = 40;
+  const TimedIntent run = board.pwmIntent(fan);
+  ASSERT_TRUE(run.restart.has_value());
+  EXPECT_LT(run.seconds, 0);
+  ScriptedTransport bus;
+  bus.expect(frame(Request::writeMultipleRegisters(1, 0x0060, {500, 40, 0xFFFF})));  // lost
+  bus.expect(frame(Request::readHoldingRegisters(1, 0x0060, 3)),
+             registersReply(1, 0x0060, {500, 40, 0xFFFF}));
+  const Result r = board.startAgain(bus, *run.restart);
+  EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_TRUE(board.pwm()[6].running && board.pwm()[6].continuous);
+  EXPECT_EQ(bus.executed(), 2);  // one write, one read: never sent twice
+  EXPECT_EQ(bus.mismatches(), "");
+  // A burst has no restart; a write that is no continuous run of this board is refused unsent.
+  PwmSettings burst3;
+  burst3.channel = 2;
+  burst3.period = 1.0;
+  burst3.on_time = 0.5;
+  burst3.pulses = 3;
+  EXPECT_FALSE(board.pwmIntent(burst3).restart.has_value());
+  ScriptedTransport idle;
+  for (const Request& wrong : {Request::writeMultipleRegisters(1, 0x0020, {10, 5, 3}),
+                               Request::writeMultipleRegisters(2, 0x0060, {500, 40, 0xFFFF}),
+                               Request::writeMultipleRegisters(1, 0x0061, {40, 0xFFFF, 0}),
+                               Request::writeSingleRegister(1, 0x0062, 0xFFFF)})
+    EXPECT_EQ(board.startAgain(idle, wrong).error, ErrorKind::kInvalidArgument) << wrong.describe();
+  EXPECT_EQ(idle.executed(), 0);
+}

@@ -119,6 +119,14 @@ class Device {
   // coilWriteKeepsRun and what the node knew of it): the snapshot says it runs until a read says
   // otherwise, as a read showing it would.
   virtual void noteRunKept(uint8_t channel) { (void)channel; }
+  // Starts a continuous run again with the write that started it (TimedIntent::restart): a
+  // restore after a power cycle stopped it. Sent once; a lost answer is read back.
+  virtual Result startAgain(Transport& link, const Request& write) {
+    (void)link;
+    return Result::failure(
+        ErrorKind::kInvalidArgument,
+        std::string("a ") + type() + " has no run to start again: " + write.describe());
+  }
   // Reads again what outputSelfTimed() answers from (an LD58A08's PWM registers, otherwise
   // read one channel per poll), so a restore decides on the device's state now.
   virtual Result refreshSelfTimed(Transport& link) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "modbus_rtu_driver/core/modbus/text.h"
+#include "modbus_rtu_driver/core/modbus/types.h"
 
 namespace modbus_rtu_driver {
 
@@ -58,10 +59,17 @@ struct FailsafeConfig {
 // level may show. `seconds` < 0: the device drives the channel with no end the node knows (a
 // continuous PWM run).
 struct TimedIntent {
+  TimedIntent() = default;
+  TimedIntent(uint8_t ch, std::optional<bool> level_during, bool level_after, double for_seconds)
+      : channel(ch), during(level_during), after(level_after), seconds(for_seconds) {}
   uint8_t channel = 0;
   std::optional<bool> during;
   bool after = false;
   double seconds = -1.0;
+  // A continuous run the node can start again after a power cycle stopped it: the write that
+  // started it (sent once, never retried; docs/failsafe.md, "What restore writes"). None for a
+  // run with an end, or one whose settings the node does not know.
+  std::optional<Request> restart;
 };
 
 }  // namespace modbus_rtu_driver

@@ -77,9 +77,13 @@ class Ld58a08 : public Device {
   static std::string validatePwm(const PwmSettings& settings);
   // One FC16 write of the channel's three registers.
   Result setPwm(Transport& link, const PwmSettings& settings);
+  // That write (never retried: a second copy would run a burst twice).
+  Request pwmWrite(const PwmSettings& settings) const;
   // What a PWM run does to its output: the device drives it until the burst or the timed run
-  // ends, then it is off; a continuous run has no end.
-  static TimedIntent pwmIntent(const PwmSettings& settings);
+  // ends, then it is off; a continuous run has no end (and can be started again: its write).
+  TimedIntent pwmIntent(const PwmSettings& settings) const;
+  // A continuous run's write again (a restore): as setPwm sends it, confirmed the same way.
+  Result startAgain(Transport& link, const Request& write) override;
   // A client's write of a channel's enable register (0x00n2) that starts a run.
   std::vector<TimedIntent> timedWrittenBy(const Request& request) const override;
   // A client's write of 0 to a channel's enable register: that channel's run stopped.
@@ -130,6 +134,8 @@ class Ld58a08 : public Device {
   // A continuous run the device confirmed (set_pwm's, or a client's write the node carried):
   // the snapshot says it runs until a read says otherwise.
   void noteContinuousRun(uint8_t channel);
+  // Sends a PWM write of one channel's three registers; a lost answer is read back.
+  Result writePwm(Transport& link, const Request& write);
   Result readPwmChannel(Transport& link, uint8_t channel, PwmState* out);
   Result confirmPwm(Transport& link, Result failed, uint8_t channel,
                     const std::vector<uint16_t>& written);

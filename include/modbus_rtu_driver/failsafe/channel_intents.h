@@ -129,6 +129,11 @@ class ChannelIntents {
   // `device_runs[i]`: the device reports a PWM running on channel i, read just before the
   // write (a restore does not write such a channel: it is the device's).
   OutputTargets afterPollTargets(Verdict verdict, const std::vector<bool>& device_runs = {}) const;
+  // The continuous runs a restore after `verdict` starts again (on_restart: restore): the
+  // node's own (TimedIntent::restart) that `device_runs`, read just before, shows stopped, on
+  // channels neither held nor owed (docs/failsafe.md, "What restore writes").
+  std::vector<TimedIntent> runsToStartAgain(Verdict verdict,
+                                            const std::vector<bool>& device_runs) const;
 
   // --- timed commands across a node's restart ---
   // The timed commands not ended at `now`, with the seconds left (< 0: no end), for the next
@@ -151,6 +156,7 @@ class ChannelIntents {
     std::optional<bool> during;             // a timed command's level until `ends` (none: any)
     std::optional<Clock::time_point> ends;  // a timed command's end
     bool driven = false;                    // the device drives it with no known end
+    std::optional<Request> restart;         // driven: the node's continuous run, its write
     bool adopt = false;                     // the next poll's level is the intent
     std::optional<Clock::time_point> adopt_from;  // adopt: not before then
     std::optional<bool> adopt_prev;               // adoptChangeNextPoll: the level expected before

@@ -30,11 +30,19 @@ struct FailsafeReport {
   std::string device, trigger, reason, action, message;
   std::vector<std::string> channels;
   std::vector<bool> states;
+  // Per channel: a continuous PWM run a restore started again (its state then says on); and
+  // why one of them was not confirmed ("" when all were).
+  std::vector<bool> runs;
+  std::string runs_failed;
+  // The plain levels (runs[i] false) were confirmed; `confirmed` needs the runs too.
+  bool levels_confirmed = false;
   bool confirmed = false;
   // A restart on a device with no fail-safe: nothing was written, only noted (log INFO).
   bool note_only = false;
   // "trigger (reason): pump off, lamp on[; NOT confirmed: why]"
   std::string text() const;
+  // "PWM run started again on fan, heater" (the channels whose runs[i] is true)
+  std::string runsStartedText() const;
 };
 
 // The fail-safe's side of a device's /diagnostics.
@@ -134,7 +142,11 @@ class DeviceFailsafe {
                         const std::string& reason, const std::string& action,
                         std::optional<Clock::time_point> owe_since,
                         const UntilSilentTransport* until_silent = nullptr,
-                        const std::vector<uint8_t>& held_only = {});
+                        const std::vector<uint8_t>& held_only = {},
+                        const FailsafeReport* runs_started = nullptr);
+  // Starts a restore's continuous runs again (ChannelIntents::runsToStartAgain) and names them in
+  // `r` (channels, states, runs; runs_failed): the restore's report carries them.
+  void startRunsAgain(Transport& t, const std::vector<TimedIntent>& runs, FailsafeReport* r);
   // The report's channels and states: `targets`, by the outputs' names.
   void nameTargets(const OutputTargets& targets, FailsafeReport* r) const;
   // Reads the outputs (a poll of the device) and checks `targets` there: success, or why not
