@@ -21,7 +21,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from std_msgs.msg import Bool, String
 from std_srvs.srv import SetBool
 
-from modbus_rtu_driver.msg import DigitalStates, FailsafeEvent
+from modbus_rtu_driver.msg import DigitalStates, FailsafeEvent, PwmStates
 from modbus_rtu_driver.srv import Pulse, SetPwm
 
 import helpers
@@ -287,6 +287,32 @@ class FailsafeItemsTest(unittest.TestCase):
         self.sim.power_cycle(RELAYS)
         self.assertEqual(self.event("restart", "relays", since).action, "restore")
         self.wait_coils(RELAYS, {FAN: 1}, 10, "the fan restored")
+
+    def test_07b_restore_starts_the_nodes_continuous_pwm_run_again(self):
+        # docs/failsafe.md, "What restore writes": "a continuous PWM run the node started is
+        # started again by a restore when the read just before the restore shows it stopped (a
+        # power cycle without the power-down save)"; "Restart detection needs polls": such a run
+        # read stopped is a restart. Before: the fan stayed off and /pwm showed it not running.
+        pwm = helpers.Latest(NS + "pwm_board/pwm", PwmStates)
+        self.start_node()
+        res = helpers.service(NS + "pwm_board/set_pwm", SetPwm)(6, 0, 0, 0, 500, 40, 0)
+        self.assertTrue(res.success, res.message)
+        fan_regs = lambda: self.sim.get(PWM, "holding_register", 0x60, 3)  # noqa: E731
+        self.assertEqual(fan_regs(), [500, 40, 0xFFFF])
+        since = len(self.events)
+        self.sim.power_cycle(PWM)  # power-down save off: every PWM register cleared
+        self.assertEqual(fan_regs()[2], 0)
+        # Only the run changed: the poll that reads channel 6's registers (one channel a poll,
+        # 5 polls/s) sees it.
+        event = self.event("restart", "pwm_board", since, timeout=20)
+        self.assertEqual(event.action, "restore")
+        helpers.wait_until(lambda: fan_regs() == [500, 40, 0xFFFF], 20,
+                           "channel 6's continuous run started again, as set_pwm wrote it")
+        self.assertTrue(any("PWM run started again on out6" in e.message
+                            for e in self.events[since:]),
+                        [e.message for e in self.events[since:]])
+        pwm.wait(10, lambda m: m.channels[6].running and m.channels[6].continuous,
+                 "/pwm: channel 6 running continuously again")
 
     def test_08_a_silent_board_at_start_does_not_lose_the_heartbeat(self):
         # docs/failsafe.md: the heartbeat is "armed when the node has written its on_start safe
