@@ -281,7 +281,7 @@ void DeviceFailsafe::afterPoll() {
     // One report names them with the plain writes (FailsafeReport::runs).
     const std::vector<TimedIntent> again = intents_.runsToStartAgain(verdict, runs);
     FailsafeReport started;
-    if (!again.empty()) startRunsAgain(t, again, &started);
+    const Result runs_result = startRunsAgain(t, again, &started);
     const OutputTargets targets = intents_.afterPollTargets(verdict, runs);
     if (!targets.empty())
       return writeAndReport(t, targets, trigger, reason, action, {}, nullptr, {}, &started);
@@ -294,8 +294,7 @@ void DeviceFailsafe::afterPoll() {
       started.confirmed = started.runs_failed.empty();
       started.message = started.confirmed ? started.runsStartedText() : started.runs_failed;
       report(started);
-      return started.confirmed ? Result::success()
-                               : Result::failure(ErrorKind::kTimeout, started.runs_failed);
+      return runs_result;
     }
     if (verdict == ChannelIntents::Verdict::kNormal) return Result::success();
     nothingWritten(true, "outputs left as they are");  // trigger is "restart" here
@@ -303,15 +302,16 @@ void DeviceFailsafe::afterPoll() {
   });
 }
 
-void DeviceFailsafe::startRunsAgain(Transport& t, const std::vector<TimedIntent>& runs,
-                                    FailsafeReport* r) {
+Result DeviceFailsafe::startRunsAgain(Transport& t, const std::vector<TimedIntent>& runs,
+                                      FailsafeReport* r) {
+  if (runs.empty()) return Result::success();
   const auto names = device_.outputNames();
+  Result first_failure = Result::success();
   for (const TimedIntent& run : runs) {
     intents_.writeRan();
     const Result w = device_.startAgain(t, *run.restart);
     r->channels.push_back(names[run.channel]);
     r->states.push_back(true);
-    r->runs.resize(r->channels.size() - 1, false);
     r->runs.push_back(true);
     if (w.ok()) {
       intents_.timed(run, CommandSource::kRestore);
@@ -321,9 +321,11 @@ void DeviceFailsafe::startRunsAgain(Transport& t, const std::vector<TimedIntent>
     // channel tells (docs/failsafe.md, "A command whose answer was lost").
     if (answerLost(w.error) || w.error == ErrorKind::kIo) adoptAfterLost(run);
     r->runs_failed += (r->runs_failed.empty() ? "" : "; ") + names[run.channel] + ": " + w.message;
+    if (first_failure.ok()) first_failure = w;
   }
   timedMaybeChanged();
   if (outputs_written_) outputs_written_();
+  return first_failure;
 }
 
 std::vector<DeviceFailsafe::Fired> DeviceFailsafe::firedTriggers() {

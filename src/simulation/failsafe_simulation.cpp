@@ -205,6 +205,11 @@ struct Chan {
   // channel per poll) reports a restart for it (docs "Restart detection needs polls").
   bool run_stop_unseen = false;
   TP run_stopped_at{};
+  // A run power-down save restarted (docs:176-186): the device's once a poll reads it running;
+  // until then its start and its end may each show as a change (a restart report naming the
+  // channel is justified), the end up to the report after a poll read it stopped.
+  bool saved_run_unseen = false;
+  TP saved_stop_read_at{};
   bool maybe_devices = false;  // read running near the node's run's end: either may be right
   // A set_pwm's end counted from when the device answered its write (the node's end); `ends`
   // counts from the model's callback, a read back later.
@@ -724,7 +729,14 @@ void World::onAttempt(const LineEvent& e) {
     const int ch = e.request.address / 0x10;
     const bool runs = e.values.size() == 3 && e.values[2] != 0;  // as the node read it
     m.pwm_read_running[ch] = runs;
-    if (runs) m.ch[ch].run_stop_unseen = false;  // running: a power-down save restarted it
+    // Read by a poll: running, the node's (or the device's, docs:176-186) from now on; a saved
+    // run read stopped, its end is seen by this poll.
+    if (m.in_poll && node_ && node_->currentOp() == 0) {
+      Chan& read = m.ch[ch];
+      if (runs) read.run_stop_unseen = read.saved_run_unseen = false;
+      if (!runs && read.saved_run_unseen && read.saved_stop_read_at == TP{})
+        read.saved_stop_read_at = e.at;
+    }
     m.pwm_read_in_poll[ch] = m.poll_running;
     // docs:88-90 and "Restart detection needs polls": a run a poll reads that is no timed
     // command of the node's still running makes the channel the device's until a plain write,
@@ -896,18 +908,19 @@ void World::onPolled(const std::string& device, const Result& r) {
       const bool changed = c.adopt_prev_known && level != c.adopt_prev_level;
       const bool ends = c.adopt_is_command && changed && !(c.held && c.held_since > c.adopt_at);
       // The level before the write unknown (a client's write whose answer was lost came before
-      // it: an open question, docs/simulation.md): whether it changed, and so whether the hold
-      // ended, is unknown too. Nothing is checked on the channel until it is commanded.
+      // it): not known to have changed, so taken as found, and a hold stays (docs:67, stop 41).
       const bool unknown = c.adopt_is_command && !c.adopt_prev_known;
       Chan kept = c;
       c = Chan{};
-      c.known = !unknown;
-      c.command = kept.adopt_is_command;
+      c.known = true;
+      c.command = kept.adopt_is_command && !unknown;
       c.level = level;
-      c.continuous = pwm;
+      // docs:66: "found running" is as the node read it (this poll read the channel's PWM
+      // registers), not the simulator's register when the poll ended (a run may end between).
+      c.continuous = d == kLd ? m.pwm_read_running[ch] : pwm;
       c.at = clock_.now();
       c.deadline = kept.deadline;
-      if (!ends && !unknown) {
+      if (!ends) {
         c.held = kept.held;
         c.held_since = kept.held_since;
         c.owed = kept.owed;
@@ -964,8 +977,10 @@ void World::onReport(const FailsafeReport& r) {
         const std::string name = "out" + std::to_string(ch);
         const auto at = r.reason.find(name, names_at);
         if (at == std::string::npos || at > names_end) continue;
-        run_stopped = run_stopped || m.ch[ch].run_stop_unseen;
-        m.ch[ch].run_stop_unseen = false;
+        Chan& named = m.ch[ch];
+        run_stopped = run_stopped || named.run_stop_unseen || named.saved_run_unseen;
+        named.run_stop_unseen = false;
+        if (named.saved_stop_read_at != TP{}) named.saved_run_unseen = false;
       }
     if (r.reason.find("changed with no command") != std::string::npos && !m.justified &&
         m.prev_poll_at >= m.justified_until && !run_stopped)
@@ -1224,11 +1239,21 @@ bool World::step(const SimStep& s, size_t index) {
     const int d = arg(0) % kDevices;
     sim(d)->powerCycle(clock_.now());
     deviceDisturbed(d, true);
-    for (Chan& c : model_[d].ch)
-      if (!c.node_run.empty()) {
+    for (int ch = 0; ch < kChannels; ++ch) {
+      Chan& c = model_[d].ch[ch];
+      // A run power-down save restarted (docs:176-186) shows as the device's only at a poll that
+      // reads its registers while it runs; until then its end may show as a change (a report
+      // naming the channel is justified); and a run of the node's it stopped likewise.
+      const bool saved_run =
+          d == kLd && simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0;
+      if (saved_run) {
+        c.saved_run_unseen = true;
+        c.saved_stop_read_at = TP{};
+      } else if (!c.node_run.empty()) {
         c.run_stop_unseen = true;
         c.run_stopped_at = clock_.now();
       }
+    }
     // It may restart saved PWM runs (LD58A08 power-down save) and it ended the timed commands
     // the node expects: their ends may show as more changes. The docs do not say what the
     // intent of an interrupted timed command is with on_restart: leave; nothing is checked.

@@ -137,7 +137,8 @@ class DeviceFailsafe {
   // states (fired then), owed per channel when it does not get through. `until_silent`: a
   // lasting trigger's write goes through it (`t`; `held_only` is its channel filter): when it
   // refused the read back (no reply to the write), the read and the report come from a job
-  // queued behind the other writes, for the channels still held then.
+  // queued behind the other writes, for the channels still held then. `runs_started`: a
+  // restore's runs started again just before (startRunsAgain), named in the same report.
   Result writeAndReport(Transport& t, const OutputTargets& targets, const std::string& trigger,
                         const std::string& reason, const std::string& action,
                         std::optional<Clock::time_point> owe_since,
@@ -145,8 +146,9 @@ class DeviceFailsafe {
                         const std::vector<uint8_t>& held_only = {},
                         const FailsafeReport* runs_started = nullptr);
   // Starts a restore's continuous runs again (ChannelIntents::runsToStartAgain) and names them in
-  // `r` (channels, states, runs; runs_failed): the restore's report carries them.
-  void startRunsAgain(Transport& t, const std::vector<TimedIntent>& runs, FailsafeReport* r);
+  // `r` (channels, states, runs; runs_failed): the restore's report carries them. The first
+  // failure, else success (none to start included).
+  Result startRunsAgain(Transport& t, const std::vector<TimedIntent>& runs, FailsafeReport* r);
   // The report's channels and states: `targets`, by the outputs' names.
   void nameTargets(const OutputTargets& targets, FailsafeReport* r) const;
   // Reads the outputs (a poll of the device) and checks `targets` there: success, or why not
