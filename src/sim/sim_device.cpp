@@ -14,23 +14,6 @@ double simFrameGap(const SimLineSettings& l) {
   return frameGap(l.baud, simBitsPerCharacter(l));
 }
 
-namespace {
-
-Table readTable(FunctionCode fc) {
-  switch (fc) {
-    case FunctionCode::kReadCoils:
-      return Table::kCoil;
-    case FunctionCode::kReadDiscreteInputs:
-      return Table::kDiscreteInput;
-    case FunctionCode::kReadHoldingRegisters:
-      return Table::kHoldingRegister;
-    default:
-      return Table::kInputRegister;
-  }
-}
-
-}  // namespace
-
 std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point now) {
   const bool broadcast = r.slave == kBroadcastAddress;
   uint8_t exception = 0;
@@ -50,21 +33,21 @@ std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point no
       for (uint32_t a = r.address; a < r.address + r.count && !exception; ++a) {
         uint16_t v = 0;
         exception = a > 0xFFFF ? static_cast<uint8_t>(kIllegalDataAddress)
-                               : read(readTable(r.function), static_cast<uint16_t>(a), now, &v);
+                               : read(tableOf(r.function), static_cast<uint16_t>(a), now, &v);
         values.push_back(v);
       }
       break;
     }
     case FunctionCode::kWriteSingleCoil:
     case FunctionCode::kWriteMultipleCoils:
-      if (r.values.empty() || r.values.size() > kMaxWriteBits) exception = kIllegalDataValue;
+      if (r.values.empty() || r.values.size() > maxCount(r.function)) exception = kIllegalDataValue;
       for (uint16_t v : r.values)
         if (v > 1) exception = kIllegalDataValue;  // FC05 value not FF00/0000
       if (!exception) exception = write(Table::kCoil, r.address, r.values, now);
       break;
     case FunctionCode::kWriteSingleRegister:
     case FunctionCode::kWriteMultipleRegisters:
-      if (r.values.empty() || r.values.size() > kMaxWriteRegisters) exception = kIllegalDataValue;
+      if (r.values.empty() || r.values.size() > maxCount(r.function)) exception = kIllegalDataValue;
       if (!exception) exception = write(Table::kHoldingRegister, r.address, r.values, now);
       break;
   }
@@ -76,7 +59,7 @@ std::optional<Bytes> SimDevice::handle(const Request& r, SimClock::time_point no
 
 // True when a write would leave a coil or register other than it is now (counted in `changes`).
 bool SimDevice::wouldChange(const Request& r, SimClock::time_point now) {
-  const Table table = isBitFunction(r.function) ? Table::kCoil : Table::kHoldingRegister;
+  const Table table = tableOf(r.function);
   for (size_t i = 0; i < r.values.size(); ++i) {
     uint16_t v = 0;
     const uint32_t a = r.address + i;

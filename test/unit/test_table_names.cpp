@@ -72,3 +72,36 @@ TEST(TableNames, YamlTableKeyNamesTheKeyAndTheName) {
 
 }  // namespace
 }  // namespace modbus_rtu_driver
+
+// One definition of each function's table and limit (the client's checks, the slave role and
+// the simulator all use it): the Modbus spec's figures.
+TEST(FunctionCodes, TheTableAndTheLimitOfEachFunction) {
+  EXPECT_EQ(modbus_rtu_driver::tableOf(modbus_rtu_driver::FunctionCode::kReadCoils),
+            modbus_rtu_driver::Table::kCoil);
+  EXPECT_EQ(modbus_rtu_driver::tableOf(modbus_rtu_driver::FunctionCode::kReadDiscreteInputs),
+            modbus_rtu_driver::Table::kDiscreteInput);
+  EXPECT_EQ(modbus_rtu_driver::tableOf(modbus_rtu_driver::FunctionCode::kReadHoldingRegisters),
+            modbus_rtu_driver::Table::kHoldingRegister);
+  EXPECT_EQ(modbus_rtu_driver::tableOf(modbus_rtu_driver::FunctionCode::kReadInputRegisters),
+            modbus_rtu_driver::Table::kInputRegister);
+  EXPECT_EQ(modbus_rtu_driver::tableOf(modbus_rtu_driver::FunctionCode::kWriteSingleCoil),
+            modbus_rtu_driver::Table::kCoil);
+  EXPECT_EQ(modbus_rtu_driver::tableOf(modbus_rtu_driver::FunctionCode::kWriteMultipleCoils),
+            modbus_rtu_driver::Table::kCoil);
+  EXPECT_EQ(modbus_rtu_driver::tableOf(modbus_rtu_driver::FunctionCode::kWriteSingleRegister),
+            modbus_rtu_driver::Table::kHoldingRegister);
+  EXPECT_EQ(modbus_rtu_driver::tableOf(modbus_rtu_driver::FunctionCode::kWriteMultipleRegisters),
+            modbus_rtu_driver::Table::kHoldingRegister);
+  EXPECT_EQ(modbus_rtu_driver::maxCount(modbus_rtu_driver::FunctionCode::kReadCoils), 2000);
+  EXPECT_EQ(modbus_rtu_driver::maxCount(modbus_rtu_driver::FunctionCode::kReadDiscreteInputs),
+            2000);
+  EXPECT_EQ(modbus_rtu_driver::maxCount(modbus_rtu_driver::FunctionCode::kReadHoldingRegisters),
+            125);
+  EXPECT_EQ(modbus_rtu_driver::maxCount(modbus_rtu_driver::FunctionCode::kReadInputRegisters), 125);
+  EXPECT_EQ(modbus_rtu_driver::maxCount(modbus_rtu_driver::FunctionCode::kWriteSingleCoil), 1);
+  EXPECT_EQ(modbus_rtu_driver::maxCount(modbus_rtu_driver::FunctionCode::kWriteSingleRegister), 1);
+  EXPECT_EQ(modbus_rtu_driver::maxCount(modbus_rtu_driver::FunctionCode::kWriteMultipleCoils),
+            1968);
+  EXPECT_EQ(modbus_rtu_driver::maxCount(modbus_rtu_driver::FunctionCode::kWriteMultipleRegisters),
+            123);
+}

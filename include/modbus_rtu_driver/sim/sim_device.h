@@ -88,7 +88,9 @@ class SimDevice {
   Bytes unknownFunction(uint8_t slave, uint8_t function) const;
   // The longest read it serves (registers, or bits for `bits`); longer reads get exception 03,
   // as the protocol's limits do. Some devices serve less than the protocol allows.
-  virtual uint16_t readLimit(bool bits) const { return bits ? kMaxReadBits : kMaxReadRegisters; }
+  virtual uint16_t readLimit(bool bits) const {
+    return maxCount(bits ? FunctionCode::kReadCoils : FunctionCode::kReadHoldingRegisters);
+  }
   // Seconds the device waits before answering (LD58A08 return delay). Read before handling a
   // request: a new delay applies from the next one.
   virtual double replyDelay() const { return 0.0; }

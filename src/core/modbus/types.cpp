@@ -24,6 +24,43 @@ bool isReadFunction(FunctionCode fc) {
   return static_cast<uint8_t>(fc) <= 0x04;
 }
 
+Table tableOf(FunctionCode fc) {
+  switch (fc) {
+    case FunctionCode::kReadCoils:
+    case FunctionCode::kWriteSingleCoil:
+    case FunctionCode::kWriteMultipleCoils:
+      return Table::kCoil;
+    case FunctionCode::kReadDiscreteInputs:
+      return Table::kDiscreteInput;
+    case FunctionCode::kReadInputRegisters:
+      return Table::kInputRegister;
+    case FunctionCode::kReadHoldingRegisters:
+    case FunctionCode::kWriteSingleRegister:
+    case FunctionCode::kWriteMultipleRegisters:
+      break;
+  }
+  return Table::kHoldingRegister;
+}
+
+uint16_t maxCount(FunctionCode fc) {
+  switch (fc) {
+    case FunctionCode::kReadCoils:
+    case FunctionCode::kReadDiscreteInputs:
+      return kMaxReadBits;
+    case FunctionCode::kReadHoldingRegisters:
+    case FunctionCode::kReadInputRegisters:
+      return kMaxReadRegisters;
+    case FunctionCode::kWriteMultipleCoils:
+      return kMaxWriteBits;
+    case FunctionCode::kWriteMultipleRegisters:
+      return kMaxWriteRegisters;
+    case FunctionCode::kWriteSingleCoil:
+    case FunctionCode::kWriteSingleRegister:
+      break;
+  }
+  return 1;
+}
+
 const char* tableName(Table table) {
   return nameIn(kTableNames, table).data();  // the table's names are literals: terminated
 }
@@ -163,25 +200,7 @@ std::string Request::validate() const {
   if (!isKnownFunction(static_cast<uint8_t>(function))) return "function: unsupported code";
   if (slave == kBroadcastAddress && isReadFunction(function) && !single_device_at_zero)
     return "slave: 0 (broadcast) is only allowed for writes";
-  uint16_t max = 1;
-  switch (function) {
-    case FunctionCode::kReadCoils:
-    case FunctionCode::kReadDiscreteInputs:
-      max = kMaxReadBits;
-      break;
-    case FunctionCode::kReadHoldingRegisters:
-    case FunctionCode::kReadInputRegisters:
-      max = kMaxReadRegisters;
-      break;
-    case FunctionCode::kWriteMultipleCoils:
-      max = kMaxWriteBits;
-      break;
-    case FunctionCode::kWriteMultipleRegisters:
-      max = kMaxWriteRegisters;
-      break;
-    default:
-      max = 1;
-  }
+  const uint16_t max = maxCount(function);
   if (count < 1 || count > max)
     return "count: " + std::to_string(count) + " is outside 1-" + std::to_string(max);
   if (static_cast<uint32_t>(address) + count > 0x10000u)

@@ -185,45 +185,10 @@ uint8_t SlaveServer::predictException(const Bytes& f) const {
   // A known function whose layout does not add up (byte count vs quantity) is a bad value.
   if (!request) return isKnownFunction(f[1]) ? kIllegalDataValue : kIllegalFunction;
   const Request& r = *request;
-  Table table = Table::kCoil;
-  uint16_t max = 0;
-  switch (r.function) {
-    case FunctionCode::kReadCoils:
-      table = Table::kCoil;
-      max = MODBUS_MAX_READ_BITS;
-      break;
-    case FunctionCode::kReadDiscreteInputs:
-      table = Table::kDiscreteInput;
-      max = MODBUS_MAX_READ_BITS;
-      break;
-    case FunctionCode::kReadHoldingRegisters:
-      table = Table::kHoldingRegister;
-      max = MODBUS_MAX_READ_REGISTERS;
-      break;
-    case FunctionCode::kReadInputRegisters:
-      table = Table::kInputRegister;
-      max = MODBUS_MAX_READ_REGISTERS;
-      break;
-    case FunctionCode::kWriteSingleCoil:
-      if (r.values[0] > 1) return kIllegalDataValue;
-      table = Table::kCoil;
-      max = 1;
-      break;
-    case FunctionCode::kWriteSingleRegister:
-      table = Table::kHoldingRegister;
-      max = 1;
-      break;
-    case FunctionCode::kWriteMultipleCoils:
-      table = Table::kCoil;
-      max = MODBUS_MAX_WRITE_BITS;
-      break;
-    case FunctionCode::kWriteMultipleRegisters:
-      table = Table::kHoldingRegister;
-      max = MODBUS_MAX_WRITE_REGISTERS;
-      break;
-  }
-  if (r.count < 1 || r.count > max) return kIllegalDataValue;
-  if (static_cast<uint32_t>(r.address) + r.count > tableSize(table)) return kIllegalDataAddress;
+  if (r.function == FunctionCode::kWriteSingleCoil && r.values[0] > 1) return kIllegalDataValue;
+  if (r.count < 1 || r.count > maxCount(r.function)) return kIllegalDataValue;
+  if (static_cast<uint32_t>(r.address) + r.count > tableSize(tableOf(r.function)))
+    return kIllegalDataAddress;
   return 0;
 }
 
@@ -266,7 +231,7 @@ void SlaveServer::serve(const Bytes& frame) {
   const auto request = decodeRequest(frame);
   if (exception || !request || isReadFunction(request->function) || !on_write_) return;
   SlaveWrite w;
-  w.table = isBitFunction(request->function) ? Table::kCoil : Table::kHoldingRegister;
+  w.table = tableOf(request->function);
   w.address = request->address;
   w.values = request->values;
   w.broadcast = broadcast;

@@ -63,6 +63,11 @@ constexpr uint16_t kMaxReadBits = 2000;
 constexpr uint16_t kMaxReadRegisters = 125;
 constexpr uint16_t kMaxWriteBits = 1968;
 constexpr uint16_t kMaxWriteRegisters = 123;
+// The table a function reads or writes (FC05 and FC15 write coils, FC06 and FC16 holding
+// registers), and the most items one request of it may carry (the limits above; 1 for FC05 and
+// FC06): one definition for the client's checks, the slave role and the simulator.
+Table tableOf(FunctionCode fc);
+uint16_t maxCount(FunctionCode fc);
 
 // One Modbus transaction as the caller means it. For bit functions, `values` holds 0/1.
 struct Request {
