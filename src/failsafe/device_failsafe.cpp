@@ -281,7 +281,7 @@ void DeviceFailsafe::afterPoll() {
     // One report names them with the plain writes (FailsafeReport::runs).
     const std::vector<TimedIntent> again = intents_.runsToStartAgain(verdict, runs);
     FailsafeReport started;
-    const Result runs_result = startRunsAgain(t, again, &started);
+    Result runs_result = startRunsAgain(t, again, &started);
     const OutputTargets targets = intents_.afterPollTargets(verdict, runs);
     if (!targets.empty())
       return writeAndReport(t, targets, trigger, reason, action, {}, nullptr, {}, &started);
