@@ -883,7 +883,6 @@ void World::onPolled(const std::string& device, const Result& r) {
   if (outputs.size() < kChannels) return;
   for (int ch = 0; ch < kChannels; ++ch) {
     Chan& c = m.ch[ch];
-    const bool pwm = d == kLd && simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0;
     if (!m.found && !c.known && !c.adopt) {
       // docs:62-63: where the node has commanded nothing, the intent is the state found at its
       // first good poll. A running PWM is the device's (docs:73).
@@ -917,7 +916,7 @@ void World::onPolled(const std::string& device, const Result& r) {
       c.level = level;
       // docs:66: "found running" is as the node read it (this poll read the channel's PWM
       // registers), not the simulator's register when the poll ended (a run may end between).
-      c.continuous = d == kLd ? m.pwm_read_running[ch] : pwm;
+      c.continuous = d == kLd && m.pwm_read_running[ch];
       c.at = clock_.now();
       c.deadline = kept.deadline;
       if (!ends) {

@@ -415,10 +415,11 @@ bool BusScheduler::stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_po
   lock.lock();
   starving_poll_running_ = false;
   record(next->device, r, Kind::kPoll);
-  // A poll stops at its first request that fails: its outcome is its last request's.
+  // A poll stops at its first request that fails: its outcome is its last request's (a port
+  // that failed says nothing of the device).
   if (r.error == ErrorKind::kTimeout)
     unanswered_.insert(next->device);
-  else if (!noProperAnswer(r.error) || answerLost(r.error))
+  else if (r.error != ErrorKind::kIo && r.error != ErrorKind::kNotConnected)
     unanswered_.erase(next->device);
   if (r.error == ErrorKind::kIo) transport_.disconnect();
   // Keep the schedule, so a poll delayed by a slow transaction (an offline device's probe)
