@@ -121,6 +121,11 @@ void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double
   if (was && was->ends && *was->ends > now) {
     in.adopt_from = std::max(in.adopt_from.value_or(now), *was->ends + endSlack(*was));
   }
+  // An earlier lost write there already waits for such an end: whichever write the device
+  // heard, the timed command may still run, so this one waits as long.
+  if (was && was->adopt && was->adopt_from && *was->adopt_from > now) {
+    in.adopt_from = std::max(in.adopt_from.value_or(now), *was->adopt_from);
+  }
   intent_[channel] = in;
   newCommand(channel, source);
 }
@@ -242,10 +247,17 @@ Clock::duration ChannelIntents::endSlack(const Intent& in) {
          std::chrono::duration_cast<Clock::duration>((*in.ends - in.at) * kEndSlackFraction);
 }
 
-void ChannelIntents::pollStarting() {
+std::vector<uint8_t> ChannelIntents::pollStarting() {
   std::lock_guard<std::mutex> lock(mutex_);
   write_during_poll_ = false;
   poll_started_at_ = clock_.now();
+  std::vector<uint8_t> due;
+  for (size_t ch = 0; ch < channels_; ++ch) {
+    const auto& in = intent_[ch];
+    if (in && in->adopt && (!in->adopt_from || *in->adopt_from <= poll_started_at_))
+      due.push_back(static_cast<uint8_t>(ch));
+  }
+  return due;
 }
 
 Expectation ChannelIntents::expected(uint8_t channel, Clock::time_point t) const {

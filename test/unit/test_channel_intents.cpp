@@ -461,6 +461,49 @@ TEST(ChannelIntents, ALostWriteOverARunningFlashIsDecidedAfterTheFlashEnds) {
   EXPECT_EQ(poll(t, {true, false, false, false}), Verdict::kOutputsChanged);
 }
 
+// The same with two lost writes in a row over the flash (stop 42, case
+// open_30min_restart_without_cause: a raw FC15 and then `set on` to a silent board): the second
+// one must not forget that the flash may still run, whichever of them the board heard.
+TEST(ChannelIntents, TwoLostWritesOverARunningFlashAreDecidedAfterTheFlashEnds) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kLeave), 4, clock);
+  poll(t, {false, false, false, false});
+  t.timed(TimedIntent{0, true, false, 1.8}, CommandSource::kTimed);  // flash-close 1.8 s
+  clock.advance(200ms);
+  t.adoptNextPoll(0, CommandSource::kShare);  // a client's FC15, answer lost (not heard)
+  clock.advance(250ms);
+  t.adoptNextPoll(0, CommandSource::kFound);  // `set on`, answer lost (not heard)
+  clock.advance(900ms);
+  EXPECT_EQ(poll(t, {true, false, false, false}), Verdict::kNormal);  // the flash, still on
+  clock.advance(600ms);
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kNormal);  // it ended (1.95 s)
+  clock.advance(700ms);
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kNormal);  // found off
+  EXPECT_EQ(poll(t, {true, false, false, false}), Verdict::kOutputsChanged);
+}
+
+// docs/failsafe.md, "A command whose answer was lost": a poll names the channels whose deciding
+// read is due (the device reads those first: an LD58A08's PWM registers), not before the end
+// plus the slack, and no more once a poll that read them decided.
+TEST(ChannelIntents, APollNamesTheChannelsWhoseDecidingReadIsDue) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kLeave), 4, clock);
+  poll(t, {false, false, false, false});
+  t.timed(TimedIntent{1, true, false, 1.0}, CommandSource::kTimed);
+  clock.advance(100ms);
+  t.adoptNextPoll(1, CommandSource::kShare);  // answer lost over the running flash
+  t.adoptNextPoll(3, CommandSource::kShare);  // answer lost, nothing running
+  EXPECT_EQ(t.pollStarting(), (std::vector<uint8_t>{3}));
+  // A poll that did not read channel 3's state (read_now false) leaves it waiting.
+  EXPECT_EQ(
+      t.observePoll({false, true, false, false}, {}, false, nullptr, {true, true, true, false}),
+      Verdict::kNormal);
+  clock.advance(1500ms);  // past 1.1 s + 0.5 s + 2 %
+  EXPECT_EQ(t.pollStarting(), (std::vector<uint8_t>{1, 3}));
+  EXPECT_EQ(t.observePoll({false, false, false, true}, {}, false, nullptr), Verdict::kNormal);
+  EXPECT_EQ(t.pollStarting(), (std::vector<uint8_t>{}));
+}
+
 // docs/failsafe.md, "Timed commands keep their end": a stop the device confirmed ends the run at
 // once, so the next poll gives the channel's level as commanded, before the run's planned end
 // (stop 39: a burst stopped by stop_pwm was left out of a restore until its end plus slack).

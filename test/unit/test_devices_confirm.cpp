@@ -178,6 +178,34 @@ TEST(ConfirmByReadBack, AnUnconfirmedPwmWritesChannelIsReadByTheNextPollFirst) {
   EXPECT_TRUE(bus.usedUp());
 }
 
+// docs/failsafe.md, "A command whose answer was lost": the poll that decides a channel the
+// fail-safe waits for (a client's PWM write whose answer was lost, its end plus the slack
+// passed) reads that channel's PWM registers first, not up to 8 polls later in the round.
+// Stop 42, cases open_30min_held_ld_out0_late and _out1_late: a held channel was written safe
+// again only seconds after the run ended.
+TEST(ConfirmByReadBack, AChannelTheFailsafeWaitsForIsReadByTheNextPollFirst) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  const std::vector<uint16_t> idle = {0, 0, 0};
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
+  for (uint16_t ch = 0; ch < 8; ++ch)
+    bus.expect(frame(Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3)),
+               registersReply(1, static_cast<uint16_t>(ch * 0x10), idle));
+  ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
+  board.readSelfTimedFirst({5});
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
+  bus.expect(frame(Request::readHoldingRegisters(1, 0x0050, 3)), registersReply(1, 0x0050, idle));
+  ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
+  EXPECT_TRUE(board.selfTimedReadByLastPoll(5));
+  // Then the round goes on at channel 0; a channel out of range is ignored.
+  board.readSelfTimedFirst({8});
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
+  bus.expect(frame(Request::readHoldingRegisters(1, 0x0000, 3)), registersReply(1, 0x0000, idle));
+  ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
+  EXPECT_EQ(bus.mismatches(), "");
+  EXPECT_TRUE(bus.usedUp());
+}
+
 // docs/failsafe.md "What restore writes" (#32 item 7): a restore starts a continuous run again
 // with the write that started it, sent once; a lost answer is read back, as for set_pwm. Only a
 // continuous run of this board's channel is taken: anything else is refused unsent.

@@ -71,6 +71,9 @@ class Device {
     (void)channel;
     return true;
   }
+  // Bus thread: the next polls read these channels' self-timed state first (an LD58A08 reads
+  // one channel's PWM registers per poll): the fail-safe waits for it to decide them.
+  virtual void readSelfTimedFirst(const std::vector<uint8_t>& channels) { (void)channels; }
   // Whether outputSelfTimed() answers from what was read (false while an LD58A08's PWM registers
   // were never read: it then answers true for every channel, "may run").
   virtual bool selfTimedRead() const { return true; }

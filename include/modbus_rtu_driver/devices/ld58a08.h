@@ -88,7 +88,7 @@ class Ld58a08 : public Device {
   std::vector<TimedIntent> timedWrittenBy(const Request& request) const override;
   // A client's write of 0 to a channel's enable register: that channel's run stopped.
   std::vector<uint8_t> timedStoppedBy(const Request& request) const override;
-  // A client's write of 0 to a channel's enable register: that channel's run stopped.
+  // A client's confirmed write: the PWM snapshot takes the registers it set.
   void noteCarriedWrite(const Request& request) override;
   Result refreshSelfTimed(Transport& link) override { return readPwm(link); }
   bool coilWriteKeepsRun() const override { return true; }
@@ -107,6 +107,10 @@ class Ld58a08 : public Device {
   bool selfTimedRead() const override { return pwm_known_; }
   bool selfTimedReadByLastPoll(size_t channel) const override {
     return channel < kChannels && pwm_read_by_poll_[channel];
+  }
+  void readSelfTimedFirst(const std::vector<uint8_t>& channels) override {
+    for (uint8_t ch : channels)
+      if (ch < kChannels) pwm_unsure_[ch] = true;
   }
 
   Result readSettings(Transport& link, Ld58a08Settings* out);
@@ -144,8 +148,9 @@ class Ld58a08 : public Device {
   std::array<bool, kChannels> pwm_read_by_poll_{};  // the channels the newest poll read
   uint8_t poll_cursor_ = 0;
   // Channels whose PWM write or stop went unconfirmed (its answer and the read back lost, or the
-  // read back not sent to a device that gave no reply): the next poll reads them first, so the
-  // fail-safe learns what the channel does at the next poll, not up to 8 polls later.
+  // read back not sent to a device that gave no reply), and those the fail-safe waits to read
+  // (readSelfTimedFirst): the next poll reads them first, so the fail-safe learns what the
+  // channel does at the next poll, not up to 8 polls later.
   std::array<bool, kChannels> pwm_unsure_{};
   bool pwm_known_ = false;
 };

@@ -107,7 +107,10 @@ class ChannelIntents {
 
   // --- polls (bus thread) ---
   enum class Verdict { kNormal, kCameBack, kOutputsChanged };
-  void pollStarting();
+  // A poll starts: returns the channels whose deciding read is due (a command whose answer was
+  // lost, past its end plus the slack), which the device should read first (an LD58A08 reads
+  // one channel's PWM registers per poll).
+  std::vector<uint8_t> pollStarting();
   // `self_timed[i]`: the device reports channel i as driven by itself now (a running PWM);
   // `read_now[i]`: this poll read that (empty: every channel), not an older snapshot.
   // A channel with no intent yet takes the level found as its intent (kFound).

@@ -106,7 +106,8 @@ class DeviceFailsafe {
   void commandReceived(uint8_t channel, bool state) { intents_.commandReceived(channel, state); }
 
   // --- the bus thread ---
-  void pollStarting() { intents_.pollStarting(); }
+  // A poll of the device starts: it reads first what the fail-safe waits for.
+  void pollStarting() { device_.readSelfTimedFirst(intents_.pollStarting()); }
   // After a good poll: restart detection, then on_restart's write and the owed safe writes.
   void afterPoll();
   // A user's output write is about to be sent / was confirmed / was not confirmed.
