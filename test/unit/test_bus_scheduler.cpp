@@ -224,6 +224,57 @@ TEST_F(BusSchedulerTest, ARateTheBusCannotCarryIsReported) {
   EXPECT_LT(h.achieved_poll_rate, 100.0);
 }
 
+// docs/troubleshooting.md "the other devices keep their poll rates", docs/share.md: a device
+// that answers is polled ahead of devices that gave no reply to their last request, so silent
+// devices (each poll a whole timeout) delay its poll by the one transaction in progress, also
+// before their backoff has grown. Stop 42: three silent devices with longer periods, always
+// overdue, claimed more priority than a 10 Hz board that answered, which went unpolled for
+// 7 s, and the safe write it owed with it (case open_30min_held_relays_out0_late).
+TEST_F(BusSchedulerTest, SilentDevicesDelayAnAnsweringDevicesPollByOneTransactionAtMost) {
+  bus.dead = {2, 3, 4};
+  bus.timeout = 100ms;
+  BusScheduler& s = make();
+  s.addPoll("answers", 10.0, read(1), nullptr);
+  s.addPoll("silent2", 2.0, read(2), nullptr);
+  s.addPoll("silent3", 5.0, read(3), nullptr);
+  s.addPoll("silent4", 5.0, read(4), nullptr);
+  s.start();
+  ASSERT_TRUE(runUntil(3000ms));
+  const std::vector<long> polls = startsOf(1);
+  ASSERT_GE(polls.size(), 2u);
+  // From when each silent device has failed once (their first polls, due at 0, go by rate:
+  // nothing is known of them before).
+  for (size_t i = 1; i < polls.size(); ++i) {
+    EXPECT_LE(polls[i] - std::max(polls[i - 1], 302L), 100 + 100)
+        << "poll " << i << " at " << polls[i] << " ms";
+  }
+  EXPECT_GE(polls.size(), 15u);  // a third of the bus at most goes to the silent ones' timeouts
+  for (uint8_t a = 2; a <= 4; ++a) EXPECT_GE(startsOf(a).size(), 2u) << int(a);  // still probed
+}
+
+// docs/share.md: a bus that cannot carry the rates is shared in turn. Stop 42: devices with
+// longer periods, each always more than the fast device's period late, claimed more priority
+// than it and took the whole bus (here: 2 polls in 3 s); a 10 Hz board back from offline went
+// unpolled for 2 s (case
+// open_30min_held_relays_out4_late). Every device late by the longest period or more has the
+// same claim, and the one served least recently goes first.
+TEST_F(BusSchedulerTest, AnOverloadedBusPollsEveryDeviceInTurn) {
+  bus.latency = 70ms;  // 14 transactions a second; the slow devices alone ask for 15
+  BusScheduler& s = make();
+  s.addPoll("fast", 10.0, read(1), nullptr);
+  for (uint8_t a = 2; a <= 4; ++a) s.addPoll("slow" + std::to_string(a), 5.0, read(a), nullptr);
+  s.start();
+  ASSERT_TRUE(runUntil(3000ms));
+  for (uint8_t a = 1; a <= 4; ++a) {
+    const std::vector<long> polls = startsOf(a);
+    ASSERT_GE(polls.size(), 2u) << int(a);
+    for (size_t i = 1; i < polls.size(); ++i)  // the three others in between, at most
+      EXPECT_LE(polls[i] - polls[i - 1], 4 * 70) << int(a) << ": poll " << i << " at " << polls[i];
+  }
+  for (uint8_t a = 2; a <= 4; ++a)  // it asks for twice as many: it gets no fewer
+    EXPECT_GE(startsOf(1).size(), startsOf(a).size()) << int(a);
+}
+
 TEST_F(BusSchedulerTest, AnOfflineDeviceIsBackedOffAndDoesNotStallOthers) {
   bus.dead = {2};
   BusScheduler::Options o;

@@ -3,6 +3,8 @@
 #include <pthread.h>
 
 #include <algorithm>
+#include <tuple>
+#include <utility>
 
 #include "modbus_rtu_driver/core/link/until_silent_transport.h"
 
@@ -114,6 +116,7 @@ void BusScheduler::addPoll(const std::string& device, double rate_hz, Job poll,
     p.device = device;
     p.period = seconds(1.0 / rate_hz);
     p.due = clock_.now();
+    longest_period_ = std::max(longest_period_, p.period);
     p.job = std::move(poll);
     p.on_result = std::move(on_result);
     polls_.push_back(std::move(p));
@@ -251,6 +254,18 @@ Clock::time_point BusScheduler::probeNotBefore(const Poll& poll) {
   return b->second;
 }
 
+// A silent device's poll costs a whole timeout with its retries: were it to go by lateness
+// alone, a few silent devices with longer periods (each always a period late) would take the
+// bus from a fast device that answers until their backoff had grown, and with it that device's
+// restart detection and owed safe writes (docs/share.md). So it goes after the answering
+// devices' due polls, each of which it then delays by one transaction at most; one that has
+// waited the longest backoff goes in its turn, so a bus that cannot carry the answering
+// devices' rates still probes it.
+bool BusScheduler::yieldsToAnswering(const Poll& poll, Clock::time_point due,
+                                     Clock::time_point now) const {
+  return unanswered_.count(poll.device) > 0 && now - due < seconds(options_.backoff_max);
+}
+
 BusScheduler::Poll* BusScheduler::starvingPoll(Clock::time_point now) {
   if (last_ran_starving_poll_ || (writes_.empty() && shared_.empty())) return nullptr;
   // A device with a job of its own queued is left to it: its poll runs after (a poll between
@@ -264,7 +279,9 @@ BusScheduler::Poll* BusScheduler::starvingPoll(Clock::time_point now) {
   Poll* oldest = nullptr;
   for (Poll& p : polls_) {
     if (p.due + p.period > now || queuedFor(p.device) || probeNotBefore(p) > now) continue;
-    if (!oldest || p.due < oldest->due) oldest = &p;
+    if (!oldest || std::make_pair(yieldsToAnswering(p, p.due, now), p.due) <
+                       std::make_pair(yieldsToAnswering(*oldest, oldest->due, now), oldest->due))
+      oldest = &p;
   }
   return oldest;
 }
@@ -383,20 +400,29 @@ bool BusScheduler::stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_po
     return true;
   }
 
-  // The poll due first; an offline device waits out its backoff.
+  // The poll due first; an offline device waits out its backoff, and a silent device's due
+  // poll waits for the answering devices' (yieldsToAnswering).
   Clock::time_point when = now;
+  bool yields = false;
   const bool starving = next != nullptr;
   for (Poll& p : polls_) {
     if (starving) break;
-    // A late device claims at most one period of priority: it catches up after a stall
-    // without starving the others, and a rate the bus cannot carry only takes what is left.
-    const auto t = std::max({p.due, now - p.period, probeNotBefore(p)});
+    // A late device claims priority by how late it is, up to the longest period on the bus:
+    // it catches up after a stall without holding the others back longer than that, and on a
+    // bus that cannot carry the rates every device a whole longest period late has the same
+    // claim, so they go in turn. (A cap at the device's own period gave the slow devices the
+    // larger claim: a fast device, always less late than they, went unpolled.)
+    const auto t = std::max({p.due, now - longest_period_, probeNotBefore(p)});
+    const bool y = t <= now && yieldsToAnswering(p, std::max(p.due, probeNotBefore(p)), now);
     // Ties (devices late on a bus that cannot carry their rates) go to the one served least
     // recently, so an overloaded bus is shared in turn rather than by list order or by who
     // was reset last.
-    if (!next || t < when || (t == when && p.last_run < next->last_run)) {
+    const auto rank = std::make_tuple(t > now, y, t);
+    const auto best = std::make_tuple(when > now, yields, when);
+    if (!next || rank < best || (rank == best && p.last_run < next->last_run)) {
       next = &p;
       when = t;
+      yields = y;
     }
   }
   if (!next) {

@@ -185,6 +185,9 @@ class BusScheduler {
   Poll* starvingPoll(Clock::time_point now);
   // An offline device's poll waits out its backoff: not before then (else the epoch). `lock` held.
   Clock::time_point probeNotBefore(const Poll& poll);
+  // A poll of a device whose last request got no reply, due since `due`: it waits for the due
+  // polls of devices that answer, unless it has waited `backoff_max` already. `lock` held.
+  bool yieldsToAnswering(const Poll& poll, Clock::time_point due, Clock::time_point now) const;
   // Runs every queued job against a ClosedTransport saying `reason`; `lock` held on entry/exit.
   void refuseQueued(std::unique_lock<std::mutex>& lock, const std::string& reason);
   enum class Kind { kPoll, kWrite, kShared };
@@ -197,7 +200,8 @@ class BusScheduler {
   std::condition_variable wake_;
   std::deque<Pending> writes_;
   std::deque<Pending> shared_;
-  std::deque<Poll> polls_;  // a deque: adding a poll keeps the one running valid
+  std::deque<Poll> polls_;            // a deque: adding a poll keeps the one running valid
+  Clock::duration longest_period_{};  // of polls_: the most priority a late poll claims
   std::map<std::string, DeviceHealth> health_;
   std::map<std::string, Clock::time_point> backoff_until_;
   std::map<std::string, double> backoff_;
