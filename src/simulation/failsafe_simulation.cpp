@@ -701,6 +701,9 @@ void World::lostAnswer(int d, int ch, double seconds) {
   // device, if it heard the write, started it before now and so ends it before the window does.
   TP until = seconds > 0 ? now + dur(seconds + 0.5 + 0.02 * seconds) : now;
   if (c.known && c.timed) until = std::max(until, c.ends + dur(0.5 + 0.02 * c.duration));
+  // docs:105 "also when another write whose answer was lost came between": a timed command
+  // that earlier lost write may have started (or left running) still decides (model change 14).
+  if (c.adopt) until = std::max(until, c.adopt_not_before);
   unconfirmed(d, ch, secs(until - now), false);
 }
 
@@ -854,7 +857,14 @@ void World::onAttempt(const LineEvent& e) {
     // A change the device made by itself that I6 accepts (a power cycle, a lost answer's write,
     // a flash or saved PWM run ending) may be seen at any poll of its window: what that poll
     // saw is a restart for the commands confirmed before it.
-    const bool seeable = m.cause_pending || m.justified || e.at < m.justified_until;
+    // So may a node's continuous run a power cycle stopped, which the poll that reads its
+    // registers reports, up to 8 polls after the power cycle (docs "Restart detection needs
+    // polls"; model change 13).
+    const bool run_stop_seeable = std::any_of(m.ch.begin(), m.ch.end(), [](const Chan& x) {
+      return x.run_stop_unseen || x.saved_run_unseen;
+    });
+    const bool seeable =
+        m.cause_pending || m.justified || e.at < m.justified_until || run_stop_seeable;
     if ((m.cause_at && *m.cause_at >= c.at) || (seeable && c.at <= m.last_poll_at)) {
       if (onRestart(d) == OnRestart::kSafe && hasSafe(d, ch) && v == safeLevel(d, ch)) continue;
       if (onRestart(d) == OnRestart::kRestore && c.timed && v == c.level) continue;
