@@ -27,6 +27,14 @@ std::string registersReply(uint8_t slave, uint16_t address, const std::vector<ui
       Request::readHoldingRegisters(slave, address, static_cast<uint16_t>(values.size())), values));
 }
 
+// An LD58A08's first poll: its outputs, then every channel's PWM registers (all idle).
+void expectFirstLd58a08Poll(ScriptedTransport& bus) {
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
+  for (uint16_t ch = 0; ch < 8; ++ch)
+    bus.expect(frame(Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3)),
+               registersReply(1, static_cast<uint16_t>(ch * 0x10), {0, 0, 0}));
+}
+
 PwmSettings burst() {
   PwmSettings s;
   s.channel = 2;
@@ -153,10 +161,7 @@ TEST(ConfirmByReadBack, AnUnconfirmedPwmWritesChannelIsReadByTheNextPollFirst) {
   ScriptedTransport bus;
   const std::vector<uint16_t> idle = {0, 0, 0};
   // The first poll reads every channel's PWM registers; the next one channel 0 (its round).
-  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
-  for (uint16_t ch = 0; ch < 8; ++ch)
-    bus.expect(frame(Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3)),
-               registersReply(1, static_cast<uint16_t>(ch * 0x10), idle));
+  expectFirstLd58a08Poll(bus);
   ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
   bus.expect(frame(Request::writeMultipleRegisters(1, 0x0020, {10, 5, 5})));  // no reply
   UntilSilentTransport until_silent(bus);
@@ -187,10 +192,7 @@ TEST(ConfirmByReadBack, AChannelTheFailsafeWaitsForIsReadByTheNextPollFirst) {
   Ld58a08 board(config("ld58a08", 1));
   ScriptedTransport bus;
   const std::vector<uint16_t> idle = {0, 0, 0};
-  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
-  for (uint16_t ch = 0; ch < 8; ++ch)
-    bus.expect(frame(Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3)),
-               registersReply(1, static_cast<uint16_t>(ch * 0x10), idle));
+  expectFirstLd58a08Poll(bus);
   ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
   board.readSelfTimedFirst({5});
   bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
