@@ -275,6 +275,34 @@ TEST_F(BusSchedulerTest, AnOverloadedBusPollsEveryDeviceInTurn) {
     EXPECT_GE(startsOf(1).size(), startsOf(a).size()) << int(a);
 }
 
+// The claim of a late poll is capped at the longest period, but at most 1 s: a fast device that
+// fell behind (here: silent for 2.5 s, every poll a timeout) catches up on the bus without
+// holding an on-time device back by more than that, even with a device polled every 50 s.
+TEST_F(BusSchedulerTest, AFastDeviceCatchingUpHoldsTheOthersBackByOneSecondAtMost) {
+  BusScheduler::Options o;
+  o.offline_after = 1000;  // no backoff: its schedule falls behind while it times out
+  bus.dead = {1};
+  bus.timeout = 100ms;  // each silent poll puts it 80 ms further behind
+  bus.latency = 15ms;   // and it catches up 5 ms a poll
+  BusScheduler& s = make(o);
+  s.addPoll("fast", 50.0, read(1), nullptr);
+  s.addPoll("steady", 5.0, read(2), nullptr);
+  s.addPoll("rare", 0.02, read(3), nullptr);
+  s.start();
+  ASSERT_TRUE(runUntil(2500ms));
+  {
+    std::lock_guard<std::mutex> lock(bus.m);
+    bus.dead.clear();
+  }
+  ASSERT_TRUE(runUntil(6000ms));
+  const std::vector<long> steady = startsOf(2);
+  ASSERT_GE(steady.size(), 2u);
+  long worst = 0;
+  for (size_t i = 1; i < steady.size(); ++i) worst = std::max(worst, steady[i] - steady[i - 1]);
+  EXPECT_LE(worst, 200 + 1000) << "the steady device waited " << worst << " ms";
+  EXPECT_GE(startsOf(1).size(), 100u);  // the fast one caught up meanwhile
+}
+
 TEST_F(BusSchedulerTest, AnOfflineDeviceIsBackedOffAndDoesNotStallOthers) {
   bus.dead = {2};
   BusScheduler::Options o;

@@ -116,7 +116,9 @@ void BusScheduler::addPoll(const std::string& device, double rate_hz, Job poll,
     p.device = device;
     p.period = seconds(1.0 / rate_hz);
     p.due = clock_.now();
-    longest_period_ = std::max(longest_period_, p.period);
+    // At most 1 s: a device slower than that would let a fast one, catching up after a stall,
+    // hold the others back for as long (up to the 3 s after which a schedule is given up).
+    longest_period_ = std::min<Clock::duration>(std::max(longest_period_, p.period), seconds(1.0));
     p.job = std::move(poll);
     p.on_result = std::move(on_result);
     polls_.push_back(std::move(p));

@@ -200,8 +200,9 @@ class BusScheduler {
   std::condition_variable wake_;
   std::deque<Pending> writes_;
   std::deque<Pending> shared_;
-  std::deque<Poll> polls_;            // a deque: adding a poll keeps the one running valid
-  Clock::duration longest_period_{};  // of polls_: the most priority a late poll claims
+  std::deque<Poll> polls_;  // a deque: adding a poll keeps the one running valid
+  Clock::duration
+      longest_period_{};  // of polls_, at most 1 s: the most priority a late poll claims
   std::map<std::string, DeviceHealth> health_;
   std::map<std::string, Clock::time_point> backoff_until_;
   std::map<std::string, double> backoff_;
