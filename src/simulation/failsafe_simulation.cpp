@@ -263,6 +263,7 @@ struct DevModel {
   size_t queued_at_reachable = 0;
   bool queued_noted = false;
   std::vector<TP> pwm_write_answered = std::vector<TP>(8, TP{});
+  std::vector<TP> stop_answered = std::vector<TP>(8, TP{});  // a 0 to the enable register
   // ... and whether it ran as last read when the fail-safe's write starting it again went out
   // (docs "What restore writes": started again only when the read just before shows it stopped)
   std::vector<bool> run_read_at_start = std::vector<bool>(8, false);
@@ -797,8 +798,10 @@ void World::onAttempt(const LineEvent& e) {
        e.request.function == FunctionCode::kWriteMultipleRegisters))
     for (size_t i = 0; i < e.request.values.size(); ++i) {
       const auto reg = static_cast<uint16_t>(e.request.address + i);
-      if (reg % 0x10 == 2 && reg / 0x10 < kChannels && e.request.values[i] == 0)
+      if (reg % 0x10 == 2 && reg / 0x10 < kChannels && e.request.values[i] == 0) {
         m.pwm_read_running[reg / 0x10] = false;
+        m.stop_answered[reg / 0x10] = e.at;
+      }
     }
   if (!e.answered) {
     m.unanswered = true;
@@ -1389,6 +1392,11 @@ void World::doCommandStep(const SimStep& s) {
             // A PWM command (docs:77) ends the hold; the level shows at the next poll.
             commanded(kLd, ch, false);
             unconfirmed(kLd, ch, 0, true);
+            // Precedence counts from when the device confirmed the stop (docs:77, "a command
+            // confirmed after that"), not from when the step saw its result (model change 15).
+            Chan& stopped = model_[kLd].ch[ch];
+            const TP answered = model_[kLd].stop_answered[ch];
+            if (answered != TP{} && answered <= clock_.now()) stopped.adopt_at = answered;
             model_[kLd].ch[ch].known = false;
           } else if (answerLost(r.error)) {
             lostAnswer(kLd, ch, 0);
