@@ -72,6 +72,7 @@ void ChannelIntents::commanded(const std::vector<uint8_t>& channels,
     in.level = levels[i];
     intent_[ch] = in;
     newCommand(ch, source);
+    held_not_safe_[ch] = false;  // the device shows this level now, not what the poll showed
     const bool safe_level = config_.safeStateOf(ch) == SafeState::kOn;
     if (held_[ch] != 0 && levels[i] == safe_level &&
         (source == CommandSource::kSafe || source == CommandSource::kRestore))
@@ -145,6 +146,10 @@ void ChannelIntents::adoptChangeNextPoll(uint8_t channel, CommandSource source) 
   in.adopt_change = true;
   const Expectation e = expectedLocked(channel, now);
   if (e.kind == Expectation::Kind::kLevel) in.adopt_prev = e.level;
+  // A held channel the last poll showed otherwise, not yet written safe again: the device
+  // shows the other level, so a stop that leaves it there changed nothing (docs/failsafe.md).
+  if (held_[channel] != 0 && held_not_safe_[channel])
+    in.adopt_prev = config_.safeStateOf(channel) != SafeState::kOn;
   intent_[channel] = in;
   write_during_poll_ = true;  // holds and owed writes end at the poll, if it changed
 }

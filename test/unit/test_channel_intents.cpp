@@ -504,6 +504,27 @@ TEST(ChannelIntents, APollNamesTheChannelsWhoseDecidingReadIsDue) {
   EXPECT_EQ(t.pollStarting(), (std::vector<uint8_t>{}));
 }
 
+// docs/failsafe.md line 67: a client's decoded stop on a held channel that a poll showed
+// otherwise (a power cycle; its safe write again not yet done) changed nothing when the next
+// poll shows the same level: no command, the hold stays and writes the safe state again.
+// Stop 42: the level before was taken from the intent (the safe state), so the stop was taken
+// as the client's command and ended the hold.
+TEST(ChannelIntents, AStopThatLeavesAHeldChannelAsAPollShowedItKeepsTheHold) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, true, false});
+  t.hold({2}, HoldTrigger::kHeartbeat);
+  t.commanded({2}, {true}, CommandSource::kSafe);  // the lamp's safe state (on), confirmed
+  clock.advance(100ms);
+  poll(t, {false, false, false, false});  // a power cycle: the lamp off
+  EXPECT_EQ(t.heldNotSafe(), (std::vector<uint8_t>{2}));
+  t.adoptChangeNextPoll(2, CommandSource::kShare);  // a client's PWM stop there, confirmed
+  clock.advance(100ms);
+  poll(t, {false, false, false, false});
+  EXPECT_NE(t.heldBy(2), 0);
+  EXPECT_EQ(t.heldNotSafe(), (std::vector<uint8_t>{2}));
+}
+
 // docs/failsafe.md, "Timed commands keep their end": a stop the device confirmed ends the run at
 // once, so the next poll gives the channel's level as commanded, before the run's planned end
 // (stop 39: a burst stopped by stop_pwm was left out of a restore until its end plus slack).
