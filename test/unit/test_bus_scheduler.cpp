@@ -258,6 +258,29 @@ TEST_F(BusSchedulerTest, SilentDevicesDelayAnAnsweringDevicesPollByOneTransactio
 // unpolled for 2 s (case
 // open_30min_held_relays_out4_late). Every device late by the longest period or more has the
 // same claim, and the one served least recently goes first.
+// docs/share.md: once offline, a silent device's probes are spaced by the backoff and go in
+// their turn, also on a bus the answering devices keep busy: a device that answers again is
+// seen within the backoff (5 s), not a backoff plus a wait behind the others (stop 42's
+// simulation: a PDU back on a busy bus was first probed 7 s later, its owed safe write with it).
+TEST_F(BusSchedulerTest, AnOfflineDevicesProbesKeepTheirBackoffOnABusyBus) {
+  bus.dead = {3};
+  bus.latency = 10ms;  // the two answering devices ask for the whole bus
+  BusScheduler& s = make();
+  s.addPoll("a", 50.0, read(1), nullptr);
+  s.addPoll("b", 50.0, read(2), nullptr);
+  s.addPoll("silent", 5.0, read(3), nullptr);
+  s.start();
+  ASSERT_TRUE(runUntil(30s));
+  const std::vector<long> probes = startsOf(3);
+  ASSERT_GE(probes.size(), 6u);
+  EXPECT_FALSE(s.health("silent").online);
+  // The backoff (at most 5 s; before it is offline, as long waiting for the answering devices),
+  // then its turn among polls as late as the longest period (200 ms), its timeout, a poll.
+  for (size_t i = 1; i < probes.size(); ++i)
+    EXPECT_LE(probes[i] - probes[i - 1], 5000 + 200 + 20 + 10)
+        << "probe " << i << " at " << probes[i];
+}
+
 TEST_F(BusSchedulerTest, AnOverloadedBusPollsEveryDeviceInTurn) {
   bus.latency = 70ms;  // 14 transactions a second; the slow devices alone ask for 15
   BusScheduler& s = make();

@@ -260,12 +260,18 @@ Clock::time_point BusScheduler::probeNotBefore(const Poll& poll) {
 // alone, a few silent devices with longer periods (each always a period late) would take the
 // bus from a fast device that answers until their backoff had grown, and with it that device's
 // restart detection and owed safe writes (docs/share.md). So it goes after the answering
-// devices' due polls, each of which it then delays by one transaction at most; one that has
-// waited the longest backoff goes in its turn, so a bus that cannot carry the answering
-// devices' rates still probes it.
+// devices' due polls, each of which it then delays by one transaction at most, until it is
+// offline (its probes then wait out the backoff instead); one that has waited the longest
+// backoff goes in its turn, so a bus that cannot carry the answering devices' rates still
+// probes it.
 bool BusScheduler::yieldsToAnswering(const Poll& poll, Clock::time_point due,
                                      Clock::time_point now) const {
-  return unanswered_.count(poll.device) > 0 && now - due < seconds(options_.backoff_max);
+  if (unanswered_.count(poll.device) == 0) return false;
+  // Once offline, its probes are spaced by the backoff already: each goes in its turn, so a
+  // device that answers again is seen within the backoff, also on a busy bus.
+  const auto h = health_.find(poll.device);
+  if (h != health_.end() && !h->second.online) return false;
+  return now - due < seconds(options_.backoff_max);
 }
 
 BusScheduler::Poll* BusScheduler::starvingPoll(Clock::time_point now) {
