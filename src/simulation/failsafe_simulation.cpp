@@ -227,7 +227,8 @@ struct Chan {
   bool adopt_is_command = false;
   uint64_t adopt_after_poll = 0;
   TP adopt_not_before{};
-  TP adopt_at{};                                            // when the write was confirmed
+  TP adopt_at{};                 // when the write was confirmed
+  bool shown_otherwise = false;  // held, and the last poll showed it not in its safe state
   bool adopt_prev_known = false, adopt_prev_level = false;  // what it should show before
 };
 
@@ -263,7 +264,8 @@ struct DevModel {
   size_t queued_at_reachable = 0;
   bool queued_noted = false;
   std::vector<TP> pwm_write_answered = std::vector<TP>(8, TP{});
-  std::vector<TP> stop_answered = std::vector<TP>(8, TP{});  // a 0 to the enable register
+  std::vector<TP> stop_answered = std::vector<TP>(8, TP{});   // a 0 to the enable register
+  std::vector<TP> flash_answered = std::vector<TP>(8, TP{});  // an LC flash's FC16
   // ... and whether it ran as last read when the fail-safe's write starting it again went out
   // (docs "What restore writes": started again only when the read just before shows it stopped)
   std::vector<bool> run_read_at_start = std::vector<bool>(8, false);
@@ -687,6 +689,11 @@ void World::unconfirmed(int d, int ch, double not_before_s, bool as_command) {
   // checked on the channel until a poll shows it again.
   Chan& c = model_[d].ch[ch];
   c.adopt_prev_known = expected(c, clock_.now(), &c.adopt_prev_level);
+  // docs:67: on a held channel a poll showed otherwise, the level before is what it showed.
+  if (as_command && c.held && c.shown_otherwise) {
+    c.adopt_prev_known = true;
+    c.adopt_prev_level = !safeLevel(d, ch);
+  }
   c.adopt_at = clock_.now();
   c.known = false;
   c.adopt = true;
@@ -765,6 +772,10 @@ void World::onAttempt(const LineEvent& e) {
         c.maybe_devices = true;
     }
   }
+  // When the LC board confirmed a flash (its mode and delay registers, 3 + 5 n).
+  if (d == kLc && e.answered && e.request.function == FunctionCode::kWriteMultipleRegisters &&
+      e.request.count == 2 && e.request.address % 5 == 3 && e.request.address / 5 < kChannels)
+    m.flash_answered[e.request.address / 5] = e.at;
   // When the device confirmed a PWM write: its answer, or (answer lost) the read that confirmed
   // it (Ld58a08::confirmPwm reads the channel back).
   if (d == kLd && write && e.request.function == FunctionCode::kWriteMultipleRegisters &&
@@ -896,6 +907,7 @@ void World::onPolled(const std::string& device, const Result& r) {
   if (outputs.size() < kChannels) return;
   for (int ch = 0; ch < kChannels; ++ch) {
     Chan& c = m.ch[ch];
+    c.shown_otherwise = c.held && outputs[ch] != safeLevel(d, ch);
     if (!m.found && !c.known && !c.adopt) {
       // docs:62-63: where the node has commanded nothing, the intent is the state found at its
       // first good poll. A running PWM is the device's (docs:73).
@@ -1337,6 +1349,12 @@ void World::doCommandStep(const SimStep& s) {
                                       if (r.ok()) {
                                         checkCoils(kLc, {ch}, {st}, "a pulse");
                                         commandedTimed(kLc, ch, st, !st, seconds);
+                                        // docs:71-75: its end counts from the board's answer,
+                                        // not from the read back after it (model change 16).
+                                        Chan& c = model_[kLc].ch[ch];
+                                        const TP answered = model_[kLc].flash_answered[ch];
+                                        if (answered != TP{} && answered <= clock_.now())
+                                          c.ends = c.ends_earliest = answered + dur(seconds);
                                       } else if (answerLost(r.error)) {
                                         lostAnswer(kLc, ch, seconds);
                                       }

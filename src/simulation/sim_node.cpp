@@ -269,12 +269,22 @@ std::future<Result> SimNode::command(uint64_t op, const std::string& device, uin
   auto added = e->batch.add(*e->device, {channel}, {state});
   if (added->result) return readyResult(*added->result);
   e->newest_command = std::move(added);
-  if (e->command_job_queued) return readyResult(Result::success());  // merged into the queued job
+  if (e->command_job_queued) {
+    // Merged into the queued job: its write carries this channel too, and the caller (the
+    // model) learns how that write went, as the fail-safe does (OutputBatch::complete).
+    e->merged_done.push_back(std::move(done));
+    return readyResult(Result::success());
+  }
   e->command_job_queued = true;
   return runOp(op, device, std::move(done), [this, e](Transport& t) {
     auto newest = std::move(e->newest_command);
+    auto merged = std::move(e->merged_done);
+    e->merged_done.clear();
     e->command_job_queued = false;
-    return completeBatch(*e, t, newest);
+    Result r = completeBatch(*e, t, newest);
+    for (const Done& d : merged)
+      if (d) d(r);
+    return r;
   });
 }
 

@@ -111,6 +111,7 @@ class SimNode {
     OutputBatch batch;
     std::shared_ptr<OutputBatch::Entry> newest_command;
     bool command_job_queued = false;
+    std::vector<Done> merged_done;      // commands merged into the queued job: told how it went
     bool generic_safe_pending = false;  // generic: safe values not reached (device silent)
   };
   Entry* entry(const std::string& name);
