@@ -298,7 +298,11 @@ class Model:
                 # Read at start, never commanded: docs/failsafe.md has restore write "the last
                 # states users commanded", issue 24 "the last state the node confirmed". Either
                 # way (restored, or left at the power-on state) is accepted until that is settled.
-                c.restore, c.by_failsafe, c.held, c.settled = set(c.values) | {0}, False, False, True
+                # A flash still running (a killed node's) is resumed before the first poll ("A
+                # node started during a flash"): its final level is what a restore writes ("What
+                # restore writes"), not the level found during it.
+                found = {c.flash.final()} if c.flash is not None else set(c.values)
+                c.restore, c.by_failsafe, c.held, c.settled = found | {0}, False, False, True
         self.failsafe(sorted(self.safe), "on_start: safe", hold=False)
 
 
