@@ -252,12 +252,6 @@ TEST_F(BusSchedulerTest, SilentDevicesDelayAnAnsweringDevicesPollByOneTransactio
   for (uint8_t a = 2; a <= 4; ++a) EXPECT_GE(startsOf(a).size(), 2u) << int(a);  // still probed
 }
 
-// docs/share.md: a bus that cannot carry the rates is shared in turn. Stop 42: devices with
-// longer periods, each always more than the fast device's period late, claimed more priority
-// than it and took the whole bus (here: 2 polls in 3 s); a 10 Hz board back from offline went
-// unpolled for 2 s (case
-// open_30min_held_relays_out4_late). Every device late by the longest period or more has the
-// same claim, and the one served least recently goes first.
 // docs/share.md: once offline, a silent device's probes are spaced by the backoff and go in
 // their turn, also on a bus the answering devices keep busy: a device that answers again is
 // seen within the backoff (5 s), not a backoff plus a wait behind the others (stop 42's
@@ -281,6 +275,11 @@ TEST_F(BusSchedulerTest, AnOfflineDevicesProbesKeepTheirBackoffOnABusyBus) {
         << "probe " << i << " at " << probes[i];
 }
 
+// docs/share.md: a bus that cannot carry the rates is shared in turn. Stop 42: devices with
+// longer periods, each always more than the fast device's period late, claimed more priority
+// than it and took the whole bus (here: 2 polls in 3 s); a 10 Hz board back from offline went
+// unpolled for 2 s (case open_30min_held_relays_out4_late). Every device late by the longest
+// period or more has the same claim, and the one served least recently goes first.
 TEST_F(BusSchedulerTest, AnOverloadedBusPollsEveryDeviceInTurn) {
   bus.latency = 70ms;  // 14 transactions a second; the slow devices alone ask for 15
   BusScheduler& s = make();
