@@ -420,8 +420,9 @@ bool BusScheduler::stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_po
     // bus that cannot carry the rates every device a whole longest period late has the same
     // claim, so they go in turn. (A cap at the device's own period gave the slow devices the
     // larger claim: a fast device, always less late than they, went unpolled.)
-    const auto t = std::max({p.due, now - longest_period_, probeNotBefore(p)});
-    const bool y = t <= now && yieldsToAnswering(p, std::max(p.due, probeNotBefore(p)), now);
+    const auto due = std::max(p.due, probeNotBefore(p));
+    const auto t = std::max(due, now - longest_period_);
+    const bool y = t <= now && yieldsToAnswering(p, due, now);
     // Ties (devices late on a bus that cannot carry their rates) go to the one served least
     // recently, so an overloaded bus is shared in turn rather than by list order or by who
     // was reset last.
