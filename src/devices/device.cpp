@@ -24,8 +24,8 @@ std::vector<std::string> Device::inputNames() const {
   return withDefaults(config_.inputs, inputCount(), "in");
 }
 
-std::string Device::validateChannels(const std::vector<uint8_t>& channels,
-                                     const std::vector<bool>& states) const {
+std::string Device::checkOutputs(const std::vector<uint8_t>& channels,
+                                 const std::vector<bool>& states) const {
   if (outputCount() == 0) return std::string("channels: a ") + type() + " device has no outputs";
   if (channels.empty()) return "channels: empty, give at least one channel";
   if (states.size() != channels.size())
@@ -67,15 +67,8 @@ OutputTargets Device::outputsWrittenBy(const Request& request) const {
   return set;
 }
 
-Result Device::setOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                          const std::vector<bool>& states) {
-  const std::string problem = validateChannels(channels, states);
-  if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
-  return writeOutputs(link, channels, states);
-}
-
-Result Device::writeCoilOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                                const std::vector<bool>& states) {
+Result Device::writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
+                            const std::vector<bool>& states) {
   // Only the channels asked for go on the wire: one frame per run of adjacent channels, so a
   // channel between two requested ones is never rewritten (a rewrite would cancel its flash
   // or fight its PWM on the board).

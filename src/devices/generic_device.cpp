@@ -26,7 +26,7 @@ bool sameReading(double a, double b) {
 }
 
 GenericDevice::GenericDevice(DeviceConfig config)
-    : Device(std::move(config)),
+    : Device(kGenericType, std::move(config)),
       planner_(this->config().generic.signals, this->config().generic.max_gap) {
   states_.resize(signals().size());
   groups_.push_back({this->config().poll_rate, {}});
@@ -37,12 +37,6 @@ GenericDevice::GenericDevice(DeviceConfig config)
     if (g == groups_.size()) groups_.push_back({rate, {}});
     groups_[g].signals.push_back(i);
   }
-}
-
-Result GenericDevice::writeOutputs(Transport&, const std::vector<uint8_t>&,
-                                   const std::vector<bool>&) {
-  return Result::failure(ErrorKind::kInvalidArgument,
-                         "channels: a generic device has no outputs (write its signals)");
 }
 
 void GenericDevice::setFromWords(size_t i, const uint16_t* words) {

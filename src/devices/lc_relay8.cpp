@@ -22,11 +22,6 @@ Result LcRelay8::poll(Transport& link) {
   return inputs;
 }
 
-Result LcRelay8::writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                              const std::vector<bool>& states) {
-  return writeCoilOutputs(link, channels, states);
-}
-
 std::string LcRelay8::pulseTenths(uint8_t channel, double duration, uint16_t* tenths) {
   if (channel >= kChannels) return "channel: " + std::to_string(channel) + " is outside 0-7";
   // Convert first (the nearest 0.1 s, float noise allowed), then check the register value that

@@ -309,7 +309,7 @@ Result Ld58a08::writeOutputs(Transport& link, const std::vector<uint8_t>& channe
     pwm_[ch].enable = 0;
     stopped.push_back(ch);
   }
-  Result r = writeCoilOutputs(link, channels, states);
+  Result r = Device::writeOutputs(link, channels, states);
   if (stopped.empty()) return r;
   if (r.ok())
     r.message = stoppedNote() + (r.message.empty() ? "" : "; " + r.message);

@@ -20,6 +20,13 @@ std::shared_ptr<OutputBatch::Entry> OutputBatch::add(const Device& device,
   return entry;
 }
 
+Result OutputBatch::write(Device& device, Transport& link, const std::vector<uint8_t>& channels,
+                          const std::vector<bool>& states) {
+  const std::string problem = device.checkOutputs(channels, states);
+  if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
+  return device.writeOutputs(link, channels, states);
+}
+
 Result OutputBatch::complete(Device& device, Transport& link, const std::shared_ptr<Entry>& entry,
                              const WrittenCallback& on_written,
                              const NotConfirmedCallback& on_not_confirmed) {

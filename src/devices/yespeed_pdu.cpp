@@ -54,11 +54,6 @@ Result YespeedPdu::poll(Transport& link) {
   return relays.ok() ? telemetry : relays;
 }
 
-Result YespeedPdu::writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                                const std::vector<bool>& states) {
-  return writeCoilOutputs(link, channels, states);
-}
-
 Result YespeedPdu::readTelemetry(Transport& link) {
   reading_fresh_ = false;
   Result r = link.execute(Request::readInputRegisters(address(), 0, 5));

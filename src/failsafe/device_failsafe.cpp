@@ -4,6 +4,7 @@
 
 #include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/core/modbus/text.h"
+#include "modbus_rtu_driver/devices/output_batch.h"
 
 namespace modbus_rtu_driver {
 
@@ -104,7 +105,7 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
     r.runs_failed = runs_started->runs_failed;
   }
   intents_.writeRan();
-  Result w = device_.setOutputs(t, targets.channels, targets.states);
+  Result w = OutputBatch::write(device_, t, targets.channels, targets.states);
   if (until_silent && until_silent->refused()) {
     // The device gave no reply: its read back waits behind the queued safe writes (the bus
     // runs writes in the order queued), and this write's event comes with it.

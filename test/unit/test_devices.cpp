@@ -7,6 +7,7 @@
 #include "device_fixtures.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/devices/output_batch.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"
 
@@ -55,13 +56,12 @@ TEST(Ld58a08, OutputsUseFc05ForOneAndFc15ForSeveral) {
   ScriptedTransport bus;
   bus.expect("01 03 00 50 00 03 05 DA", "01 03 06 00 00 00 00 00 00 21 75");  // PWM 5 off
   bus.expect("01 05 00 05 FF 00 9C 3B", "01 05 00 05 FF 00 9C 3B");
-  EXPECT_TRUE(board.setOutputs(bus, {5}, {true}).ok());
+  EXPECT_TRUE(OutputBatch::write(board, bus, {5}, {true}).ok());
   // All eight at once: the manual's "channels 0,3,7 ON, others OFF".
   for (uint8_t ch = 0; ch < 8; ++ch) expectPwmOff(bus, ch);
   bus.expect("01 0F 00 00 00 08 01 89 3F 33", "01 0F 00 00 00 08 54 0D");
-  EXPECT_TRUE(board
-                  .setOutputs(bus, {0, 1, 2, 3, 4, 5, 6, 7},
-                              {true, false, false, true, false, false, false, true})
+  EXPECT_TRUE(OutputBatch::write(board, bus, {0, 1, 2, 3, 4, 5, 6, 7},
+                                 {true, false, false, true, false, false, false, true})
                   .ok());
   EXPECT_EQ(board.outputs(), (std::vector<bool>{1, 0, 0, 1, 0, 0, 0, 1}));
   EXPECT_SCRIPT_DONE(bus);
@@ -75,7 +75,7 @@ TEST(Ld58a08, ChannelsWithGapsAreWrittenAloneSoOthersAreNotTouched) {
   expectPwmOff(bus, 3);
   bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(1, 0, true))));
   bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(1, 3, false))));
-  EXPECT_TRUE(board.setOutputs(bus, {0, 3}, {true, false}).ok());
+  EXPECT_TRUE(OutputBatch::write(board, bus, {0, 3}, {true, false}).ok());
   EXPECT_TRUE(board.outputs().empty()) << "the others are not known until a poll";
   EXPECT_SCRIPT_DONE(bus);
 }
@@ -249,9 +249,10 @@ TEST(Ld58a08, BadPwmValuesNameTheFieldAndSendNothing) {
   }
   EXPECT_EQ(board.stopPwm(bus, 9).error, ErrorKind::kInvalidArgument);
   EXPECT_EQ(board.setReturnDelay(bus, 26).error, ErrorKind::kInvalidArgument);
-  EXPECT_EQ(board.setOutputs(bus, {8}, {true}).error, ErrorKind::kInvalidArgument);
-  EXPECT_EQ(board.setOutputs(bus, {1, 1}, {true, true}).error, ErrorKind::kInvalidArgument);
-  EXPECT_EQ(board.setOutputs(bus, {1, 2}, {true}).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(OutputBatch::write(board, bus, {8}, {true}).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(OutputBatch::write(board, bus, {1, 1}, {true, true}).error,
+            ErrorKind::kInvalidArgument);
+  EXPECT_EQ(OutputBatch::write(board, bus, {1, 2}, {true}).error, ErrorKind::kInvalidArgument);
   EXPECT_EQ(bus.executed(), 0);
   EXPECT_SCRIPT_DONE(bus);
 }
@@ -312,12 +313,12 @@ TEST(Ld58a08, ADeviceThatDoesNotConfirmIsNotSuccess) {
   expectPwmOff(bus, 0);
   bus.expect("01 05 00 00 FF 00 8C 3A");                          // silence
   bus.expect(toHex(encodeRequest(Request::readCoils(1, 0, 8))));  // and to the read-back
-  const Result silent = board.setOutputs(bus, {0}, {true});
+  const Result silent = OutputBatch::write(board, bus, {0}, {true});
   EXPECT_EQ(silent.error, ErrorKind::kTimeout);
   EXPECT_NE(silent.message.find("not confirmed"), std::string::npos) << silent.message;
   expectPwmOff(bus, 0);
   bus.expect("01 05 00 00 FF 00 8C 3A", toHex(encodeException(1, 5, 4)));
-  const Result r = board.setOutputs(bus, {0}, {true});
+  const Result r = OutputBatch::write(board, bus, {0}, {true});
   EXPECT_EQ(r.error, ErrorKind::kException);
   EXPECT_NE(r.message.find("slave device failure"), std::string::npos);
   EXPECT_SCRIPT_DONE(bus);
@@ -331,7 +332,7 @@ TEST(Ld58a08, AnOutputOnARunningPwmChannelStopsThePwmFirst) {
   bus.expect("01 03 00 30 00 03 05 C4", "01 03 06 00 0A 00 05 FF FF A8 C5");  // 1 s, 0.5 s, run
   bus.expect("01 06 00 32 00 00 28 05", "01 06 00 32 00 00 28 05");           // enable 0
   bus.expect("01 05 00 03 FF 00 7C 3A", "01 05 00 03 FF 00 7C 3A");           // DO 3 on
-  const Result r = board.setOutputs(bus, {3}, {true});
+  const Result r = OutputBatch::write(board, bus, {3}, {true});
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(r.message, "PWM on channel 3 stopped first");
   EXPECT_FALSE(board.pwm()[3].running);
@@ -340,7 +341,7 @@ TEST(Ld58a08, AnOutputOnARunningPwmChannelStopsThePwmFirst) {
   bus.expect("01 03 00 70 00 03 04 10", "01 03 06 07 D0 00 37 FF FF 51 6E");
   bus.expect("01 06 00 72 00 00 29 D1", "01 06 00 72 00 00 29 D1");
   bus.expect("01 05 00 07 00 00 7C 0B", "01 05 00 07 00 00 7C 0B");
-  const Result off = board.setOutputs(bus, {7}, {false});
+  const Result off = OutputBatch::write(board, bus, {7}, {false});
   EXPECT_TRUE(off.ok()) << off.message;
   EXPECT_EQ(off.message, "PWM on channel 7 stopped first");
   EXPECT_SCRIPT_DONE(bus);
@@ -353,7 +354,7 @@ TEST(Ld58a08, SeveralOutputsStopOnlyTheChannelsThatRun) {
   bus.expect("01 03 00 30 00 03 05 C4", "01 03 06 00 0A 00 05 FF FF A8 C5");  // 3: runs
   bus.expect("01 06 00 32 00 00 28 05", "01 06 00 32 00 00 28 05");
   bus.expect("01 0F 00 02 00 02 01 03 E7 56", "01 0F 00 02 00 02 75 CA");  // DO 2, 3 on
-  const Result r = board.setOutputs(bus, {2, 3}, {true, true});
+  const Result r = OutputBatch::write(board, bus, {2, 3}, {true, true});
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(r.message, "PWM on channel 3 stopped first");
   EXPECT_SCRIPT_DONE(bus);
@@ -367,7 +368,7 @@ TEST(Ld58a08, ALostStopReplyIsReadBackBeforeTheOutputIsWritten) {
   bus.expect("01 03 00 30 00 03 05 C4", "01 03 06 00 0A 00 05 00 00 A9 75");  // stopped
   bus.expect("01 05 00 03 FF 00 7C 3A");                                      // reply lost
   bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 08 50 4E");                 // DO 3 on
-  const Result r = board.setOutputs(bus, {3}, {true});
+  const Result r = OutputBatch::write(board, bus, {3}, {true});
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(r.message.rfind("PWM on channel 3 stopped first; confirmed by reading the outputs", 0),
             0u)
@@ -381,7 +382,7 @@ TEST(Ld58a08, APwmThatCouldNotBeStoppedLeavesTheOutputUnwritten) {
   bus.expect("01 03 00 30 00 03 05 C4", "01 03 06 00 0A 00 05 FF FF A8 C5");
   bus.expect("01 06 00 32 00 00 28 05");                                      // reply lost
   bus.expect("01 03 00 30 00 03 05 C4", "01 03 06 00 0A 00 05 FF FF A8 C5");  // still runs
-  const Result r = board.setOutputs(bus, {3}, {true});
+  const Result r = OutputBatch::write(board, bus, {3}, {true});
   EXPECT_EQ(r.error, ErrorKind::kTimeout);
   EXPECT_NE(r.message.find("PWM runs on channel 3 and stopping it failed"), std::string::npos)
       << r.message;
@@ -390,7 +391,7 @@ TEST(Ld58a08, APwmThatCouldNotBeStoppedLeavesTheOutputUnwritten) {
   EXPECT_SCRIPT_DONE(bus);  // no FC05
   // An unreadable PWM state: nothing written either.
   bus.expect("01 03 00 30 00 03 05 C4");
-  const Result unknown = board.setOutputs(bus, {3}, {true});
+  const Result unknown = OutputBatch::write(board, bus, {3}, {true});
   EXPECT_FALSE(unknown.ok());
   EXPECT_NE(unknown.message.find("outputs not written: whether PWM runs on channel 3 is unknown"),
             std::string::npos)
@@ -402,9 +403,10 @@ TEST(LcRelay8, ManualFramesAtAddress255) {
   LcRelay8 board(config("lc_relay8", 255));
   ScriptedTransport bus;
   bus.expect("FF 05 00 00 FF 00 99 E4", "FF 05 00 00 FF 00 99 E4");
-  EXPECT_TRUE(board.setOutputs(bus, {0}, {true}).ok());
+  EXPECT_TRUE(OutputBatch::write(board, bus, {0}, {true}).ok());
   bus.expect("FF 0F 00 00 00 08 01 FF 30 1D", "FF 0F 00 00 00 08 41 D3");
-  EXPECT_TRUE(board.setOutputs(bus, {0, 1, 2, 3, 4, 5, 6, 7}, std::vector<bool>(8, true)).ok());
+  EXPECT_TRUE(
+      OutputBatch::write(board, bus, {0, 1, 2, 3, 4, 5, 6, 7}, std::vector<bool>(8, true)).ok());
   bus.expect("FF 01 00 00 00 08 28 12", "FF 01 01 01 A1 A0");
   bus.expect("FF 02 00 00 00 08 6C 12", "FF 02 01 01 51 A0");
   ASSERT_TRUE(board.poll(bus).ok());
@@ -647,14 +649,13 @@ TEST(Registry, TypesAddressesAndNames) {
   EXPECT_NE(validateDeviceConfig(config("relay", 3)).find("devices/dev/type: 'relay'"),
             std::string::npos);
   EXPECT_EQ(createDevice(config("relay", 3)), nullptr);
-  // Every registered type builds from its config and has the channels its descriptor says
-  // (generic: none of its own, its signals come from the YAML).
+  // Every registered type builds from its config, as the class of the descriptor it registered
+  // with (its name and channel counts come from there; generic: no channels of its own, its
+  // signals come from the YAML).
   for (const DeviceDescriptor* type : deviceClasses().types()) {
     const std::unique_ptr<Device> made = createDevice(config(type->name, 1));
     ASSERT_NE(made, nullptr) << type->name;
-    EXPECT_STREQ(made->type(), type->name);
-    EXPECT_EQ(made->outputCount(), type->outputs) << type->name;
-    EXPECT_EQ(made->inputCount(), type->inputs) << type->name;
+    EXPECT_EQ(&made->descriptor(), type) << type->name;
   }
   DeviceConfig c = config("yespeed_pdu", 3);
   c.inputs = {"a", "b", "c", "d", "e", "f", "g", "h"};

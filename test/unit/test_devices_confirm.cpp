@@ -6,6 +6,7 @@
 #include "modbus_rtu_driver/core/link/until_silent_transport.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/devices/output_batch.h"
 
 using namespace modbus_rtu_driver;
 using namespace modbus_rtu_driver::devtest;
@@ -51,7 +52,7 @@ TEST(ConfirmByReadBack, ACoilWriteWhoseReplyWasLostIsConfirmedByItsState) {
   ScriptedTransport bus;
   bus.expect(frame(Request::writeSingleCoil(255, 3, true)));  // reply lost
   bus.expect(frame(Request::readCoils(255, 0, 8)), coilsReply(255, 0x08));
-  const Result r = board.setOutputs(bus, {3}, {true});
+  const Result r = OutputBatch::write(board, bus, {3}, {true});
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_NE(r.message.find("confirmed by reading the outputs back"), std::string::npos);
   EXPECT_TRUE(board.outputs()[3]);
@@ -64,7 +65,7 @@ TEST(ConfirmByReadBack, ACoilWriteTheDeviceNeverHeardIsAFailureThatSaysSo) {
   ScriptedTransport bus;
   bus.expect(frame(Request::writeMultipleCoils(255, 0, {true, true})));  // never heard
   bus.expect(frame(Request::readCoils(255, 0, 8)), coilsReply(255, 0x01));
-  const Result r = board.setOutputs(bus, {0, 1}, {true, true});
+  const Result r = OutputBatch::write(board, bus, {0, 1}, {true, true});
   EXPECT_EQ(r.error, ErrorKind::kTimeout);
   EXPECT_NE(r.message.find("not done (output 1 is off)"), std::string::npos) << r.message;
   EXPECT_FALSE(board.outputs()[1]) << "the snapshot shows what was read";
@@ -75,7 +76,7 @@ TEST(ConfirmByReadBack, AnExceptionIsTheAnswerAndNeedsNoReadBack) {
   LcRelay8 board(config("lc_relay8", 255));
   ScriptedTransport bus;
   bus.expect(frame(Request::writeSingleCoil(255, 0, true)), toHex(encodeException(255, 5, 2)));
-  EXPECT_EQ(board.setOutputs(bus, {0}, {true}).error, ErrorKind::kException);
+  EXPECT_EQ(OutputBatch::write(board, bus, {0}, {true}).error, ErrorKind::kException);
   EXPECT_TRUE(bus.usedUp());
   EXPECT_EQ(bus.executed(), 1);
 }
@@ -129,7 +130,7 @@ TEST(ConfirmByReadBack, AfterNoReplyTheUntilSilentTransportRefusesTheReadBackUns
   ScriptedTransport bus;
   bus.expect(frame(Request::writeMultipleCoils(255, 0, {false, false})));  // no reply
   UntilSilentTransport until_silent(bus);
-  const Result r = board.setOutputs(until_silent, {0, 1}, {false, false});
+  const Result r = OutputBatch::write(board, until_silent, {0, 1}, {false, false});
   EXPECT_EQ(r.error, ErrorKind::kTimeout);
   EXPECT_NE(r.message.find("not sent: the device gave no reply to this job's request before"),
             std::string::npos)
@@ -146,7 +147,7 @@ TEST(ConfirmByReadBack, AGarbledReplyIsAnAnswerTheUntilSilentTransportStillReads
   bus.expect(frame(Request::writeSingleCoil(255, 3, false)), "FF01020304");  // garbled
   bus.expect(frame(Request::readCoils(255, 0, 8)), coilsReply(255, 0x00));
   UntilSilentTransport until_silent(bus);
-  const Result r = board.setOutputs(until_silent, {3}, {false});
+  const Result r = OutputBatch::write(board, until_silent, {3}, {false});
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_FALSE(until_silent.refused());
   EXPECT_EQ(bus.mismatches(), "");

@@ -48,7 +48,7 @@ TEST(LcRelay8Writes, TwoChannelsWithAGapAreTwoFc05AndTheGapIsNotWritten) {
   // read of the coils, no FC15 over relay #2).
   bus.expect("FF 05 00 00 FF 00 99 E4", "FF 05 00 00 FF 00 99 E4");
   bus.expect("FF 05 00 02 FF 00 38 24", "FF 05 00 02 FF 00 38 24");
-  const Result r = board.setOutputs(bus, {0, 2}, {true, true});
+  const Result r = OutputBatch::write(board, bus, {0, 2}, {true, true});
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_SCRIPT_DONE(bus);
 }
@@ -58,7 +58,8 @@ TEST(LcRelay8Writes, RunsOfAdjacentChannelsAreOneFc15Each) {
   ScriptedTransport bus;
   expectAnswered(bus, Request::writeMultipleCoils(3, 0, {true, false}));
   expectAnswered(bus, Request::writeMultipleCoils(3, 4, {true, true, false}));
-  const Result r = board.setOutputs(bus, {6, 0, 4, 1, 5}, {false, true, true, false, true});
+  const Result r =
+      OutputBatch::write(board, bus, {6, 0, 4, 1, 5}, {false, true, true, false, true});
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_SCRIPT_DONE(bus);
 }
@@ -73,7 +74,7 @@ TEST(LcRelay8Writes, TheSnapshotTakesOnlyTheWrittenChannels) {
   ASSERT_TRUE(board.poll(bus).ok());
   expectAnswered(bus, Request::writeSingleCoil(3, 0, true));
   expectAnswered(bus, Request::writeSingleCoil(3, 2, true));
-  ASSERT_TRUE(board.setOutputs(bus, {0, 2}, {true, true}).ok());
+  ASSERT_TRUE(OutputBatch::write(board, bus, {0, 2}, {true, true}).ok());
   EXPECT_EQ(board.outputs(), (std::vector<bool>{1, 1, 1, 1, 0, 0, 0, 0}));
   EXPECT_SCRIPT_DONE(bus);
 }
@@ -84,7 +85,7 @@ TEST(LcRelay8Writes, AFailedRunStopsTheWriteAndSaysWhatWasWritten) {
   expectAnswered(bus, Request::writeSingleCoil(3, 0, true));
   const Request second = Request::writeSingleCoil(3, 2, true);
   bus.expect(hexOf(second), toHex(encodeException(3, 0x05, kSlaveDeviceFailure)));
-  const Result r = board.setOutputs(bus, {0, 2, 5}, {true, true, true});
+  const Result r = OutputBatch::write(board, bus, {0, 2, 5}, {true, true, true});
   EXPECT_FALSE(r.ok());
   EXPECT_NE(r.message.find("outputs 0 were written before, the others not"), std::string::npos)
       << r.message;
@@ -101,7 +102,7 @@ TEST(LcRelay8Writes, ASafeStateMapWithHoldBetweenWritesOnlyTheSafeChannels) {
   expectAnswered(bus, Request::writeSingleCoil(3, 0, false));
   expectAnswered(bus, Request::writeSingleCoil(3, 2, false));
   expectAnswered(bus, Request::writeMultipleCoils(3, 4, {true, true}));
-  const Result r = board.setOutputs(bus, safe.channels, safe.states);
+  const Result r = OutputBatch::write(board, bus, safe.channels, safe.states);
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_SCRIPT_DONE(bus);  // relays 1, 3, 6, 7 (hold) never on the wire
 }
@@ -127,7 +128,7 @@ TEST(Ld58a08Writes, AnOutputUnderARunningPwmBetweenTwoRequestedIsNotRewritten) {
   expectPwm(bus, 2, 0);
   bus.expect("01 05 00 00 FF 00 8C 3A", "01 05 00 00 FF 00 8C 3A");
   bus.expect("01 05 00 02 00 00 6C 0A", "01 05 00 02 00 00 6C 0A");
-  const Result r = board.setOutputs(bus, {0, 2}, {true, false});
+  const Result r = OutputBatch::write(board, bus, {0, 2}, {true, false});
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_SCRIPT_DONE(bus);
 }
@@ -138,7 +139,7 @@ TEST(Ld58a08Writes, RunsOfAdjacentOutputsAreOneFc15Each) {
   for (uint8_t ch : {0, 1, 5, 6}) expectPwm(bus, ch, 0);
   expectAnswered(bus, Request::writeMultipleCoils(1, 0, {true, true}));
   expectAnswered(bus, Request::writeMultipleCoils(1, 5, {false, true}));
-  const Result r = board.setOutputs(bus, {0, 1, 5, 6}, {true, true, false, true});
+  const Result r = OutputBatch::write(board, bus, {0, 1, 5, 6}, {true, true, false, true});
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_SCRIPT_DONE(bus);
 }
@@ -149,7 +150,7 @@ TEST(YespeedPduWrites, RelaysWithAGapAreWrittenAloneAndTheGapIsNotWritten) {
   expectAnswered(bus, Request::writeSingleCoil(1, 1, true));
   expectAnswered(bus, Request::writeMultipleCoils(1, 3, {false, false}));
   expectAnswered(bus, Request::writeSingleCoil(1, 7, true));
-  const Result r = pdu.setOutputs(bus, {1, 3, 4, 7}, {true, false, false, true});
+  const Result r = OutputBatch::write(pdu, bus, {1, 3, 4, 7}, {true, false, false, true});
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_SCRIPT_DONE(bus);
 }
@@ -161,7 +162,7 @@ TEST(YespeedPduWrites, ALostReplyIsConfirmedPerRun) {
   const Request back = Request::readCoils(1, 0, 8);
   bus.expect(hexOf(back), toHex(encodeReply(back, {0, 1, 0, 0, 0, 0, 0, 0})));
   expectAnswered(bus, Request::writeSingleCoil(1, 6, true));
-  const Result r = pdu.setOutputs(bus, {1, 6}, {true, true});
+  const Result r = OutputBatch::write(pdu, bus, {1, 6}, {true, true});
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_NE(r.message.find("confirmed by reading the outputs back"), std::string::npos)
       << r.message;

@@ -7,6 +7,7 @@
 
 #include "modbus_rtu_driver/core/link/rtu_link.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/output_batch.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 #include "wait_for.h"
 
@@ -50,7 +51,7 @@ TEST_F(WritesVsSimulator, AFlashBetweenTwoWrittenRelaysKeepsRunning) {
   Result r = board.pulse(*link_, 1, true, 3.0);
   ASSERT_TRUE(r.ok()) << r.message;
   ASSERT_EQ(sim("get 255 coil 1"), "ok 1");
-  r = board.setOutputs(*link_, {0, 2}, {true, true});
+  r = OutputBatch::write(board, *link_, {0, 2}, {true, true});
   ASSERT_TRUE(r.ok()) << r.message;
   // The write came while the flash ran (3 s is far longer than two frames at 9600 baud); if it
   // already ended, this run proves nothing.

@@ -8,6 +8,7 @@
 #include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/output_batch.h"
 #include "modbus_rtu_driver/failsafe/channel_intents.h"
 #include "scripted_transport.h"
 
@@ -151,7 +152,7 @@ TEST(ChannelIntents, TheSafeWriteIsOneFrame) {
   const OutputTargets s = t.safeTargets();
   ScriptedTransport bus;
   bus.expectEcho(toHex(encodeRequest(Request::writeMultipleCoils(255, 0, {false, false, true}))));
-  EXPECT_TRUE(board.setOutputs(bus, s.channels, s.states).ok());
+  EXPECT_TRUE(OutputBatch::write(board, bus, s.channels, s.states).ok());
   EXPECT_TRUE(bus.usedUp());
   EXPECT_EQ(bus.mismatches(), "");
 }

@@ -7,6 +7,7 @@
 
 #include "device_fixtures.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
+#include "modbus_rtu_driver/devices/output_batch.h"
 #include "modbus_rtu_driver/devices/registry.h"
 
 using namespace modbus_rtu_driver;
@@ -326,7 +327,7 @@ TEST(GenericDevice, HasNoOutputs) {
   GenericDevice d(generic({sig("a", kH, 0)}));
   EXPECT_EQ(d.checkOutputs({0}, {true}), "channels: a generic device has no outputs");
   ScriptedTransport bus;
-  EXPECT_EQ(d.setOutputs(bus, {0}, {true}).error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(OutputBatch::write(d, bus, {0}, {true}).error, ErrorKind::kInvalidArgument);
   EXPECT_EQ(bus.executed(), 0);
 }
 

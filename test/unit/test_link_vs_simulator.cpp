@@ -8,6 +8,7 @@
 #include "modbus_rtu_driver/core/link/rtu_link.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/devices/output_batch.h"
 #include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/sim/simulator.h"
 
@@ -173,7 +174,7 @@ TEST_F(LinkVsSimulator, Ld58a08At248WorksEndToEnd) {
   Result r = board.poll(*link_);
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_TRUE(board.pwmKnown());
-  r = board.setOutputs(*link_, {3}, {true});
+  r = OutputBatch::write(board, *link_, {3}, {true});
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(sim("get 248 coil 0 8"), "ok 0 0 0 1 0 0 0 0");
   PwmSettings s;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/output_batch.h"
 #include "share_test_bus.h"
 #include "wait_for.h"
 
@@ -30,7 +31,7 @@ TEST(ShareShutdown, QueuedClientWritesDoNotRunAfterTheSafeWrites) {
   // The node's shutdown sequence.
   f.gateway->stop();
   std::future<Result> safe = f.bus_thread.submit(
-      "memory", [&](Transport& t) { return board.setOutputs(t, {0}, {false}); });
+      "memory", [&](Transport& t) { return OutputBatch::write(board, t, {0}, {false}); });
   f.bus.release();
   ASSERT_EQ(safe.wait_for(std::chrono::seconds(10)), std::future_status::ready);
   const Result r = safe.get();

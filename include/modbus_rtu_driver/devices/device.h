@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "modbus_rtu_driver/core/config/device_types.h"
 #include "modbus_rtu_driver/core/config/signal.h"
 #include "modbus_rtu_driver/core/link/transport.h"
 #include "modbus_rtu_driver/core/modbus/types.h"
@@ -43,11 +44,14 @@ std::vector<std::string> withDefaults(const std::vector<std::string>& given, siz
 class OutputBatch;
 
 class Device {
-  // Writes its merge of requests it checked one by one through writeOutputs.
+  // The only writer of outputs (writeOutputs): every request checked once, then merged or alone.
   friend class OutputBatch;
 
  public:
-  explicit Device(DeviceConfig config) : config_(std::move(config)) {}
+  // `type`: the descriptor the type registered with (core/config/device_types/): its name and
+  // channel counts are the device's, stated once.
+  Device(const DeviceDescriptor& type, DeviceConfig config)
+      : type_(type), config_(std::move(config)) {}
   virtual ~Device() = default;
   Device(const Device&) = delete;
   Device& operator=(const Device&) = delete;
@@ -56,9 +60,10 @@ class Device {
   uint8_t address() const { return static_cast<uint8_t>(config_.address); }
   const std::string& name() const { return config_.name; }
 
-  virtual const char* type() const = 0;
-  virtual size_t outputCount() const = 0;
-  virtual size_t inputCount() const { return 0; }
+  const DeviceDescriptor& descriptor() const { return type_; }
+  const char* type() const { return type_.name; }
+  size_t outputCount() const { return type_.outputs; }
+  size_t inputCount() const { return type_.inputs; }
   // True for an output the device drives by itself right now (a running PWM), as far as the
   // snapshot knows: a poll that shows it changed is not a restart.
   virtual bool outputSelfTimed(size_t channel) const {
@@ -81,18 +86,11 @@ class Device {
   // Reads everything the device reports (outputs, inputs, telemetry, settings) into the
   // snapshot. On failure the snapshot keeps its previous values and the Result says why.
   virtual Result poll(Transport& link) = 0;
-  // Sets channels[i] to states[i] and touches no other channel: one frame per run of adjacent
-  // channels (FC05 for a run of one, FC15 otherwise); checks the arguments first, here and only
-  // here (nothing is sent when they are bad), then has the type write them (writeOutputs). On
-  // success the snapshot holds the confirmed states.
-  Result setOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                    const std::vector<bool>& states);
-
-  // Empty when setOutputs would accept these arguments, else a message naming the field.
+  // Empty when a write of channels[i] to states[i] is valid here (sizes match, each channel in
+  // range and given once), else a message naming the field. OutputBatch checks every request
+  // with it, once, before anything is queued.
   std::string checkOutputs(const std::vector<uint8_t>& channels,
-                           const std::vector<bool>& states) const {
-    return validateChannels(channels, states);
-  }
+                           const std::vector<bool>& states) const;
 
   // The outputs a client's confirmed write (a share client's, a raw write) set: FC05/FC15 on
   // the coils 0..outputCount()-1, which are the outputs of every fixed-function type. What other
@@ -146,19 +144,13 @@ class Device {
   std::vector<std::string> inputNames() const;
 
  protected:
-  // The type's write of outputs setOutputs (or OutputBatch::add, for the batch's merged write)
-  // has checked; it checks nothing again.
+  // The write of outputs OutputBatch has checked (checkOutputs), its only caller: it checks
+  // nothing again. This one is for a board whose coils 0..N-1 are the outputs: FC05 for a lone
+  // channel, FC15 per run of adjacent channels; a channel nobody asked for is never written.
+  // Stops at the first run that fails (the message says which outputs were written before). A
+  // lost answer is read back (confirmCoils). On success the snapshot holds the written states.
   virtual Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                              const std::vector<bool>& states) = 0;
-  // Shared check of setOutputs arguments: sizes match, channels in range, no duplicates.
-  std::string validateChannels(const std::vector<uint8_t>& channels,
-                               const std::vector<bool>& states) const;
-  // Writes the outputs of a board whose coils 0..N-1 are the outputs: FC05 for a lone channel,
-  // FC15 per run of adjacent channels; a channel nobody asked for is never written. Stops at
-  // the first run that fails (the message says which outputs were written before). For
-  // writeOutputs: the arguments are setOutputs' checked ones.
-  Result writeCoilOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                          const std::vector<bool>& states);
+                              const std::vector<bool>& states);
   // True for failures after which the device may have done the write (its reply was lost or
   // garbled), as opposed to refusing it or never being asked.
   static bool mayHaveActed(const Result& result);
@@ -170,6 +162,7 @@ class Device {
   std::vector<bool> inputs_;
 
  private:
+  const DeviceDescriptor& type_;
   DeviceConfig config_;
 };
 

@@ -37,8 +37,6 @@ class GenericDevice : public Device {
 
   explicit GenericDevice(DeviceConfig config);
 
-  const char* type() const override { return kGenericType.name; }
-  size_t outputCount() const override { return 0; }
   // Reads group 0 (the signals at the device's own poll_rate).
   Result poll(Transport& link) override { return pollGroup(link, 0); }
   const std::vector<SignalConfig>& signals() const { return planner_.signals(); }
@@ -68,11 +66,6 @@ class GenericDevice : public Device {
 
   // Merged spans split after exception 02 or 03, in words (diagnostics).
   const std::vector<std::string>& splits() const { return planner_.splits(); }
-
- protected:
-  // Never reached: setOutputs refuses first (no outputs; a generic device's signals are written).
-  Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                      const std::vector<bool>& states) override;
 
  private:
   // Reads one span; false when the device did not answer (the rest of the poll is skipped).

@@ -18,10 +18,7 @@ class LcRelay8 : public Device {
   static constexpr uint16_t kBaudReadRegister = 0x03E8;
   static uint16_t flashRegister(uint8_t channel) { return static_cast<uint16_t>(3 + 5 * channel); }
 
-  explicit LcRelay8(DeviceConfig config) : Device(std::move(config)) {}
-  const char* type() const override { return kLcRelay8Type.name; }
-  size_t outputCount() const override { return kChannels; }
-  size_t inputCount() const override { return kChannels; }
+  explicit LcRelay8(DeviceConfig config) : Device(kLcRelay8Type, std::move(config)) {}
 
   // FC01 relays then FC02 inputs.
   Result poll(Transport& link) override;
@@ -41,10 +38,6 @@ class LcRelay8 : public Device {
   // "Single device on the bus" operations at address 0 (any LC board answers them).
   static Result readAddressAtZero(Transport& link);                  // values[0] = address
   static Result setAddressAtZero(Transport& link, uint8_t address);  // 1-255
-
- protected:
-  Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                      const std::vector<bool>& states) override;
 };
 
 }  // namespace modbus_rtu_driver

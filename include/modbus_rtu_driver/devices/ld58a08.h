@@ -67,9 +67,7 @@ class Ld58a08 : public Device {
   static constexpr uint16_t kParityRegister = 0x00FF;
   static uint16_t pwmRegister(uint8_t channel) { return static_cast<uint16_t>(channel * 0x10); }
 
-  explicit Ld58a08(DeviceConfig config) : Device(std::move(config)) {}
-  const char* type() const override { return kLd58a08Type.name; }
-  size_t outputCount() const override { return kChannels; }
+  explicit Ld58a08(DeviceConfig config) : Device(kLd58a08Type, std::move(config)) {}
 
   // Polls the outputs (FC01) and the PWM registers of one channel (all on the first poll).
   Result poll(Transport& link) override;

@@ -4,7 +4,8 @@
 // per run of adjacent channels; no other channel is written), newest state per channel winning, and
 // every merged caller gets that outcome. The later jobs find their request done and send nothing.
 // A request is checked once, as it is added; the merged write is made of checked ones only.
-// ROS-free.
+// Every write of a device's outputs goes through here (Device::writeOutputs has no other caller):
+// the fail-safe's own writes too, alone (write()). ROS-free.
 #pragma once
 
 #include <functional>
@@ -38,6 +39,12 @@ class OutputBatch {
   // callers of each were told it failed; the device may have acted on any of them).
   using NotConfirmedCallback =
       std::function<void(const std::vector<uint8_t>& channels, const Result& result)>;
+
+  // Bus thread: one request written alone, now, merged with nothing pending: checked as add()
+  // checks it (a refused one is not sent). For writes that must carry exactly what they name
+  // (the fail-safe's safe states; a caller with a bus job of its own).
+  static Result write(Device& device, Transport& link, const std::vector<uint8_t>& channels,
+                      const std::vector<bool>& states);
 
   // Bus thread: the outcome of `entry`, writing the pending requests first if it is among them.
   // `device` is the one they were added for. `on_written` runs once per confirmed write,

@@ -34,9 +34,7 @@ class YespeedPdu : public Device {
  public:
   static constexpr size_t kRelays = kYespeedPduType.outputs;
 
-  explicit YespeedPdu(DeviceConfig config) : Device(std::move(config)) {}
-  const char* type() const override { return kYespeedPduType.name; }
-  size_t outputCount() const override { return kRelays; }
+  explicit YespeedPdu(DeviceConfig config) : Device(kYespeedPduType, std::move(config)) {}
 
   // FC01 relays, then one FC04 for all five readings. Limits are read once (and after writes).
   Result poll(Transport& link) override;
@@ -78,10 +76,6 @@ class YespeedPdu : public Device {
   const PduLimitValues& limits() const { return limits_; }
   const PduLimitRegisters& limitRegisters() const { return limit_registers_; }
   bool limitsKnown() const { return limits_known_; }
-
- protected:
-  Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                      const std::vector<bool>& states) override;
 
  private:
   PduReading reading_;
