@@ -13,11 +13,16 @@ DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& sched
     : device_(std::move(device)),
       scheduler_(scheduler),
       nh_(node, device_->name()),
-      failsafe_(*device_, scheduler) {
+      failsafe_(*device_, scheduler),
+      commands_(*device_, failsafe_, [this](BusScheduler::Job job) {
+        return scheduler_.submit(device_->name(), std::move(job));
+      }) {
   // Here, not in start(): the start-up safe states are reported before start().
   if (device_->outputCount() > 0) failsafe_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 1, true);
   failsafe_.setReportSink([this](const FailsafeReport& r) { report(r); });
   failsafe_.setOutputsWritten([this] { publishOutputs(); });
+  commands_.setWritten(
+      [this](const std::vector<uint8_t>&, const std::vector<bool>&) { publishOutputs(); });
   if (device_->outputCount() > 0) keepTimedCommands(node);
 }
 
@@ -141,30 +146,6 @@ Result DeviceAdapter::runOnBus(BusScheduler::Job job) {
   return scheduler_.submit(device_->name(), std::move(job)).get();
 }
 
-Result DeviceAdapter::writeOutputs(const std::vector<uint8_t>& channels,
-                                   const std::vector<bool>& states) {
-  auto entry = batch_.add(*device_, channels, states);  // checked there, once
-  if (entry->result) return *entry->result;             // refused: nothing to queue
-  return runOnBus([this, entry](Transport& t) { return completeBatch(t, entry); });
-}
-
-Result DeviceAdapter::completeBatch(Transport& t,
-                                    const std::shared_ptr<OutputBatch::Entry>& entry) {
-  const bool sent = !entry->result;
-  if (sent) failsafe_.userWriteSending();
-  // Outcomes per merged write: every channel it carried, not only this entry's.
-  Result w = batch_.complete(
-      *device_, t, entry,
-      [this](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
-        failsafe_.userWriteConfirmed(chs, sts);
-      },
-      [this](const std::vector<uint8_t>& chs, const Result& r) {
-        failsafe_.userWriteNotConfirmed(chs, r);
-      });
-  if (sent && w.ok()) publishOutputs();
-  return w;
-}
-
 void DeviceAdapter::publishOutputs() {
   if (!outputs_) return;  // before start(): the start-up safe states
   publishLater([this, states = device_->outputs(), stamp = ros::Time::now()] {
@@ -183,7 +164,7 @@ std::string DeviceAdapter::answer(const Result& result, const std::string& what)
 bool DeviceAdapter::onSet(uint8_t channel, std_srvs::SetBool::Request& req,
                           std_srvs::SetBool::Response& res) {
   const bool state = req.data;
-  const Result r = writeOutputs({channel}, {state});
+  const Result r = commands_.write({channel}, {state}).get();
   res.success = r.ok();
   res.message = answer(r, device_->outputNames()[channel] + (state ? " on" : " off"));
   return true;
@@ -192,34 +173,18 @@ bool DeviceAdapter::onSet(uint8_t channel, std_srvs::SetBool::Request& req,
 bool DeviceAdapter::onSetOutputs(SetOutputs::Request& req, SetOutputs::Response& res) {
   std::vector<uint8_t> channels(req.channels.begin(), req.channels.end());
   std::vector<bool> states(req.states.begin(), req.states.end());
-  const Result r = writeOutputs(channels, states);
+  const Result r = commands_.write(channels, states).get();
   res.success = r.ok();
   res.message = answer(r, std::to_string(channels.size()) + " output(s) set");
   return true;
 }
 
-// Commands join the same batch as service writes (newest state per channel wins, one frame).
-// One bus job at a time is queued for them: it completes the newest command's entry, and with
-// it every command added before (a batch takes everything pending, in order).
+// Commands join the same batch as service writes (newest state per channel wins, one frame); a
+// topic's caller gets no answer, so a write that failed is logged.
 void DeviceAdapter::onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& msg) {
-  failsafe_.commandReceived(channel, msg->data);  // the dead man's deadline
-  std::lock_guard<std::mutex> lock(commands_mutex_);
-  auto entry = batch_.add(*device_, {channel}, {static_cast<bool>(msg->data)});
-  if (entry->result) return;  // refused (not for a channel it subscribed for: never)
-  newest_command_ = std::move(entry);
-  if (command_job_queued_) return;  // the queued job will take this one too
-  command_job_queued_ = true;
-  scheduler_.submit(device_->name(), [this](Transport& t) {
-    std::shared_ptr<OutputBatch::Entry> entry;
-    {
-      std::lock_guard<std::mutex> lock(commands_mutex_);
-      entry = std::move(newest_command_);
-      command_job_queued_ = false;
-    }
-    Result w = completeBatch(t, entry);
+  commands_.command(channel, msg->data, [this](const Result& w) {
     if (!w.ok())
       ROS_WARN_THROTTLE(1.0, "%s: command failed: %s", device_->name().c_str(), w.message.c_str());
-    return w;
   });
 }
 

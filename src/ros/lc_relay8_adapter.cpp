@@ -29,15 +29,19 @@ class LcRelay8Adapter : public DeviceAdapter {
     const uint8_t channel = req.channel;
     const bool state = req.state;
     const double duration = req.duration;
-    const Result r = runOnBus([this, channel, state, duration](Transport& t) {
-      timedCommandSending();
-      Result w = board().pulse(t, channel, state, duration);
-      // Flash-close: on for `duration`, then off by itself; flash-open the other way round.
-      timedCommandDone(TimedIntent{channel, state, !state, duration}, w);
-      // The board changed the output by itself: read it back so the topics show it now.
-      if (w.ok() && board().poll(t).ok()) publishOutputs();
-      return w;
-    });
+    // Flash-close: on for `duration`, then off by itself; flash-open the other way round.
+    const Result r =
+        commands()
+            .timed(
+                TimedIntent{channel, state, !state, duration},
+                [this, channel, state, duration](Transport& t) {
+                  return board().pulse(t, channel, state, duration);
+                },
+                // The board changed the output by itself: read it back so the topics show it now.
+                [this](Transport& t) {
+                  if (board().poll(t).ok()) publishOutputs();
+                })
+            .get();
     res.success = r.ok();
     res.message =
         answer(r, std::string(state ? "flash-close " : "flash-open ") +

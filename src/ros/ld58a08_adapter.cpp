@@ -27,6 +27,11 @@ class Ld58a08Adapter : public DeviceAdapter {
     if (result.ok()) publishPwm();
   }
 
+  // Bus thread: after a confirmed PWM command, what the board runs now.
+  void readPwmAndPublish(Transport& t) {
+    if (board().readPwm(t).ok()) publishPwm();
+  }
+
   // Bus thread: publish the PWM settings when they changed.
   void publishPwm() {
     if (!board().pwmKnown()) return;
@@ -67,15 +72,14 @@ class Ld58a08Adapter : public DeviceAdapter {
       res.message = device_->name() + ": " + problem;
       return true;
     }
-    const Result r = runOnBus([this, s](Transport& t) {
-      timedCommandSending();
-      Result w = board().setPwm(t, s);
-      // The PWM drives the output from now on: for a burst or a timed run until its end, then
-      // off; a continuous run until stopped.
-      timedCommandDone(board().pwmIntent(s), w);
-      if (w.ok() && board().readPwm(t).ok()) publishPwm();
-      return w;
-    });
+    // The PWM drives the output from now on: for a burst or a timed run until its end, then
+    // off; a continuous run until stopped.
+    const Result r =
+        commands()
+            .timed(
+                board().pwmIntent(s), [this, s](Transport& t) { return board().setPwm(t, s); },
+                [this](Transport& t) { readPwmAndPublish(t); })
+            .get();
     res.success = r.ok();
     res.message = answer(r, "PWM set on channel " + std::to_string(s.channel));
     return true;
@@ -89,13 +93,12 @@ class Ld58a08Adapter : public DeviceAdapter {
       return true;
     }
     const uint8_t channel = req.channel;
-    const Result r = runOnBus([this, channel](Transport& t) {
-      timedCommandSending();
-      Result w = board().stopPwm(t, channel);
-      timedCommandStopped(channel, w);
-      if (w.ok() && board().readPwm(t).ok()) publishPwm();
-      return w;
-    });
+    const Result r =
+        commands()
+            .stopTimed(
+                channel, [this, channel](Transport& t) { return board().stopPwm(t, channel); },
+                [this](Transport& t) { readPwmAndPublish(t); })
+            .get();
     res.success = r.ok();
     res.message = answer(r, "PWM stopped on channel " + std::to_string(channel));
     return true;

@@ -1,10 +1,12 @@
 #include "modbus_rtu_driver/simulation/sim_node.h"
 
 #include <algorithm>
+#include <utility>
 
 #include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"
 
 namespace modbus_rtu_driver {
@@ -13,13 +15,6 @@ namespace {
 
 bool isReady(const std::future<Result>& f) {
   return !f.valid() || f.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
-}
-
-std::shared_ptr<Device> makeDevice(const DeviceConfig& dc) {
-  if (dc.type == "lc_relay8") return std::make_shared<LcRelay8>(dc);
-  if (dc.type == "ld58a08") return std::make_shared<Ld58a08>(dc);
-  if (dc.type == "yespeed_pdu") return std::make_shared<YespeedPdu>(dc);
-  return std::make_shared<GenericDevice>(dc);
 }
 
 }  // namespace
@@ -36,7 +31,7 @@ SimNode::SimNode(SimNodeOptions options, Transport& transport, Clock& clock, Sim
   }
   for (const DeviceConfig& dc : options_.devices) {
     auto e = std::make_unique<Entry>();
-    e->device = makeDevice(dc);
+    e->device = createDevice(dc);  // the registered class of its type, as BusNode builds it
     scheduler_->addDevice(dc.name);
     if (e->device->outputCount() > 0) {
       e->failsafe = std::make_unique<DeviceFailsafe>(*e->device, *scheduler_, clock_);
@@ -44,6 +39,16 @@ SimNode::SimNode(SimNodeOptions options, Transport& transport, Clock& clock, Sim
       e->failsafe->setReportSink([this](const FailsafeReport& r) {
         if (hooks_.report) hooks_.report(r);
       });
+      // DeviceAdapter's commands: the same job bodies, queued with the operation they run for.
+      const std::string name = dc.name;
+      e->commands = std::make_unique<DeviceCommands>(
+          *e->device, *e->failsafe, [this, name](BusScheduler::Job job) {
+            return runOp(submitting_op_, name, std::exchange(submitting_done_, {}), std::move(job));
+          });
+      e->commands->setWritten(
+          [this, name](const std::vector<uint8_t>& channels, const std::vector<bool>& states) {
+            if (hooks_.written) hooks_.written(name, channels, states);
+          });
       // BusNode::startFailsafe watches a device's own heartbeat too.
       if (e->failsafe->heartbeat()) {
         shortest = std::min(shortest, dc.failsafe.heartbeat_timeout);
@@ -233,104 +238,72 @@ std::future<Result> SimNode::runOp(uint64_t op, const std::string& device, Done 
                             });
 }
 
-Result SimNode::completeBatch(Entry& e, Transport& t,
-                              const std::shared_ptr<OutputBatch::Entry>& entry) {
-  // DeviceAdapter::completeBatch.
-  const bool sent = !entry->result;
-  if (sent) e.failsafe->userWriteSending();
-  Result w = e.batch.complete(
-      *e.device, t, entry,
-      [this, &e](const std::vector<uint8_t>& chs, const std::vector<bool>& sts) {
-        e.failsafe->userWriteConfirmed(chs, sts);
-        if (hooks_.written) hooks_.written(e.device->name(), chs, sts);
-      },
-      [&e](const std::vector<uint8_t>& chs, const Result& r) {
-        e.failsafe->userWriteNotConfirmed(chs, r);
-      });
-  return w;
+std::future<Result> SimNode::viaCommands(uint64_t op, Done done,
+                                         const std::function<std::future<Result>()>& call) {
+  // DeviceCommands queues at most one job per call, through the Submit above, which takes these.
+  submitting_op_ = op;
+  submitting_done_ = std::move(done);
+  std::future<Result> f = call();
+  submitting_op_ = 0;
+  submitting_done_ = {};  // not queued (refused, or merged into a queued job): not called
+  return f;
 }
 
 std::future<Result> SimNode::set(uint64_t op, const std::string& device,
                                  const std::vector<uint8_t>& channels,
                                  const std::vector<bool>& states, Done done) {
   Entry* e = entry(device);
-  auto added = e->batch.add(*e->device, channels, states);
-  if (added->result) return readyResult(*added->result);
-  return runOp(op, device, std::move(done),
-               [this, e, added](Transport& t) { return completeBatch(*e, t, added); });
+  return viaCommands(op, std::move(done), [&] { return e->commands->write(channels, states); });
 }
 
 std::future<Result> SimNode::command(uint64_t op, const std::string& device, uint8_t channel,
                                      bool state, Done done) {
-  // DeviceAdapter::onCommand: one job at a time completes the newest command and everything
-  // added before it. The caller of a topic gets no answer; the future says how the job went.
+  // DeviceAdapter::onCommand. The caller of a topic gets no answer: `done` (the model) learns how
+  // the write that carried it went, also when it joined a queued job.
   Entry* e = entry(device);
-  e->failsafe->commandReceived(channel, state);
-  auto added = e->batch.add(*e->device, {channel}, {state});
-  if (added->result) return readyResult(*added->result);
-  e->newest_command = std::move(added);
-  if (e->command_job_queued) {
-    // Merged into the queued job: its write carries this channel too, and the caller (the
-    // model) learns how that write went, as the fail-safe does (OutputBatch::complete).
-    e->merged_done.push_back(std::move(done));
-    return readyResult(Result::success());
-  }
-  e->command_job_queued = true;
-  return runOp(op, device, std::move(done), [this, e](Transport& t) {
-    auto newest = std::move(e->newest_command);
-    auto merged = std::move(e->merged_done);
-    e->merged_done.clear();
-    e->command_job_queued = false;
-    Result r = completeBatch(*e, t, newest);
-    for (const Done& d : merged)
-      if (d) d(r);
-    return r;
-  });
+  return viaCommands(op, {}, [&] { return e->commands->command(channel, state, std::move(done)); });
 }
 
 std::future<Result> SimNode::pulse(uint64_t op, const std::string& device, uint8_t channel,
                                    bool state, double duration, Done done) {
+  // LcRelay8Adapter::onPulse (its read back publishes nothing here).
   Entry* e = entry(device);
   const std::string problem = LcRelay8::validatePulse(channel, duration);
   if (!problem.empty()) return readyResult(Result::failure(ErrorKind::kInvalidArgument, problem));
-  return runOp(op, device, std::move(done), [e, channel, state, duration](Transport& t) {
-    // LcRelay8Adapter::onPulse.
-    auto& board = static_cast<LcRelay8&>(*e->device);
-    e->failsafe->timedCommandSending();
-    Result w = board.pulse(t, channel, state, duration);
-    e->failsafe->timedCommandDone(TimedIntent{channel, state, !state, duration}, w);
-    if (w.ok()) board.poll(t);
-    return w;
+  auto& board = static_cast<LcRelay8&>(*e->device);
+  return viaCommands(op, std::move(done), [&] {
+    return e->commands->timed(
+        TimedIntent{channel, state, !state, duration},
+        [&board, channel, state, duration](Transport& t) {
+          return board.pulse(t, channel, state, duration);
+        },
+        [&board](Transport& t) { board.poll(t); });
   });
 }
 
 std::future<Result> SimNode::setPwm(uint64_t op, const std::string& device, const PwmSettings& s,
                                     Done done) {
+  // Ld58a08Adapter::onSetPwm.
   Entry* e = entry(device);
   const std::string problem = Ld58a08::validatePwm(s);
   if (!problem.empty()) return readyResult(Result::failure(ErrorKind::kInvalidArgument, problem));
-  return runOp(op, device, std::move(done), [e, s](Transport& t) {
-    // Ld58a08Adapter::onSetPwm.
-    auto& board = static_cast<Ld58a08&>(*e->device);
-    e->failsafe->timedCommandSending();
-    Result w = board.setPwm(t, s);
-    e->failsafe->timedCommandDone(board.pwmIntent(s), w);
-    if (w.ok()) board.readPwm(t);
-    return w;
+  auto& board = static_cast<Ld58a08&>(*e->device);
+  return viaCommands(op, std::move(done), [&] {
+    return e->commands->timed(
+        board.pwmIntent(s), [&board, s](Transport& t) { return board.setPwm(t, s); },
+        [&board](Transport& t) { board.readPwm(t); });
   });
 }
 
 std::future<Result> SimNode::stopPwm(uint64_t op, const std::string& device, uint8_t channel,
                                      Done done) {
+  // Ld58a08Adapter::onStopPwm.
   Entry* e = entry(device);
-  return runOp(op, device, std::move(done), [e, channel](Transport& t) {
-    // Ld58a08Adapter::onStopPwm.
-    auto& board = static_cast<Ld58a08&>(*e->device);
-    e->failsafe->timedCommandSending();
-    Result w = board.stopPwm(t, channel);
-    e->failsafe->timedCommandStopped(channel, w);
-    if (w.ok()) board.readPwm(t);
-    return w;
+  auto& board = static_cast<Ld58a08&>(*e->device);
+  return viaCommands(op, std::move(done), [&] {
+    return e->commands->stopTimed(
+        channel, [&board, channel](Transport& t) { return board.stopPwm(t, channel); },
+        [&board](Transport& t) { board.readPwm(t); });
   });
 }
 

@@ -12,7 +12,6 @@
 #include <functional>
 #include <future>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,7 +23,7 @@
 #include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
-#include "modbus_rtu_driver/devices/output_batch.h"
+#include "modbus_rtu_driver/failsafe/device_commands.h"
 #include "modbus_rtu_driver/failsafe/device_failsafe.h"
 #include "modbus_rtu_driver/ros/digital_states_publisher.h"
 #include "modbus_rtu_driver/ros/publish_shared.h"
@@ -110,25 +109,11 @@ class DeviceAdapter {
   void publishLater(const ros::Publisher& publisher, Message message) {
     publishLater([publisher, m = std::move(message)] { publishShared(publisher, m); });
   }
-  // Bus thread, around a timed command (a flash, a PWM run): before it is sent, and with its
-  // outcome. Confirmed, it is a user's command like a write (it ends the fail-safe's hold there
-  // and the "in their safe state" claim) whose end and final level the fail-safe knows; not
-  // confirmed, the channel may run it or not, so a poll may show either level until its end.
-  void timedCommandSending() { failsafe_.timedCommandSending(); }
-  void timedCommandDone(const TimedIntent& intent, const Result& result) {
-    failsafe_.timedCommandDone(intent, result);
-  }
-  // A PWM run stopped (confirmed): the output shows the channel's coil again.
-  void timedCommandStopped(uint8_t channel, const Result& result) {
-    failsafe_.timedCommandStopped(channel, result);
-  }
+  // The device's commands on their way to the bus (failsafe/device_commands.h): writes, command
+  // topics and timed commands, told to the fail-safe with their outcome.
+  DeviceCommands& commands() { return commands_; }
   // Whether the last poll failed with the device now offline (its states are stale).
   bool offline() const { return !scheduler_.health(device_->name()).online; }
-  // Service writes of outputs: checked, then merged with others queued for this device.
-  Result writeOutputs(const std::vector<uint8_t>& channels, const std::vector<bool>& states);
-  // Bus thread: the outcome of a batch entry (service write or command), written with every
-  // other pending one if not written yet; confirmed states reach the fail-safe and the topics.
-  Result completeBatch(Transport& t, const std::shared_ptr<OutputBatch::Entry>& entry);
   // "ok" or "<device>: <message>" for service answers.
   std::string answer(const Result& result, const std::string& what) const;
 
@@ -147,6 +132,7 @@ class DeviceAdapter {
   virtual void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   DeviceFailsafe failsafe_;
+  DeviceCommands commands_;  // after failsafe_: it calls into it
   void keepTimedCommands(const ros::NodeHandle& node);
   EventSink failsafe_sink_;
   ros::Publisher failsafe_pub_;  // ~<device>/failsafe, latched: this device's newest event
@@ -160,11 +146,6 @@ class DeviceAdapter {
 
   std::optional<bool> logged_online_;  // what the log last said
   ros::WallTime last_offline_log_;
-
-  OutputBatch batch_;          // service writes and command topics, merged
-  std::mutex commands_mutex_;  // the two below
-  std::shared_ptr<OutputBatch::Entry> newest_command_;
-  bool command_job_queued_ = false;
 };
 
 }  // namespace modbus_rtu_driver

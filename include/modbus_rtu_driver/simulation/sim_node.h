@@ -1,7 +1,8 @@
 // The node side of the deterministic simulation (ROS-free): what the bus node builds for one bus
-// (the device classes, one DeviceFailsafe per device with outputs, the generic devices' safe
-// values, the BusScheduler in step mode, the heartbeat's Watchdog, the share's and the raw
-// writes' path) wired the way ros/bus_node.cpp and ros/device_adapter.cpp wire them, with the
+// (the device classes, one DeviceFailsafe and DeviceCommands per device with outputs: the
+// adapters' own write and timed-command jobs; the generic devices' safe values, the
+// BusScheduler in step mode, the heartbeat's Watchdog, the share's and the raw writes' path)
+// wired the way ros/bus_node.cpp and ros/device_adapter.cpp wire them, with the
 // ROS parts (services, topics, timers) replaced by calls. Nothing here runs by itself: the
 // simulation runs the bus (BusScheduler::step) and the deadline timer on one thread.
 //
@@ -22,7 +23,7 @@
 #include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
-#include "modbus_rtu_driver/devices/output_batch.h"
+#include "modbus_rtu_driver/failsafe/device_commands.h"
 #include "modbus_rtu_driver/failsafe/device_failsafe.h"
 
 namespace modbus_rtu_driver {
@@ -108,18 +109,18 @@ class SimNode {
   struct Entry {
     std::shared_ptr<Device> device;
     std::unique_ptr<DeviceFailsafe> failsafe;  // devices with outputs
-    OutputBatch batch;
-    std::shared_ptr<OutputBatch::Entry> newest_command;
-    bool command_job_queued = false;
-    std::vector<Done> merged_done;      // commands merged into the queued job: told how it went
-    bool generic_safe_pending = false;  // generic: safe values not reached (device silent)
+    std::unique_ptr<DeviceCommands> commands;  // devices with outputs
+    bool generic_safe_pending = false;         // generic: safe values not reached (device silent)
   };
   Entry* entry(const std::string& name);
   std::vector<Entry*> answeringFirst();
   std::future<Result> applySafe(Entry& e, const std::string& trigger, const std::string& reason);
   Result genericWriteSafe(Entry& e, Transport& t, const std::string& trigger,
                           const std::string& reason) const;
-  Result completeBatch(Entry& e, Transport& t, const std::shared_ptr<OutputBatch::Entry>& entry);
+  // Runs `call` (one DeviceCommands call) so that the job it queues, if any, runs for `op` and
+  // tells `done`.
+  std::future<Result> viaCommands(uint64_t op, Done done,
+                                  const std::function<std::future<Result>()>& call);
   void externalWrite(const Request& request, const Result& result, CommandSource source);
   std::future<Result> runOp(uint64_t op, const std::string& device, Done done,
                             std::function<Result(Transport&)> job);
@@ -134,6 +135,8 @@ class SimNode {
   bool started_ = false;
   bool share_closed_ = false;
   uint64_t current_op_ = 0;
+  uint64_t submitting_op_ = 0;  // viaCommands: the operation and callback of the job queued now
+  Done submitting_done_;
   std::vector<std::future<Result>> start_writes_, stop_writes_;
 };
 

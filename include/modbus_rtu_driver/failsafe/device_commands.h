@@ -1,0 +1,78 @@
+// One device's callers' commands on their way to the bus: a service's write of outputs, a command
+// topic's message, a timed command (an LC flash, an LD58A08 PWM run or its stop). Each is
+// checked before anything is queued, runs as one bus job, is written through OutputBatch (merged
+// with the writes queued meanwhile), and its outcome goes to the fail-safe, which decides what
+// the channel should be from then on. The ROS adapters and the simulation's SimNode both call
+// this, so the job bodies the simulation searches are the node's. ROS-free.
+//
+// Threads: every call comes from any thread; `done`, `after` and the written callback run on
+// the bus thread, in the job, right after the device's answer.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <future>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/devices/device.h"
+#include "modbus_rtu_driver/devices/output_batch.h"
+#include "modbus_rtu_driver/failsafe/device_failsafe.h"
+
+namespace modbus_rtu_driver {
+
+class DeviceCommands {
+ public:
+  using Done = std::function<void(const Result&)>;
+  using After = std::function<void(Transport&)>;
+  // Queues a job on the bus thread for this device (BusScheduler::submit; the simulation also
+  // notes whose job it is).
+  using Submit = std::function<std::future<Result>(BusScheduler::Job)>;
+
+  DeviceCommands(Device& device, DeviceFailsafe& failsafe, Submit submit);
+  DeviceCommands(const DeviceCommands&) = delete;
+  DeviceCommands& operator=(const DeviceCommands&) = delete;
+
+  // Runs after each write of callers' outputs that the device confirmed, with every channel it
+  // carried (the adapter publishes the outputs); before the bus runs.
+  void setWritten(OutputBatch::WrittenCallback written) { written_ = std::move(written); }
+
+  // A service's write: checked here (refused: a ready failure, nothing queued), then written with
+  // every other write queued for the device meanwhile (newest state per channel wins).
+  std::future<Result> write(const std::vector<uint8_t>& channels, const std::vector<bool>& states);
+  // A command topic's message: the dead man's deadline, then the same merged write. One bus job
+  // at a time is queued for commands: it writes the newest command and every one added before.
+  // `done` gets the outcome of the write that carried this command. The future is that job's
+  // when this call queued it; a ready success when the command joined a queued job (its outcome
+  // comes through `done`); a ready failure when refused.
+  std::future<Result> command(uint8_t channel, bool state, Done done = {});
+  // A timed command the device runs by itself (`intent`: its channel, level during and after,
+  // seconds): `send` writes it; confirmed, it is the caller's command, whose end and final level
+  // the fail-safe knows; not confirmed, the channel may run it or not until its end. `after`
+  // runs after a confirmed one (the adapters read the outputs back and publish them).
+  std::future<Result> timed(const TimedIntent& intent, BusScheduler::Job send, After after = {});
+  // A run the device times by itself stopped on `channel` (stop_pwm): confirmed, the channel
+  // shows its level again, taken at the next poll; its answer lost, unknown until a poll reads
+  // it.
+  std::future<Result> stopTimed(uint8_t channel, BusScheduler::Job send, After after = {});
+
+ private:
+  // Bus thread: the outcome of `entry`, written with every other pending one if not written
+  // yet; confirmed or not, every channel the write carried reaches the fail-safe.
+  Result complete(Transport& t, const std::shared_ptr<OutputBatch::Entry>& entry);
+
+  Device& device_;
+  DeviceFailsafe& failsafe_;
+  Submit submit_;
+  OutputBatch::WrittenCallback written_;
+  OutputBatch batch_;  // service writes and command topics, merged
+
+  std::mutex commands_mutex_;  // the three below
+  std::shared_ptr<OutputBatch::Entry> newest_command_;
+  bool command_job_queued_ = false;
+  std::vector<Done> command_done_;  // the queued job's commands, in the order they came
+};
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,79 @@
+#include "modbus_rtu_driver/failsafe/device_commands.h"
+
+namespace modbus_rtu_driver {
+
+DeviceCommands::DeviceCommands(Device& device, DeviceFailsafe& failsafe, Submit submit)
+    : device_(device), failsafe_(failsafe), submit_(std::move(submit)) {}
+
+std::future<Result> DeviceCommands::write(const std::vector<uint8_t>& channels,
+                                          const std::vector<bool>& states) {
+  auto entry = batch_.add(device_, channels, states);  // checked there, once
+  if (entry->result) return readyResult(*entry->result);
+  return submit_([this, entry](Transport& t) { return complete(t, entry); });
+}
+
+std::future<Result> DeviceCommands::command(uint8_t channel, bool state, Done done) {
+  failsafe_.commandReceived(channel, state);  // the dead man's deadline
+  std::lock_guard<std::mutex> lock(commands_mutex_);
+  auto entry = batch_.add(device_, {channel}, {state});
+  if (entry->result) {  // refused (never, for a channel a topic subscribes for)
+    if (done) done(*entry->result);
+    return readyResult(*entry->result);
+  }
+  newest_command_ = std::move(entry);
+  command_done_.push_back(std::move(done));
+  if (command_job_queued_) return readyResult(Result::success());  // the queued job takes it
+  command_job_queued_ = true;
+  return submit_([this](Transport& t) {
+    std::shared_ptr<OutputBatch::Entry> newest;
+    std::vector<Done> dones;
+    {
+      std::lock_guard<std::mutex> lock(commands_mutex_);
+      newest = std::move(newest_command_);
+      dones.swap(command_done_);
+      command_job_queued_ = false;
+    }
+    Result w = complete(t, newest);
+    for (const Done& d : dones)
+      if (d) d(w);
+    return w;
+  });
+}
+
+Result DeviceCommands::complete(Transport& t, const std::shared_ptr<OutputBatch::Entry>& entry) {
+  if (!entry->result) failsafe_.userWriteSending();  // this job sends the pending writes
+  // Outcomes per merged write: every channel it carried, not only this entry's.
+  return batch_.complete(
+      device_, t, entry,
+      [this](const std::vector<uint8_t>& channels, const std::vector<bool>& states) {
+        failsafe_.userWriteConfirmed(channels, states);
+        if (written_) written_(channels, states);
+      },
+      [this](const std::vector<uint8_t>& channels, const Result& result) {
+        failsafe_.userWriteNotConfirmed(channels, result);
+      });
+}
+
+std::future<Result> DeviceCommands::timed(const TimedIntent& intent, BusScheduler::Job send,
+                                          After after) {
+  return submit_([this, intent, send = std::move(send), after = std::move(after)](Transport& t) {
+    failsafe_.timedCommandSending();
+    Result w = send(t);
+    failsafe_.timedCommandDone(intent, w);
+    if (w.ok() && after) after(t);
+    return w;
+  });
+}
+
+std::future<Result> DeviceCommands::stopTimed(uint8_t channel, BusScheduler::Job send,
+                                              After after) {
+  return submit_([this, channel, send = std::move(send), after = std::move(after)](Transport& t) {
+    failsafe_.timedCommandSending();
+    Result w = send(t);
+    failsafe_.timedCommandStopped(channel, w);
+    if (w.ok() && after) after(t);
+    return w;
+  });
+}
+
+}  // namespace modbus_rtu_driver

@@ -1,0 +1,149 @@
+// A device's callers' commands on their way to the bus (failsafe/device_commands.h): what is
+// queued, what goes on the wire (byte exact, scripted transport), who learns the outcome, and
+// what the fail-safe then expects of each channel. The jobs run by hand, in the order queued, as
+// the bus thread would run them.
+#include <gtest/gtest.h>
+
+#include <deque>
+
+#include "modbus_rtu_driver/core/bus/clock.h"
+#include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/failsafe/device_commands.h"
+#include "scripted_transport.h"
+
+using namespace modbus_rtu_driver;
+
+namespace {
+
+DeviceConfig relays() {
+  DeviceConfig c;
+  c.name = "relays";
+  c.type = "lc_relay8";
+  c.address = 255;
+  return c;
+}
+
+struct Commands : ::testing::Test {
+  ManualClock clock;
+  ScriptedTransport unused;  // the scheduler's: nothing here runs through it
+  BusScheduler scheduler{unused, {}, clock};
+  LcRelay8 board{relays()};
+  DeviceFailsafe failsafe{board, scheduler, clock};
+  std::deque<BusScheduler::Job> queued;
+  DeviceCommands commands{board, failsafe, [this](BusScheduler::Job job) {
+                            queued.push_back(std::move(job));
+                            return std::future<Result>();  // the tests take outcomes from jobs
+                          }};
+  ScriptedTransport bus;
+
+  Result runNext() {
+    EXPECT_FALSE(queued.empty());
+    if (queued.empty()) return Result::failure(ErrorKind::kInvalidArgument, "nothing queued");
+    BusScheduler::Job job = std::move(queued.front());
+    queued.pop_front();
+    return job(bus);
+  }
+  Expectation expected(uint8_t channel) {
+    return failsafe.intents().expected(channel, clock.now());
+  }
+};
+
+}  // namespace
+
+TEST_F(Commands, ARefusedWriteQueuesNothingAndTellsTheCallerWhy) {
+  std::future<Result> f = commands.write({8}, {true});
+  ASSERT_TRUE(f.valid());
+  const Result r = f.get();
+  EXPECT_EQ(r.error, ErrorKind::kInvalidArgument);
+  EXPECT_NE(r.message.find("channel: 8 is outside 0-7"), std::string::npos) << r.message;
+  bool told = false;
+  commands.command(9, true, [&](const Result& w) {
+    told = true;
+    EXPECT_EQ(w.error, ErrorKind::kInvalidArgument);
+  });
+  EXPECT_TRUE(told);
+  EXPECT_TRUE(queued.empty());
+  EXPECT_EQ(bus.executed(), 0);
+}
+
+TEST_F(Commands, CommandsThatCameMeanwhileGoOutInOneWriteAndEachLearnsItsOutcome) {
+  std::vector<Result> outcomes;
+  auto done = [&](const Result& r) { outcomes.push_back(r); };
+  commands.command(1, true, done);
+  commands.command(2, true, done);
+  commands.command(1, false, done);  // newer than the first for channel 1
+  ASSERT_EQ(queued.size(), 1u) << "one job for the commands";
+  std::vector<uint8_t> written_channels;
+  std::vector<bool> written_states;
+  commands.setWritten([&](const std::vector<uint8_t>& c, const std::vector<bool>& s) {
+    written_channels = c;
+    written_states = s;
+  });
+  bus.expectEcho(toHex(encodeRequest(Request::writeMultipleCoils(255, 1, {false, true}))));
+  EXPECT_TRUE(runNext().ok());
+  ASSERT_EQ(outcomes.size(), 3u);
+  for (const Result& r : outcomes) EXPECT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(written_channels, (std::vector<uint8_t>{1, 2}));
+  EXPECT_EQ(written_states, (std::vector<bool>{false, true}));
+  // The fail-safe holds the channels at what the device confirmed.
+  EXPECT_EQ(expected(1).kind, Expectation::Kind::kLevel);
+  EXPECT_FALSE(expected(1).level);
+  EXPECT_EQ(expected(2).kind, Expectation::Kind::kLevel);
+  EXPECT_TRUE(expected(2).level);
+  // A command after that job ran queues the next one.
+  commands.command(3, true, done);
+  EXPECT_EQ(queued.size(), 1u);
+  EXPECT_TRUE(bus.usedUp());
+  EXPECT_EQ(bus.mismatches(), "");
+}
+
+TEST_F(Commands, AWriteWithoutAnAnswerIsNotConfirmedToItsCallerNorTheFailsafe) {
+  bool written = false;
+  commands.setWritten(
+      [&](const std::vector<uint8_t>&, const std::vector<bool>&) { written = true; });
+  commands.write({4}, {false});
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(255, 4, false))));
+  EXPECT_TRUE(runNext().ok());
+  ASSERT_TRUE(written);
+  ASSERT_EQ(expected(4).kind, Expectation::Kind::kLevel);
+  written = false;
+  commands.write({4}, {true});
+  // Silent, and silent again for the read back that might have confirmed it.
+  bus.expect(toHex(encodeRequest(Request::writeSingleCoil(255, 4, true))));
+  bus.expect(toHex(encodeRequest(Request::readCoils(255, 0, 8))));
+  const Result r = runNext();
+  EXPECT_FALSE(r.ok());
+  EXPECT_FALSE(written);
+  // The device may have done it: the channel is whatever the next poll shows.
+  EXPECT_EQ(expected(4).kind, Expectation::Kind::kAny);
+  EXPECT_TRUE(bus.usedUp());
+  EXPECT_EQ(bus.mismatches(), "");
+}
+
+TEST_F(Commands, ATimedCommandConfirmedIsTheCallersWithItsEndAndFinalLevel) {
+  int after = 0;
+  commands.timed(
+      TimedIntent{5, true, false, 2.0}, [&](Transport& t) { return board.pulse(t, 5, true, 2.0); },
+      [&](Transport&) { ++after; });
+  const Request flash =
+      Request::writeMultipleRegisters(255, LcRelay8::flashRegister(5), {LcRelay8::kFlashClose, 20});
+  bus.expectEcho(toHex(encodeRequest(flash)));
+  EXPECT_TRUE(runNext().ok());
+  EXPECT_EQ(after, 1);
+  EXPECT_EQ(expected(5).kind, Expectation::Kind::kLevel);
+  EXPECT_TRUE(expected(5).level) << "on during the flash-close";
+  clock.advance(std::chrono::seconds(3));
+  EXPECT_EQ(expected(5).kind, Expectation::Kind::kLevel);
+  EXPECT_FALSE(expected(5).level) << "off after it";
+  // Not confirmed: `after` does not run, the channel may show either level.
+  commands.timed(
+      TimedIntent{6, true, false, 2.0}, [&](Transport& t) { return board.pulse(t, 6, true, 2.0); },
+      [&](Transport&) { ++after; });
+  const Request flash6 =
+      Request::writeMultipleRegisters(255, LcRelay8::flashRegister(6), {LcRelay8::kFlashClose, 20});
+  bus.expect(toHex(encodeRequest(flash6)), toHex(encodeException(255, 0x10, 4)));
+  EXPECT_FALSE(runNext().ok());
+  EXPECT_EQ(after, 1);
+  EXPECT_TRUE(bus.usedUp());
+  EXPECT_EQ(bus.mismatches(), "");
+}
