@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """PDU power logging: rosbag records the node's telemetry and the bag reads back."""
 import os
+import shutil
 import subprocess
+import tempfile
 import time
 import unittest
 
@@ -14,9 +16,6 @@ from std_srvs.srv import SetBool
 
 from modbus_rtu_driver.msg import DigitalStates, PduTelemetry
 
-BAG = "/tmp/modbus_rtu_rostest_bag/telemetry.bag"
-
-
 class BagTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -24,13 +23,14 @@ class BagTest(unittest.TestCase):
 
     def test_record_and_read_back(self):
         rospy.wait_for_message("/bus/pdu/telemetry", PduTelemetry, timeout=20)
-        os.makedirs(os.path.dirname(BAG), exist_ok=True)
-        if os.path.exists(BAG):
-            os.remove(BAG)
-        subprocess.run(["rosbag", "record", "--duration=3", "-O", BAG, "/bus/pdu/telemetry",
+        # A directory of this run's own: another run beside it cannot take the bag or the PNG.
+        work = tempfile.mkdtemp(prefix="modbus_rtu_rostest_bag_")
+        self.addCleanup(shutil.rmtree, work, True)
+        bag_path = os.path.join(work, "telemetry.bag")
+        subprocess.run(["rosbag", "record", "--duration=3", "-O", bag_path, "/bus/pdu/telemetry",
                         "/bus/relays/outputs"], check=True, timeout=30,
                        stdout=subprocess.DEVNULL)
-        with rosbag.Bag(BAG) as bag:
+        with rosbag.Bag(bag_path) as bag:
             telemetry = [m for _, m, _ in bag.read_messages(topics=["/bus/pdu/telemetry"])]
             outputs = [m for _, m, _ in bag.read_messages(topics=["/bus/relays/outputs"])]
         # 5 Hz for 3 s; allow for a slow start of the recorder.
@@ -42,11 +42,9 @@ class BagTest(unittest.TestCase):
             self.assertGreater(m.voltage, 150.0)
             self.assertGreater(m.power, -1.0)
         # The plotting script turns the bag into a PNG.
-        png = os.path.join(os.path.dirname(BAG), "telemetry.png")
-        if os.path.exists(png):
-            os.remove(png)
+        png = os.path.join(work, "telemetry.png")
         script = os.path.join(rospkg.RosPack().get_path("modbus_rtu_driver"), "scripts", "plot_bag.py")
-        out = subprocess.run(["/usr/bin/python3", script, BAG, "-o", png, "--node", "/bus"],
+        out = subprocess.run(["/usr/bin/python3", script, bag_path, "-o", png, "--node", "/bus"],
                              check=True, timeout=120, stdout=subprocess.PIPE, text=True).stdout
         self.assertIn("%d telemetry samples" % len(telemetry), out)
         with open(png, "rb") as f:

@@ -20,15 +20,11 @@ import rostest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
+from helpers import free_port  # noqa: E402  (below the ephemeral range, checked to bind)
 
 PKG = "modbus_rtu_driver"
 
 
-def free_port():
-    """A TCP port free on 127.0.0.1 now (the kernel picks it) for the simulator's gateway."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 OK, BAD_ARGUMENTS, NOT_FOUND, REFUSED, BUS_ERROR, NOT_CONFIRMED = 0, 2, 3, 4, 5, 6
 
@@ -107,11 +103,17 @@ class CommissionTest(unittest.TestCase):
         self.tmp = tempfile.mkdtemp(prefix="modbus_rtu_commission_")
         self.sim = None
         self.tool = executable("modbus_rtu_commission")
-        self.env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:1")  # nobody there
+        # The tool needs no ROS master: point it at a port bound here and never listened on,
+        # where a connection is refused whatever else runs on this machine.
+        self.no_master = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.no_master.bind(("127.0.0.1", 0))
+        self.env = dict(os.environ,
+                        ROS_MASTER_URI="http://127.0.0.1:%d" % self.no_master.getsockname()[1])
 
     def tearDown(self):
         if self.sim:
             self.sim.stop()
+        self.no_master.close()
         shutil.rmtree(self.tmp, ignore_errors=True)
 
     def start_sim(self, devices, rtu_tcp=None):
