@@ -56,21 +56,22 @@ Result DeviceCommands::complete(Transport& t, const std::shared_ptr<OutputBatch:
 
 std::future<Result> DeviceCommands::timed(const TimedIntent& intent, BusScheduler::Job send,
                                           After after) {
-  return submit_([this, intent, send = std::move(send), after = std::move(after)](Transport& t) {
-    failsafe_.timedCommandSending();
-    Result w = send(t);
-    failsafe_.timedCommandDone(intent, w);
-    if (w.ok() && after) after(t);
-    return w;
-  });
+  return timedJob(std::move(send), std::move(after),
+                  [this, intent](const Result& w) { failsafe_.timedCommandDone(intent, w); });
 }
 
 std::future<Result> DeviceCommands::stopTimed(uint8_t channel, BusScheduler::Job send,
                                               After after) {
-  return submit_([this, channel, send = std::move(send), after = std::move(after)](Transport& t) {
+  return timedJob(std::move(send), std::move(after),
+                  [this, channel](const Result& w) { failsafe_.timedCommandStopped(channel, w); });
+}
+
+std::future<Result> DeviceCommands::timedJob(BusScheduler::Job send, After after, Done tell) {
+  return submit_([this, send = std::move(send), after = std::move(after),
+                  tell = std::move(tell)](Transport& t) {
     failsafe_.timedCommandSending();
     Result w = send(t);
-    failsafe_.timedCommandStopped(channel, w);
+    tell(w);
     if (w.ok() && after) after(t);
     return w;
   });

@@ -6,28 +6,20 @@
 
 #include <deque>
 
+#include "device_fixtures.h"
 #include "modbus_rtu_driver/core/bus/clock.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/failsafe/device_commands.h"
-#include "scripted_transport.h"
 
 using namespace modbus_rtu_driver;
 
 namespace {
 
-DeviceConfig relays() {
-  DeviceConfig c;
-  c.name = "relays";
-  c.type = "lc_relay8";
-  c.address = 255;
-  return c;
-}
-
 struct Commands : ::testing::Test {
   ManualClock clock;
   ScriptedTransport unused;  // the scheduler's: nothing here runs through it
   BusScheduler scheduler{unused, {}, clock};
-  LcRelay8 board{relays()};
+  LcRelay8 board{devtest::config("lc_relay8", 255)};
   DeviceFailsafe failsafe{board, scheduler, clock};
   std::deque<BusScheduler::Job> queued;
   DeviceCommands commands{board, failsafe, [this](BusScheduler::Job job) {
@@ -93,8 +85,7 @@ TEST_F(Commands, CommandsThatCameMeanwhileGoOutInOneWriteAndEachLearnsItsOutcome
   // A command after that job ran queues the next one.
   commands.command(3, true, done);
   EXPECT_EQ(queued.size(), 1u);
-  EXPECT_TRUE(bus.usedUp());
-  EXPECT_EQ(bus.mismatches(), "");
+  EXPECT_SCRIPT_DONE(bus);
 }
 
 TEST_F(Commands, AWriteWithoutAnAnswerIsNotConfirmedToItsCallerNorTheFailsafe) {
@@ -116,8 +107,7 @@ TEST_F(Commands, AWriteWithoutAnAnswerIsNotConfirmedToItsCallerNorTheFailsafe) {
   EXPECT_FALSE(written);
   // The device may have done it: the channel is whatever the next poll shows.
   EXPECT_EQ(expected(4).kind, Expectation::Kind::kAny);
-  EXPECT_TRUE(bus.usedUp());
-  EXPECT_EQ(bus.mismatches(), "");
+  EXPECT_SCRIPT_DONE(bus);
 }
 
 TEST_F(Commands, ATimedCommandConfirmedIsTheCallersWithItsEndAndFinalLevel) {
@@ -144,6 +134,5 @@ TEST_F(Commands, ATimedCommandConfirmedIsTheCallersWithItsEndAndFinalLevel) {
   bus.expect(toHex(encodeRequest(flash6)), toHex(encodeException(255, 0x10, 4)));
   EXPECT_FALSE(runNext().ok());
   EXPECT_EQ(after, 1);
-  EXPECT_TRUE(bus.usedUp());
-  EXPECT_EQ(bus.mismatches(), "");
+  EXPECT_SCRIPT_DONE(bus);
 }

@@ -62,6 +62,9 @@ class DeviceCommands {
   // Bus thread: the outcome of `entry`, written with every other pending one if not written
   // yet; confirmed or not, every channel the write carried reaches the fail-safe.
   Result complete(Transport& t, const std::shared_ptr<OutputBatch::Entry>& entry);
+  // The job of a timed command or its stop: `send`, its outcome to the fail-safe (`tell`), then
+  // `after` when confirmed.
+  std::future<Result> timedJob(BusScheduler::Job send, After after, Done tell);
 
   Device& device_;
   DeviceFailsafe& failsafe_;
