@@ -83,14 +83,12 @@ TEST(Ld58a08, ChannelsWithGapsAreWrittenAloneSoOthersAreNotTouched) {
 TEST(Ld58a08, PollDecodesOutputsAndPwm) {
   Ld58a08 board(config("ld58a08", 1));
   ScriptedTransport bus;
-  bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 7C 50 69");
-  for (uint16_t ch = 0; ch < 8; ++ch) {
-    const Request read = Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3);
-    const std::vector<uint16_t> regs = ch == 0   ? std::vector<uint16_t>{500, 200, 0xFFFF}
-                                       : ch == 6 ? std::vector<uint16_t>{10000, 30, 1000}
-                                                 : std::vector<uint16_t>{0, 0, 0};
-    bus.expect(toHex(encodeRequest(read)), toHex(encodeReply(read, regs)));
-  }
+  // The manual's frames: outputs 2-6 on (01 01 01 7C 50 69).
+  expectFirstLd58a08Poll(bus, 0x7C, [](uint16_t ch) {
+    return ch == 0   ? std::vector<uint16_t>{500, 200, 0xFFFF}
+           : ch == 6 ? std::vector<uint16_t>{10000, 30, 1000}
+                     : std::vector<uint16_t>{0, 0, 0};
+  });
   ASSERT_TRUE(board.poll(bus).ok());
   EXPECT_EQ(board.outputs(), (std::vector<bool>{0, 0, 1, 1, 1, 1, 1, 0}));
   ASSERT_TRUE(board.pwmKnown());
@@ -121,14 +119,11 @@ TEST(Ld58a08, PollDecodesOutputsAndPwm) {
 TEST(Ld58a08, ReadBackSaysContinuousAndWhatIsLeftExplicitly) {
   Ld58a08 board(config("ld58a08", 1));
   ScriptedTransport bus;
-  bus.expect("01 01 00 00 00 08 3D CC", "01 01 01 00 51 88");
-  for (uint16_t ch = 0; ch < 8; ++ch) {
-    const Request read = Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3);
-    const std::vector<uint16_t> regs = ch == 1   ? std::vector<uint16_t>{10, 5, 7}
-                                       : ch == 7 ? std::vector<uint16_t>{2000, 55, 0xFFFF}
-                                                 : std::vector<uint16_t>{10, 5, 0};
-    bus.expect(toHex(encodeRequest(read)), toHex(encodeReply(read, regs)));
-  }
+  expectFirstLd58a08Poll(bus, 0x00, [](uint16_t ch) {
+    return ch == 1   ? std::vector<uint16_t>{10, 5, 7}
+           : ch == 7 ? std::vector<uint16_t>{2000, 55, 0xFFFF}
+                     : std::vector<uint16_t>{10, 5, 0};
+  });
   ASSERT_TRUE(board.poll(bus).ok());
   const PwmState& burst = board.pwm()[1];
   EXPECT_TRUE(burst.running);

@@ -13,29 +13,6 @@ using namespace modbus_rtu_driver::devtest;
 
 namespace {
 
-std::string frame(const Request& r) {
-  return toHex(encodeRequest(r));
-}
-
-std::string coilsReply(uint8_t slave, unsigned bits) {
-  std::vector<uint16_t> values;
-  for (unsigned i = 0; i < 8; ++i) values.push_back(static_cast<uint16_t>(bits >> i & 1u));
-  return toHex(encodeReply(Request::readCoils(slave, 0, 8), values));
-}
-
-std::string registersReply(uint8_t slave, uint16_t address, const std::vector<uint16_t>& values) {
-  return toHex(encodeReply(
-      Request::readHoldingRegisters(slave, address, static_cast<uint16_t>(values.size())), values));
-}
-
-// An LD58A08's first poll: its outputs, then every channel's PWM registers (all idle).
-void expectFirstLd58a08Poll(ScriptedTransport& bus) {
-  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
-  for (uint16_t ch = 0; ch < 8; ++ch)
-    bus.expect(frame(Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3)),
-               registersReply(1, static_cast<uint16_t>(ch * 0x10), {0, 0, 0}));
-}
-
 PwmSettings burst() {
   PwmSettings s;
   s.channel = 2;
