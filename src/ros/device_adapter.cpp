@@ -19,7 +19,8 @@ DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& sched
       }) {
   // Here, not in start(): the start-up safe states are reported before start().
   if (device_->outputCount() > 0) failsafe_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 1, true);
-  failsafe_.setReportSink([this](const FailsafeReport& r) { report(r); });
+  failsafe_.setReportSink(
+      [this](const FailsafeReport& r) { publishReport(r, r.text(), failsafe_pub_); });
   failsafe_.setOutputsWritten([this] { publishOutputs(); });
   commands_.setWritten(
       [this](const std::vector<uint8_t>&, const std::vector<bool>&) { publishOutputs(); });
@@ -249,8 +250,8 @@ void DeviceAdapter::diagnosePollRate(diagnostic_updater::DiagnosticStatusWrapper
 // The fail-safe's report: the log (stderr once ROS is down: at shutdown, rosconsole is gone and
 // this is what the user must still see), ~<device>/failsafe (this device's newest event, for
 // late subscribers) and the node's ~failsafe (every device's events).
-void DeviceAdapter::report(const FailsafeReport& r) {
-  const std::string text = r.text();
+void DeviceAdapter::publishReport(const FailsafeReport& r, const std::string& text,
+                                  const ros::Publisher& publisher) {
   if (!ros::ok()) {
     std::fprintf(stderr, "[%s] %s: fail-safe %s\n", r.confirmed ? "WARN" : "ERROR",
                  device_->name().c_str(), text.c_str());
@@ -270,9 +271,10 @@ void DeviceAdapter::report(const FailsafeReport& r) {
   e.action = r.action;
   e.channels = r.channels;
   e.states.assign(r.states.begin(), r.states.end());
+  e.values = r.values;
   e.confirmed = r.confirmed;
   e.message = r.message;
-  if (failsafe_pub_) publishLater(failsafe_pub_, e);
+  if (publisher) publishLater(publisher, e);
   if (failsafe_sink_) failsafe_sink_(e);
 }
 

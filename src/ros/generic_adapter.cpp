@@ -6,9 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <future>
-#include <sstream>
 
 #include "modbus_rtu_driver/SetValue.h"
 #include "modbus_rtu_driver/SignalValues.h"
@@ -16,6 +14,7 @@
 #include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/core/modbus/text.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
+#include "modbus_rtu_driver/failsafe/generic_failsafe.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
 
 namespace modbus_rtu_driver {
@@ -24,7 +23,15 @@ namespace {
 
 class GenericAdapter : public DeviceAdapter {
  public:
-  using DeviceAdapter::DeviceAdapter;
+  GenericAdapter(std::shared_ptr<Device> device, BusScheduler& scheduler,
+                 const ros::NodeHandle& node)
+      : DeviceAdapter(std::move(device), scheduler, node), safe_(generic(), scheduler) {
+    safe_.setReportSink(
+        [this](const FailsafeReport& r) { publishReport(r, safe_.text(r), event_pub_); });
+    safe_.setSignalsWritten([this] {
+      if (!pubs_.empty()) publishSignals(false);  // not before start() (on_start: safe)
+    });
+  }
 
   void advertise() override {
     const auto& signals = generic().signals();
@@ -108,39 +115,32 @@ class GenericAdapter : public DeviceAdapter {
     }
   }
 
-  // Fail-safe: the signals' safe values stand for the outputs' safe states. The triggers are
-  // the base's and the node's (shutdown, heartbeat, on_start); they reach the device here.
-  bool hasSafeStates() const override { return !generic().safeSignals().empty(); }
+  // Fail-safe: the signals' safe values stand for the outputs' safe states
+  // (failsafe/generic_failsafe.h). The triggers are the base's and the node's (shutdown,
+  // heartbeat, on_start); they reach the device here.
+  bool hasSafeStates() const override { return safe_.hasSafeValues(); }
 
   std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
                                 const std::vector<uint8_t>&) override {
-    if (!hasSafeStates()) return readyResult(Result::success());
-    return scheduler_.submit(device_->name(), [this, trigger, reason](Transport& t) {
-      return writeSafe(t, trigger, reason);
-    });
-  }
-
-  void setFailsafeSink(EventSink sink) override {
-    failsafe_sink_ = sink;
-    DeviceAdapter::setFailsafeSink(std::move(sink));
+    return safe_.applySafe(trigger, reason);
   }
 
   // Only what a generic device has: no output safe states, no on_restart, no restart count.
   void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status) override {
     if (!hasSafeStates()) return;  // no fail-safe at all
     status.add("safe values", join(generic().safeSignals(), ", ",
-                                   [this](size_t i) { return describeSafeValue(i); }));
+                                   [this](size_t i) { return safe_.describeSafeValue(i); }));
     const FailsafeConfig& fs = failsafeConfig();
     status.add("on_start", fs.on_start_safe ? "safe" : "keep");
     if (!fs.heartbeat_topic.empty())
       status.add("device heartbeat",
-                 fs.heartbeat_topic + " within " + number(fs.heartbeat_timeout) + " s");
-    std::lock_guard<std::mutex> lock(failsafe_mutex_);
-    status.add("fail-safe events", failsafe_events_);
-    status.add("last fail-safe event", last_failsafe_.empty() ? "none" : last_failsafe_);
-    if (!failsafe_active_.empty())
+                 fs.heartbeat_topic + " within " + numberText(fs.heartbeat_timeout) + " s");
+    const GenericFailsafe::Status s = safe_.status();
+    status.add("fail-safe events", s.events);
+    status.add("last fail-safe event", s.last_event.empty() ? "none" : s.last_event);
+    if (!s.active.empty())
       status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN,
-                          "signals at their safe values after " + failsafe_active_);
+                          "signals at their safe values after " + s.active);
   }
 
   void diagnoseType(diagnostic_updater::DiagnosticStatusWrapper& status) override {
@@ -168,12 +168,7 @@ class GenericAdapter : public DeviceAdapter {
   // values not reached (the device was silent) are written once it answers again.
   void onPoll(const Result& r) override {
     publishSignals(true);
-    if (!safe_pending_ || noProperAnswer(r.error)) return;
-    safe_pending_ = false;  // one retry queued; it sets this again if it fails too
-    scheduler_.submit(device_->name(), [this](Transport& t) {
-      return writeSafe(t, "restart",
-                       "the device answers again; its safe values were not reached before");
-    });
+    safe_.afterPoll(r);
   }
 
   Result write(size_t i, double value) {
@@ -183,80 +178,9 @@ class GenericAdapter : public DeviceAdapter {
     return runOnBus([this, i, value](Transport& t) {
       Result r = generic().writeSignal(t, i, value);
       publishSignals(false);
-      if (r.ok()) {  // a user's confirmed write ends the fail-safe state in /diagnostics
-        std::lock_guard<std::mutex> lock(failsafe_mutex_);
-        failsafe_active_.clear();
-      }
+      if (r.ok()) safe_.userWriteConfirmed();  // no longer "at their safe values"
       return r;
     });
-  }
-
-  static std::string number(double v) {
-    std::ostringstream s;
-    s << v;
-    return s.str();
-  }
-
-  std::string describeSafeValue(size_t i) const {
-    const SignalConfig& s = generic().signals()[i];
-    if (s.type == SignalType::kBool) return s.name + (*s.safe_value != 0 ? " on" : " off");
-    return s.name + " " + number(*s.safe_value) + (s.unit.empty() ? "" : " " + s.unit);
-  }
-
-  // Bus thread: writes every safe value, reads each back, reports the event.
-  Result writeSafe(Transport& t, const std::string& trigger, const std::string& reason) {
-    FailsafeEvent e;
-    e.header.stamp = ros::Time::now();
-    e.device = device_->name();
-    e.trigger = trigger;
-    e.reason = reason;
-    e.action = "safe";
-    for (size_t i : generic().safeSignals()) {
-      const double v = *generic().signals()[i].safe_value;
-      e.channels.push_back(generic().signals()[i].name);
-      e.states.push_back(v != 0.0);
-      e.values.push_back(v);
-    }
-    bool silent = false;
-    Result w = generic().writeSafeValues(t, &silent);
-    // Not reached because the device did not answer: tried again when it answers. A refusal,
-    // or a value read back that differs, is the device's answer: reported, not retried (on
-    // every poll it would only repeat the event), and the other signals were still written.
-    safe_pending_ = silent;
-    if (!pubs_.empty()) publishSignals(false);  // not before start() (on_start: safe)
-    e.confirmed = w.ok();
-    e.message = w.ok() ? "confirmed by reading the signals back" : w.message;
-    report(e);
-    return w;
-  }
-
-  // The event in the log (stderr once ROS is down: at shutdown), the counters for
-  // /diagnostics, and the node's ~failsafe topic.
-  void report(const FailsafeEvent& e) {
-    std::string text = e.trigger + " (" + e.reason +
-                       "): " + join(e.channels, ", ", [this](const std::string& name) {
-                         const auto i = static_cast<size_t>(
-                             std::find_if(generic().signals().begin(), generic().signals().end(),
-                                          [&](const SignalConfig& s) { return s.name == name; }) -
-                             generic().signals().begin());
-                         return describeSafeValue(i);
-                       });
-    text += e.confirmed ? "" : "; NOT confirmed: " + e.message;
-    {
-      std::lock_guard<std::mutex> lock(failsafe_mutex_);
-      ++failsafe_events_;
-      last_failsafe_ = text;
-      failsafe_active_ = text;
-    }
-    if (!ros::ok())
-      std::fprintf(stderr, "[%s] %s: fail-safe %s\n", e.confirmed ? "WARN" : "ERROR",
-                   device_->name().c_str(), text.c_str());
-    else if (e.confirmed)
-      ROS_WARN("%s: fail-safe %s", device_->name().c_str(), text.c_str());
-    else
-      ROS_ERROR("%s: fail-safe %s", device_->name().c_str(), text.c_str());
-    if (event_pub_) publishLater(event_pub_, e);
-    if (failsafe_sink_) failsafe_sink_(e);
   }
 
   // Bus thread: each signal's topic when its value changed, D/signals after a poll.
@@ -322,14 +246,9 @@ class GenericAdapter : public DeviceAdapter {
   std::vector<bool> warned_;                      // by signal: refused and logged; bus thread
   // By poll group: recorded on the bus thread, read by diagnostics (each locks itself).
   std::vector<RateMeter> rates_ = std::vector<RateMeter>(generic().groups().size());
-  EventSink failsafe_sink_;
-  ros::Publisher event_pub_;   // D/failsafe; none before advertise() (on_start: safe)
-  bool safe_pending_ = false;  // bus thread only
-  std::mutex failsafe_mutex_;  // the three below
-  uint64_t failsafe_events_ = 0;
-  std::string last_failsafe_;    // the newest event in words
-  std::string failsafe_active_;  // set by a safe write, cleared by a user's write
-  std::mutex splits_mutex_;      // the two below: copies for diagnostics
+  GenericFailsafe safe_;
+  ros::Publisher event_pub_;  // D/failsafe; none before advertise() (on_start: safe)
+  std::mutex splits_mutex_;   // the two below: copies for diagnostics
   std::vector<std::string> splits_;
   std::string unread_;
 };

@@ -60,6 +60,14 @@ SimNode::SimNode(SimNodeOptions options, Transport& transport, Clock& clock, Sim
         deadlines = true;
       }
     }
+    if (!e->failsafe) {
+      // GenericAdapter's fail-safe: the signals' safe values.
+      e->generic_safe =
+          std::make_unique<GenericFailsafe>(static_cast<GenericDevice&>(*e->device), *scheduler_);
+      e->generic_safe->setReportSink([this](const FailsafeReport& r) {
+        if (hooks_.report) hooks_.report(r);
+      });
+    }
     entries_.push_back(std::move(e));
   }
   // BusNode::startFailsafe: deadlines at a tenth of the shortest timeout.
@@ -100,34 +108,7 @@ std::vector<SimNode::Entry*> SimNode::answeringFirst() {
 std::future<Result> SimNode::applySafe(Entry& e, const std::string& trigger,
                                        const std::string& reason) {
   if (e.failsafe) return e.failsafe->applySafe(trigger, reason);
-  auto& generic = static_cast<GenericDevice&>(*e.device);
-  if (generic.safeSignals().empty()) return readyResult(Result::success());
-  return scheduler_->submit(e.device->name(), [this, &e, trigger, reason](Transport& t) {
-    return genericWriteSafe(e, t, trigger, reason);
-  });
-}
-
-// GenericAdapter::writeSafe: every safe value written and read back; not reached because the
-// device did not answer: written again when it answers a poll.
-Result SimNode::genericWriteSafe(Entry& e, Transport& t, const std::string& trigger,
-                                 const std::string& reason) const {
-  auto& generic = static_cast<GenericDevice&>(*e.device);
-  FailsafeReport r;
-  r.device = e.device->name();
-  r.trigger = trigger;
-  r.reason = reason;
-  r.action = "safe";
-  for (size_t i : generic.safeSignals()) {
-    r.channels.push_back(generic.signals()[i].name);
-    r.states.push_back(*generic.signals()[i].safe_value != 0.0);
-  }
-  bool silent = false;
-  Result w = generic.writeSafeValues(t, &silent);
-  e.generic_safe_pending = silent;
-  r.confirmed = r.levels_confirmed = w.ok();
-  r.message = w.ok() ? "confirmed by reading the signals back" : w.message;
-  if (hooks_.report) hooks_.report(r);
-  return w;
+  return e.generic_safe->applySafe(trigger, reason);
 }
 
 void SimNode::beginStart() {
@@ -173,15 +154,7 @@ void SimNode::finishStart() {
               return static_cast<GenericDevice&>(*e->device).pollGroup(t, g);
             },
             [this, e](const Result& r) {
-              // GenericAdapter::onPoll: safe values not reached are written once it answers.
-              if (e->generic_safe_pending && !noProperAnswer(r.error)) {
-                e->generic_safe_pending = false;
-                scheduler_->submit(e->device->name(), [this, e](Transport& t) {
-                  return genericWriteSafe(
-                      *e, t, "restart",
-                      "the device answers again; its safe values were not reached before");
-                });
-              }
+              e->generic_safe->afterPoll(r);  // GenericAdapter::onPoll
               if (hooks_.polled) hooks_.polled(e->device->name(), r);
             });
       }
@@ -195,8 +168,7 @@ void SimNode::beginStop() {
   scheduler_->closeShared("the share stopped (the node is stopping)");
   started_ = false;
   for (Entry* e : answeringFirst()) {
-    const bool safe = e->failsafe ? e->failsafe->hasSafeStates()
-                                  : !static_cast<GenericDevice&>(*e->device).safeSignals().empty();
+    const bool safe = e->failsafe ? e->failsafe->hasSafeStates() : e->generic_safe->hasSafeValues();
     if (safe) stop_writes_.push_back(applySafe(*e, "shutdown", "node stops"));
   }
 }

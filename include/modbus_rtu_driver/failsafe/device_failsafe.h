@@ -33,6 +33,9 @@ struct FailsafeReport {
   // Per channel: a continuous PWM run a restore started again (its state then says on); and
   // why one of them was not confirmed ("" when all were).
   std::vector<bool> runs;
+  // A generic device's report (failsafe/generic_failsafe.h): its channels are signals, and
+  // these their safe values (states: value != 0).
+  std::vector<double> values;
   std::string runs_failed;
   // The plain levels (runs[i] false) were confirmed; `confirmed` needs the runs too.
   bool levels_confirmed = false;

@@ -56,7 +56,7 @@ class DeviceAdapter {
   // hands it the triggers and publishes its reports. Where events go (the node's latched
   // ~failsafe topic).
   using EventSink = std::function<void(const FailsafeEvent&)>;
-  virtual void setFailsafeSink(EventSink sink) { failsafe_sink_ = std::move(sink); }
+  void setFailsafeSink(EventSink sink) { failsafe_sink_ = std::move(sink); }
   // Puts the channels with a safe state there (only those in `only`, when given), confirmed by
   // reading the outputs back, and reports the event. The future holds the outcome.
   // Virtual: a generic device writes its signals' safe values instead (generic_adapter.cpp).
@@ -114,6 +114,11 @@ class DeviceAdapter {
   DeviceCommands& commands() { return commands_; }
   // Whether the last poll failed with the device now offline (its states are stale).
   bool offline() const { return !scheduler_.health(device_->name()).online; }
+  // A fail-safe report, `text` its words: logged (stderr once ROS is down: at shutdown), on
+  // `publisher` (~<device>/failsafe, latched; none before it is advertised) and the node's
+  // ~failsafe.
+  void publishReport(const FailsafeReport& report, const std::string& text,
+                     const ros::Publisher& publisher);
   // "ok" or "<device>: <message>" for service answers.
   std::string answer(const Result& result, const std::string& what) const;
 
@@ -127,8 +132,6 @@ class DeviceAdapter {
   bool onSetOutputs(SetOutputs::Request& req, SetOutputs::Response& res);
   void onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& msg);
   void logOnlineChange(const DeviceHealth& health);
-  // A report of the fail-safe's: logged, on ~<device>/failsafe and the node's ~failsafe.
-  void report(const FailsafeReport& report);
   virtual void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   DeviceFailsafe failsafe_;

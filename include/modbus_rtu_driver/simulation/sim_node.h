@@ -25,6 +25,7 @@
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/failsafe/device_commands.h"
 #include "modbus_rtu_driver/failsafe/device_failsafe.h"
+#include "modbus_rtu_driver/failsafe/generic_failsafe.h"
 
 namespace modbus_rtu_driver {
 
@@ -108,15 +109,13 @@ class SimNode {
  private:
   struct Entry {
     std::shared_ptr<Device> device;
-    std::unique_ptr<DeviceFailsafe> failsafe;  // devices with outputs
-    std::unique_ptr<DeviceCommands> commands;  // devices with outputs
-    bool generic_safe_pending = false;         // generic: safe values not reached (device silent)
+    std::unique_ptr<DeviceFailsafe> failsafe;       // devices with outputs
+    std::unique_ptr<DeviceCommands> commands;       // devices with outputs
+    std::unique_ptr<GenericFailsafe> generic_safe;  // generic devices: their safe values
   };
   Entry* entry(const std::string& name);
   std::vector<Entry*> answeringFirst();
   std::future<Result> applySafe(Entry& e, const std::string& trigger, const std::string& reason);
-  Result genericWriteSafe(Entry& e, Transport& t, const std::string& trigger,
-                          const std::string& reason) const;
   // Runs `call` (one DeviceCommands call) so that the job it queues, if any, runs for `op` and
   // tells `done`.
   std::future<Result> viaCommands(uint64_t op, Done done,

@@ -1,0 +1,71 @@
+// A generic device's fail-safe, ROS-free: its signals' safe values stand for the outputs' safe
+// states (docs/failsafe.md, "Generic devices"). The triggers are the node's and the adapter's
+// (shutdown, heartbeat, on_start, a device heartbeat); this class writes every safe value, reads
+// each back, reports what it did, and writes them again once a device that was silent answers
+// a poll. No restart detection and no on_restart: a generic device's signals say nothing of it.
+// The ROS adapter (ros/generic_adapter.cpp) and the simulation's SimNode both use it.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <future>
+#include <mutex>
+#include <string>
+
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/devices/generic_device.h"
+#include "modbus_rtu_driver/failsafe/device_failsafe.h"
+
+namespace modbus_rtu_driver {
+
+class GenericFailsafe {
+ public:
+  using ReportSink = std::function<void(const FailsafeReport&)>;
+
+  GenericFailsafe(GenericDevice& device, BusScheduler& scheduler);
+  GenericFailsafe(const GenericFailsafe&) = delete;
+  GenericFailsafe& operator=(const GenericFailsafe&) = delete;
+
+  // Where reports go (their channels are the signals, `values` their safe values), and what to
+  // run on the bus thread after a safe write changed the signals (the adapter publishes them);
+  // before the bus runs.
+  void setReportSink(ReportSink sink) { sink_ = std::move(sink); }
+  void setSignalsWritten(std::function<void()> written) { written_ = std::move(written); }
+
+  bool hasSafeValues() const { return !device_.safeSignals().empty(); }
+  // Any thread: writes every safe value and reads each back (a bus job), then reports. The
+  // future holds the outcome (a ready success with no safe value).
+  std::future<Result> applySafe(const std::string& trigger, const std::string& reason);
+  // Bus thread, after each poll: safe values not reached because the device did not answer
+  // are written once it answers (one try per answer; a refusal is an answer and not retried).
+  void afterPoll(const Result& poll);
+  // A user's confirmed write: the signals are no longer "at their safe values".
+  void userWriteConfirmed();
+
+  // "speed 0 rpm", "run off": a safe value as the reports and /diagnostics say it.
+  std::string describeSafeValue(size_t signal) const;
+  // "heartbeat (why): run off, speed 0 rpm[; NOT confirmed: why]"
+  std::string text(const FailsafeReport& report) const;
+
+  struct Status {
+    uint64_t events = 0;
+    std::string last_event;  // the newest report in words, or ""
+    std::string active;      // the newest safe write's, until a user's write; or ""
+  };
+  Status status() const;
+
+ private:
+  // Bus thread: every safe value written and read back, the report made.
+  Result writeSafe(Transport& t, const std::string& trigger, const std::string& reason);
+
+  GenericDevice& device_;
+  BusScheduler& scheduler_;
+  ReportSink sink_;
+  std::function<void()> written_;
+  bool safe_pending_ = false;  // bus thread only: safe values not reached, the device silent
+
+  mutable std::mutex mutex_;  // status_
+  Status status_;
+};
+
+}  // namespace modbus_rtu_driver
