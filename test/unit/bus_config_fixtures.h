@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "modbus_rtu_driver/config/bus_config.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 
 namespace modbus_rtu_driver {
 namespace configtest {

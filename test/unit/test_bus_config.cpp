@@ -7,9 +7,9 @@
 #include <sstream>
 
 #include "bus_config_fixtures.h"
-#include "modbus_rtu_driver/config/bus_config.h"
 #include "modbus_rtu_driver/core/config/config_yaml.h"
 #include "modbus_rtu_driver/core/config/slave_config.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 
 using namespace modbus_rtu_driver;
 using configtest::errorOf;

@@ -5,11 +5,11 @@
 #include <yaml-cpp/yaml.h>
 
 #include "bus_config_fixtures.h"
-#include "modbus_rtu_driver/config/bus_config.h"
 #include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/failsafe/channel_intents.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 #include "scripted_transport.h"
 
 using namespace modbus_rtu_driver;

@@ -5,7 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "bus_config_fixtures.h"
-#include "modbus_rtu_driver/config/bus_config.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 
 using namespace modbus_rtu_driver;
 using configtest::errorOf;

@@ -9,7 +9,7 @@
 #include <chrono>
 
 #include "bus_config_fixtures.h"
-#include "modbus_rtu_driver/config/bus_config.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 #include "share_test_bus.h"
 #include "wait_for.h"
 
