@@ -16,8 +16,8 @@
 # The layers, each a library linked only on the ones below it; --no-undefined makes a call that
 # goes the wrong way a link error, and scripts/check_conventions.sh checks the includes:
 #   core (ROS-free; five libraries, one per folder of src/core: see below)
-#   <- devices (one class per device type) <- failsafe (channel intents) <- config (the bus
-#   node's YAML)
+#   <- devices (one class per device type) <- failsafe (channel intents) <- node_config (the bus
+#   node's YAML; not core/config, the link, slave and signal settings)
 #   <- ros (adapters, node).   sim and tools sit on core (tools also on devices); simulation
 #   (the fail-safe's deterministic simulation) on failsafe and sim.
 # The executables on these layers: cmake/executables.cmake; the ROS library and the node:
@@ -76,10 +76,10 @@ target_link_libraries(modbus_rtu_failsafe PUBLIC modbus_rtu_devices)
 layer(modbus_rtu_failsafe)
 
 # The bus node's configuration: link, devices (checked against their type), fail-safe keys.
-layer_sources(config_sources config)
-add_library(modbus_rtu_config ${MODBUS_RTU_LIBRARY_TYPE} ${config_sources})
-target_link_libraries(modbus_rtu_config PUBLIC modbus_rtu_failsafe)
-layer(modbus_rtu_config)
+layer_sources(node_config_sources node_config)
+add_library(modbus_rtu_node_config ${MODBUS_RTU_LIBRARY_TYPE} ${node_config_sources})
+target_link_libraries(modbus_rtu_node_config PUBLIC modbus_rtu_failsafe)
+layer(modbus_rtu_node_config)
 
 # Simulator (ROS-free): simulated devices, the line on a pty, fault injection, control socket.
 layer_sources(sim_sources sim)

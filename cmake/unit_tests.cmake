@@ -30,7 +30,7 @@ unit_test(test_realtime modbus_rtu_core)
 unit_test(test_link_config modbus_rtu_core)
 # Issue 34 item 3: a kind of link registered from a test file reaches the node's configuration,
 # the factory and the commissioning tool's checks and help.
-unit_test(test_link_types "modbus_rtu_config;modbus_rtu_commission_lib")
+unit_test(test_link_types "modbus_rtu_node_config;modbus_rtu_commission_lib")
 # Issue 26 item 3: enum names and their parse from one table, and the one join.
 unit_test(test_text modbus_rtu_core)
 unit_test(test_request_framer modbus_rtu_core)
@@ -49,7 +49,7 @@ unit_test(test_share_fuzz modbus_rtu_core)
 # Issue 24: queued share requests never run after the shutdown's safe writes.
 unit_test(test_share_shutdown modbus_rtu_devices)
 # Issue 24: idle and half-closed clients, keep-alive, exception 02, broadcast turnaround.
-unit_test(test_share_connections modbus_rtu_config)
+unit_test(test_share_connections modbus_rtu_node_config)
 unit_test(test_signal modbus_rtu_core)
 
 # Devices against a scripted transport (byte exact), merged writes, read-back confirmation.
@@ -62,17 +62,17 @@ unit_test(test_devices_writes_vs_simulator "modbus_rtu_sim;modbus_rtu_devices")
 unit_test(test_generic_device modbus_rtu_devices)
 
 # Configuration rules, fail-safe policy.
-unit_test(test_bus_config modbus_rtu_config)
-unit_test(test_failsafe modbus_rtu_config)
+unit_test(test_bus_config modbus_rtu_node_config)
+unit_test(test_failsafe modbus_rtu_node_config)
 unit_test(test_channel_intents modbus_rtu_failsafe)
 unit_test(test_device_commands modbus_rtu_failsafe)
 unit_test(test_generic_failsafe modbus_rtu_failsafe)
 # The fail-safe's deterministic simulation (docs/simulation.md): regression cases, determinism,
 # a bounded run (the 60 s run is scripts/test.sh's, hours: scripts/simulate.sh).
 unit_test(test_failsafe_simulation modbus_rtu_simulation)
-unit_test(test_generic_config modbus_rtu_config)
-unit_test(test_generic_failsafe_config modbus_rtu_config)
-unit_test(test_config_messages modbus_rtu_config)
+unit_test(test_generic_config modbus_rtu_node_config)
+unit_test(test_generic_failsafe_config modbus_rtu_node_config)
+unit_test(test_config_messages modbus_rtu_node_config)
 
 # Simulator: the devices alone (requests in, replies out, time given to them), the line over a
 # real pty, the control interface, power cycle and state file, injected faults, the executable.

@@ -4,6 +4,7 @@
 #include "modbus_rtu_driver/StopPwm.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
+#include "modbus_rtu_driver/ros/last_published.h"
 
 namespace modbus_rtu_driver {
 
@@ -50,9 +51,7 @@ class Ld58a08Adapter : public DeviceAdapter {
       c.remaining_time = s.remaining_time;
       msg.channels.push_back(c);
     }
-    if (have_last_ && msg.channels == last_.channels) return;
-    last_ = msg;
-    have_last_ = true;
+    if (!last_pwm_.changed(msg)) return;
     msg.header.stamp = ros::Time::now();
     publishLater(pwm_pub_, std::move(msg));
   }
@@ -106,8 +105,7 @@ class Ld58a08Adapter : public DeviceAdapter {
 
   ros::Publisher pwm_pub_;
   ros::ServiceServer set_srv_, stop_srv_;
-  PwmStates last_;
-  bool have_last_ = false;
+  LastPublished<PwmStates> last_pwm_;
 };
 
 }  // namespace

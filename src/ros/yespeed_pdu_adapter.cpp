@@ -4,6 +4,7 @@
 #include "modbus_rtu_driver/SetPduLimits.h"
 #include "modbus_rtu_driver/devices/yespeed_pdu.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
+#include "modbus_rtu_driver/ros/last_published.h"
 
 namespace modbus_rtu_driver {
 
@@ -46,9 +47,7 @@ class YespeedPduAdapter : public DeviceAdapter {
     msg.over_voltage = static_cast<float>(l.over_voltage);
     msg.under_voltage = static_cast<float>(l.under_voltage);
     msg.over_current = static_cast<float>(l.over_current);
-    if (have_last_ && msg == last_) return;
-    last_ = msg;
-    have_last_ = true;
+    if (!last_limits_.changed(msg)) return;
     publishLater(limits_pub_, msg);
   }
 
@@ -96,8 +95,7 @@ class YespeedPduAdapter : public DeviceAdapter {
 
   ros::Publisher telemetry_pub_, limits_pub_;
   ros::ServiceServer set_limits_srv_;
-  PduLimits last_;
-  bool have_last_ = false;
+  LastPublished<PduLimits> last_limits_;
 };
 
 }  // namespace

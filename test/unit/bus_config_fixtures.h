@@ -7,15 +7,23 @@
 
 #include <string>
 
-#include "modbus_rtu_driver/config/bus_config.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 
 namespace modbus_rtu_driver {
 namespace configtest {
 
-inline std::string parseError(const std::string& yaml) {
+// The error parseBusConfig gives for `yaml`; empty when it accepts it. For a test that checks
+// either outcome (`EXPECT_EQ(errorOf(yaml), "")` for an accepted one).
+inline std::string errorOf(const std::string& yaml) {
   BusConfig c;
   std::string error;
-  EXPECT_FALSE(parseBusConfig(YAML::Load(yaml), &c, &error)) << yaml;
+  return parseBusConfig(YAML::Load(yaml), &c, &error) ? "" : error;
+}
+
+// The error for a `yaml` the test expects refused: an accepted one fails the test here.
+inline std::string parseError(const std::string& yaml) {
+  const std::string error = errorOf(yaml);
+  EXPECT_NE(error, "") << "accepted: " << yaml;
   return error;
 }
 

@@ -6,11 +6,13 @@
 #include <fstream>
 #include <sstream>
 
-#include "modbus_rtu_driver/config/bus_config.h"
+#include "bus_config_fixtures.h"
 #include "modbus_rtu_driver/core/config/config_yaml.h"
 #include "modbus_rtu_driver/core/config/slave_config.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 
 using namespace modbus_rtu_driver;
+using configtest::errorOf;
 
 namespace {
 
@@ -32,13 +34,6 @@ devices:
   pwm_board: {type: ld58a08, address: 1, poll_rate: 5.0}
   pdu: {type: yespeed_pdu, address: 2, poll_rate: 2.0}
 )";
-
-std::string errorOf(const std::string& yaml) {
-  BusConfig config;
-  std::string error;
-  const bool ok = parseBusConfig(YAML::Load(yaml), &config, &error);
-  return ok ? "" : error;
-}
 
 // kGood with one line replaced.
 std::string replaced(const std::string& from, const std::string& to) {

@@ -4,15 +4,17 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
-#include "modbus_rtu_driver/config/bus_config.h"
+#include "bus_config_fixtures.h"
 #include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
 #include "modbus_rtu_driver/devices/output_batch.h"
 #include "modbus_rtu_driver/failsafe/channel_intents.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 #include "scripted_transport.h"
 
 using namespace modbus_rtu_driver;
+using configtest::errorOf;
 using namespace std::chrono_literals;
 
 namespace {
@@ -31,12 +33,6 @@ devices:
     on_start: safe
   pdu: {type: yespeed_pdu, address: 2, safe_state: off, heartbeat: {topic: pdu_alive, timeout: 1}}
 )";
-
-std::string errorOf(const std::string& yaml) {
-  BusConfig config;
-  std::string error;
-  return parseBusConfig(YAML::Load(yaml), &config, &error) ? "" : error;
-}
 
 std::string device(const std::string& settings) {
   return "devices: {relays: {type: lc_relay8, address: 255, " + settings + "}}";

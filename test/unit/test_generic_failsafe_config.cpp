@@ -4,17 +4,13 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
-#include "modbus_rtu_driver/config/bus_config.h"
+#include "bus_config_fixtures.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 
 using namespace modbus_rtu_driver;
+using configtest::errorOf;
 
 namespace {
-
-std::string errorOf(const std::string& yaml) {
-  BusConfig c;
-  std::string error;
-  return parseBusConfig(YAML::Load(yaml), &c, &error) ? "" : error;
-}
 
 // A generic device `m` with `signals` (a YAML list) and `more` device keys.
 std::string device(const std::string& signals, const std::string& more = "") {

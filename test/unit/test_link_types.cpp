@@ -8,10 +8,10 @@
 #include <memory>
 #include <string>
 
-#include "modbus_rtu_driver/config/bus_config.h"
 #include "modbus_rtu_driver/core/link/link.h"
 #include "modbus_rtu_driver/core/link/link_types.h"
 #include "modbus_rtu_driver/core/link/make_link.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 #include "modbus_rtu_driver/tools/commission.h"
 
 using namespace modbus_rtu_driver;

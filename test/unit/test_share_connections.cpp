@@ -8,7 +8,8 @@
 
 #include <chrono>
 
-#include "modbus_rtu_driver/config/bus_config.h"
+#include "bus_config_fixtures.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 #include "share_test_bus.h"
 #include "wait_for.h"
 
@@ -222,10 +223,8 @@ TEST(ShareConfigKeys, IdleTimeoutAndTurnaroundAreCheckedWithTheirRange) {
   EXPECT_NE(error.find("idle_timeout"), std::string::npos) << error;
 
   const std::string base = "port: /dev/ttyUSB0\ndevices: {pdu: {type: yespeed_pdu, address: 2}}\n";
-  auto errorOf = [&](const std::string& share) {
-    BusConfig c;
-    std::string e;
-    return parseBusConfig(YAML::Load(base + "share: " + share), &c, &e) ? "" : e;
+  auto shareError = [&](const std::string& share) {
+    return configtest::errorOf(base + "share: " + share);
   };
   BusConfig c;
   std::string e;
@@ -236,10 +235,10 @@ TEST(ShareConfigKeys, IdleTimeoutAndTurnaroundAreCheckedWithTheirRange) {
   EXPECT_EQ(c.share.broadcast_turnaround, 0.2);
   ASSERT_TRUE(parseBusConfig(YAML::Load(base + "share: {}"), &c, &e)) << e;
   EXPECT_EQ(c.share.server.idle_timeout, 60.0);
-  EXPECT_NE(errorOf("{idle_timeout: -1}").find("share/idle_timeout"), std::string::npos)
-      << errorOf("{idle_timeout: -1}");
-  EXPECT_NE(errorOf("{idle_timeout: -1}").find("0-86400 s (0 = never)"), std::string::npos);
-  EXPECT_NE(errorOf("{broadcast_turnaround: 2}").find("share/broadcast_turnaround"),
+  EXPECT_NE(shareError("{idle_timeout: -1}").find("share/idle_timeout"), std::string::npos)
+      << shareError("{idle_timeout: -1}");
+  EXPECT_NE(shareError("{idle_timeout: -1}").find("0-86400 s (0 = never)"), std::string::npos);
+  EXPECT_NE(shareError("{broadcast_turnaround: 2}").find("share/broadcast_turnaround"),
             std::string::npos);
-  EXPECT_NE(errorOf("{broadcast_turnaround: 2}").find("0-1 s"), std::string::npos);
+  EXPECT_NE(shareError("{broadcast_turnaround: 2}").find("0-1 s"), std::string::npos);
 }

@@ -23,7 +23,7 @@ std::unique_ptr<Device> makeDevice(const DeviceConfig& config) {
 // The registered type names, alphabetical.
 std::vector<std::string> knownDeviceTypes();
 // Checks a device config (address range for the type, names, poll rate); empty when valid.
-// The bus configuration runs it once, as it parses each device (config/bus_config.h).
+// The bus configuration runs it once, as it parses each device (node_config/bus_config.h).
 std::string validateDeviceConfig(const DeviceConfig& config);
 // The device for a config that passed validateDeviceConfig; null only for an unknown type.
 std::unique_ptr<Device> createDevice(const DeviceConfig& config);

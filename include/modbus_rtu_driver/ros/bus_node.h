@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/config/bus_config.h"
 #include "modbus_rtu_driver/core/bus/bus_scheduler.h"
 #include "modbus_rtu_driver/core/bus/task_queue.h"
 #include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/core/link/link.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 #include "modbus_rtu_driver/ros/raw_writes.h"
 #include "modbus_rtu_driver/ros/share_bridge.h"

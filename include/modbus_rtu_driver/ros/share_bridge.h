@@ -8,8 +8,8 @@
 #include <memory>
 #include <string>
 
-#include "modbus_rtu_driver/config/bus_config.h"
 #include "modbus_rtu_driver/core/server/share_gateway.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 
 namespace modbus_rtu_driver {
 

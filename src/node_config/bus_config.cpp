@@ -1,4 +1,4 @@
-#include "modbus_rtu_driver/config/bus_config.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
 
 #include <algorithm>
 #include <map>
