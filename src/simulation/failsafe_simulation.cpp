@@ -772,12 +772,13 @@ void World::onAttempt(const LineEvent& e) {
         c.maybe_devices = true;
     }
   }
-  // When the LC board confirmed a flash (its mode and delay registers, 3 + 5 n).
+  // When the LC board confirmed a flash (its mode and delay registers, 3 + 5 n): when its answer
+  // has come (docs:71-75), now, not when the request went out (e.at; model change 18).
   if (d == kLc && e.answered && e.request.function == FunctionCode::kWriteMultipleRegisters &&
       e.request.count == 2 && e.request.address % 5 == 3 && e.request.address / 5 < kChannels)
-    m.flash_answered[e.request.address / 5] = e.at;
+    m.flash_answered[e.request.address / 5] = clock_.now();
   // When the device confirmed a PWM write: its answer, or (answer lost) the read that confirmed
-  // it (Ld58a08::confirmPwm reads the channel back).
+  // it (Ld58a08::confirmPwm reads the channel back); as for a flash, when that answer has come.
   if (d == kLd && write && e.request.function == FunctionCode::kWriteMultipleRegisters &&
       e.request.values.size() == 3 && e.request.address % 0x10 == 0 &&
       e.request.address / 0x10 < kChannels) {
@@ -793,13 +794,13 @@ void World::onAttempt(const LineEvent& e) {
                        (c.node_run.empty() ? ", which is no continuous run the node started"
                                            : ", not the run as the node started it"));
     }
-    m.pwm_write_answered[ch] = e.answered ? e.at : TP{};
+    m.pwm_write_answered[ch] = e.answered ? clock_.now() : TP{};
     m.pwm_confirm_pending[ch] = !e.answered;
   }
   if (d == kLd && e.answered && e.request.function == FunctionCode::kReadHoldingRegisters &&
       e.request.address % 0x10 == 0 && e.request.address / 0x10 < kChannels &&
       m.pwm_confirm_pending[e.request.address / 0x10]) {
-    m.pwm_write_answered[e.request.address / 0x10] = e.at;
+    m.pwm_write_answered[e.request.address / 0x10] = clock_.now();
     m.pwm_confirm_pending[e.request.address / 0x10] = false;
   }
   // docs:68: a stop the device confirmed (an enable register written 0: the node's own before
@@ -811,7 +812,7 @@ void World::onAttempt(const LineEvent& e) {
       const auto reg = static_cast<uint16_t>(e.request.address + i);
       if (reg % 0x10 == 2 && reg / 0x10 < kChannels && e.request.values[i] == 0) {
         m.pwm_read_running[reg / 0x10] = false;
-        m.stop_answered[reg / 0x10] = e.at;
+        m.stop_answered[reg / 0x10] = clock_.now();
       }
     }
   if (!e.answered) {
