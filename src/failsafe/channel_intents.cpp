@@ -117,9 +117,11 @@ void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double
   Intent in = adoptingIntent(channel, source, now);
   if (not_before_s > 0) in.adopt_from = now + seconds(not_before_s);
   // A timed command still running there (a write over a flash, heard or not): either level may
-  // show until its end, so the poll that decides comes after its end plus the slack.
+  // show until its end, so the poll that decides comes after its end plus the slack. Its end
+  // may have passed by now (the write's timeout and its read back outlast the flash), but not
+  // its slack: polls within it may still show either level (docs/failsafe.md line 105).
   const auto& was = intent_[channel];
-  if (was && was->ends && *was->ends > now) {
+  if (was && was->ends && *was->ends + endSlack(*was) > now) {
     in.adopt_from = std::max(in.adopt_from.value_or(now), *was->ends + endSlack(*was));
   }
   // An earlier lost write there already waits for such an end: whichever write the device

@@ -482,6 +482,29 @@ TEST(ChannelIntents, TwoLostWritesOverARunningFlashAreDecidedAfterTheFlashEnds) 
   EXPECT_EQ(poll(t, {true, false, false, false}), Verdict::kOutputsChanged);
 }
 
+// docs/failsafe.md, "A command whose answer was lost": a write sent while a timed command still
+// ran waits for the first poll after that end plus the slack, also when the node learns that
+// its answer was lost only after the end (the write's timeout and its read back's took longer
+// than the flash had left). Stop 43, case lost_write_learned_after_flash_end_waits_for_slack:
+// a poll inside the slack took the level the write set as found, a power cycle then showed as
+// that channel's change, and the restore put the write's level back.
+TEST(ChannelIntents, AWriteSentDuringAFlashWaitsForItsSlackWhenItsLossIsLearnedAfterTheEnd) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, false, false});
+  t.timed(TimedIntent{0, true, false, 2.0}, CommandSource::kTimed);  // flash-close 2 s
+  clock.advance(2100ms);  // the write went out at 1.65 s; its loss is known now, after the end
+  t.adoptNextPoll(0, CommandSource::kFound);  // `set on`, no answer (the board did it)
+  EXPECT_EQ(t.pollStarting(), (std::vector<uint8_t>{})) << "still within 0.5 s + 2 % of the end";
+  clock.advance(300ms);
+  EXPECT_EQ(poll(t, {true, false, false, false}), Verdict::kNormal);  // either level may show
+  clock.advance(300ms);  // past 2 s + 0.54 s: the deciding poll, after a power cycle
+  EXPECT_EQ(t.pollStarting(), (std::vector<uint8_t>{0}));
+  EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kNormal) << "taken as found";
+  EXPECT_EQ(t.expected(0, clock.now()).kind, Expectation::Kind::kLevel);
+  EXPECT_FALSE(t.expected(0, clock.now()).level);
+}
+
 // docs/failsafe.md, "A command whose answer was lost": a poll names the channels whose deciding
 // read is due (the device reads those first: an LD58A08's PWM registers), not before the end
 // plus the slack, and no more once a poll that read them decided.
