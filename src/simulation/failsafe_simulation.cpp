@@ -363,6 +363,7 @@ class World {
   void onAttempt(const LineEvent& e);
   void onReport(const FailsafeReport& r);
   void onGenericReport(const FailsafeReport& r);
+  void takeFoundAfterRestart(int d, const FailsafeReport& r);
   void onPollStarting(const std::string& device);
   void onPolled(const std::string& device, const Result& r);
   void onWritten(const std::string& device, const std::vector<uint8_t>& chs,
@@ -980,6 +981,45 @@ void World::checkCoils(int d, const std::vector<uint8_t>& chs, const std::vector
                      (sts[i] ? "off" : "on"));
 }
 
+void World::takeFoundAfterRestart(int d, const FailsafeReport& r) {
+  // docs:36, 65 (model change 19): after a restart, a changed channel that on_restart does not
+  // write back (leave; safe on a channel whose safe state is hold) and that owes no safe write
+  // has the level the poll that saw the restart showed as its intent, as found: a later poll or
+  // a client's stop is compared with that level, not with the one the power cycle dropped.
+  const bool restore = onRestart(d) == OnRestart::kRestore;
+  const auto& outputs = node_->device(r.device)->outputs();
+  if (restore || outputs.size() < kChannels) return;
+  const auto names_at = r.reason.find("outputs ");
+  const auto names_end = r.reason.find(" changed with no command");
+  // The channels the report names as changed; a device that answers again names none: those
+  // whose level differs from what the model expects.
+  const bool names = names_at != std::string::npos && names_end != std::string::npos;
+  for (int ch = 0; ch < kChannels; ++ch) {
+    Chan& c = model_[d].ch[ch];
+    if (c.owed || (onRestart(d) == OnRestart::kSafe && hasSafe(d, ch))) continue;
+    bool level = false;
+    const bool changed = names ? r.reason.find("out" + std::to_string(ch), names_at) < names_end
+                               : expected(c, clock_.now(), &level) && level != outputs[ch];
+    if (!c.known || c.adopt || !changed) continue;
+    Chan kept = c;
+    c = Chan{};
+    c.known = true;
+    c.level = outputs[ch];
+    c.at = clock_.now();
+    c.deadline = kept.deadline;
+    c.held = kept.held;
+    c.held_since = kept.held_since;
+    c.queued_at_hold = kept.queued_at_hold;
+    c.triggered = kept.triggered;
+    c.trigger_at = kept.trigger_at;
+    c.shown_otherwise = kept.shown_otherwise;
+    c.run_stop_unseen = kept.run_stop_unseen;
+    c.run_stopped_at = kept.run_stopped_at;
+    c.saved_run_unseen = kept.saved_run_unseen;
+    c.saved_stop_read_at = kept.saved_stop_read_at;
+  }
+}
+
 void World::onReport(const FailsafeReport& r) {
   if (trace_) std::fprintf(trace_, "report %s: %s\n", r.device.c_str(), r.text().c_str());
   const int d = devOf(r.device);
@@ -1021,6 +1061,7 @@ void World::onReport(const FailsafeReport& r) {
     // not confirmed (the next poll shows the same change again).
     if (m.justified_at <= m.last_poll_at && r.confirmed) m.justified = false;
     m.cause_pending = false;
+    takeFoundAfterRestart(d, r);
   }
   if (r.action == "safe") {
     // I11 (docs:4-5): "Nothing changes unless it is configured: the default safe state is hold".
