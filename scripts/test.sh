@@ -5,12 +5,25 @@
 # ASan/UBSan, short fuzz runs and an install-space check) and ends with
 # "N passed, N failed". Exit code 0 only when all passed.
 source "$(dirname "$0")/common.sh"
-# Wall time per step, printed before the summary (what to shorten when the command grows).
+# Wall time and CPU time (user + sys of this script and of every process it waited for) per step,
+# printed before the summary (what to shorten when the command grows). The builds beside the
+# tests are waited for in their own step, so their CPU counts there.
+cpu_ticks() {  # this shell's and its reaped children's user + sys, in clock ticks (no fork)
+  local st
+  read -r -a st </proc/$$/stat
+  echo $((st[13] + st[14] + st[15] + st[16]))
+}
+TICKS=$(getconf CLK_TCK)
 PHASE_START=$SECONDS
-PHASES=()
+PHASE_CPU=$(cpu_ticks)
+START_CPU=$PHASE_CPU
+PHASES=("$(printf '%5s    %5s    %s' wall CPU step)")
 phase_done() {
-  PHASES+=("$(printf '%5d s  %s' $((SECONDS - PHASE_START)) "$1")")
+  local now
+  now=$(cpu_ticks)
+  PHASES+=("$(printf '%5d s  %5d s  %s' $((SECONDS - PHASE_START)) $(((now - PHASE_CPU) / TICKS)) "$1")")
   PHASE_START=$SECONDS
+  PHASE_CPU=$now
 }
 install_deps
 build_workspace
@@ -40,18 +53,26 @@ tail -n 1 "$WS/rosdep_check.log"
 phase_done "dependencies and rosdep checks"
 # The sanitizer and fuzz builds run at the lowest CPU priority while the tests below run: the
 # tests mostly wait on the line, and this halves the wall time of the whole command.
+rm -f "$WS/background_builds.time"
 (nice -n 19 "$REPO/scripts/sanitized_tests.sh" --build-only
   nice -n 19 "$REPO/scripts/fuzz.sh" --build-only
   # clang-tidy on the C++ files changed lately (the whole pass does not fit in this command).
   TIDY_COMMITS=${TIDY_COMMITS:-3} nice -n 19 "$REPO/scripts/tidy.sh" --changed \
-    "$WS/build/test_results/tidy") >"$WS/background_builds.log" 2>&1 &
+    "$WS/build/test_results/tidy"
+  read -r -a st </proc/$BASHPID/stat
+  echo "$SECONDS $(((st[15] + st[16]) / TICKS))" >"$WS/background_builds.time"
+) >"$WS/background_builds.log" 2>&1 &
 background_builds=$!
+BACKGROUND_START=$SECONDS
 # -j1: rostests each start their own master and must not run in parallel.
 catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests 2>&1 | tee "$WS/run_tests.log" |
   grep -E '^\[ *(RUN|FAILED|PASSED|OK) |^\[Testcase|FAILURE|ERROR:|^Ran |testcase|^\[ROSUNIT\]|^ *\* ' || true
 phase_done "unit tests and rostests (sanitizer, fuzz and tidy builds beside them)"
 wait $background_builds || true
 phase_done "waiting for the builds beside them"
+read -r background_end background_cpu <"$WS/background_builds.time" || true
+PHASES+=("$(printf '%5d s  %5d s  %s' $((${background_end:-0} - BACKGROUND_START)) "${background_cpu:-0}" \
+  "  (of which the builds beside the tests, counted in the step above)")")
 # The fail-safe's deterministic simulation (docs/simulation.md): 60 s of seeds from 1 on one core,
 # no ROS; the known open defects' invariants are counted, not failed (scripts/simulate.sh for
 # hours).
@@ -76,7 +97,11 @@ phase_done "benchmark smoke run"
 # catkin_make install gives an install space that works on its own.
 "$REPO/scripts/check_install.sh" "$WS/build/test_results/install" || true
 phase_done "install space"
+phase_done_total() {
+  printf '%5d s  %5d s  %s\n' $SECONDS $((($(cpu_ticks) - START_CPU) / TICKS)) "in all"
+}
 printf '%s\n' "${PHASES[@]}"
+phase_done_total
 # Each step above writes its results into a folder of its own; one that wrote nothing failed.
 exec /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$WS/build/test_results" \
   --expect modbus_rtu_driver --expect dependencies --expect rosdep --expect sanitizers \
