@@ -51,11 +51,12 @@ tail -n 1 "$WS/rosdep_check.log"
   --work "$WS/build/rosdep_check" >"$WS/rosdep_self_test.log" 2>&1 || true
 "$REPO/scripts/check_ros_choice.sh" "$DEPS_RESULTS" >/dev/null || true
 phase_done "dependencies and rosdep checks"
-# The sanitizer and fuzz builds run at the lowest CPU priority while the tests below run: the
-# tests mostly wait on the line, and this halves the wall time of the whole command.
+# The instrumented build (clang++, ASan + UBSan: the sanitized unit tests and node, and the fuzz
+# targets, on layer libraries compiled once; scripts/instrumented_mode.sh) runs at the lowest CPU
+# priority while the tests below run: the tests mostly wait on the line, and this halves the wall
+# time of the whole command.
 rm -f "$WS/background_builds.time"
 (nice -n 19 "$REPO/scripts/sanitized_tests.sh" --build-only
-  nice -n 19 "$REPO/scripts/fuzz.sh" --build-only
   # clang-tidy on the C++ files changed lately (the whole pass does not fit in this command).
   TIDY_COMMITS=${TIDY_COMMITS:-3} nice -n 19 "$REPO/scripts/tidy.sh" --changed \
     "$WS/build/test_results/tidy"
