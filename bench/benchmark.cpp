@@ -207,8 +207,7 @@ int main(int argc, char** argv) {
     const double ch = characterTime(lc), gap = frameGap(lc);
     // request (8 bytes), t3.5, reply (7 bytes), t3.5 before the next request
     const double theoretical = 1.0 / ((8 + 7) * ch + 2 * gap);
-    const double achieved =
-        transactionRate(paced_seconds, [&] { return link.execute(r).ok(); });
+    const double achieved = transactionRate(paced_seconds, [&] { return link.execute(r).ok(); });
     std::printf("| %d | %.1f | %.1f | %.1f %% |\n", baud, theoretical, achieved,
                 100.0 * achieved / theoretical);
     csv << "line," << baud << "," << theoretical << "," << achieved << "," << achieved / theoretical
