@@ -17,7 +17,8 @@ double transactionRate(double seconds, const std::function<bool()>& once);
 // `r` through libmodbus's own API on `ctx`: true when it succeeded.
 bool plainLibmodbus(modbus_t* ctx, const Request& r);
 
-void benchmarkScale(const std::string& dir, double seconds, std::ofstream& csv);
+void benchmarkScale(const std::string& dir, double seconds, double warm_up_seconds,
+                    std::ofstream& csv);
 void benchmarkTransports(const std::string& dir, double seconds, std::ofstream& csv);
 
 }  // namespace modbus_rtu_driver

@@ -35,7 +35,8 @@ double pollWireTime(const LinkConfig& c) {
   return (8 + 6 + 8 + 15) * characterTime(c) + 4 * frameGap(c);
 }
 
-Outcome run(const std::string& dir, int devices, bool one_offline, double seconds) {
+Outcome run(const std::string& dir, int devices, bool one_offline, double seconds,
+            double warm_up_seconds) {
   SimulatorConfig config;
   config.factory.baud = 115200;
   config.pace = true;
@@ -68,7 +69,7 @@ Outcome run(const std::string& dir, int devices, bool one_offline, double second
   }
   scheduler.start();
   // Warm-up: first polls read the limits too; an offline device reaches its probing backoff.
-  std::this_thread::sleep_for(std::chrono::seconds(2));
+  std::this_thread::sleep_for(std::chrono::duration<double>(warm_up_seconds));
   auto polls = [&] {
     uint64_t n = 0;
     for (const auto& d : pdus) n += scheduler.health(d->name()).polls_ok;
@@ -97,7 +98,8 @@ Outcome run(const std::string& dir, int devices, bool one_offline, double second
 
 }  // namespace
 
-void benchmarkScale(const std::string& dir, double seconds, std::ofstream& csv) {
+void benchmarkScale(const std::string& dir, double seconds, double warm_up_seconds,
+                    std::ofstream& csv) {
   LinkConfig lc;
   lc.baud = 115200;
   const double limit = 1.0 / pollWireTime(lc);
@@ -111,14 +113,14 @@ void benchmarkScale(const std::string& dir, double seconds, std::ofstream& csv) 
       "the offline one |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
   for (int n : {1, 4, 16, 32}) {
-    const Outcome all = run(dir, n, false, std::max(seconds, 3.0));
+    const Outcome all = run(dir, n, false, seconds, warm_up_seconds);
     Outcome off;
-    if (n > 1) off = run(dir, n, true, std::max(seconds, 3.0));
+    if (n > 1) off = run(dir, n, true, seconds, warm_up_seconds);
     std::printf("| %d | %.1f | %.1f | %.1f %% | %.2f | %s |", n, all.polls_per_s, all.tx_per_s,
                 100.0 * all.polls_per_s / limit, all.fairness, all.overrun ? "yes" : "no");
     if (n > 1)
       std::printf(" %.1f | %.1f %% | %.2f |\n", off.polls_per_s, 100.0 * off.polls_per_s / limit,
-                  static_cast<double>(off.offline_tries) / std::max(seconds, 3.0));
+                  static_cast<double>(off.offline_tries) / seconds);
     else
       std::printf(" - | - | - |\n");
     csv << "scale," << n << "," << all.polls_per_s << "," << off.polls_per_s << ","

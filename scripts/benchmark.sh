@@ -40,7 +40,7 @@ if [ "${1:-}" = "--smoke" ]; then
     fi
     cat "$out/$name.md"
   }
-  smoke benchmark "$WS/devel/lib/modbus_rtu_driver/modbus_rtu_benchmark" --seconds 0.1
+  smoke benchmark "$WS/devel/lib/modbus_rtu_driver/modbus_rtu_benchmark" --seconds 0.1 --smoke
   smoke line_attribution /usr/bin/python3 "$REPO/bench/line_attribution.py" --seconds 1 \
     --repeats 1 --bauds 115200
   smoke node_bench /usr/bin/python3 "$REPO/bench/node_bench.py" --calls 20 --repeats 1 --hog 0 \

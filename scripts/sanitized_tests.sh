@@ -1,23 +1,21 @@
 #!/usr/bin/env bash
-# Builds the ROS-free unit tests with ASan + UBSan and runs them; JUnit results go to RESULTS.
+# Runs the ROS-free unit tests and the bus node (node_devices.test) built with ASan + UBSan
+# (clang++: the instrumented build of scripts/instrumented_mode.sh, which has the fuzz targets
+# too); JUnit results go to RESULTS.
 #   sanitized_tests.sh RESULTS               build, then run
-#   sanitized_tests.sh --build-only          build only (test.sh builds while the rostests run)
+#   sanitized_tests.sh --build-only          build only, the fuzz targets too (test.sh builds while
+#                                            the rostests run)
 #   sanitized_tests.sh --prebuilt RESULTS    run what --build-only built (its failure counts)
 set -euo pipefail
 # shellcheck source=SCRIPTDIR/instrumented_mode.sh
-source "$(dirname "$0")/instrumented_mode.sh"  # MODE from --build-only / --prebuilt; REPO, WS
+source "$(dirname "$0")/instrumented_mode.sh"  # MODE, REPO, WS, BUILD, instrumented_build
 RESULTS=${1:-}
-BUILD="$WS/sanitizers"
-mkdir -p "$BUILD/logs"
-BUILD_STATUS=$BUILD/logs/build.status  # "ok" or "failed", written by the build
 if [ $MODE != run ]; then
-  rm -f "$BUILD_STATUS"
-  cmake -S "$REPO/test/sanitizers" -B "$BUILD" -DCMAKE_CXX_COMPILER=g++ \
-    -DMSG_INCLUDE="$WS/devel/include" >"$BUILD/logs/configure.log" 2>&1 &&
-    cmake --build "$BUILD" -j"$(nproc)" >"$BUILD/logs/build.log" 2>&1 &&
-    echo ok >"$BUILD_STATUS" || echo failed >"$BUILD_STATUS"
+  # shellcheck disable=SC2119  # every target
+  instrumented_build || true  # its failure fails the run below
   [ $MODE = build ] && exit 0
 fi
+mkdir -p "$BUILD/logs"
 [ -n "$RESULTS" ] || { echo "usage: $0 [--build-only | --prebuilt] RESULTS" >&2; exit 2; }
 mkdir -p "$RESULTS"
 status=0
@@ -26,10 +24,10 @@ junit() {  # suite (and file name), case: NAME or NAME=FAILURE (scripts/junit.py
 }
 # A build that fails (or never ran) must fail the run: old binaries would otherwise be tested
 # as if new.
-if [ "$(cat "$BUILD_STATUS" 2>/dev/null)" != ok ]; then
-  cat "$BUILD/logs/configure.log" 2>/dev/null | grep -E "Error" | head -5 || true
+if [ "$(cat "$SANITIZERS_STATUS" 2>/dev/null)" != ok ]; then
+  grep -E "Error" "$BUILD/logs/configure.log" 2>/dev/null | head -5 || true
   grep -E "error|warning: " "$BUILD/logs/build.log" 2>/dev/null | head -20 || true
-  junit sanitized-build "build=the sanitizer build failed, see $BUILD/logs/build.log"
+  junit sanitized-build "build=the instrumented build failed (or built the fuzz targets only), see $BUILD/logs/build.log"
   exit 1
 fi
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1
