@@ -67,6 +67,7 @@ unit_test(test_failsafe modbus_rtu_node_config)
 unit_test(test_channel_intents modbus_rtu_failsafe)
 unit_test(test_device_commands modbus_rtu_failsafe)
 unit_test(test_generic_failsafe modbus_rtu_failsafe)
+unit_test(test_kept_timed_commands modbus_rtu_failsafe)
 # The fail-safe's deterministic simulation (docs/simulation.md): regression cases, determinism,
 # a bounded run (the 60 s run is scripts/test.sh's, hours: scripts/simulate.sh).
 unit_test(test_failsafe_simulation modbus_rtu_simulation)

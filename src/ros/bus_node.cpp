@@ -145,7 +145,7 @@ bool BusNode::start() {
   std::string error;
   YAML::Node root = toYaml(params);
   // Not configuration: the running timed commands the node keeps for its next start
-  // (DeviceAdapter::keepTimedCommands).
+  // (DeviceAdapter::keepTimedOnParameterServer).
   root.remove("running_timed");
   if (!parseBusConfig(root, &config_, &error)) {
     ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());

@@ -24,39 +24,38 @@ DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& sched
   failsafe_.setOutputsWritten([this] { publishOutputs(); });
   commands_.setWritten(
       [this](const std::vector<uint8_t>&, const std::vector<bool>&) { publishOutputs(); });
-  if (device_->outputCount() > 0) keepTimedCommands(node);
+  if (device_->outputCount() > 0) keepTimedOnParameterServer(node);
 }
 
 // A node killed during a flash (or restarted by roslaunch's respawn) must not take the flash's
 // end for a restart: the running timed commands are kept on the parameter server, whose life is
 // the robot's roscore, with their ends in wall-clock time, and the next node resumes them before
 // its first poll (issue #32 item 6; docs/failsafe.md, "What the node cannot do").
-void DeviceAdapter::keepTimedCommands(const ros::NodeHandle& node) {
+void DeviceAdapter::keepTimedOnParameterServer(const ros::NodeHandle& node) {
   const std::string key = "running_timed/" + device_->name();
-  XmlRpc::XmlRpcValue kept;
-  if (node.getParam(key, kept) && kept.getType() == XmlRpc::XmlRpcValue::TypeArray) {
-    const double now = ros::WallTime::now().toSec();
-    std::vector<TimedIntent> running;
-    std::string told;
-    for (int i = 0; i < kept.size(); ++i) {
-      XmlRpc::XmlRpcValue& e = kept[i];
+  XmlRpc::XmlRpcValue list;
+  if (node.getParam(key, list) && list.getType() == XmlRpc::XmlRpcValue::TypeArray) {
+    std::vector<KeptTimedCommand> kept;
+    for (int i = 0; i < list.size(); ++i) {
+      XmlRpc::XmlRpcValue& e = list[i];
       if (e.getType() != XmlRpc::XmlRpcValue::TypeStruct || !e.hasMember("channel") ||
           !e.hasMember("after") || !e.hasMember("during") || !e.hasMember("ends"))
         continue;
       const int channel = static_cast<int>(e["channel"]);
-      const double ends = static_cast<double>(e["ends"]);
-      if (channel < 0 || static_cast<size_t>(channel) >= device_->outputCount()) continue;
-      if (ends >= 0 && ends <= now) continue;  // ended while no node ran: the poll shows it
-      TimedIntent t;
-      t.channel = static_cast<uint8_t>(channel);
-      const int during = static_cast<int>(e["during"]);
-      if (during >= 0) t.during = during != 0;
-      t.after = static_cast<bool>(e["after"]);
-      t.seconds = ends < 0 ? -1.0 : ends - now;
-      running.push_back(t);
-      told += (told.empty() ? "" : ", ") + device_->outputNames()[t.channel] +
-              (ends < 0 ? " (no end)" : " (" + secondsText(t.seconds) + " left)");
+      if (channel < 0 || channel > 255) continue;
+      KeptTimedCommand k;
+      k.channel = static_cast<uint8_t>(channel);
+      k.during = static_cast<int>(e["during"]);
+      k.after = static_cast<bool>(e["after"]);
+      k.ends = static_cast<double>(e["ends"]);
+      kept.push_back(k);
     }
+    const std::vector<TimedIntent> running =
+        resumeTimedCommands(kept, ros::WallTime::now().toSec(), device_->outputCount());
+    std::string told;
+    for (const TimedIntent& t : running)
+      told += (told.empty() ? "" : ", ") + device_->outputNames()[t.channel] +
+              (t.seconds < 0 ? " (no end)" : " (" + secondsText(t.seconds) + " left)");
     if (!running.empty()) {
       failsafe_.resumeTimed(running);
       ROS_INFO("%s: the previous node's timed commands still run: %s", device_->name().c_str(),
@@ -71,15 +70,16 @@ void DeviceAdapter::keepTimedCommands(const ros::NodeHandle& node) {
       node.deleteParam(key);
       return;
     }
-    const double now = ros::WallTime::now().toSec();
+    const std::vector<KeptTimedCommand> kept =
+        keepTimedCommands(running, ros::WallTime::now().toSec());
     XmlRpc::XmlRpcValue list;
-    list.setSize(static_cast<int>(running.size()));
-    for (size_t i = 0; i < running.size(); ++i) {
+    list.setSize(static_cast<int>(kept.size()));
+    for (size_t i = 0; i < kept.size(); ++i) {
       XmlRpc::XmlRpcValue& e = list[static_cast<int>(i)];
-      e["channel"] = static_cast<int>(running[i].channel);
-      e["during"] = running[i].during ? static_cast<int>(*running[i].during) : -1;
-      e["after"] = running[i].after;
-      e["ends"] = running[i].seconds < 0 ? -1.0 : now + running[i].seconds;
+      e["channel"] = static_cast<int>(kept[i].channel);
+      e["during"] = kept[i].during;
+      e["after"] = kept[i].after;
+      e["ends"] = kept[i].ends;
     }
     node.setParam(key, list);
   });

@@ -21,16 +21,17 @@ Bytes exceptionReply(uint16_t transaction, const Request& r, uint8_t code) {
 }  // namespace
 
 TEST(ShareAddresses, ListenAndAllowEntriesAreChecked) {
+  // Text only: nothing here binds or connects.
   std::string host, error;
-  uint16_t port = 0;
-  EXPECT_TRUE(parseListenAddress("127.0.0.1:1502", &host, &port, &error));
+  uint16_t parsed = 0;
+  EXPECT_TRUE(parseListenAddress("127.0.0.1:1502", &host, &parsed, &error));
   EXPECT_EQ(host, "127.0.0.1");
-  EXPECT_EQ(port, 1502);
-  EXPECT_FALSE(parseListenAddress("localhost:1502", &host, &port, &error));
+  EXPECT_EQ(parsed, 1502u);
+  EXPECT_FALSE(parseListenAddress("localhost:1502", &host, &parsed, &error));
   EXPECT_NE(error.find("IPv4"), std::string::npos) << error;
-  EXPECT_FALSE(parseListenAddress("127.0.0.1:0", &host, &port, &error));
+  EXPECT_FALSE(parseListenAddress("127.0.0.1:0", &host, &parsed, &error));
   EXPECT_NE(error.find("1-65535"), std::string::npos) << error;
-  EXPECT_FALSE(parseListenAddress("127.0.0.1:70000", &host, &port, &error));
+  EXPECT_FALSE(parseListenAddress("127.0.0.1:70000", &host, &parsed, &error));
   uint32_t net = 0, mask = 0;
   EXPECT_TRUE(parseAllowEntry("10.1.2.3/8", &net, &mask, &error));
   EXPECT_EQ(net, 0x0A000000u);

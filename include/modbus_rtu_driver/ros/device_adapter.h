@@ -25,6 +25,7 @@
 #include "modbus_rtu_driver/devices/failsafe.h"
 #include "modbus_rtu_driver/failsafe/device_commands.h"
 #include "modbus_rtu_driver/failsafe/device_failsafe.h"
+#include "modbus_rtu_driver/failsafe/kept_timed_commands.h"
 #include "modbus_rtu_driver/ros/digital_states_publisher.h"
 #include "modbus_rtu_driver/ros/publish_shared.h"
 
@@ -136,7 +137,7 @@ class DeviceAdapter {
 
   DeviceFailsafe failsafe_;
   DeviceCommands commands_;  // after failsafe_: it calls into it
-  void keepTimedCommands(const ros::NodeHandle& node);
+  void keepTimedOnParameterServer(const ros::NodeHandle& node);
   EventSink failsafe_sink_;
   ros::Publisher failsafe_pub_;  // ~<device>/failsafe, latched: this device's newest event
 
