@@ -88,6 +88,32 @@ TEST_F(Commands, CommandsThatCameMeanwhileGoOutInOneWriteAndEachLearnsItsOutcome
   EXPECT_SCRIPT_DONE(bus);
 }
 
+TEST_F(Commands, CommandsMergedIntoAWriteWithoutAnAnswerAreEachToldItFailedInArrivalOrder) {
+  std::vector<int> order;
+  std::vector<Result> outcomes;
+  auto doneAs = [&](int n) {
+    return [&, n](const Result& r) {
+      order.push_back(n);
+      outcomes.push_back(r);
+    };
+  };
+  commands.command(3, true, doneAs(0));
+  commands.command(4, true, doneAs(1));
+  commands.command(3, false, doneAs(2));
+  ASSERT_EQ(queued.size(), 1u);
+  EXPECT_TRUE(order.empty()) << "nobody is told before the write went out";
+  // One FC15 of channels 3-4 (3 off, the newest for it; 4 on), then silence, and silence again
+  // for the read back.
+  bus.expect(toHex(encodeRequest(Request::writeMultipleCoils(255, 3, {false, true}))));
+  bus.expect(toHex(encodeRequest(Request::readCoils(255, 0, 8))));
+  EXPECT_FALSE(runNext().ok());
+  EXPECT_EQ(order, (std::vector<int>{0, 1, 2}));
+  for (const Result& r : outcomes) EXPECT_FALSE(r.ok());
+  EXPECT_EQ(expected(3).kind, Expectation::Kind::kAny);
+  EXPECT_EQ(expected(4).kind, Expectation::Kind::kAny);
+  EXPECT_SCRIPT_DONE(bus);
+}
+
 TEST_F(Commands, AWriteWithoutAnAnswerIsNotConfirmedToItsCallerNorTheFailsafe) {
   bool written = false;
   commands.setWritten(
