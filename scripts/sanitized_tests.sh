@@ -64,6 +64,7 @@ rm -f "$BUILD"/logs/node.* "$SANITIZED_NODE.started"
 if [ -x "$SANITIZED_NODE" ]; then
   echo "sanitized: rostest node_devices.test with $SANITIZED_NODE"
   ASAN_OPTIONS="detect_leaks=1:log_path=$BUILD/logs/node" UBSAN_OPTIONS="print_stacktrace=1:log_path=$BUILD/logs/node" \
+    LSAN_OPTIONS="suppressions=$REPO/test/sanitizers/lsan.supp:print_suppressions=0" \
     ROS_TEST_RESULTS_DIR="$RESULTS/node" /usr/bin/python3 "$REPO/test/run_rostest.py" \
     "$REPO/test/rostest/node_devices.test" node_prefix:="$REPO/test/sanitizers/node_prefix.sh" \
     >"$BUILD/logs/node_rostest.log" 2>&1 || status=1

@@ -132,6 +132,14 @@ void BusNode::shutdown() {
     std::fflush(nullptr);
     std::_Exit(0);
   }
+  // The bus thread has ended: the timed commands the safe writes ended are gone from the lists
+  // kept for the next node. After ROS's shutdown roscpp tries the master once: a master that is
+  // gone costs no wait, one that does not answer at most kParameterGrace.
+  if (running_timed_ && !running_timed_->flush(std::chrono::steady_clock::now() + kParameterGrace))
+    std::fprintf(stderr,
+                 "[ERROR] ~running_timed not updated within %.0f s (the master does not answer): "
+                 "a node started under this roscore may resume timed commands the stop ended\n",
+                 std::chrono::duration<double>(kParameterGrace).count());
   if (publish_queue_) publish_queue_->stop();
 }
 
@@ -145,7 +153,7 @@ bool BusNode::start() {
   std::string error;
   YAML::Node root = toYaml(params);
   // Not configuration: the running timed commands the node keeps for its next start
-  // (DeviceAdapter::keepTimedOnParameterServer).
+  // (RunningTimedParameter).
   root.remove("running_timed");
   if (!parseBusConfig(root, &config_, &error)) {
     ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());
@@ -160,6 +168,7 @@ bool BusNode::start() {
     return false;
   }
   scheduler_ = std::make_unique<BusScheduler>(*link_, schedulingOptions());
+  running_timed_ = RunningTimedParameter::onParameterServer(nh_);
   for (const DeviceConfig& dc : config_.devices) {
     std::shared_ptr<Device> device = createDevice(dc);  // dc was validated as it was parsed
     link_->setReplyDelay(device->address(), dc.reply_delay);
@@ -169,6 +178,7 @@ bool BusNode::start() {
       ROS_FATAL("devices/%s/type: '%s' has no ROS interface", dc.name.c_str(), dc.type.c_str());
       return false;
     }
+    adapter->keepTimedIn(*running_timed_);
     adapters_.push_back(std::move(adapter));
   }
 

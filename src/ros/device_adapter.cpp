@@ -24,65 +24,32 @@ DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& sched
   failsafe_.setOutputsWritten([this] { publishOutputs(); });
   commands_.setWritten(
       [this](const std::vector<uint8_t>&, const std::vector<bool>&) { publishOutputs(); });
-  if (device_->outputCount() > 0) keepTimedOnParameterServer(node);
 }
 
 // A node killed during a flash (or restarted by roslaunch's respawn) must not take the flash's
 // end for a restart: the running timed commands are kept on the parameter server, whose life is
 // the robot's roscore, with their ends in wall-clock time, and the next node resumes them before
 // its first poll (issue #32 item 6; docs/failsafe.md, "What the node cannot do").
-void DeviceAdapter::keepTimedOnParameterServer(const ros::NodeHandle& node) {
-  const std::string key = "running_timed/" + device_->name();
-  XmlRpc::XmlRpcValue list;
-  if (node.getParam(key, list) && list.getType() == XmlRpc::XmlRpcValue::TypeArray) {
-    std::vector<KeptTimedCommand> kept;
-    for (int i = 0; i < list.size(); ++i) {
-      XmlRpc::XmlRpcValue& e = list[i];
-      if (e.getType() != XmlRpc::XmlRpcValue::TypeStruct || !e.hasMember("channel") ||
-          !e.hasMember("after") || !e.hasMember("during") || !e.hasMember("ends"))
-        continue;
-      const int channel = static_cast<int>(e["channel"]);
-      if (channel < 0 || channel > 255) continue;
-      KeptTimedCommand k;
-      k.channel = static_cast<uint8_t>(channel);
-      k.during = static_cast<int>(e["during"]);
-      k.after = static_cast<bool>(e["after"]);
-      k.ends = static_cast<double>(e["ends"]);
-      kept.push_back(k);
-    }
-    const std::vector<TimedIntent> running =
-        resumeTimedCommands(kept, ros::WallTime::now().toSec(), device_->outputCount());
+void DeviceAdapter::keepTimedIn(RunningTimedParameter& parameter) {
+  if (device_->outputCount() == 0) return;
+  const std::vector<TimedIntent> running = resumeTimedCommands(
+      parameter.read(device_->name()), ros::WallTime::now().toSec(), device_->outputCount());
+  if (!running.empty()) {
     std::string told;
     for (const TimedIntent& t : running)
       told += (told.empty() ? "" : ", ") + device_->outputNames()[t.channel] +
               (t.seconds < 0 ? " (no end)" : " (" + secondsText(t.seconds) + " left)");
-    if (!running.empty()) {
-      failsafe_.resumeTimed(running);
-      ROS_INFO("%s: the previous node's timed commands still run: %s", device_->name().c_str(),
-               told.c_str());
-    }
+    failsafe_.resumeTimed(running);
+    ROS_INFO("%s: the previous node's timed commands still run: %s", device_->name().c_str(),
+             told.c_str());
   }
-  // Kept from the thread that confirmed the command (the bus thread; a parameter write is one
-  // XML-RPC call to the master), only while a timed command runs or just stopped running.
-  failsafe_.setTimedChanged([node, key](const std::vector<TimedIntent>& running) {
-    if (!ros::ok()) return;  // at shutdown: the master may be gone
-    if (running.empty()) {
-      node.deleteParam(key);
-      return;
-    }
-    const std::vector<KeptTimedCommand> kept =
-        keepTimedCommands(running, ros::WallTime::now().toSec());
-    XmlRpc::XmlRpcValue list;
-    list.setSize(static_cast<int>(kept.size()));
-    for (size_t i = 0; i < kept.size(); ++i) {
-      XmlRpc::XmlRpcValue& e = list[static_cast<int>(i)];
-      e["channel"] = static_cast<int>(kept[i].channel);
-      e["during"] = kept[i].during;
-      e["after"] = kept[i].after;
-      e["ends"] = kept[i].ends;
-    }
-    node.setParam(key, list);
-  });
+  // From the thread that confirmed the command (the bus thread), only while a timed command
+  // runs or just stopped running, also for the shutdown's safe writes; the parameter's own
+  // thread writes it.
+  failsafe_.setTimedChanged(
+      [&parameter, name = device_->name()](const std::vector<TimedIntent>& now_running) {
+        parameter.keep(name, keepTimedCommands(now_running, ros::WallTime::now().toSec()));
+      });
 }
 
 void DeviceAdapter::start() {

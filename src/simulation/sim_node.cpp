@@ -77,8 +77,9 @@ SimNode::SimNode(SimNodeOptions options, Transport& transport, Clock& clock, Sim
 }
 
 void SimNode::keepTimed(Entry& e) {
-  // DeviceAdapter::keepTimedOnParameterServer: the previous node's timed commands resumed before
-  // the first poll, this node's kept while they run.
+  // DeviceAdapter::keepTimedIn: the previous node's timed commands resumed before the first
+  // poll, this node's kept while they run, also as the stop's safe writes end them (the real
+  // node flushes those after its bus thread ended: RunningTimedParameter).
   if (!options_.kept_timed) return;
   const std::string name = e.device->name();
   auto* kept = options_.kept_timed;
@@ -92,7 +93,7 @@ void SimNode::keepTimed(Entry& e) {
     if (!running.empty()) e.failsafe->resumeTimed(running);
   }
   e.failsafe->setTimedChanged([this, kept, name, seconds](const std::vector<TimedIntent>& running) {
-    if (stopping_) return;
+    if (killed_) return;
     if (running.empty())
       kept->erase(name);
     else
@@ -101,7 +102,7 @@ void SimNode::keepTimed(Entry& e) {
 }
 
 SimNode::~SimNode() {
-  stopping_ = true;  // a killed node keeps nothing more (SIGKILL runs no code)
+  killed_ = true;  // a killed node keeps nothing more
   // The bus's queued jobs call into the fail-safes: they fail unsent before those go.
   scheduler_->stop();
 }
@@ -191,7 +192,6 @@ void SimNode::finishStart() {
 }
 
 void SimNode::beginStop() {
-  stopping_ = true;
   share_closed_ = true;
   scheduler_->closeShared("the share stopped (the node is stopping)");
   started_ = false;

@@ -276,6 +276,32 @@ class FailsafeItemsTest(unittest.TestCase):
                           e.trigger == "restart"], "the flash's end was taken for a restart")
         self.assertEqual(self.coil(RELAYS, PUMP), 1, "on_restart: safe switched the pump off")
 
+    def test_06b_a_flash_a_clean_stop_ended_is_not_kept_for_the_next_node(self):
+        # docs/failsafe.md: the node keeps its *running* timed commands for its next start. A
+        # clean stop's safe write ends a flash on a channel with a safe state: the next node must
+        # not resume it, take its safe level for a restart, nor write the channel.
+        self.config["devices"]["relays"]["safe_state"]["out4"] = False
+        self.start_node()
+        res = helpers.service(NS + "relays/pulse", Pulse)(OUT4, True, 6.0)  # on 6 s, then off
+        self.assertTrue(res.success, res.message)
+        t0 = time.time()
+        helpers.wait_until(lambda: rospy.get_param(NS + "running_timed/relays", None), 5,
+                           "the flash kept on the parameter server")
+        self.stop_node()  # SIGINT: the shutdown's safe write switches out4 off
+        self.assertEqual(self.coil(RELAYS, OUT4), 0, "the shutdown's safe write")
+        kept = rospy.get_param(NS + "running_timed/relays", [])
+        self.assertFalse([k for k in kept if k["channel"] == OUT4],
+                         "a flash the safe write ended is still kept: %r" % kept)
+        since = len(self.events)
+        self.start_node(fresh=False)  # as roslaunch's respawn: the same roscore
+        self.assertLess(time.time(), t0 + 6.0, "the next node started after the flash's end")
+        self.hold_coils(RELAYS, {OUT4: 0}, t0 + 6.0 + 0.6 + 1.5 - time.time(),
+                        "out4 written by the next node")  # through the flash's end and polls
+        self.assertFalse([e for e in self.events[since:] if e.device == "relays" and
+                          e.trigger == "restart"], "the safe write was taken for a restart")
+        self.log.seek(0)
+        self.assertNotIn("timed commands still run", self.log.read())
+
     def test_07_restore_writes_the_states_the_node_found(self):
         # docs/failsafe.md: "Where the node has commanded nothing, the intent is the state it
         # found at its first good poll".

@@ -2,8 +2,8 @@
 // next one: a node killed during a flash must not take the flash's end for a restart (issue #32
 // item 6; docs/failsafe.md, "What the node cannot do"). Their ends are kept as absolute seconds
 // of a clock that outlives the node: wall-clock time on the parameter server
-// (DeviceAdapter::keepTimedOnParameterServer). ROS-free, so the simulation's harness can keep
-// them the same way once its model carries them across a new node (docs/simulation.md).
+// (ros/running_timed_parameter.h). ROS-free, so the simulation's harness can keep them the same
+// way once its model carries them across a new node (docs/simulation.md).
 #pragma once
 
 #include <cstddef>

@@ -20,6 +20,7 @@
 #include "modbus_rtu_driver/node_config/bus_config.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 #include "modbus_rtu_driver/ros/raw_writes.h"
+#include "modbus_rtu_driver/ros/running_timed_parameter.h"
 #include "modbus_rtu_driver/ros/share_bridge.h"
 
 namespace modbus_rtu_driver {
@@ -57,6 +58,8 @@ class BusNode {
   // After shutdown_timeout, how long the stop still waits for the bus thread to end the
   // transaction it is in before the process exits without it (docs/failsafe.md).
   static constexpr std::chrono::seconds kBusStopGrace{2};
+  // After the bus thread ended, how long the stop waits for ~running_timed's last writes.
+  static constexpr std::chrono::seconds kParameterGrace{1};
   std::deque<std::pair<ros::WallTime, uint64_t>> error_totals_;  // (when, line errors so far)
   void logRecoveries();
   std::string silentBusAdvice() const;
@@ -67,6 +70,8 @@ class BusNode {
   BusConfig config_;
   std::unique_ptr<Link> link_;  // serial, Modbus TCP or RTU over TCP (by `port`)
   std::unique_ptr<BusScheduler> scheduler_;
+  // Declared before the adapters, which keep their timed commands in it: it outlives them.
+  std::unique_ptr<RunningTimedParameter> running_timed_;
   std::vector<std::unique_ptr<DeviceAdapter>> adapters_;
   // wire_log's writes, and with realtime_priority the bus thread's publishing, run here; none
   // without either (stopped after the bus, before the adapters go).

@@ -28,6 +28,7 @@
 #include "modbus_rtu_driver/failsafe/kept_timed_commands.h"
 #include "modbus_rtu_driver/ros/digital_states_publisher.h"
 #include "modbus_rtu_driver/ros/publish_shared.h"
+#include "modbus_rtu_driver/ros/running_timed_parameter.h"
 
 namespace modbus_rtu_driver {
 
@@ -44,6 +45,10 @@ class DeviceAdapter {
   // Where the bus thread hands its publishing (the node's publishing thread, when the bus
   // thread runs at real-time priority); before start(). Without one, it publishes itself.
   void setPublishQueue(TaskQueue* queue) { publish_queue_ = queue; }
+  // Resumes the timed commands the previous node kept in `parameter` and keeps this node's
+  // there; before the scheduler starts (the first poll compares with them). `parameter`
+  // outlives the adapter's bus work.
+  void keepTimedIn(RunningTimedParameter& parameter);
   // Advertises topics and services (the base's, then the type's own in advertise()), and only
   // then registers the poll with the scheduler: the bus may already run, and a poll's callback
   // publishes on them.
@@ -137,7 +142,6 @@ class DeviceAdapter {
 
   DeviceFailsafe failsafe_;
   DeviceCommands commands_;  // after failsafe_: it calls into it
-  void keepTimedOnParameterServer(const ros::NodeHandle& node);
   EventSink failsafe_sink_;
   ros::Publisher failsafe_pub_;  // ~<device>/failsafe, latched: this device's newest event
 

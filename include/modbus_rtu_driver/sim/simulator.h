@@ -17,8 +17,6 @@
 // the line's character rate.
 #pragma once
 
-#include <sys/types.h>
-
 #include <atomic>
 #include <memory>
 #include <mutex>
@@ -30,6 +28,7 @@
 
 #include "modbus_rtu_driver/core/modbus/request_framer.h"
 #include "modbus_rtu_driver/sim/pty_link.h"
+#include "modbus_rtu_driver/sim/sim_control_socket.h"
 #include "modbus_rtu_driver/sim/sim_device.h"
 #include "modbus_rtu_driver/sim/sim_gateway.h"
 #include "modbus_rtu_driver/sim/sim_generic.h"
@@ -80,10 +79,6 @@ class Simulator {
     SimClock::duration per_byte{};  // zero: all at once
     SimClock::time_point first_written{};
   };
-  struct Client {
-    int fd;
-    std::string input;
-  };
 
   void run();
   SimClock::duration waitTime(SimClock::time_point now) const;
@@ -103,12 +98,7 @@ class Simulator {
   void powerCycle(SimClock::time_point now);
   void saveState();
   void loadState(SimClock::time_point now);
-  // Refuses a control socket a running simulator answers on; closeControl removes only ours.
-  bool openControl(std::string* error);
-  void closeControl();
-  void serveControl();
-  std::string doCommand(const std::string& line);
-  std::string deviceCommand(const std::string& verb, SimDevice& device, std::istream& args);
+  std::string doCommand(const std::string& line);  // the line thread's, under mutex_
 
   SimulatorConfig config_;
   SimulatorOptions options_;
@@ -118,10 +108,8 @@ class Simulator {
   std::atomic<bool> running_{false};
   std::atomic<bool> power_cycle_requested_{false};
   PtyLink pty_;
-  SimGateway gateway_;  // the same line, reached over TCP
-  int listen_fd_ = -1;
-  std::pair<dev_t, ino_t> control_inode_{};  // the control socket this run made (0: none)
-  std::vector<Client> clients_;
+  SimGateway gateway_;        // the same line, reached over TCP
+  SimControlSocket control_;  // the line thread's
   RequestFramer framer_;
   SimLineSettings line_;  // the line's settings when the last bytes came
   SimClock::time_point last_byte_{}, rx_start_{}, line_free_{};

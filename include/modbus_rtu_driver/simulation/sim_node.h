@@ -35,7 +35,7 @@ struct SimNodeOptions {
   double heartbeat_timeout = 0.5;  // the bus heartbeat; 0 = none
   double shutdown_timeout = 3.0;
   BusScheduler::Options scheduling;
-  // The parameter server's running_timed/<device> (DeviceAdapter::keepTimedOnParameterServer):
+  // The parameter server's running_timed/<device> (DeviceAdapter::keepTimedIn):
   // owned by the harness, so it outlives a killed or stopped node; ends in the clock's seconds.
   // Null: nothing kept.
   std::map<std::string, std::vector<KeptTimedCommand>>* kept_timed = nullptr;
@@ -139,7 +139,7 @@ class SimNode {
   double check_period_ = 0;
   bool started_ = false;
   bool share_closed_ = false;
-  bool stopping_ = false;  // ros::ok() is false in BusNode::shutdown: nothing more is kept
+  bool killed_ = false;  // SIGKILL runs no code: nothing more is kept
   uint64_t current_op_ = 0;
   uint64_t submitting_op_ = 0;  // viaCommands: the operation and callback of the job queued now
   Done submitting_done_;
