@@ -552,8 +552,7 @@ void World::resetModelForNewNode() {
       }
       c = Chan{};
       // Resumed as the previous node left it, not as a command of this node's (found).
-      if (ch < carried_[d].size() && carried_[d][ch] &&
-          (carried_[d][ch]->continuous || carried_[d][ch]->ends > now)) {
+      if (ch < carried_[d].size() && carried_[d][ch] && carried_[d][ch]->ends > now) {
         const Chan& k = *carried_[d][ch];
         c.known = true;
         c.level = k.level;
@@ -565,8 +564,6 @@ void World::resetModelForNewNode() {
         c.continuous = k.continuous;
         c.at = now;
         c.from_old_node = true;
-        // docs:68: a resumed continuous run counts as read running (a coil write keeps it).
-        if (d == kLd && c.continuous) m.pwm_read_running[ch] = true;
       }
     }
     carried_[d].clear();
@@ -585,13 +582,15 @@ void World::resetModelForNewNode() {
 
 void World::keepRunningTimed() {
   // What DeviceFailsafe's timed-changed callback last put on the parameter server: each channel
-  // whose timed command runs (a known one, not ended) or whose continuous run is the device's.
+  // whose timed command runs (a known one, not ended).
   const TP now = clock_.now();
   for (int d = 0; d < kGen; ++d) {
     carried_[d].assign(kChannels, std::nullopt);
     for (int ch = 0; ch < kChannels; ++ch) {
       const Chan& c = model_[d].ch[ch];
-      if (c.known && !c.adopt && (c.continuous || (c.timed && c.ends > now))) carried_[d][ch] = c;
+      // Model change 23 (failsafe.md line 198): only a timed command with an end; a run with
+      // none is found by the next node.
+      if (c.known && !c.adopt && !c.continuous && c.timed && c.ends > now) carried_[d][ch] = c;
     }
   }
 }
@@ -655,10 +654,12 @@ void World::stopNode() {
         model_[d].ch[ch].trigger_at = began;
       }
   next_tick_ = next_feed_ = next_dev_feed_ = TP::max();
-  keepRunningTimed();  // ros::ok() is false in the shutdown: nothing more is kept
   node_->beginStop();
   stopping_ = true;
   runUntil(began + dur(config_.shutdown_timeout), [this] { return node_->stopWritesDone(); });
+  // Model change 22 (failsafe.md, the stop's step 5): the list kept for the next node is the
+  // one the safe writes left, written after the bus thread ended.
+  keepRunningTimed();
   // I10 (docs:31): a device that answered throughout shows its safe states.
   if (node_->stopWritesDone() && !port_lost_)
     for (int d = 0; d < kGen; ++d) {
