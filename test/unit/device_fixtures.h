@@ -39,17 +39,17 @@ inline std::string registersReply(uint8_t slave, uint16_t address,
       Request::readHoldingRegisters(slave, address, static_cast<uint16_t>(values.size())), values));
 }
 
-// An LD58A08's first poll (address 1): its outputs (`coils`, bit i = output i), then every
-// channel's PWM registers (period, on time, pulses), `pwm(channel)`; idle when not given.
+// An LD58A08's first poll (address 1): every channel's PWM registers (period, on time, pulses),
+// `pwm(channel)`, idle when not given; then its outputs (`coils`, bit i = output i).
 inline void expectFirstLd58a08Poll(
     ScriptedTransport& bus, unsigned coils = 0,
     const std::function<std::vector<uint16_t>(uint16_t)>& pwm = nullptr) {
-  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, coils));
   for (uint16_t ch = 0; ch < 8; ++ch) {
     const auto address = static_cast<uint16_t>(ch * 0x10);
     bus.expect(frame(Request::readHoldingRegisters(1, address, 3)),
                registersReply(1, address, pwm ? pwm(ch) : std::vector<uint16_t>{0, 0, 0}));
   }
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, coils));  // after the registers
 }
 
 }  // namespace devtest
