@@ -1,6 +1,8 @@
 #include "modbus_rtu_driver/failsafe/device_failsafe.h"
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 
 #include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/core/modbus/text.h"
@@ -214,6 +216,7 @@ void DeviceFailsafe::afterPoll() {
   std::vector<uint8_t> changed;
   const auto verdict =
       intents_.observePoll(device_.outputs(), timed, was_offline, &changed, read_now);
+  timedMaybeChanged();  // a run read ended, a timed command's end shown, a level adopted
   // A share client or raw write changed outputs: "in their safe state" (which names the channels
   // the safe write set) is no longer true, as after a user's write.
   if (intents_.tookAdoptedWrite()) endSafeState();
@@ -364,6 +367,7 @@ void DeviceFailsafe::userWriteNotConfirmed(const std::vector<uint8_t>& channels,
   // (not a restart, not the caller's command).
   if (!answerLost(result.error)) return;
   for (uint8_t ch : channels) intents_.adoptNextPoll(ch, CommandSource::kFound);
+  timedMaybeChanged();  // a timed command it may have replaced is no longer known to run
 }
 
 void DeviceFailsafe::timedCommandDone(const TimedIntent& intent, const Result& result) {
@@ -469,8 +473,16 @@ void DeviceFailsafe::externalWriteConfirmed(const Request& request, CommandSourc
 
 void DeviceFailsafe::timedMaybeChanged() {
   const std::vector<TimedIntent> running = intents_.runningTimed();
-  if (running.empty() && !timed_told_) return;  // none before, none now: nothing to tell
-  timed_told_ = !running.empty();
+  const double now =
+      std::chrono::duration<double>(intents_.clock().now().time_since_epoch()).count();
+  std::vector<KeptTimedCommand> kept = keepTimedCommands(running, now);
+  auto same = [](const KeptTimedCommand& a, const KeptTimedCommand& b) {
+    // The ends are now + seconds left: the same end, computed at two times, within rounding.
+    return a.channel == b.channel && a.during == b.during && a.after == b.after &&
+           (a.ends < 0) == (b.ends < 0) && std::abs(a.ends - b.ends) < 1e-3;
+  };
+  if (std::equal(kept.begin(), kept.end(), timed_told_.begin(), timed_told_.end(), same)) return;
+  timed_told_ = std::move(kept);
   if (timed_changed_) timed_changed_(running);
 }
 

@@ -6,11 +6,15 @@ std::vector<KeptTimedCommand> keepTimedCommands(const std::vector<TimedIntent>& 
                                                 double now) {
   std::vector<KeptTimedCommand> kept;
   for (const TimedIntent& t : running) {
+    // A run with no end (a continuous PWM run, a run the device drives) is not kept: the next
+    // node takes it as found, as its first poll reads it (docs/failsafe.md, "What restore
+    // writes"), and a restore of that node does not start it again.
+    if (t.seconds < 0) continue;
     KeptTimedCommand k;
     k.channel = t.channel;
     k.during = t.during ? static_cast<int>(*t.during) : -1;
     k.after = t.after;
-    k.ends = t.seconds < 0 ? -1.0 : now + t.seconds;
+    k.ends = now + t.seconds;
     kept.push_back(k);
   }
   return kept;
@@ -21,12 +25,12 @@ std::vector<TimedIntent> resumeTimedCommands(const std::vector<KeptTimedCommand>
   std::vector<TimedIntent> running;
   for (const KeptTimedCommand& k : kept) {
     if (k.channel >= channels) continue;
-    if (k.ends >= 0 && k.ends <= now) continue;  // ended while no node ran: the poll shows it
+    if (k.ends <= now) continue;  // ended while no node ran (or no end): the poll shows it
     TimedIntent t;
     t.channel = k.channel;
     if (k.during >= 0) t.during = k.during != 0;
     t.after = k.after;
-    t.seconds = k.ends < 0 ? -1.0 : k.ends - now;
+    t.seconds = k.ends - now;
     running.push_back(t);
   }
   return running;

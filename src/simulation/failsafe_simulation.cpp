@@ -214,7 +214,7 @@ struct Chan {
   // A set_pwm's end counted from when the device answered its write (the node's end); `ends`
   // counts from the model's callback, a read back later.
   TP ends_earliest{};
-  bool from_old_node = false;
+  bool from_old_node = false;  // a timed command the previous node kept, resumed by this one
   TP at{};
   bool held = false;  // docs:76-80
   TP held_since{};
@@ -360,6 +360,7 @@ class World {
   void stopNode();
   void killNode();
   void resetModelForNewNode();
+  void keepRunningTimed();
   void onAttempt(const LineEvent& e);
   void onReport(const FailsafeReport& r);
   void onGenericReport(const FailsafeReport& r);
@@ -393,11 +394,18 @@ class World {
   ManualClock clock_;
   MemoryLink link_;
   CountingTransport transport_;
-  std::unique_ptr<SimNode> node_;
+  // running_timed/<device> on the parameter server (SimNodeOptions::kept_timed): kept across
+  // nodes, as roscore outlives a killed or respawned node.
+  std::map<std::string, std::vector<KeptTimedCommand>> kept_timed_;
+  std::unique_ptr<SimNode> node_;  // after kept_timed_: it writes there
   bool dying_ = false;
   bool stopping_ = false;
   TP start_{};
   DevModel model_[kDevices];
+  // docs/failsafe.md "A node started during a flash": the timed commands still running when the
+  // node died, or when it began to stop (its shutdown keeps nothing more), which the next node
+  // resumes.
+  std::vector<std::optional<Chan>> carried_[kDevices];
   // The controller and its heartbeat (docs:32).
   bool alive_ = true;
   TP last_feed_{};
@@ -532,7 +540,8 @@ void World::resetModelForNewNode() {
     // Each of its flashes changes the outputs at its own end (docs:171-172): every report up to
     // the last end (+ the slack of docs line 70) is justified, not only the first.
     bool running_unknown = false;
-    for (Chan& c : m.ch) {
+    for (size_t ch = 0; ch < m.ch.size(); ++ch) {
+      Chan& c = m.ch[ch];
       if (!c.known && c.adopt) running_unknown = true;
       const TP seen_by = c.ends + dur(0.5 + 0.02 * c.duration);
       // An LD58A08 burst too: its last pulse may still be on while its registers read it ended.
@@ -542,7 +551,22 @@ void World::resetModelForNewNode() {
         m.justified_until = std::max(m.justified_until, seen_by + dur(2.0));
       }
       c = Chan{};
+      // Resumed as the previous node left it, not as a command of this node's (found).
+      if (ch < carried_[d].size() && carried_[d][ch] && carried_[d][ch]->ends > now) {
+        const Chan& k = *carried_[d][ch];
+        c.known = true;
+        c.level = k.level;
+        c.timed = k.timed;
+        c.during = k.during;
+        c.ends = k.ends;
+        c.ends_earliest = k.ends_earliest;
+        c.duration = k.duration;
+        c.continuous = k.continuous;
+        c.at = now;
+        c.from_old_node = true;
+      }
     }
+    carried_[d].clear();
     if (running_unknown) {
       m.justified = true;
       m.justified_at = now;
@@ -556,6 +580,21 @@ void World::resetModelForNewNode() {
   lost_ = false;
 }
 
+void World::keepRunningTimed() {
+  // What DeviceFailsafe's timed-changed callback last put on the parameter server: each channel
+  // whose timed command runs (a known one, not ended).
+  const TP now = clock_.now();
+  for (int d = 0; d < kGen; ++d) {
+    carried_[d].assign(kChannels, std::nullopt);
+    for (int ch = 0; ch < kChannels; ++ch) {
+      const Chan& c = model_[d].ch[ch];
+      // Model change 23 (failsafe.md line 198): only a timed command with an end; a run with
+      // none is found by the next node.
+      if (c.known && !c.adopt && !c.continuous && c.timed && c.ends > now) carried_[d][ch] = c;
+    }
+  }
+}
+
 void World::startNode() {
   if (node_) return;
   resetModelForNewNode();
@@ -563,6 +602,7 @@ void World::startNode() {
   o.devices = config_.devices;
   o.heartbeat_timeout = config_.heartbeat;
   o.shutdown_timeout = config_.shutdown_timeout;
+  o.kept_timed = &kept_timed_;  // the parameter server's: a new node resumes what runs
   SimNodeHooks h;
   h.report = [this](const FailsafeReport& r) {
     if (!dying_) onReport(r);
@@ -617,6 +657,9 @@ void World::stopNode() {
   node_->beginStop();
   stopping_ = true;
   runUntil(began + dur(config_.shutdown_timeout), [this] { return node_->stopWritesDone(); });
+  // Model change 22 (failsafe.md, the stop's step 5): the list kept for the next node is the
+  // one the safe writes left, written after the bus thread ended.
+  keepRunningTimed();
   // I10 (docs:31): a device that answered throughout shows its safe states.
   if (node_->stopWritesDone() && !port_lost_)
     for (int d = 0; d < kGen; ++d) {
@@ -631,6 +674,7 @@ void World::stopNode() {
 
 void World::killNode() {
   if (!node_) return;
+  if (!stopping_) keepRunningTimed();
   dying_ = true;
   stopping_ = false;
   node_.reset();  // queued jobs fail unsent: nothing reaches the line

@@ -1,6 +1,7 @@
 #include "modbus_rtu_driver/simulation/sim_node.h"
 
 #include <algorithm>
+#include <chrono>
 #include <utility>
 
 #include "modbus_rtu_driver/core/config/number_text.h"
@@ -49,6 +50,7 @@ SimNode::SimNode(SimNodeOptions options, Transport& transport, Clock& clock, Sim
           [this, name](const std::vector<uint8_t>& channels, const std::vector<bool>& states) {
             if (hooks_.written) hooks_.written(name, channels, states);
           });
+      keepTimed(*e);
       // BusNode::startFailsafe watches a device's own heartbeat too.
       if (e->failsafe->heartbeat()) {
         shortest = std::min(shortest, dc.failsafe.heartbeat_timeout);
@@ -74,7 +76,33 @@ SimNode::SimNode(SimNodeOptions options, Transport& transport, Clock& clock, Sim
   if (deadlines) check_period_ = std::max(0.005, shortest / 10);
 }
 
+void SimNode::keepTimed(Entry& e) {
+  // DeviceAdapter::keepTimedIn: the previous node's timed commands resumed before the first
+  // poll, this node's kept while they run, also as the stop's safe writes end them (the real
+  // node flushes those after its bus thread ended: RunningTimedParameter).
+  if (!options_.kept_timed) return;
+  const std::string name = e.device->name();
+  auto* kept = options_.kept_timed;
+  auto seconds = [this] {
+    return std::chrono::duration<double>(clock_.now().time_since_epoch()).count();
+  };
+  const auto it = kept->find(name);
+  if (it != kept->end()) {
+    const std::vector<TimedIntent> running =
+        resumeTimedCommands(it->second, seconds(), e.device->outputCount());
+    if (!running.empty()) e.failsafe->resumeTimed(running);
+  }
+  e.failsafe->setTimedChanged([this, kept, name, seconds](const std::vector<TimedIntent>& running) {
+    if (killed_) return;
+    if (running.empty())
+      kept->erase(name);
+    else
+      (*kept)[name] = keepTimedCommands(running, seconds());
+  });
+}
+
 SimNode::~SimNode() {
+  killed_ = true;  // a killed node keeps nothing more
   // The bus's queued jobs call into the fail-safes: they fail unsent before those go.
   scheduler_->stop();
 }

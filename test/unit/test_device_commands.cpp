@@ -162,3 +162,28 @@ TEST_F(Commands, ATimedCommandConfirmedIsTheCallersWithItsEndAndFinalLevel) {
   EXPECT_EQ(after, 1);
   EXPECT_SCRIPT_DONE(bus);
 }
+
+TEST_F(Commands, ATimedCommandAWriteWhoseAnswerWasLostMayHaveReplacedIsNoLongerKept) {
+  std::vector<std::vector<TimedIntent>> told;
+  failsafe.setTimedChanged(
+      [&](const std::vector<TimedIntent>& running) { told.push_back(running); });
+  commands.timed(
+      TimedIntent{5, true, false, 2.0}, [&](Transport& t) { return board.pulse(t, 5, true, 2.0); },
+      [](Transport&) {});
+  bus.expectEcho(toHex(encodeRequest(Request::writeMultipleRegisters(
+      255, LcRelay8::flashRegister(5), {LcRelay8::kFlashClose, 20}))));
+  EXPECT_TRUE(runNext().ok());
+  ASSERT_EQ(told.size(), 1u);
+  ASSERT_EQ(told[0].size(), 1u);
+  EXPECT_EQ(told[0][0].channel, 5);
+  // A plain write on that channel during the flash: no answer, none to its read back either.
+  commands.write({5}, {true});
+  bus.expect(toHex(encodeRequest(Request::writeSingleCoil(255, 5, true))));
+  bus.expect(toHex(encodeRequest(Request::readCoils(255, 0, 8))));
+  EXPECT_FALSE(runNext().ok());
+  // The flash may have been replaced: the next node must not resume it (the first poll after
+  // its end plus the slack decides the channel here).
+  ASSERT_EQ(told.size(), 2u);
+  EXPECT_TRUE(told[1].empty());
+  EXPECT_SCRIPT_DONE(bus);
+}

@@ -22,6 +22,7 @@
 #include "modbus_rtu_driver/core/link/until_silent_transport.h"
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/failsafe/channel_intents.h"
+#include "modbus_rtu_driver/failsafe/kept_timed_commands.h"
 
 namespace modbus_rtu_driver {
 
@@ -75,7 +76,9 @@ class DeviceFailsafe {
   void setOutputsWritten(std::function<void()> written) { outputs_written_ = std::move(written); }
   // The timed commands running now (flashes, bursts, PWM runs; seconds left), each time that
   // changes: the ROS layer keeps them for the next node's start, so that a node killed during a
-  // flash does not take its end for a restart (issue #32 item 6).
+  // flash does not take its end for a restart (issue #32 item 6). Looked at after every
+  // command's outcome and every poll: one that ended, or that a poll or a write whose answer
+  // was lost made unknown, is no longer running, so the next node does not resume it.
   void setTimedChanged(std::function<void(const std::vector<TimedIntent>&)> changed) {
     timed_changed_ = std::move(changed);
   }
@@ -178,7 +181,9 @@ class DeviceFailsafe {
   ReportSink sink_;
   std::function<void()> outputs_written_;
   std::function<void(const std::vector<TimedIntent>&)> timed_changed_;
-  bool timed_told_ = false;  // the last list told was not empty (bus thread)
+  // The last list told, its ends in the clock's seconds (bus thread): told again only when it
+  // changed, as it is looked at after every poll.
+  std::vector<KeptTimedCommand> timed_told_;
 
   mutable std::mutex mutex_;  // the counters and texts below
   uint64_t restarts_detected_ = 0, events_ = 0;

@@ -18,10 +18,10 @@ struct KeptTimedCommand {
   uint8_t channel = 0;
   int during = -1;     // the level until the end: 0 or 1; -1 any (the device toggles it)
   bool after = false;  // the level after the end
-  double ends = -1.0;  // absolute seconds; < 0: no end (a continuous run)
+  double ends = -1.0;  // absolute seconds
 };
 
-// What to keep of `running` (DeviceFailsafe's timed commands at `now`).
+// What to keep of `running` (DeviceFailsafe's timed commands at `now`): those with an end.
 std::vector<KeptTimedCommand> keepTimedCommands(const std::vector<TimedIntent>& running,
                                                 double now);
 

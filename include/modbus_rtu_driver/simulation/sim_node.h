@@ -26,6 +26,7 @@
 #include "modbus_rtu_driver/failsafe/device_commands.h"
 #include "modbus_rtu_driver/failsafe/device_failsafe.h"
 #include "modbus_rtu_driver/failsafe/generic_failsafe.h"
+#include "modbus_rtu_driver/failsafe/kept_timed_commands.h"
 
 namespace modbus_rtu_driver {
 
@@ -34,6 +35,10 @@ struct SimNodeOptions {
   double heartbeat_timeout = 0.5;  // the bus heartbeat; 0 = none
   double shutdown_timeout = 3.0;
   BusScheduler::Options scheduling;
+  // The parameter server's running_timed/<device> (DeviceAdapter::keepTimedIn):
+  // owned by the harness, so it outlives a killed or stopped node; ends in the clock's seconds.
+  // Null: nothing kept.
+  std::map<std::string, std::vector<KeptTimedCommand>>* kept_timed = nullptr;
 };
 
 struct SimNodeHooks {
@@ -114,6 +119,7 @@ class SimNode {
     std::unique_ptr<GenericFailsafe> generic_safe;  // generic devices: their safe values
   };
   Entry* entry(const std::string& name);
+  void keepTimed(Entry& e);
   std::vector<Entry*> answeringFirst();
   std::future<Result> applySafe(Entry& e, const std::string& trigger, const std::string& reason);
   // Runs `call` (one DeviceCommands call) so that the job it queues, if any, runs for `op` and
@@ -133,6 +139,7 @@ class SimNode {
   double check_period_ = 0;
   bool started_ = false;
   bool share_closed_ = false;
+  bool killed_ = false;  // SIGKILL runs no code: nothing more is kept
   uint64_t current_op_ = 0;
   uint64_t submitting_op_ = 0;  // viaCommands: the operation and callback of the job queued now
   Done submitting_done_;
