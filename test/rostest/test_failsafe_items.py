@@ -281,8 +281,9 @@ class FailsafeItemsTest(unittest.TestCase):
         # clean stop's safe write ends a flash on a channel with a safe state: the next node must
         # not resume it, take its safe level for a restart, nor write the channel.
         self.config["devices"]["relays"]["safe_state"]["out4"] = False
+        FLASH = 12.0  # s: long enough for a stop and a start on a loaded machine
         self.start_node()
-        res = helpers.service(NS + "relays/pulse", Pulse)(OUT4, True, 6.0)  # on 6 s, then off
+        res = helpers.service(NS + "relays/pulse", Pulse)(OUT4, True, FLASH)
         self.assertTrue(res.success, res.message)
         t0 = time.time()
         helpers.wait_until(lambda: rospy.get_param(NS + "running_timed/relays", None), 5,
@@ -294,8 +295,8 @@ class FailsafeItemsTest(unittest.TestCase):
                          "a flash the safe write ended is still kept: %r" % kept)
         since = len(self.events)
         self.start_node(fresh=False)  # as roslaunch's respawn: the same roscore
-        self.assertLess(time.time(), t0 + 6.0, "the next node started after the flash's end")
-        self.hold_coils(RELAYS, {OUT4: 0}, t0 + 6.0 + 0.6 + 1.5 - time.time(),
+        self.assertLess(time.time(), t0 + FLASH, "the next node started after the flash's end")
+        self.hold_coils(RELAYS, {OUT4: 0}, t0 + FLASH + 0.6 + 1.5 - time.time(),
                         "out4 written by the next node")  # through the flash's end and polls
         self.assertFalse([e for e in self.events[since:] if e.device == "relays" and
                           e.trigger == "restart"], "the safe write was taken for a restart")
