@@ -208,7 +208,7 @@ void Simulator::broadcast(const std::optional<Request>& request,
     }
   }
   if (!isReadFunction(request->function)) saveState();
-  if (replies.empty()) return;
+  if (!first_answer) return;  // no reply (first_answer is set with the first one)
   Bytes on_line = replies.size() == 1 ? std::move(replies[0]) : collideReplies(replies);
   send(*first_answer, std::move(on_line), first_answer->replyDelay(), request_end);
 }
