@@ -245,7 +245,8 @@ Result Ld58a08::readPwm(Transport& link) {
 
 Result Ld58a08::poll(Transport& link) {
   pwm_read_by_poll_.fill(false);
-  if (!pwm_known_) {
+  const bool first = !pwm_known_;
+  if (first) {
     // The first poll: the PWM registers before the outputs. The outputs it reads are what the
     // node finds; a run that ended between the two reads in the other order would leave its
     // last on phase as that level (docs/devices/ld58a08.md). A run the registers show stays the
@@ -255,13 +256,11 @@ Result Ld58a08::poll(Transport& link) {
     if (!pwm.ok()) return pwm;
     pwm_read_by_poll_.fill(true);
     pwm_unsure_.fill(false);
-    Result r = link.execute(Request::readCoils(address(), 0, kChannels));
-    if (r.ok()) outputs_.assign(r.values.begin(), r.values.end());
-    return r;
   }
   Result r = link.execute(Request::readCoils(address(), 0, kChannels));
   if (!r.ok()) return r;
   outputs_.assign(r.values.begin(), r.values.end());
+  if (first) return r;
   // The manual allows reading 1-3 registers at a time: one channel per poll keeps a poll at two
   // transactions, and a burst that ends on the board shows within 8 polls. A channel whose PWM
   // write went unconfirmed goes first, out of turn.

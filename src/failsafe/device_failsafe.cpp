@@ -479,7 +479,7 @@ void DeviceFailsafe::timedMaybeChanged() {
   auto same = [](const KeptTimedCommand& a, const KeptTimedCommand& b) {
     // The ends are now + seconds left: the same end, computed at two times, within rounding.
     return a.channel == b.channel && a.during == b.during && a.after == b.after &&
-           (a.ends < 0) == (b.ends < 0) && std::abs(a.ends - b.ends) < 1e-3;
+           std::abs(a.ends - b.ends) < 1e-3;
   };
   if (std::equal(kept.begin(), kept.end(), timed_told_.begin(), timed_told_.end(), same)) return;
   timed_told_ = std::move(kept);

@@ -37,8 +37,8 @@ void DeviceAdapter::keepTimedIn(RunningTimedParameter& parameter) {
   if (!running.empty()) {
     std::string told;
     for (const TimedIntent& t : running)
-      told += (told.empty() ? "" : ", ") + device_->outputNames()[t.channel] +
-              (t.seconds < 0 ? " (no end)" : " (" + secondsText(t.seconds) + " left)");
+      told += (told.empty() ? "" : ", ") + device_->outputNames()[t.channel] + " (" +
+              secondsText(t.seconds) + " left)";  // only commands with an end are kept
     failsafe_.resumeTimed(running);
     ROS_INFO("%s: the previous node's timed commands still run: %s", device_->name().c_str(),
              told.c_str());

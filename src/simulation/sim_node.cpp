@@ -94,10 +94,11 @@ void SimNode::keepTimed(Entry& e) {
   }
   e.failsafe->setTimedChanged([this, kept, name, seconds](const std::vector<TimedIntent>& running) {
     if (killed_) return;
-    if (running.empty())
-      kept->erase(name);
+    std::vector<KeptTimedCommand> list = keepTimedCommands(running, seconds());
+    if (list.empty())
+      kept->erase(name);  // as RunningTimedParameter deletes the key
     else
-      (*kept)[name] = keepTimedCommands(running, seconds());
+      (*kept)[name] = std::move(list);
   });
 }
 
