@@ -114,11 +114,15 @@ void Simulator::run() {
       wait.tv_nsec = static_cast<long>(ns % 1'000'000'000);
     }
     ppoll(fds.data(), fds.size(), &wait, nullptr);
-    std::lock_guard<std::mutex> lock(mutex_);
     const auto now = SimClock::now();
+    // The pty is read before the lock: a system call has no place in it, and the fd is this
+    // thread's (closed only after it ended).
+    uint8_t buf[512];
+    const ssize_t n = (fds[0].revents & POLLIN) ? read(pty_.fd(), buf, sizeof buf) : 0;
+    std::lock_guard<std::mutex> lock(mutex_);
     if (power_cycle_requested_.exchange(false)) powerCycle(now);
     for (auto& d : devices_) d->tick(now);
-    if (fds[0].revents & POLLIN) receive(now);
+    if (n > 0) take(buf, static_cast<size_t>(n), now);
     if (Bytes in; gateway_.receive(now, &in)) take(in.data(), in.size(), now);
     const bool silence = framer_.pending() && now - last_byte_ >= silenceOf(line_);
     for (const Bytes& frame : framer_.take(silence)) processFrame(frame, now);
@@ -135,12 +139,6 @@ SimClock::duration Simulator::waitTime(SimClock::time_point now) const {
     until = std::min(until, o.start + o.per_byte * static_cast<long>(o.sent + 1));
   if (framer_.pending()) until = std::min(until, last_byte_ + silenceOf(line_));
   return std::max(until - now, SimClock::duration::zero());
-}
-
-void Simulator::receive(SimClock::time_point now) {
-  uint8_t buf[512];
-  const ssize_t n = read(pty_.fd(), buf, sizeof buf);
-  if (n > 0) take(buf, static_cast<size_t>(n), now);
 }
 
 void Simulator::take(const uint8_t* data, size_t size, SimClock::time_point now) {

@@ -82,7 +82,6 @@ class Simulator {
 
   void run();
   SimClock::duration waitTime(SimClock::time_point now) const;
-  void receive(SimClock::time_point now);
   void take(const uint8_t* data, size_t size, SimClock::time_point now);  // bytes onto the line
   void processFrame(const Bytes& frame, SimClock::time_point now);
   void broadcast(const std::optional<Request>& request, const std::vector<SimDevice*>& hearing,
