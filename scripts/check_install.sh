@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs the package (catkin_make install) and checks that the install space works on its
 # own: the package is found, the launch files resolve, the scripts the docs use are installed,
-# and the installed simulator and commissioning tool run (a scan finds the three simulated devices). Writes a JUnit case to $1.
+# and the installed simulator and commissioning tool run (a scan finds the three simulated
+# devices; the scan starts once the simulator's link exists, waited for up to 10 s). Writes a
+# JUnit case to $1.
 set -euo pipefail
 REPO=$(cd "$(dirname "$0")/.." && pwd)
 WS=$("$REPO/scripts/workspace.sh")
@@ -29,7 +31,8 @@ if [ -z "$problem" ]; then
   check "cd / && BIN=\$(catkin_find --first-only --libexec modbus_rtu_driver modbus_rtu_simulator) &&
     case \$BIN in */install/*) ;; *) exit 1;; esac &&
     { \$BIN --config \$(rospack find modbus_rtu_driver)/config/simulator.yaml --link $dir/tty & } &&
-    sleep 1 && rosrun modbus_rtu_driver modbus_rtu_commission --port $dir/tty scan --addresses 1,2,8 \
+    { for _ in \$(seq 100); do [ -e $dir/tty ] && break; sleep 0.1; done; } &&
+    rosrun modbus_rtu_driver modbus_rtu_commission --port $dir/tty scan --addresses 1,2,8 \
       > $dir/scan.txt; status=\$?; kill %1; exit \$status" ||
     problem="the installed simulator or commissioning tool failed"
   [ -n "$problem" ] || [ "$(grep -cE 'lc_relay8|ld58a08|yespeed_pdu' "$dir/scan.txt")" -ge 3 ] ||
