@@ -69,8 +69,9 @@ std::string Ld58a08::validatePwm(const PwmSettings& s) {
       return std::string(wrong) + ": " + ch +
              " takes period/on_time/pulses (channels 0-5); frequency/duty_cycle/duration are "
              "for channels 6-7";
-    if (!(problem = checkTenths("period", s.period, 0.1, 6553.5, "")).empty()) return problem;
-    if (!(problem = checkTenths("on_time", s.on_time, 0.0, 6553.4, "")).empty()) return problem;
+    problem = checkTenths("period", s.period, 0.1, 6553.5, "");
+    if (problem.empty()) problem = checkTenths("on_time", s.on_time, 0.0, 6553.4, "");
+    if (!problem.empty()) return problem;
     if (s.on_time > s.period + 1e-9)
       return "on_time: " + fmt(s.on_time) + " s is longer than the period (" + fmt(s.period) +
              " s)";
@@ -85,11 +86,10 @@ std::string Ld58a08::validatePwm(const PwmSettings& s) {
     return std::string(wrong) + ": " + ch +
            " takes frequency/duty_cycle/duration (channels 6-7); period/on_time/pulses are for "
            "channels 0-5";
-  if (!(problem = checkWhole("frequency", s.frequency, 1, 20000, "Hz", "a whole number of Hz"))
-           .empty())
-    return problem;
-  if (!(problem = checkWhole("duty_cycle", s.duty_cycle, 0, 100, "%", "a whole percent")).empty())
-    return problem;
+  problem = checkWhole("frequency", s.frequency, 1, 20000, "Hz", "a whole number of Hz");
+  if (problem.empty())
+    problem = checkWhole("duty_cycle", s.duty_cycle, 0, 100, "%", "a whole percent");
+  if (!problem.empty()) return problem;
   if (s.duration != 0.0)
     return checkTenths("duration", s.duration, 0.1, 6553.4, "0 = run continuously");
   return {};

@@ -312,6 +312,7 @@ Result DeviceFailsafe::startRunsAgain(Transport& t, const std::vector<TimedInten
   const auto names = device_.outputNames();
   Result first_failure = Result::success();
   for (const TimedIntent& run : runs) {
+    if (!run.restart) continue;  // runsToStartAgain gives only runs with their request
     intents_.writeRan();
     const Result w = device_.startAgain(t, *run.restart);
     r->channels.push_back(names[run.channel]);

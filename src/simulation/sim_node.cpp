@@ -126,6 +126,7 @@ DeviceFailsafe* SimNode::failsafe(const std::string& name) {
 
 std::vector<SimNode::Entry*> SimNode::answeringFirst() {
   std::vector<Entry*> order;
+  order.reserve(entries_.size());
   for (auto& e : entries_) order.push_back(e.get());
   std::stable_sort(order.begin(), order.end(), [this](Entry* x, Entry* y) {
     return scheduler_->health(x->device->name()).consecutive_failures == 0 &&
