@@ -68,7 +68,7 @@ OutputTargets Device::outputsWrittenBy(const Request& request) const {
 }
 
 Result Device::writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                            const std::vector<bool>& states) {
+                            const std::vector<bool>& states, std::vector<uint8_t>* changed) {
   // Only the channels asked for go on the wire: one frame per run of adjacent channels, so a
   // channel between two requested ones is never rewritten (a rewrite would cancel its flash
   // or fight its PWM on the board).
@@ -84,6 +84,7 @@ Result Device::writeOutputs(Transport& link, const std::vector<uint8_t>& channel
                    : link.execute(Request::writeMultipleCoils(address(), run.first, run.states));
     if (!r.ok()) r = confirmCoils(link, std::move(r), run_channels, run.states);
     if (!r.ok()) {
+      if (changed) changed->insert(changed->end(), written.begin(), written.end());
       if (!written.empty())
         r.message += "; outputs " +
                      join(written, ", ", [](uint8_t c) { return std::to_string(c); }) +

@@ -282,8 +282,14 @@ Result Ld58a08::poll(Transport& link) {
 // following the PWM. So the requested channels' PWM registers are read first (the snapshot may
 // be 8 polls old), a running PWM is stopped (confirmed), and then the outputs are written.
 Result Ld58a08::writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                             const std::vector<bool>& states) {
+                             const std::vector<bool>& states, std::vector<uint8_t>* changed) {
   std::vector<uint8_t> stopped;
+  // A run stopped (confirmed) before the outputs failed stays stopped: the caller's failure
+  // carries it (`changed`), so that the fail-safe does not take it as still running.
+  auto failed = [&](Result r) {
+    if (changed) changed->insert(changed->end(), stopped.begin(), stopped.end());
+    return r;
+  };
   auto list = [](const std::vector<uint8_t>& chs) {
     // uint8_t would print as a character through join's <<.
     return (chs.size() == 1 ? "channel " : "channels ") +
@@ -297,7 +303,7 @@ Result Ld58a08::writeOutputs(Transport& link, const std::vector<uint8_t>& channe
       read.message += "; outputs not written: whether PWM runs on channel " + std::to_string(ch) +
                       " is unknown";
       if (!stopped.empty()) read.message += " (" + stoppedNote() + ")";
-      return read;
+      return failed(read);
     }
     pwm_[ch] = state;
     if (!state.running) continue;
@@ -306,7 +312,7 @@ Result Ld58a08::writeOutputs(Transport& link, const std::vector<uint8_t>& channe
       stop.message = "PWM runs on channel " + std::to_string(ch) + " and stopping it failed (" +
                      stop.message + "); outputs not written";
       if (!stopped.empty()) stop.message += " (" + stoppedNote() + ")";
-      return stop;
+      return failed(stop);
     }
     pwm_[ch].running = pwm_[ch].continuous = false;
     pwm_[ch].remaining_pulses = 0;
@@ -314,13 +320,14 @@ Result Ld58a08::writeOutputs(Transport& link, const std::vector<uint8_t>& channe
     pwm_[ch].enable = 0;
     stopped.push_back(ch);
   }
-  Result r = Device::writeOutputs(link, channels, states);
+  Result r = Device::writeOutputs(link, channels, states, changed);
   if (stopped.empty()) return r;
-  if (r.ok())
+  if (r.ok()) {
     r.message = stoppedNote() + (r.message.empty() ? "" : "; " + r.message);
-  else
-    r.message += " (" + stoppedNote() + ")";
-  return r;
+    return r;
+  }
+  r.message += " (" + stoppedNote() + ")";
+  return failed(r);
 }
 
 Result Ld58a08::readSettings(Transport& link, Ld58a08Settings* out) {

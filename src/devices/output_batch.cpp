@@ -48,9 +48,10 @@ Result OutputBatch::complete(Device& device, Transport& link, const std::shared_
   }
   // Every entry was checked by add(), so their merge is a valid write: each channel in range and
   // once (the map), a state for each. It goes to the type's write without a second check.
-  Result r = device.writeOutputs(link, channels, states);
+  std::vector<uint8_t> changed;
+  Result r = device.writeOutputs(link, channels, states, &changed);
   if (r.ok() && on_written) on_written(channels, states);
-  if (!r.ok() && on_not_confirmed) on_not_confirmed(channels, r);
+  if (!r.ok() && on_not_confirmed) on_not_confirmed(channels, r, changed);
   if (batch.size() > 1 && r.ok())
     r.message = (r.message.empty() ? "" : r.message + "; ") + "merged with " +
                 std::to_string(batch.size() - 1) + " other request(s) into one write";

@@ -49,8 +49,9 @@ Result DeviceCommands::complete(Transport& t, const std::shared_ptr<OutputBatch:
         failsafe_.userWriteConfirmed(channels, states);
         if (written_) written_(channels, states);
       },
-      [this](const std::vector<uint8_t>& channels, const Result& result) {
-        failsafe_.userWriteNotConfirmed(channels, result);
+      [this](const std::vector<uint8_t>& channels, const Result& result,
+             const std::vector<uint8_t>& changed) {
+        failsafe_.userWriteNotConfirmed(channels, result, changed);
       });
 }
 

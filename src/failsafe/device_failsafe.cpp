@@ -362,13 +362,19 @@ void DeviceFailsafe::userWriteConfirmed(const std::vector<uint8_t>& channels,
 }
 
 void DeviceFailsafe::userWriteNotConfirmed(const std::vector<uint8_t>& channels,
-                                           const Result& result) {
-  // Refused, or never sent (port not open): nothing changed. Its answer lost: the caller was
-  // told it failed, yet the device may have acted; the next poll shows what the channels are
-  // (not a restart, not the caller's command).
-  if (!answerLost(result.error)) return;
-  for (uint8_t ch : channels) intents_.adoptNextPoll(ch, CommandSource::kFound);
-  timedMaybeChanged();  // a timed command it may have replaced is no longer known to run
+                                           const Result& result,
+                                           const std::vector<uint8_t>& changed) {
+  // Refused, or never sent (port not open): nothing changed, but for what the device confirmed
+  // before (docs/failsafe.md, "A write that failed after part of it was done"; a PWM run so
+  // stopped no longer runs: its confirmed stop, as stop_pwm's). Its answer lost, or the port
+  // failed after it may have gone out (kIo): the caller was told it failed, yet the device may
+  // have acted; the next poll shows what the channels are (not a restart, not the caller's
+  // command).
+  for (uint8_t ch : changed) intents_.stoppedNextPoll(ch, CommandSource::kFound);
+  if (answerLost(result.error) || result.error == ErrorKind::kIo)
+    for (uint8_t ch : channels) intents_.adoptNextPoll(ch, CommandSource::kFound);
+  if (!changed.empty() || answerLost(result.error) || result.error == ErrorKind::kIo)
+    timedMaybeChanged();  // a timed command it may have replaced is no longer known to run
 }
 
 void DeviceFailsafe::timedCommandDone(const TimedIntent& intent, const Result& result) {

@@ -73,10 +73,12 @@ TEST(OutputBatch, AWriteNotConfirmedNamesEveryMergedChannelOnce) {
   bus.expect(toHex(encodeRequest(Request::readCoils(255, 0, 8))));  // the read back: no reply too
   int calls = 0;
   std::vector<uint8_t> unknown;
-  const auto not_confirmed = [&](const std::vector<uint8_t>& chs, const Result& r) {
+  const auto not_confirmed = [&](const std::vector<uint8_t>& chs, const Result& r,
+                                 const std::vector<uint8_t>& changed) {
     ++calls;
     unknown = chs;
     EXPECT_EQ(r.error, ErrorKind::kTimeout);
+    EXPECT_TRUE(changed.empty()) << "one frame, not confirmed: nothing changed for sure";
   };
   EXPECT_FALSE(batch.complete(board, bus, command, {}, not_confirmed).ok());
   EXPECT_FALSE(batch.complete(board, bus, set, {}, not_confirmed).ok());

@@ -149,8 +149,12 @@ class Device {
   // channel, FC15 per run of adjacent channels; a channel nobody asked for is never written.
   // Stops at the first run that fails (the message says which outputs were written before). A
   // lost answer is read back (confirmCoils). On success the snapshot holds the written states.
+  // On failure, `changed` (if given) gets the channels the device confirmed changing before it
+  // (the runs written before; an LD58A08's PWM runs stopped first): the fail-safe takes them as
+  // found (docs/failsafe.md, "A write that failed after part of it was done").
   virtual Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                              const std::vector<bool>& states);
+                              const std::vector<bool>& states,
+                              std::vector<uint8_t>* changed = nullptr);
   // True for failures after which the device may have done the write (its reply was lost or
   // garbled), as opposed to refusing it or never being asked.
   static bool mayHaveActed(const Result& result);

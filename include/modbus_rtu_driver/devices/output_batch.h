@@ -36,9 +36,11 @@ class OutputBatch {
       std::function<void(const std::vector<uint8_t>& channels, const std::vector<bool>& states)>;
 
   // What a write that was sent but not confirmed carried: every channel merged into it (the
-  // callers of each were told it failed; the device may have acted on any of them).
+  // callers of each were told it failed; the device may have acted on any of them), and those
+  // the device confirmed changing before it failed (Device::writeOutputs's `changed`).
   using NotConfirmedCallback =
-      std::function<void(const std::vector<uint8_t>& channels, const Result& result)>;
+      std::function<void(const std::vector<uint8_t>& channels, const Result& result,
+                         const std::vector<uint8_t>& changed)>;
 
   // Bus thread: one request written alone, now, merged with nothing pending: checked as add()
   // checks it (a refused one is not sent). For writes that must carry exactly what they name

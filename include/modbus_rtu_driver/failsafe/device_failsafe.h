@@ -119,7 +119,11 @@ class DeviceFailsafe {
   // A user's output write is about to be sent / was confirmed / was not confirmed.
   void userWriteSending() { intents_.writeRan(); }
   void userWriteConfirmed(const std::vector<uint8_t>& channels, const std::vector<bool>& states);
-  void userWriteNotConfirmed(const std::vector<uint8_t>& channels, const Result& result);
+  // A user's write that failed: `changed`, the channels the device confirmed changing before
+  // it failed, and every channel when it may have acted (its answer lost, or the port failed
+  // after it may have gone out), are taken as found at the next poll.
+  void userWriteNotConfirmed(const std::vector<uint8_t>& channels, const Result& result,
+                             const std::vector<uint8_t>& changed = {});
   // Around a timed command (flash, pulse, PWM run), and a PWM run stopped.
   void timedCommandSending() { intents_.writeRan(); }
   void timedCommandDone(const TimedIntent& intent, const Result& result);
