@@ -10,9 +10,9 @@ name in another namespace (a robot with /left/modbus_bus and /right/modbus_bus).
 a node beside the bus node: roslaunch gives it the namespace (ROS_NAMESPACE), and the node's full
 name anchors the regex.
 
-PREFIX is rosbag's -o (the date is added to it); empty = ~/modbus_rtu_<the node's full name with
-/ as _>, e.g. ~/modbus_rtu_robot_io_bus_2026-12-04-05-00-00.bag, so each bus's bags have a name
-of their own even when two recorders start in the same second.
+PREFIX (empty = ~/modbus_rtu) gets _<the node's full name with / as _> and is rosbag's -o, which
+adds the date: ~/modbus_rtu_robot_io_bus_2026-12-04-05-00-00.bag. So each bus's bags have a name
+of their own even when two recorders are given one prefix and start in the same second.
 """
 import os
 import re
@@ -32,8 +32,7 @@ def node_name(name, namespace):
 
 def record_command(name, prefix, options, namespace, home):
     node = node_name(name, namespace)
-    if not prefix:
-        prefix = os.path.join(home, "modbus_rtu" + node.replace("/", "_"))
+    prefix = (prefix or os.path.join(home, "modbus_rtu")) + node.replace("/", "_")
     regex = "^" + re.escape(node) + "/" + TOPICS + "$"
     return ["rosrun", "rosbag", "record", "-o", prefix] + options + \
         ["--regex", regex, "^/diagnostics$"]

@@ -202,6 +202,11 @@ bool BusNode::start() {
       nh_.createTimer(ros::Duration(config_.diagnostic_period),
                       [this](const ros::TimerEvent&) { diagnostics_->force_update(); });
 
+  // A share that cannot listen stops the node before the bus is touched (no on_start write).
+  if (config_.share.enabled && !ShareBridge::canStart(config_.share, &error)) {
+    ROS_FATAL("%s", error.c_str());
+    return false;
+  }
   startFailsafe();
   scheduler_->start();
   // on_start: safe puts those outputs there before any command is taken (and before the first

@@ -20,16 +20,29 @@ ShareBridge::ShareBridge(BusScheduler& scheduler, const BusConfig& config,
 
 // Errors name the key to change: a second bus left on the default listen address (1502) is the
 // usual cause of a taken port (docs/share.md, "Several buses").
+namespace {
+std::string startError(const ShareConfig& config, bool in_use, const std::string& why) {
+  return in_use ? "share/listen: " + config.server.host + ":" + std::to_string(config.server.port) +
+                      ": address in use (another bus's share, or another program, listens "
+                      "there): give each bus its own share/listen port"
+                : "share: " + why;
+}
+}  // namespace
+
 bool ShareBridge::start(std::string* error) {
   std::string why;
   if (gateway_->start(&why)) return true;
-  if (error)
-    *error = gateway_->server().addressInUse()
-                 ? "share/listen: " + config_.server.host + ":" +
-                       std::to_string(config_.server.port) +
-                       ": address in use (another bus's share, or another program, listens "
-                       "there): give each bus its own share/listen port"
-                 : "share: " + why;
+  if (error) *error = startError(config_, gateway_->server().addressInUse(), why);
+  return false;
+}
+
+bool ShareBridge::canStart(const ShareConfig& config, std::string* error) {
+  if (config.server.port == 0) return true;  // any free port
+  std::string why;
+  bool in_use = false;
+  if (ModbusTcpServer::canListen(config.server.host, config.server.port, &why, &in_use))
+    return true;
+  if (error) *error = startError(config, in_use, why);
   return false;
 }
 

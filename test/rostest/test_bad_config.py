@@ -114,6 +114,8 @@ class BadConfigTest(unittest.TestCase):
             port = taken.getsockname()[1]
             cfg = copy.deepcopy(GOOD)
             cfg["share"] = {"listen": "127.0.0.1:%d" % port}
+            # The check comes before the bus is touched: no on_start write is even tried.
+            cfg["devices"]["relays"].update({"safe_state": "off", "on_start": "safe"})
             rosparam.upload_params("/second_bus", cfg)
             proc = subprocess.run(["rosrun", "modbus_rtu_driver", "modbus_rtu_bus",
                                    "__name:=second_bus"], stdout=subprocess.PIPE,
@@ -124,6 +126,8 @@ class BadConfigTest(unittest.TestCase):
         self.assertIn("share/listen: 127.0.0.1:%d: address in use (another bus's share, or "
                       "another program, listens there): give each bus its own share/listen "
                       "port" % port, errors[0])
+        self.assertNotIn("fail-safe start", proc.stdout,
+                         "on_start wrote (or tried to) before the share's port was checked")
 
 
 if __name__ == "__main__":

@@ -21,6 +21,9 @@ class ShareBridge {
   // Listens; false with the reason, naming the key to change (share/listen when the address is
   // in use).
   bool start(std::string* error);
+  // Before the bus is touched: false, with start()'s message, when the share could not listen
+  // now (another bus's share on the port), so that a node that will stop writes nothing first.
+  static bool canStart(const ShareConfig& config, std::string* error);
   void stop();
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   const ShareConfig& config() const { return config_; }

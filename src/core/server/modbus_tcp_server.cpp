@@ -31,6 +31,29 @@ ModbusTcpServer::~ModbusTcpServer() {
   stop();
 }
 
+bool ModbusTcpServer::canListen(const std::string& host, uint16_t port, std::string* error,
+                                bool* in_use) {
+  *in_use = false;
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(port);
+  if (inet_pton(AF_INET, host.c_str(), &addr.sin_addr) != 1) {
+    if (error) *error = "listen: '" + host + "' is not an IPv4 address";
+    return false;
+  }
+  const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  const int on = 1;
+  const bool ok = fd >= 0 && setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on) == 0 &&
+                  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
+  const int err = errno;
+  if (fd >= 0) close(fd);
+  if (ok) return true;
+  *in_use = err == EADDRINUSE;
+  if (error)
+    *error = "cannot listen on " + host + ":" + std::to_string(port) + ": " + std::strerror(err);
+  return false;
+}
+
 bool ModbusTcpServer::start(std::string* error) {
   auto fail = [&](const std::string& why) {
     if (error) *error = why;

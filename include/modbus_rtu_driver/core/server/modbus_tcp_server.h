@@ -74,6 +74,10 @@ class ModbusTcpServer {
 
   // Checks the options, binds, listens and starts the thread. False with a message.
   bool start(std::string* error);
+  // Binds a socket to host:port as start() does and closes it: true when a server could listen
+  // there now; false with the reason, `in_use` set for EADDRINUSE. A bus node asks before it
+  // touches the bus (a start may still lose the port to a program that takes it meanwhile).
+  static bool canListen(const std::string& host, uint16_t port, std::string* error, bool* in_use);
   void stop();  // closes every socket; later replies are dropped
   uint16_t port() const { return bound_port_; }
   // After a failed start: the address was taken (EADDRINUSE), by another bus's share or any
