@@ -324,7 +324,7 @@ Result DeviceFailsafe::startRunsAgain(Transport& t, const std::vector<TimedInten
     }
     // Its answer lost and the read back too: it may run or not; the next poll that reads the
     // channel tells (docs/failsafe.md, "A command whose answer was lost").
-    if (answerLost(w.error) || w.error == ErrorKind::kIo) adoptAfterLost(run);
+    if (outcomeUnknown(w.error)) adoptAfterLost(run);
     r->runs_failed += (r->runs_failed.empty() ? "" : "; ") + names[run.channel] + ": " + w.message;
     if (first_failure.ok()) first_failure = w;
   }
@@ -370,10 +370,11 @@ void DeviceFailsafe::userWriteNotConfirmed(const std::vector<uint8_t>& channels,
   // failed after it may have gone out (kIo): the caller was told it failed, yet the device may
   // have acted; the next poll shows what the channels are (not a restart, not the caller's
   // command).
+  const bool unknown = outcomeUnknown(result.error);
   for (uint8_t ch : changed) intents_.stoppedNextPoll(ch, CommandSource::kFound);
-  if (answerLost(result.error) || result.error == ErrorKind::kIo)
+  if (unknown)
     for (uint8_t ch : channels) intents_.adoptNextPoll(ch, CommandSource::kFound);
-  if (!changed.empty() || answerLost(result.error) || result.error == ErrorKind::kIo)
+  if (!changed.empty() || unknown)
     timedMaybeChanged();  // a timed command it may have replaced is no longer known to run
 }
 
@@ -390,7 +391,7 @@ void DeviceFailsafe::timedCommandDone(const TimedIntent& intent, const Result& r
   // caller was told it failed).
   // Not compared and not restored until its end; the first poll after it gives the channel's
   // level, taken as found (docs/failsafe.md, "A command whose answer was lost").
-  if (!answerLost(result.error) && result.error != ErrorKind::kIo) return;
+  if (!outcomeUnknown(result.error)) return;
   adoptAfterLost(intent);
   timedMaybeChanged();
 }
@@ -407,7 +408,7 @@ void DeviceFailsafe::externalWrite(const Request& request, const Result& result,
                                    CommandSource source) {
   if (result.ok())
     externalWriteConfirmed(request, source);
-  else if (answerLost(result.error) || result.error == ErrorKind::kIo)
+  else if (outcomeUnknown(result.error))
     externalWriteLost(request);
 }
 
@@ -424,7 +425,7 @@ void DeviceFailsafe::timedCommandStopped(uint8_t channel, const Result& result) 
   if (!result.ok()) {
     // Its answer lost: stopped or not, the next poll that reads the channel tells (docs/
     // failsafe.md, "A command whose answer was lost"); refused or unsent: nothing changed.
-    if (!answerLost(result.error) && result.error != ErrorKind::kIo) return;
+    if (!outcomeUnknown(result.error)) return;
     intents_.adoptNextPoll(channel, CommandSource::kFound);
     timedMaybeChanged();
     return;

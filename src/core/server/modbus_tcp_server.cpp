@@ -22,6 +22,32 @@ namespace {
 // A client that does not read its replies is closed once this much waits for it.
 constexpr size_t kMaxPendingOutput = size_t{64} * 1024;
 
+// A TCP socket bound to host:port (SO_REUSEADDR), listening when `listening`: its fd, or -1 with
+// the reason and `in_use` set for EADDRINUSE. start() and canListen() bind alike.
+int boundSocket(const std::string& host, uint16_t port, int flags, bool listening,
+                std::string* error, bool* in_use) {
+  *in_use = false;
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(port);
+  if (inet_pton(AF_INET, host.c_str(), &addr.sin_addr) != 1) {
+    if (error) *error = "listen: '" + host + "' is not an IPv4 address";
+    return -1;
+  }
+  const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC | flags, 0);
+  const int on = 1;
+  if (fd >= 0 && setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on) == 0 &&
+      bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0 &&
+      (!listening || listen(fd, 16) == 0))
+    return fd;
+  const int err = errno;
+  if (fd >= 0) close(fd);
+  *in_use = err == EADDRINUSE;
+  if (error)
+    *error = "cannot listen on " + host + ":" + std::to_string(port) + ": " + std::strerror(err);
+  return -1;
+}
+
 }  // namespace
 
 ModbusTcpServer::ModbusTcpServer(TcpServerOptions options, Handler handler)
@@ -33,25 +59,10 @@ ModbusTcpServer::~ModbusTcpServer() {
 
 bool ModbusTcpServer::canListen(const std::string& host, uint16_t port, std::string* error,
                                 bool* in_use) {
-  *in_use = false;
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(port);
-  if (inet_pton(AF_INET, host.c_str(), &addr.sin_addr) != 1) {
-    if (error) *error = "listen: '" + host + "' is not an IPv4 address";
-    return false;
-  }
-  const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  const int on = 1;
-  const bool ok = fd >= 0 && setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on) == 0 &&
-                  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
-  const int err = errno;
-  if (fd >= 0) close(fd);
-  if (ok) return true;
-  *in_use = err == EADDRINUSE;
-  if (error)
-    *error = "cannot listen on " + host + ":" + std::to_string(port) + ": " + std::strerror(err);
-  return false;
+  const int fd = boundSocket(host, port, 0, false, error, in_use);
+  if (fd < 0) return false;
+  close(fd);
+  return true;
 }
 
 bool ModbusTcpServer::start(std::string* error) {
@@ -72,21 +83,11 @@ bool ModbusTcpServer::start(std::string* error) {
   if (!(options_.idle_timeout >= 0))
     return fail("idle_timeout: " + std::to_string(options_.idle_timeout) +
                 " s is below 0 (0 = never)");
+  std::string why;
+  listen_fd_ =
+      boundSocket(options_.host, options_.port, SOCK_NONBLOCK, true, &why, &address_in_use_);
+  if (listen_fd_ < 0) return fail(why);
   sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(options_.port);
-  if (inet_pton(AF_INET, options_.host.c_str(), &addr.sin_addr) != 1)
-    return fail("listen: '" + options_.host + "' is not an IPv4 address");
-  const std::string where = options_.host + ":" + std::to_string(options_.port);
-  listen_fd_ = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  const int on = 1;
-  if (listen_fd_ < 0 || setsockopt(listen_fd_, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on) != 0 ||
-      bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
-      listen(listen_fd_, 16) != 0) {
-    const int err = errno;
-    address_in_use_ = err == EADDRINUSE;
-    return fail("cannot listen on " + where + ": " + std::strerror(err));
-  }
   socklen_t len = sizeof addr;
   getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
   bound_port_ = ntohs(addr.sin_port);

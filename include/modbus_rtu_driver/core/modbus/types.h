@@ -128,6 +128,11 @@ inline bool answerLost(ErrorKind k) {
   return k == ErrorKind::kTimeout || k == ErrorKind::kCrc || k == ErrorKind::kWrongAddress ||
          k == ErrorKind::kMalformed;
 }
+// the request may have been carried out though it failed: its answer lost, or the port failed
+// after it may have gone out (kIo); the fail-safe takes such a write's channels as found;
+inline bool outcomeUnknown(ErrorKind k) {
+  return answerLost(k) || k == ErrorKind::kIo;
+}
 // the device did not answer properly, or could not be asked: counts towards "offline" (an
 // exception is an answer).
 inline bool noProperAnswer(ErrorKind k) {
