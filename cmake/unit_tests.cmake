@@ -73,6 +73,7 @@ unit_test(test_kept_timed_commands modbus_rtu_failsafe)
 unit_test(test_failsafe_simulation modbus_rtu_simulation)
 # Writes that failed after part of them was done, on the node's classes in memory (SimNode).
 unit_test(test_failsafe_partial_writes modbus_rtu_simulation)
+unit_test(test_failsafe_node_cases modbus_rtu_simulation)
 unit_test(test_generic_config modbus_rtu_node_config)
 unit_test(test_generic_failsafe_config modbus_rtu_node_config)
 unit_test(test_config_messages modbus_rtu_node_config)

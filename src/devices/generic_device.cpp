@@ -1,6 +1,7 @@
 #include "modbus_rtu_driver/devices/generic_device.h"
 
 #include <cmath>
+#include <cstddef>
 #include <sstream>
 
 #include "modbus_rtu_driver/devices/registry.h"
@@ -146,17 +147,20 @@ std::vector<size_t> GenericDevice::safeSignals() const {
   return out;
 }
 
-Result GenericDevice::writeSafeValues(Transport& link, bool* silent) {
+Result GenericDevice::writeSafeValues(Transport& link, const std::vector<size_t>& signals,
+                                      std::vector<size_t>* not_reached) {
   Result first = Result::success();
-  if (silent) *silent = false;
-  for (size_t i : safeSignals()) {
+  if (not_reached) not_reached->clear();
+  for (size_t k = 0; k < signals.size(); ++k) {
     bool answered = true;
-    const Result r = writeSafeValue(link, i, &answered);
+    const Result r = writeSafeValue(link, signals[k], &answered);
     if (r.ok()) continue;
     if (first.ok()) first = r;
     if (!answered) {
-      if (silent) *silent = true;
-      break;  // silent: the others would only wait out their timeouts
+      // Silent: the others would only wait out their timeouts.
+      if (not_reached)
+        not_reached->assign(signals.begin() + static_cast<std::ptrdiff_t>(k), signals.end());
+      break;
     }
   }
   return first;

@@ -406,6 +406,12 @@ void DeviceFailsafe::adoptAfterLost(const TimedIntent& intent) {
 
 void DeviceFailsafe::externalWrite(const Request& request, const Result& result,
                                    CommandSource source) {
+  // A broadcast (unit 0) confirms nothing: no device replies, and a silent one never heard it
+  // (docs/failsafe.md, "What happens when"). Sent, it is as a write whose answer was lost.
+  if (request.slave == kBroadcastAddress) {
+    if (result.ok() || outcomeUnknown(result.error)) externalWriteLost(request);
+    return;
+  }
   if (result.ok())
     externalWriteConfirmed(request, source);
   else if (outcomeUnknown(result.error))

@@ -8,49 +8,92 @@
 namespace modbus_rtu_driver {
 
 GenericFailsafe::GenericFailsafe(GenericDevice& device, BusScheduler& scheduler)
-    : device_(device), scheduler_(scheduler) {}
+    : device_(device),
+      scheduler_(scheduler),
+      set_at_(device.signals().size(), 0),
+      owed_since_(device.signals().size(), 0) {}
 
 std::future<Result> GenericFailsafe::applySafe(const std::string& trigger,
                                                const std::string& reason) {
   if (!hasSafeValues()) return readyResult(Result::success());
-  return scheduler_.submit(device_.name(), [this, trigger, reason](Transport& t) {
-    return writeSafe(t, trigger, reason);
+  const uint64_t fired = ++sequence_;
+  return scheduler_.submit(device_.name(), [this, trigger, reason, fired](Transport& t) {
+    return writeSafe(t, trigger, reason, fired, device_.safeSignals());
   });
 }
 
 void GenericFailsafe::afterPoll(const Result& poll) {
-  if (!safe_pending_ || noProperAnswer(poll.error)) return;
-  safe_pending_ = false;  // one retry queued; it sets this again if it fails too
-  scheduler_.submit(device_.name(), [this](Transport& t) {
+  if (noProperAnswer(poll.error)) return;
+  // The owed signals, each with its own trigger: one write of all of them, under the oldest
+  // trigger (a signal set since its own trigger is dropped here, and writeSafe checks again).
+  std::vector<size_t> owed;
+  uint64_t oldest = 0;
+  for (size_t i = 0; i < owed_since_.size(); ++i) {
+    if (owed_since_[i] == 0) continue;
+    if (set_at_[i] > owed_since_[i]) {
+      owed_since_[i] = 0;  // set since: the newest wins
+      continue;
+    }
+    owed.push_back(i);
+    if (oldest == 0 || owed_since_[i] < oldest) oldest = owed_since_[i];
+  }
+  if (owed.empty()) return;
+  // One retry queued; writeSafe owes them again if it fails too.
+  std::vector<uint64_t> since(owed.size());
+  for (size_t k = 0; k < owed.size(); ++k) {
+    since[k] = owed_since_[owed[k]];
+    owed_since_[owed[k]] = 0;
+  }
+  scheduler_.submit(device_.name(), [this, owed, since](Transport& t) {
+    // Each signal against its own trigger: drop the ones set since.
+    std::vector<size_t> still;
+    for (size_t k = 0; k < owed.size(); ++k)
+      if (set_at_[owed[k]] < since[k]) still.push_back(owed[k]);
+    const uint64_t fired = *std::max_element(since.begin(), since.end());
     return writeSafe(t, "restart",
-                     "the device answers again; its safe values were not reached before");
+                     "the device answers again; its safe values were not reached before", fired,
+                     still);
   });
 }
 
-void GenericFailsafe::userWriteConfirmed() {
+Result GenericFailsafe::write(Transport& t, size_t signal, double value) {
+  Result r = device_.writeSignal(t, signal, value);
+  if (!r.ok()) return r;
+  set_at_[signal] = ++sequence_;
   std::lock_guard<std::mutex> lock(mutex_);
-  status_.active.clear();
+  status_.active.clear();  // no longer "at their safe values"
+  return r;
 }
 
 Result GenericFailsafe::writeSafe(Transport& t, const std::string& trigger,
-                                  const std::string& reason) {
+                                  const std::string& reason, uint64_t fired,
+                                  const std::vector<size_t>& signals) {
+  // A signal the user set since the trigger fired keeps its newer value (also one set between
+  // the trigger and this job).
+  std::vector<size_t> due;
+  for (size_t i : signals)
+    if (set_at_[i] < fired) due.push_back(i);
+  if (due.empty()) return Result::success();
   FailsafeReport r;
   r.device = device_.name();
   r.trigger = trigger;
   r.reason = reason;
   r.action = "safe";
-  for (size_t i : device_.safeSignals()) {
+  for (size_t i : due) {
     const double v = *device_.signals()[i].safe_value;
     r.channels.push_back(device_.signals()[i].name);
     r.states.push_back(v != 0.0);
     r.values.push_back(v);
   }
-  bool silent = false;
-  Result w = device_.writeSafeValues(t, &silent);
-  // Not reached because the device did not answer: tried again when it answers. A refusal,
+  std::vector<size_t> not_reached;
+  Result w = device_.writeSafeValues(t, due, &not_reached);
+  // Not reached because the device did not answer: owed, written when it answers. A refusal,
   // or a value read back that differs, is the device's answer: reported, not retried (on
   // every poll it would only repeat the event), and the other signals were still written.
-  safe_pending_ = silent;
+  for (size_t i : due)
+    owed_since_[i] = std::find(not_reached.begin(), not_reached.end(), i) != not_reached.end()
+                         ? std::max(owed_since_[i], fired)
+                         : 0;
   if (written_) written_();
   r.confirmed = r.levels_confirmed = w.ok();
   r.message = w.ok() ? "confirmed by reading the signals back" : w.message;

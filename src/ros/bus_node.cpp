@@ -137,8 +137,9 @@ void BusNode::shutdown() {
   // gone costs no wait, one that does not answer at most kParameterGrace.
   if (running_timed_ && !running_timed_->flush(std::chrono::steady_clock::now() + kParameterGrace))
     std::fprintf(stderr,
-                 "[ERROR] ~running_timed not updated within %.0f s (the master does not answer): "
+                 "[ERROR] %s not updated within %.0f s (the master does not answer): "
                  "a node started under this roscore may resume timed commands the stop ended\n",
+                 RunningTimedParameter::namespaceOf(nh_.getNamespace()).c_str(),
                  std::chrono::duration<double>(kParameterGrace).count());
   if (publish_queue_) publish_queue_->stop();
 }
@@ -152,8 +153,9 @@ bool BusNode::start() {
   }
   std::string error;
   YAML::Node root = toYaml(params);
-  // Not configuration: the running timed commands the node keeps for its next start
-  // (RunningTimedParameter).
+  // Not configuration: where releases before 2026-12 kept the running timed commands for the
+  // next node (now RunningTimedParameter::namespaceOf, outside the node's namespace); a node
+  // upgraded under a running roscore may still find it.
   root.remove("running_timed");
   if (!parseBusConfig(root, &config_, &error)) {
     ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());

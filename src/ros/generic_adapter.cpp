@@ -31,6 +31,10 @@ class GenericAdapter : public DeviceAdapter {
     safe_.setSignalsWritten([this] {
       if (!pubs_.empty()) publishSignals(false);  // not before start() (on_start: safe)
     });
+    // Latched: this device's newest fail-safe event, for a late subscriber (as the node's
+    // ~failsafe, which holds only the newest event of all devices). Advertised here, before
+    // on_start's safe write, so that its event is kept too.
+    if (safe_.hasSafeValues()) event_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 1, true);
   }
 
   void advertise() override {
@@ -38,9 +42,6 @@ class GenericAdapter : public DeviceAdapter {
     published_.assign(signals.size(), std::nullopt);
     warned_.assign(signals.size(), false);
     all_pub_ = nh_.advertise<SignalValues>("signals", 50);
-    // Latched: this device's newest fail-safe event, for a late subscriber (as the node's
-    // ~failsafe, which holds only the newest event of all devices).
-    if (hasSafeStates()) event_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 1, true);
     for (size_t i = 0; i < signals.size(); ++i) {
       const SignalConfig& s = signals[i];
       const bool bit = s.type == SignalType::kBool;
@@ -176,9 +177,8 @@ class GenericAdapter : public DeviceAdapter {
     const std::string problem = generic().encodeWrite(i, value, &words);
     if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
     return runOnBus([this, i, value](Transport& t) {
-      Result r = generic().writeSignal(t, i, value);
+      Result r = safe_.write(t, i, value);
       publishSignals(false);
-      if (r.ok()) safe_.userWriteConfirmed();  // no longer "at their safe values"
       return r;
     });
   }
@@ -247,7 +247,7 @@ class GenericAdapter : public DeviceAdapter {
   // By poll group: recorded on the bus thread, read by diagnostics (each locks itself).
   std::vector<RateMeter> rates_ = std::vector<RateMeter>(generic().groups().size());
   GenericFailsafe safe_;
-  ros::Publisher event_pub_;  // D/failsafe; none before advertise() (on_start: safe)
+  ros::Publisher event_pub_;  // D/failsafe (latched), from the constructor on
   std::mutex splits_mutex_;   // the two below: copies for diagnostics
   std::vector<std::string> splits_;
   std::string unread_;

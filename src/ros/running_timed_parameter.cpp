@@ -9,7 +9,7 @@ namespace modbus_rtu_driver {
 namespace {
 
 std::string keyOf(const std::string& device) {
-  return "running_timed/" + device;
+  return device;
 }
 
 std::vector<KeptTimedCommand> readParameter(const ros::NodeHandle& node,
@@ -60,8 +60,15 @@ void writeParameter(const ros::NodeHandle& node, const std::string& device,
 
 }  // namespace
 
+std::string RunningTimedParameter::namespaceOf(const std::string& node) {
+  return std::string(kRunningTimedRoot) + (node.empty() || node[0] != '/' ? "/" : "") + node;
+}
+
 std::unique_ptr<RunningTimedParameter> RunningTimedParameter::onParameterServer(
-    const ros::NodeHandle& node) {
+    const ros::NodeHandle& private_node) {
+  // Not under the node's private namespace: bus.launch's clear_params (and any launch file's)
+  // deletes that when the launch is started again, which is how supervisors restart a robot.
+  const ros::NodeHandle node(namespaceOf(private_node.getNamespace()));
   return std::make_unique<RunningTimedParameter>(
       [node](const std::string& device) { return readParameter(node, device); },
       [node](const std::string& device, const std::vector<KeptTimedCommand>& kept) {

@@ -184,6 +184,14 @@ void PtyLink::close() {
   lock_path_.clear();
 }
 
+bool PtyLink::claimed() const {
+  if (slave_fd_ < 0) return false;
+  // flock is per file: our own descriptor of the slave side conflicts with the program's.
+  if (flock(slave_fd_, LOCK_SH | LOCK_NB) != 0) return errno == EWOULDBLOCK;
+  flock(slave_fd_, LOCK_UN);
+  return false;
+}
+
 SimLineSettings PtyLink::lineSettings() const {
   termios tio{};
   SimLineSettings l;

@@ -1,7 +1,10 @@
 // modbus_rtu_simulator: Modbus RTU devices on a pseudo-terminal (ROS-free).
 // Prints "simulator ready on <link>" once the link exists; SIGHUP power-cycles the devices;
-// SIGINT / SIGTERM stop it and remove the link and the control socket. roslaunch's
-// __name:= style arguments are ignored.
+// SIGTERM stops it and removes the link and the control socket, and so does SIGINT, but only once
+// no program holds the link's port: Ctrl-C in a terminal, and roslaunch stopping a launch, signal
+// the bus node at the same time, and its shutdown safe writes still need the line (a second
+// SIGINT stops it at once). roslaunch's __name:= style arguments are ignored.
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -15,14 +18,21 @@
 
 namespace {
 
-volatile std::sig_atomic_t g_stop = 0;
+volatile std::sig_atomic_t g_interrupts = 0;  // SIGINTs
+volatile std::sig_atomic_t g_terminate = 0;   // SIGTERM
 volatile std::sig_atomic_t g_power_cycle = 0;
+
+// How long a SIGINT waits at most for the program on the link to let go of it: roslaunch sends
+// SIGTERM 15 s after its SIGINT anyway, and a bus node's stop takes at most about 13 s.
+constexpr std::chrono::seconds kLingerLimit{20};
 
 void onSignal(int sig) {
   if (sig == SIGHUP)
     g_power_cycle = 1;
+  else if (sig == SIGINT)
+    g_interrupts = g_interrupts + 1;
   else
-    g_stop = 1;
+    g_terminate = 1;
 }
 
 }  // namespace
@@ -37,7 +47,9 @@ int main(int argc, char** argv) {
       "Modbus RTU devices on a pseudo-terminal; prints \"simulator ready on PATH\" once "
       "the link exists.",
       "modbus_rtu_simulator");
-  app.footer("SIGHUP power-cycles the devices; SIGINT/SIGTERM stop the simulator.");
+  app.footer(
+      "SIGHUP power-cycles the devices; SIGTERM stops the simulator, and so does SIGINT once no "
+      "program holds the link's port (a second SIGINT: at once).");
   app.allow_extras();
   app.add_option("--config", config_path,
                  "devices and line settings (see config/simulator.yaml); needed")
@@ -99,12 +111,23 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "modbus_rtu_simulator: Modbus TCP on port %u\n", gateway.port());
   std::printf("simulator ready on %s\n", options.link.c_str());
   std::fflush(stdout);
-  while (!g_stop) {
+  auto serve = [&sim] {
     if (g_power_cycle) {
       g_power_cycle = 0;
       sim.requestPowerCycle();
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  };
+  while (!g_terminate && g_interrupts == 0) serve();
+  if (!g_terminate && g_interrupts == 1 && sim.linkClaimed()) {
+    std::fprintf(stderr,
+                 "modbus_rtu_simulator: stopping once the program on %s closes it (SIGINT again "
+                 "or SIGTERM: at once)\n",
+                 options.link.c_str());
+    const auto limit = std::chrono::steady_clock::now() + kLingerLimit;
+    while (!g_terminate && g_interrupts == 1 && sim.linkClaimed() &&
+           std::chrono::steady_clock::now() < limit)
+      serve();
   }
   gateway.stop();
   sim.stop();

@@ -54,9 +54,10 @@ const std::vector<SimInvariant>& simInvariants() {
       {"I7", "docs/troubleshooting.md (writes that start something are never sent twice)",
        "a frame that starts something (a flash, a PWM run) reaches the device at most once per "
        "transaction"},
-      {"I8", "docs/failsafe.md:140-146",
+      {"I8", "docs/failsafe.md:166-174",
        "generic device: a safe value the device refuses does not stop the others, and is not "
-       "retried while the device answers"},
+       "retried while the device answers; a signal set since the trigger is not written, one "
+       "not set since is"},
       {"I9", "docs/failsafe.md:36",
        "on_start: safe: the safe states are on every answering device before commands are taken"},
       {"I10", "docs/failsafe.md:31,99-100",
@@ -273,6 +274,10 @@ struct DevModel {
   // generic (I8)
   bool gen_unanswered = false;  // an attempt to it went unanswered since its last report
   bool gen_prev_silent = true;  // ... before its previous report
+  TP gen_report_at{};           // its previous report
+  // per signal: its newest set the device confirmed, and the newest report that wrote it
+  std::vector<TP> gen_set_at = std::vector<TP>(3, TP{});
+  std::vector<TP> gen_written_at = std::vector<TP>(3, TP{});
 };
 
 struct Operation {
@@ -1241,11 +1246,30 @@ void World::onGenericReport(const FailsafeReport& r) {
   if (r.trigger == "restart" && !m.gen_prev_silent)
     fail("I8", std::string("drive: safe values written again (") + r.reason +
                    ") though the device answered the previous safe write");
+  // docs:172-174: a signal set since the trigger is not written. An owed write's trigger fired
+  // before the previous report, so a signal it writes was not set since that report. A
+  // trigger's own write leaves out only a signal set since it was last written safe (an owed
+  // write carries only what the device did not get).
+  const auto& signals = config_.devices[kGen].generic.signals;
+  std::vector<bool> listed(signals.size(), false);
+  for (size_t i = 0; i < signals.size(); ++i) {
+    listed[i] =
+        std::find(r.channels.begin(), r.channels.end(), signals[i].name) != r.channels.end();
+    if (!signals[i].safe_value || i >= m.gen_set_at.size()) continue;
+    if (listed[i] && r.trigger == "restart" && m.gen_set_at[i] > m.gen_report_at)
+      fail("I8", "drive: the owed safe write (restart) wrote " + signals[i].name +
+                     ", set since its trigger fired");
+    if (!listed[i] && r.trigger != "restart" && m.gen_set_at[i] <= m.gen_written_at[i])
+      fail("I8", "drive: the safe write (" + r.trigger + ") left " + signals[i].name +
+                     " out, not set since it was last written safe");
+    if (listed[i]) m.gen_written_at[i] = clock_.now();
+  }
+  m.gen_report_at = clock_.now();
   // A device that answered throughout has the safe values it keeps, the refused one aside.
   if (!m.gen_unanswered && !port_lost_) {
-    const auto& signals = config_.devices[kGen].generic.signals;
-    for (const SignalConfig& s : signals) {
-      if (!s.safe_value) continue;
+    for (size_t i = 0; i < signals.size(); ++i) {
+      const SignalConfig& s = signals[i];
+      if (!s.safe_value || !listed[i]) continue;
       if (config_.generic_refuses && s.address == 0x20) continue;
       uint16_t raw = 0;
       const Table t = s.table;
@@ -1604,7 +1628,10 @@ void World::doCommandStep(const SimStep& s) {
   } else if (k == "signal") {
     const size_t signal = static_cast<size_t>(arg(0) % 2);
     const double value = signal == 0 ? arg(1) % 2 : (arg(1) % 6) * 10.0;
-    pending_.push_back(node_->writeSignal(op(k).id, kNames[kGen], signal, value, nullptr));
+    pending_.push_back(
+        node_->writeSignal(op(k).id, kNames[kGen], signal, value, [this, signal](const Result& r) {
+          if (r.ok()) model_[kGen].gen_set_at[signal] = clock_.now();
+        }));
   }
 }
 

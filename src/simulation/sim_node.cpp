@@ -366,9 +366,9 @@ std::future<Result> SimNode::writeSignal(uint64_t op, const std::string& device,
   std::vector<uint16_t> words;
   const std::string problem = generic.encodeWrite(signal, value, &words);
   if (!problem.empty()) return readyResult(Result::failure(ErrorKind::kInvalidArgument, problem));
-  return runOp(op, device, std::move(done), [&generic, signal, value](Transport& t) {
-    return generic.writeSignal(t, signal, value);
-  });
+  GenericFailsafe& safe = *e->generic_safe;  // GenericAdapter::write
+  return runOp(op, device, std::move(done),
+               [&safe, signal, value](Transport& t) { return safe.write(t, signal, value); });
 }
 
 }  // namespace modbus_rtu_driver

@@ -28,6 +28,8 @@ import helpers
 
 NODE = "fsitems"
 NS = "/" + NODE + "/"
+# Where the node keeps its running timed commands for the next node (docs/ros_api.md).
+KEPT = "/modbus_rtu_driver/running_timed/" + NODE + "/"
 RELAYS, PWM, PDU = "8", "1", "2"
 PUMP, VALVE, LAMP, FAN, OUT4, OUT5 = range(6)
 
@@ -95,6 +97,8 @@ class FailsafeItemsTest(unittest.TestCase):
         """fresh: the previous test's keys are deleted first (a respawned node keeps them)."""
         if fresh and rospy.has_param("/" + NODE):
             rospy.delete_param("/" + NODE)  # the previous test's keys
+        if fresh and rospy.has_param(KEPT):
+            rospy.delete_param(KEPT)  # and the timed commands its node kept for the next one
         rosparam.upload_params("/" + NODE, self.config)
         self.log = tempfile.TemporaryFile(mode="w+")
         type(self).node = subprocess.Popen(
@@ -261,7 +265,7 @@ class FailsafeItemsTest(unittest.TestCase):
         res = helpers.service(NS + "relays/pulse", Pulse)(OUT4, True, 5.0)  # on 5 s, then off
         self.assertTrue(res.success, res.message)
         t0 = time.time()
-        kept = helpers.wait_until(lambda: rospy.get_param(NS + "running_timed/relays", None), 5,
+        kept = helpers.wait_until(lambda: rospy.get_param(KEPT + "relays", None), 5,
                                   "the flash kept on the parameter server")
         self.assertEqual([(k["channel"], k["during"], k["after"]) for k in kept],
                          [(OUT4, 1, False)])
@@ -286,11 +290,11 @@ class FailsafeItemsTest(unittest.TestCase):
         res = helpers.service(NS + "relays/pulse", Pulse)(OUT4, True, FLASH)
         self.assertTrue(res.success, res.message)
         t0 = time.time()
-        helpers.wait_until(lambda: rospy.get_param(NS + "running_timed/relays", None), 5,
+        helpers.wait_until(lambda: rospy.get_param(KEPT + "relays", None), 5,
                            "the flash kept on the parameter server")
         self.stop_node()  # SIGINT: the shutdown's safe write switches out4 off
         self.assertEqual(self.coil(RELAYS, OUT4), 0, "the shutdown's safe write")
-        kept = rospy.get_param(NS + "running_timed/relays", [])
+        kept = rospy.get_param(KEPT + "relays", [])
         self.assertFalse([k for k in kept if k["channel"] == OUT4],
                          "a flash the safe write ended is still kept: %r" % kept)
         since = len(self.events)

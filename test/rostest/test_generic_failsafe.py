@@ -97,6 +97,12 @@ class GenericFailsafeTest(unittest.TestCase):
         self.assertEqual(list(e.channels), ["speed", "run"])
         self.assertEqual(list(e.values), [-2.5, 0.0])
         self.assertEqual(e.action, "safe")
+        # The device's latched ~drive/failsafe holds it for a subscriber that comes after
+        # start (docs/ros_api.md: advertised before the on_start write, as the LC board's).
+        late = helpers.Latest(NS + "drive/failsafe", FailsafeEvent)
+        kept = late.wait(10, lambda m: m.trigger == "start", "the start event")
+        self.assertEqual(list(kept.values), [-2.5, 0.0])
+        late.sub.unregister()
 
     def test_2_device_heartbeat_lost_writes_the_safe_values(self):
         self.ensure_node()

@@ -64,6 +64,7 @@ class LaunchFilesTest(unittest.TestCase):
             launch.stop()
             if sim:
                 sim.stop()
+        self.stopped_output = launch.output()
         return answers
 
     def test_every_launch_file_is_covered(self):
@@ -140,6 +141,9 @@ class LaunchFilesTest(unittest.TestCase):
         # link:= keeps this run off /tmp/modbus_rtu_demo, where a user's demo may be running.
         self.bring_up("demo_launch", ["demo.launch", "link:=" + link], "/modbus_bus", devices,
                       os.path.join(up.REPO, "config"))
+        # Stopped as Ctrl-C stops it (SIGINT to roslaunch, the simulator and the node at once):
+        # the node's shutdown safe writes reach the simulator before it goes (issue 48 item 4).
+        up.assert_shutdown_safe_writes_confirmed(self, self.stopped_output, ["relays"])
 
     def test_robot_example_launch(self):
         link = os.path.join(self.dir, "robot_tty")

@@ -161,6 +161,9 @@ class TwoBusesTest(unittest.TestCase):
                                 lambda: None)
         finally:
             launch.stop()
+        # Stopped as Ctrl-C stops it: both nodes' shutdown safe writes reach their simulators,
+        # which are stopped at the same time (issue 48 item 4).
+        up.assert_shutdown_safe_writes_confirmed(self, launch.output(), ["relays", "drive"])
         bags = []
         for node, other in (("/io_bus", "/sensor_bus"), ("/sensor_bus", "/io_bus")):
             found = glob.glob(os.path.join(out, "modbus_rtu%s_*.bag" % node.replace("/", "_")))

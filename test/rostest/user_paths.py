@@ -198,3 +198,12 @@ def call(service, srv_type, alive, *args, timeout=30):
 
 def scratch_dir(prefix):
     return tempfile.mkdtemp(prefix=prefix)
+
+
+def assert_shutdown_safe_writes_confirmed(test, output, devices):
+    """The node's stop wrote and confirmed each device's safe states (docs/failsafe.md: stderr
+    `D: fail-safe shutdown (node stops): ...`, `NOT confirmed` when not)."""
+    for device in devices:
+        test.assertRegex(output, r"\[WARN\] %s: fail-safe shutdown \(node stops\)" % device, output)
+    test.assertNotIn("NOT confirmed", output, output)
+    test.assertNotIn("safe states not", output, output)

@@ -160,11 +160,11 @@ class Harness:
     # --- the node ----------------------------------------------------------------------------
     def forget_kept_state(self):
         """A new robot: what earlier nodes kept on the parameter server for the next node (the
-        timed commands still running, `~running_timed`, docs/failsafe.md) goes, as with a new
+        timed commands still running, docs/failsafe.md) goes, as with a new
         roscore. Without this an example would resume the flashes of the example before it on
         a board that was power cycled and set anew, and its replay would not repeat it."""
         try:
-            rospy.delete_param("/" + NODE + "/running_timed")
+            rospy.delete_param("/modbus_rtu_driver/running_timed/" + NODE)
         except KeyError:
             pass
 

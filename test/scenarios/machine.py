@@ -707,7 +707,7 @@ class Scenario(RuleBasedStateMachine):
     def kill_and_restart(self, before, ch):
         """docs/failsafe.md, "node killed": no code runs, the boards keep their outputs (flashes
         and PWM runs go on); the next node's on_start: safe puts them safe. "A node started
-        during a flash": the killed node's `~running_timed` stays on the parameter server (the
+        during a flash": the killed node's kept timed commands stay on the parameter server (the
         per-example reset is not called here) and the next node resumes them, so a flash's or
         timed run's end is not taken for a restart (I8). `before`: a timed command started
         just before the kill on a channel without a safe state (the next node's on_start: safe
@@ -732,7 +732,7 @@ class Scenario(RuleBasedStateMachine):
         self.h.beating.set()
         since = len(self.h.events)
         self.h.start_node()
-        self.note("node started again (same roscore, ~running_timed kept)")
+        self.note("node started again (same roscore, its kept timed commands)")
         self.node_started(since)
         self.heartbeat_at_start(since)
         self.check("node start after SIGKILL")

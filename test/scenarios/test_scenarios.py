@@ -9,7 +9,7 @@ pulses, share reads and writes, power cycles and a silenced board; on the LD58A0
 `set_outputs` and power cycles (on_restart: safe); for all, the bus heartbeat lost and back,
 port loss and return (the test stops the simulator: its pty goes away, as an unplugged USB
 adapter; a new one comes back on the same link), node stop (SIGINT) and start, and the node
-killed (SIGKILL) and started again under the same roscore (its `~running_timed` kept). Every
+killed (SIGKILL) and started again under the same roscore (its kept timed commands stay). Every
 device's outputs (and the LD58A08's enable registers) are checked in the simulator against
 model.py (written from docs/failsafe.md) after each step; test/scenarios/KNOWN.md lists the
 invariants.

@@ -431,7 +431,7 @@ TEST(GenericDevice, SafeValuesAreWrittenAndReadBack) {
   expectRead(bus, Request::readHoldingRegisters(5, 10, 1), {0xFFE7});
   bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(5, 3, false))));
   expectRead(bus, Request::readCoils(5, 3, 1), {0});
-  const Result r = d.writeSafeValues(bus);
+  const Result r = d.writeSafeValues(bus, d.safeSignals());
   EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_NEAR(d.states()[0].value, -2.5, 1e-9);
   EXPECT_EQ(d.states()[2].value, 0.0);
@@ -442,7 +442,7 @@ TEST(GenericDevice, SafeValuesAreWrittenAndReadBack) {
   expectRefused(bus, Request::writeSingleRegister(5, 10, 0xFFE7), kSlaveDeviceFailure);
   bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(5, 3, false))));
   expectRead(bus, Request::readCoils(5, 3, 1), {1});
-  const Result refused = d.writeSafeValues(bus);
+  const Result refused = d.writeSafeValues(bus, d.safeSignals());
   EXPECT_FALSE(refused.ok());
   EXPECT_EQ(refused.message.rfind("speed: ", 0), 0u) << refused.message;
   EXPECT_SCRIPT_DONE(bus);
@@ -453,10 +453,10 @@ TEST(GenericDevice, SafeValuesAreWrittenAndReadBack) {
   expectRead(bus, Request::readHoldingRegisters(5, 10, 1), {0});
   bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(5, 3, false))));
   expectRead(bus, Request::readCoils(5, 3, 1), {0});
-  bool silent = true;
-  const Result not_kept = d.writeSafeValues(bus, &silent);
+  std::vector<size_t> not_reached{99};
+  const Result not_kept = d.writeSafeValues(bus, d.safeSignals(), &not_reached);
   EXPECT_FALSE(not_kept.ok());
-  EXPECT_FALSE(silent);
+  EXPECT_TRUE(not_reached.empty());
   EXPECT_NE(not_kept.message.find("speed is 0"), std::string::npos) << not_kept.message;
   EXPECT_SCRIPT_DONE(bus);
 
@@ -464,7 +464,13 @@ TEST(GenericDevice, SafeValuesAreWrittenAndReadBack) {
   // tried.
   bus.expect(toHex(encodeRequest(Request::writeSingleRegister(5, 10, 0xFFE7))));
   bus.expect(toHex(encodeRequest(Request::readHoldingRegisters(5, 10, 1))));
-  EXPECT_EQ(d.writeSafeValues(bus, &silent).error, ErrorKind::kTimeout);
-  EXPECT_TRUE(silent);
+  EXPECT_EQ(d.writeSafeValues(bus, d.safeSignals(), &not_reached).error, ErrorKind::kTimeout);
+  EXPECT_EQ(not_reached, (std::vector<size_t>{0, 2}));
+  EXPECT_SCRIPT_DONE(bus);
+
+  // Only the signals asked for: the coil alone.
+  bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(5, 3, false))));
+  expectRead(bus, Request::readCoils(5, 3, 1), {0});
+  EXPECT_TRUE(d.writeSafeValues(bus, {2}).ok());
   EXPECT_SCRIPT_DONE(bus);
 }

@@ -90,7 +90,9 @@ TEST_F(GenericSafe, AReportNamesEachSafeValueAndTheStatusKeepsItUntilAUsersWrite
   EXPECT_EQ(safe.text(r), text);
   EXPECT_EQ(safe.status().events, 1u);
   EXPECT_EQ(safe.status().active, text);
-  safe.userWriteConfirmed();
+  bus.expectEcho(devtest::frame(Request::writeSingleCoil(5, 3, true)));
+  ASSERT_TRUE(safe.write(bus, 1, 1.0).ok());
+  EXPECT_SCRIPT_DONE(bus);
   EXPECT_EQ(safe.status().active, "");
   EXPECT_EQ(safe.status().last_event, text);
 }
@@ -132,4 +134,50 @@ TEST_F(GenericSafe, AValueTheDeviceRefusedIsReportedNotWrittenAgainOnEveryPoll) 
   EXPECT_FALSE(reports[0].confirmed);
   safe.afterPoll(Result::success());
   EXPECT_EQ(scheduler.queuedJobs(), 0u);
+}
+
+// docs/failsafe.md, "Generic devices": a signal set since the trigger is not written, neither
+// by the owed write once the silent device answers nor by a safe write queued before the set.
+TEST_F(GenericSafe, AnOwedSafeValueIsNotWrittenOverASetConfirmedSinceItsTrigger) {
+  expectSafeWrites(false);
+  safe.applySafe("heartbeat", "lost");
+  runBus();
+  EXPECT_SCRIPT_DONE(bus);
+  // It answers again; the user sets the speed (confirmed) before the next poll.
+  bus.expectEcho(devtest::frame(Request::writeSingleRegister(5, 10, 300)));
+  ASSERT_TRUE(safe.write(bus, 0, 30.0).ok());
+  EXPECT_SCRIPT_DONE(bus);
+  // The poll: only run is still owed.
+  safe.afterPoll(Result::success());
+  bus.expectEcho(devtest::frame(Request::writeSingleCoil(5, 3, false)));
+  const Request read_run = Request::readCoils(5, 3, 1);
+  bus.expect(devtest::frame(read_run), toHex(encodeReply(read_run, {0})));
+  runBus();
+  EXPECT_SCRIPT_DONE(bus);
+  ASSERT_EQ(reports.size(), 2u);
+  EXPECT_EQ(reports[1].channels, (std::vector<std::string>{"run"}));
+  EXPECT_TRUE(reports[1].confirmed);
+  safe.afterPoll(Result::success());
+  EXPECT_EQ(scheduler.queuedJobs(), 0u);
+}
+
+TEST_F(GenericSafe, ASetConfirmedBetweenTheTriggerAndItsSafeWriteKeepsItsValue) {
+  safe.applySafe("heartbeat", "lost");  // queued, not run yet
+  bus.expectEcho(devtest::frame(Request::writeSingleCoil(5, 3, true)));
+  ASSERT_TRUE(safe.write(bus, 1, 1.0).ok());  // the user's set reaches the bus first
+  const Request speed = Request::writeSingleRegister(5, 10, 0xFFE7);  // speed only
+  bus.expectEcho(devtest::frame(speed));
+  bus.expect(devtest::frame(Request::readHoldingRegisters(5, 10, 1)),
+             devtest::registersReply(5, 10, {0xFFE7}));
+  runBus();
+  EXPECT_SCRIPT_DONE(bus);
+  ASSERT_EQ(reports.size(), 1u);
+  EXPECT_EQ(reports[0].channels, (std::vector<std::string>{"speed"}));
+  // A later trigger writes both again.
+  safe.applySafe("heartbeat", "lost again");
+  expectSafeWrites(true);
+  runBus();
+  EXPECT_SCRIPT_DONE(bus);
+  ASSERT_EQ(reports.size(), 2u);
+  EXPECT_EQ(reports[1].channels, (std::vector<std::string>{"speed", "run"}));
 }

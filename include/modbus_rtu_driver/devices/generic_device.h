@@ -56,13 +56,15 @@ class GenericDevice : public Device {
 
   // Fail-safe: the signals with a safe_value (indices), in configuration order.
   std::vector<size_t> safeSignals() const;
-  // Writes each safe signal's safe_value and reads it back (the value on the device, not the
-  // write's echo), in order. A refusal does not stop the others; a device that does not answer
-  // does (the rest would only wait out their timeouts). The Result is the first failure, its
-  // message naming the signal; the states hold what was read back.
-  // `silent` (when given): whether the device stopped answering, so that the rest were not
-  // tried; a value it refused or did not keep (read back differs) does not stop the others.
-  Result writeSafeValues(Transport& link, bool* silent = nullptr);
+  // Writes the safe_value of each of `signals` (safe signals) and reads it back (the value on
+  // the device, not the write's echo), in order. A refusal does not stop the others; a device
+  // that does not answer does (the rest would only wait out their timeouts). The Result is the
+  // first failure, its message naming the signal; the states hold what was read back.
+  // `not_reached` (when given): the signals whose safe value the device may not have got
+  // because it stopped answering (the one it went silent on and those not tried); a value it
+  // refused or did not keep (read back differs) is its answer, not in it.
+  Result writeSafeValues(Transport& link, const std::vector<size_t>& signals,
+                         std::vector<size_t>* not_reached = nullptr);
 
   // Merged spans split after exception 02 or 03, in words (diagnostics).
   const std::vector<std::string>& splits() const { return planner_.splits(); }

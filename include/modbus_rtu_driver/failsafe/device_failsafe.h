@@ -134,7 +134,8 @@ class DeviceFailsafe {
   // out. Confirmed: a command. Its answer lost (or the port dropped mid-frame: the device may
   // have acted): the channels it decodes to are unknown until the next poll, whose level is
   // taken as found (a timed command's: after its end), as for a caller's command
-  // (docs/failsafe.md line 94). Refused or unsent: nothing changed.
+  // (docs/failsafe.md line 94). Refused or unsent: nothing changed. A broadcast (unit 0) is
+  // never confirmed: sent, it is as a write whose answer was lost.
   void externalWrite(const Request& request, const Result& result, CommandSource source);
 
   FailsafeStatus status() const;

@@ -1,9 +1,10 @@
 // The running timed commands (flashes, bursts, PWM runs) a node keeps on the parameter server as
-// ~running_timed/<device>, for the next node under the same roscore (docs/failsafe.md, "What the
-// node cannot do"). Written on a thread of its own: a parameter write is an XML-RPC call that
-// roscpp retries until the master answers, and the bus thread, where timed commands change, must
-// not wait for a master that is gone. Only a device's newest list is written; the shutdown
-// flushes what its safe writes changed (after ROS's shutdown roscpp tries each call once).
+// /modbus_rtu_driver/running_timed/<node>/<device>, for the next node under the same roscore
+// (docs/failsafe.md, "What the node cannot do"). Written on a thread of its own: a parameter write
+// is an XML-RPC call that roscpp retries until the master answers, and the bus thread, where timed
+// commands change, must not wait for a master that is gone. Only a device's newest list is written;
+// the shutdown flushes what its safe writes changed (after ROS's shutdown roscpp tries each call
+// once).
 #pragma once
 
 #include <ros/node_handle.h>
@@ -27,8 +28,14 @@ class RunningTimedParameter {
   using Read = std::function<std::vector<KeptTimedCommand>(const std::string& device)>;
   using Write =
       std::function<void(const std::string& device, const std::vector<KeptTimedCommand>& kept)>;
-  // The node's: ~running_timed/<device> of `node`, the bus node's private handle.
-  static std::unique_ptr<RunningTimedParameter> onParameterServer(const ros::NodeHandle& node);
+  // The node's: /modbus_rtu_driver/running_timed/<node>/<device>, `private_node` the bus node's
+  // private handle (its namespace is the node's full name). Outside the node's own namespace, so
+  // that a launch file's clear_params, run again after the node died, does not delete it.
+  static std::unique_ptr<RunningTimedParameter> onParameterServer(
+      const ros::NodeHandle& private_node);
+  // "/modbus_rtu_driver/running_timed/robot/io_bus" for the node "/robot/io_bus".
+  static std::string namespaceOf(const std::string& node);
+  static constexpr const char* kRunningTimedRoot = "/modbus_rtu_driver/running_timed";
   // Where the lists come from and go to (tests: a write that blocks as a master can).
   RunningTimedParameter(Read read, Write write);
   // Ends the thread; one still in a write is left to the process's exit.

@@ -32,6 +32,10 @@ class PtyLink {
   // parity counts as on when PARENB or INPCK is set (libmodbus sets INPCK for even and odd; a
   // client that sets only PARENB for even parity is seen as 8N1); data bits read as 8.
   SimLineSettings lineSettings() const;
+  // Whether a program on the other side holds the port's lock (the bus node takes flock on the
+  // port it opens: serial_port.cpp); any thread. While it does not, the lock is taken for an
+  // instant: a program opening the port just then is refused and opens it again.
+  bool claimed() const;
 
  private:
   bool lock(const std::string& link, std::string* error);

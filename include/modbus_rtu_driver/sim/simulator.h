@@ -67,6 +67,8 @@ class Simulator {
   // Async-signal-safe: the line thread power-cycles the devices at its next turn.
   void requestPowerCycle() { power_cycle_requested_ = true; }
   const std::string& link() const { return options_.link; }
+  // Whether a program (a bus node) holds the link's port open and locked; any thread.
+  bool linkClaimed() const { return pty_.claimed(); }
   const std::string& controlPath() const { return options_.control; }
   // The RTU-over-TCP gateway's port on 127.0.0.1 (0 when not serving one); valid after start.
   int rtuTcpPort() const { return gateway_.port(); }
