@@ -48,6 +48,7 @@ unit_test(test_modbus_tcp_server modbus_rtu_core)
 unit_test(test_share_fuzz modbus_rtu_core)
 # Issue 24: queued share requests never run after the shutdown's safe writes.
 unit_test(test_share_shutdown modbus_rtu_devices)
+unit_test(test_share_answer_bound modbus_rtu_devices)
 # Issue 24: idle and half-closed clients, keep-alive, exception 02, broadcast turnaround.
 unit_test(test_share_connections modbus_rtu_node_config)
 unit_test(test_signal modbus_rtu_core)

@@ -27,9 +27,14 @@ const std::set<std::string> kBusKeys = {
     "role",       "diagnostic_period", "devices",          "allow_raw_writes",  "publish_on_change",
     "keep_alive", "heartbeat",         "shutdown_timeout", "realtime_priority", "lock_memory",
     "share",      "config_file",       "wire_log"};
-const std::set<std::string> kShareKeys = {
-    "listen",       "read_only",           "allow", "max_clients", "max_queue",
-    "idle_timeout", "broadcast_turnaround"};
+const std::set<std::string> kShareKeys = {"listen",
+                                          "read_only",
+                                          "allow",
+                                          "max_clients",
+                                          "max_queue",
+                                          "idle_timeout",
+                                          "broadcast_turnaround",
+                                          "answer_within"};
 
 std::vector<std::string> getNames(const YAML::Node& n, const std::string& key) {
   if (!n.IsSequence()) fail(key, show(n) + " is not a list of names");
@@ -116,7 +121,8 @@ void parseFailsafe(const YAML::Node& n, const std::string& where,
 }
 
 // share: {listen: "127.0.0.1:1502", read_only: false, allow: [127.0.0.1], max_clients: 4,
-// max_queue: 16, idle_timeout: 60, broadcast_turnaround: 0.1}; every key optional.
+// max_queue: 16, idle_timeout: 60, broadcast_turnaround: 0.1, answer_within: 0.9}; every key
+// optional.
 void parseShare(const YAML::Node& n, ShareConfig* out) {
   if (!n.IsMap()) fail("share", show(n) + " is not a map {listen: HOST:PORT, allow: [...], ...}");
   checkKeys(n, "share/", kShareKeys);
@@ -152,6 +158,13 @@ void parseShare(const YAML::Node& n, ShareConfig* out) {
   };
   seconds("idle_timeout", 86400, "0-86400 s (0 = never)", &out->server.idle_timeout);
   seconds("broadcast_turnaround", kMaxBroadcastTurnaround, "0-1 s", &out->broadcast_turnaround);
+  if (n["answer_within"]) {
+    // Its lower bound, the longest transaction, depends on the link and the devices: the
+    // gateway checks it at start (ShareGateway::start).
+    out->answer_within = getNumber(n["answer_within"], "share/answer_within");
+    if (!(out->answer_within >= kMinAnswerWithin && out->answer_within <= kMaxAnswerWithin))
+      fail("share/answer_within", std::to_string(out->answer_within) + " s is outside 0.001-60 s");
+  }
 }
 
 // The fail-safe of a generic device lives in its signals (safe_value); of the output keys it

@@ -231,10 +231,13 @@ bool BusNode::start() {
     a->start();
   }
   if (config_.share.enabled) {
-    share_ = std::make_unique<ShareBridge>(*scheduler_, config_,
-                                           [this](const Request& r, const Result& done) {
-                                             externalWrite(r, done, CommandSource::kShare);
-                                           });
+    const Link* link = link_.get();
+    share_ = std::make_unique<ShareBridge>(
+        *scheduler_, config_,
+        [this](const Request& r, const Result& done) {
+          externalWrite(r, done, CommandSource::kShare);
+        },
+        [link](const Request& r) { return link->worstTransactionSeconds(r); });
     if (!share_->start(&error)) {
       ROS_FATAL("%s", error.c_str());  // names the share's key
       return false;
@@ -243,6 +246,11 @@ bool BusNode::start() {
     ROS_INFO("share: Modbus TCP on %s:%u (%s)", config_.share.server.host.c_str(),
              static_cast<unsigned>(config_.share.server.port),
              config_.share.read_only ? "read only" : "reads and writes");
+    ROS_INFO(
+        "share: every request answered within %.3f s (%s; one that cannot start in time gets "
+        "exception 0B, unsent): give clients a timeout of at least that",
+        share_->answerBound(),
+        config_.share.answer_within > 0 ? "share/answer_within" : "twice the longest transaction");
   }
   ROS_INFO("bus %s (%s) at %d baud, %s parity: %zu device(s)", config_.link.port.c_str(),
            link_->target().type->name, config_.link.baud, parityName(config_.link.parity),

@@ -7,14 +7,18 @@
 namespace modbus_rtu_driver {
 
 ShareBridge::ShareBridge(BusScheduler& scheduler, const BusConfig& config,
-                         std::function<void(const Request&, const Result&)> wrote)
+                         std::function<void(const Request&, const Result&)> wrote,
+                         ShareGateway::TransactionTime transaction_time)
     : config_(config.share) {
   std::map<uint8_t, std::string> device_at;
   for (const DeviceConfig& d : config.devices) device_at[static_cast<uint8_t>(d.address)] = d.name;
-  gateway_ = std::make_unique<ShareGateway>(scheduler, config_, [device_at](uint8_t slave) {
-    auto it = device_at.find(slave);
-    return it == device_at.end() ? std::string() : it->second;
-  });
+  gateway_ = std::make_unique<ShareGateway>(
+      scheduler, config_,
+      [device_at](uint8_t slave) {
+        auto it = device_at.find(slave);
+        return it == device_at.end() ? std::string() : it->second;
+      },
+      std::move(transaction_time));
   gateway_->onWriteDone(std::move(wrote));
 }
 
@@ -62,6 +66,8 @@ void ShareBridge::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) 
   status.add("max clients", config_.server.max_clients);
   status.add("queued", gateway_->queued());
   status.add("max queue", config_.max_queue);
+  status.add("answer bound [s]", gateway_->answerBound());
+  status.add("answered 0B at the bound (unsent)", gateway_->expired());
   status.add("accepted", s.accepted);
   status.add("refused (not allowed)", s.refused_not_allowed);
   status.add("refused (too many clients)", s.refused_too_many);

@@ -118,6 +118,21 @@ class ShareTest(unittest.TestCase):
             return None
         self.assertGreater(helpers.wait_until(requests, 10, "the share in /diagnostics"), 0)
 
+    def test_diagnostics_state_the_answer_bound(self):
+        # docs/share.md, "How long an answer takes": the bound the node computed (twice the
+        # longest transaction: bus_three.yaml's 0.3 s response timeout with one retry, so at
+        # least 1.2 s), and the requests answered 0B at it (none on a quiet bus).
+        def share_values():
+            for status in (self.diagnostics.msg.status if self.diagnostics.msg else []):
+                if status.name.endswith("share"):
+                    return {kv.key: kv.value for kv in status.values}
+            return None
+        values = helpers.wait_until(share_values, 10, "the share in /diagnostics")
+        bound = float(values["answer bound [s]"])
+        self.assertGreaterEqual(bound, 1.2, values)
+        self.assertLess(bound, 10.0, values)
+        self.assertEqual(values["answered 0B at the bound (unsent)"], "0", values)
+
     def test_the_simulator_serves_its_devices_over_tcp(self):
         sim_port = rospy.get_param("~sim_port")
         tcp_sim = SimControl(rospy.get_param("~tcp_sim_control"))

@@ -68,6 +68,10 @@ class MemoryBus : public Transport {
     std::unique_lock<std::mutex> lock(m_);
     return cv_.wait_for(lock, std::chrono::seconds(10), [&] { return executed_ >= n; });
   }
+  int executed() {
+    std::lock_guard<std::mutex> lock(m_);
+    return executed_;
+  }
   uint16_t reg(uint16_t address) {
     std::lock_guard<std::mutex> lock(m_);
     return registers[address];
@@ -169,12 +173,17 @@ inline bool takeAnswered(std::vector<Bytes>* unanswered, const Bytes& reply) {
 
 // The share on an ephemeral port over a MemoryBus.
 struct ShareFixture {
-  explicit ShareFixture(ShareConfig config = {}) : bus_thread(bus) {
+  // `transaction_time` and `clock`: the answer bound's (none without them).
+  explicit ShareFixture(ShareConfig config = {},
+                        ShareGateway::TransactionTime transaction_time = nullptr,
+                        Clock& clock = Clock::steady())
+      : bus_thread(bus) {
     config.server.port = 0;
     config.enabled = true;
-    gateway = std::make_unique<ShareGateway>(bus_thread, config, [](uint8_t slave) {
-      return slave == 1 ? std::string("memory") : std::string();
-    });
+    gateway = std::make_unique<ShareGateway>(
+        bus_thread, config,
+        [](uint8_t slave) { return slave == 1 ? std::string("memory") : std::string(); },
+        std::move(transaction_time), clock);
   }
   ~ShareFixture() {
     bus.release();

@@ -241,4 +241,14 @@ TEST(ShareConfigKeys, IdleTimeoutAndTurnaroundAreCheckedWithTheirRange) {
   EXPECT_NE(shareError("{broadcast_turnaround: 2}").find("share/broadcast_turnaround"),
             std::string::npos);
   EXPECT_NE(shareError("{broadcast_turnaround: 2}").find("0-1 s"), std::string::npos);
+  // answer_within: its range here; its lower bound from the link at start
+  // (test_share_answer_bound).
+  ASSERT_TRUE(parseBusConfig(YAML::Load(base + "share: {answer_within: 0.9}"), &c, &e)) << e;
+  EXPECT_EQ(c.share.answer_within, 0.9);
+  ASSERT_TRUE(parseBusConfig(YAML::Load(base + "share: {}"), &c, &e)) << e;
+  EXPECT_EQ(c.share.answer_within, 0.0);
+  for (const char* bad : {"{answer_within: 0}", "{answer_within: 61}", "{answer_within: -1}"}) {
+    EXPECT_NE(shareError(bad).find("share/answer_within"), std::string::npos) << shareError(bad);
+    EXPECT_NE(shareError(bad).find("outside 0.001-60 s"), std::string::npos) << shareError(bad);
+  }
 }

@@ -16,8 +16,12 @@ namespace modbus_rtu_driver {
 class ShareBridge {
  public:
   // `wrote(request, result)`: on the bus thread, a client's write went out, with its outcome.
+  // `transaction_time`: the link's longest transaction for a request (the answer bound's).
   ShareBridge(BusScheduler& scheduler, const BusConfig& config,
-              std::function<void(const Request&, const Result&)> wrote);
+              std::function<void(const Request&, const Result&)> wrote,
+              ShareGateway::TransactionTime transaction_time);
+  // s: every request is answered within this (docs/share.md); valid after start().
+  double answerBound() const { return gateway_->answerBound(); }
   // Listens; false with the reason, naming the key to change (share/listen when the address is
   // in use).
   bool start(std::string* error);

@@ -132,6 +132,19 @@ Result Link::runBroadcast(const EncodedRequest& request) {
   return Result::success(request.request().values);
 }
 
+double Link::worstTransactionSeconds(const Request& asked) const {
+  const std::optional<EncodedRequest> encoded = EncodedRequest::encode(asked);
+  if (!encoded) return 0.0;
+  const double character = characterTime(config_);
+  const double send = minGap() + static_cast<double>(encoded->adu().size()) * character;
+  if (!asked.expectsReply()) return send;
+  const size_t reply = std::max<size_t>(encoded->replyLength(), kShortestReply);
+  const double attempt = send + responseTimeout(*encoded) + static_cast<double>(reply) * character +
+                         effectiveByteTimeout(config_);
+  const int attempts = asked.repeatable ? 1 + std::max(0, config_.retries) : 1;
+  return attempts * attempt + config_.late_reply_guard;
+}
+
 double Link::responseTimeout(const EncodedRequest& request) const {
   return effectiveResponseTimeout(config_, request.adu().size()) +
          reply_delay_[request.request().slave];

@@ -1,6 +1,9 @@
 #include "modbus_rtu_driver/core/server/share_gateway.h"
 
+#include <algorithm>
 #include <thread>
+
+#include "modbus_rtu_driver/core/config/number_text.h"
 
 namespace modbus_rtu_driver {
 
@@ -18,8 +21,13 @@ Bytes shareReplyFor(const Request& request, const Result& result) {
 }
 
 ShareGateway::ShareGateway(BusScheduler& scheduler, ShareConfig config,
-                           std::function<std::string(uint8_t)> device_of)
-    : scheduler_(scheduler), config_(std::move(config)), device_of_(std::move(device_of)) {
+                           std::function<std::string(uint8_t)> device_of,
+                           TransactionTime transaction_time, Clock& clock)
+    : scheduler_(scheduler),
+      config_(std::move(config)),
+      device_of_(std::move(device_of)),
+      transaction_time_(std::move(transaction_time)),
+      clock_(clock) {
   // The server refuses writes before decoding them: a malformed write gets 01 too, not the
   // 02 / 03 its fields would earn (docs/share.md).
   config_.server.refuse_writes = config_.read_only;
@@ -29,6 +37,28 @@ ShareGateway::ShareGateway(BusScheduler& scheduler, ShareConfig config,
 
 ShareGateway::~ShareGateway() {
   stop();
+}
+
+double ShareGateway::longestTransaction() const {
+  if (!transaction_time_) return 0.0;
+  double longest = 0.0;
+  // The largest requests and replies (256-byte ADUs), to every unit a client may name: a
+  // device's reply delay (an LD58A08's) lengthens its address's response timeout.
+  constexpr int kLastUnit = 255;
+  for (int unit = 1; unit <= kLastUnit; ++unit) {
+    const auto slave = static_cast<uint8_t>(unit);
+    longest = std::max({longest, transaction_time_(Request::readHoldingRegisters(slave, 0, 125)),
+                        transaction_time_(Request::readCoils(slave, 0, 2000)),
+                        transaction_time_(Request::writeMultipleRegisters(
+                            slave, 0, std::vector<uint16_t>(123, 0)))});
+  }
+  return std::max(longest, ownTransaction(Request::writeMultipleRegisters(
+                               kBroadcastAddress, 0, std::vector<uint16_t>(123, 0))));
+}
+
+double ShareGateway::ownTransaction(const Request& sent) const {
+  return transaction_time_(sent) +
+         (sent.slave == kBroadcastAddress ? config_.broadcast_turnaround : 0.0);
 }
 
 bool ShareGateway::start(std::string* error) {
@@ -43,6 +73,25 @@ bool ShareGateway::start(std::string* error) {
                " s is outside 0-1 s";
     return false;
   }
+  if (transaction_time_) {
+    const double longest = longestTransaction();
+    if (config_.answer_within > 0 && config_.answer_within < longest) {
+      if (error)
+        *error = "answer_within: " + numberText(config_.answer_within) +
+                 " s is shorter than the longest transaction a client's request can take on "
+                 "this bus (" +
+                 numberText(longest) +
+                 " s: the largest request and reply with every retry and the late-reply "
+                 "guard); make it at least that, or lower response_timeout or retries";
+      return false;
+    }
+    bound_ = config_.answer_within > 0 ? config_.answer_within : 2.0 * longest;
+    {
+      std::lock_guard<std::mutex> lock(deadlines_mutex_);
+      stopping_ = false;
+    }
+    if (!expiry_thread_.joinable()) expiry_thread_ = std::thread([this] { expireLoop(); });
+  }
   scheduler_.openShared();
   return server_->start(error);
 }
@@ -52,6 +101,37 @@ bool ShareGateway::start(std::string* error) {
 void ShareGateway::stop() {
   server_->stop();
   scheduler_.closeShared("the share stopped (the node is stopping)");
+  {
+    std::lock_guard<std::mutex> lock(deadlines_mutex_);
+    stopping_ = true;
+    deadlines_.clear();
+  }
+  clock_.notifyAll(deadlines_cv_);
+  if (expiry_thread_.joinable()) expiry_thread_.join();
+}
+
+void ShareGateway::expire(Waiting& w) {
+  int queued = Waiting::kQueued;
+  if (!w.state.compare_exchange_strong(queued, Waiting::kExpired)) return;
+  ++expired_;
+  server_->replyException(w.in, kGatewayTargetFailed);
+}
+
+void ShareGateway::expireLoop() {
+  std::unique_lock<std::mutex> lock(deadlines_mutex_);
+  while (!stopping_) {
+    const Clock::time_point next =
+        deadlines_.empty() ? Clock::time_point::max() : deadlines_.begin()->first;
+    if (next > clock_.now()) {
+      clock_.waitUntil(lock, deadlines_cv_, next);
+      continue;
+    }
+    const std::shared_ptr<Waiting> w = deadlines_.begin()->second;
+    deadlines_.erase(deadlines_.begin());
+    lock.unlock();
+    expire(*w);
+    lock.lock();
+  }
 }
 
 // On the server's thread: never waits for the bus.
@@ -65,17 +145,43 @@ void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
   const std::string device = device_of_ ? device_of_(request.slave) : "";
   const auto turnaround = std::chrono::duration<double>(
       sent.slave == kBroadcastAddress ? config_.broadcast_turnaround : 0.0);
+  auto w = std::make_shared<Waiting>();
+  w->in = in;
+  const bool bounded = bound_ > 0;
+  if (bounded) {
+    // The latest start that still ends within the bound.
+    w->start_by = clock_.now() + std::chrono::duration_cast<Clock::duration>(
+                                     std::chrono::duration<double>(bound_ - ownTransaction(sent)));
+    {
+      std::lock_guard<std::mutex> lock(deadlines_mutex_);
+      deadlines_.emplace(w->start_by, w);
+    }
+    clock_.notifyAll(deadlines_cv_);
+  }
   scheduler_.submitShared(
       device,
-      [this, sent, turnaround](Transport& t) {
+      [this, sent, turnaround, w, bounded](Transport& t) {
+        // Too late to be answered in time (the expiry thread may not have run yet): 0B, unsent.
+        if (bounded && clock_.now() > w->start_by) expire(*w);
+        int queued = Waiting::kQueued;
+        if (!w->state.compare_exchange_strong(queued, Waiting::kRunning))
+          return Result::failure(ErrorKind::kInvalidArgument,
+                                 sent.describe() +
+                                     ": not sent: it could not start within the share's "
+                                     "answer bound (answered 0B)");
         Result r = t.execute(sent);
         if (!isReadFunction(sent.function) && wrote_) wrote_(sent, r);
         // On the bus thread, on purpose: nothing else may go on the line during the delay.
         if (r.ok() && turnaround.count() > 0) std::this_thread::sleep_for(turnaround);
         return r;
       },
-      [this, in](const Result& r) {
-        server_->reply(in, shareReplyFor(in.request, r));
+      [this, w](const Result& r) {
+        // Ran: its answer. Refused unsent (the share stopped, the port closed) while queued:
+        // that answer, unless the bound's 0B went first.
+        int queued = Waiting::kQueued;
+        if (w->state.load() == Waiting::kRunning ||
+            w->state.compare_exchange_strong(queued, Waiting::kDone))
+          server_->reply(w->in, shareReplyFor(w->in.request, r));
         --in_flight_;
       });
 }

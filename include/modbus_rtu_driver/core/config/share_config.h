@@ -38,7 +38,12 @@ struct ShareConfig {
   bool read_only = false;
   int max_queue = 16;                 // requests waiting for or on the bus, all clients together
   double broadcast_turnaround = 0.1;  // s of silence on the bus after a broadcast, 0-1
+  // s: every request is answered within this (docs/share.md, "How long an answer takes"); one
+  // that cannot start in time gets 0B, unsent. 0 = twice the longest transaction.
+  double answer_within = 0.0;
 };
 constexpr double kMaxBroadcastTurnaround = 1.0;  // s
+constexpr double kMinAnswerWithin = 0.001;       // s
+constexpr double kMaxAnswerWithin = 60.0;        // s
 
 }  // namespace modbus_rtu_driver

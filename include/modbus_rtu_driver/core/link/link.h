@@ -86,6 +86,13 @@ class Link : public Transport {
   // 1000 ms before answering).
   void setReplyDelay(uint8_t slave, double seconds) { reply_delay_[slave] = seconds; }
   const LinkConfig& config() const { return config_; }
+  // The longest a transaction of `request` can take once it starts: each attempt (the retries
+  // of a repeatable request whose answer is lost) with the gap before its frame, the frame, the
+  // response timeout and the longest reply ended by one byte timeout, then the late-reply guard
+  // (0 for a request Request::validate refuses). A broadcast: the gap and the frame. A device
+  // that sends its reply byte by byte just inside the byte timeout could take longer. Any
+  // thread, once the reply delays are set (before the bus starts).
+  double worstTransactionSeconds(const Request& request) const;
   LinkStats stats() const;
   // What the port names: its kind (LinkType: name, traits) and address.
   const LinkTarget& target() const { return target_; }

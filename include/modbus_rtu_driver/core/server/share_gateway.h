@@ -7,8 +7,13 @@
 //   06 the share's queue is full (max_queue requests waiting for the bus, all clients together);
 //   0A the port is not open (or the bus is stopping; requests still queued when the share stops
 //   are refused this way, unsent, as their connections close); 0B the device did not answer
-//   properly (timeout, CRC, garbled reply) after the link's retries; any other code is the device's
-//   own.
+//   properly (timeout, CRC, garbled reply) after the link's retries, or the request could not
+//   start early enough to be answered within the answer bound (then it is never sent); any other
+//   code is the device's own.
+// The answer bound (docs/share.md, "How long an answer takes"): every request is answered
+// within it of its arrival. A request gets a latest start (arrival + bound - its own longest
+// transaction); one still queued then is answered 0B by the gateway's own thread, whatever the
+// bus is doing, and skipped unsent when the bus reaches it.
 // Unit 0 is a broadcast: nobody answers on the bus, so a write is answered with its normal
 // reply once it was sent (sent, not confirmed by any device), and the bus then stays quiet for
 // `broadcast_turnaround` s (the serial line spec's turnaround delay, 100-200 ms: the devices are
@@ -19,11 +24,16 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <functional>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 
 #include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/core/bus/clock.h"
 #include "modbus_rtu_driver/core/server/modbus_tcp_server.h"
 
 namespace modbus_rtu_driver {
@@ -38,9 +48,16 @@ class ShareGateway {
   // `device_of(slave)` names the configured device at that address ("" when none): its health
   // counts the shared requests. The bus must stop before the gateway goes (pending answers
   // call back into it).
+  // `transaction_time(request)`: the longest a request's transaction can take once it starts
+  // (Link::worstTransactionSeconds); without it there is no answer bound. `clock`: what the
+  // bound is measured on.
+  using TransactionTime = std::function<double(const Request&)>;
   ShareGateway(BusScheduler& scheduler, ShareConfig config,
-               std::function<std::string(uint8_t)> device_of = nullptr);
+               std::function<std::string(uint8_t)> device_of = nullptr,
+               TransactionTime transaction_time = nullptr, Clock& clock = Clock::steady());
   ~ShareGateway();
+  // Checks the configuration (answer_within against the longest transaction, naming both) and
+  // listens.
   bool start(std::string* error);
   // Closes the server and refuses every request still queued on the bus (unsent): none runs
   // after this returns, except the one on the bus right now.
@@ -54,16 +71,45 @@ class ShareGateway {
     wrote_ = std::move(done);
   }
   int queued() const { return in_flight_.load(); }
+  // s: every request is answered within this; 0 without a bound. Valid after start().
+  double answerBound() const { return bound_; }
+  // The longest transaction a client's request can take here (the largest read or write, or a
+  // broadcast with its turnaround, to any unit); the default bound is twice this.
+  double longestTransaction() const;
+  // Requests answered 0B at their latest start, never sent.
+  uint64_t expired() const { return expired_.load(); }
 
  private:
+  // A request between its arrival and its answer: queued, on the bus, or answered 0B unsent.
+  struct Waiting {
+    enum State { kQueued, kRunning, kExpired, kDone };
+    ModbusTcpServer::Incoming in;
+    Clock::time_point start_by;
+    std::atomic<int> state{kQueued};
+  };
   void handle(const ModbusTcpServer::Incoming& in);
+  // Answers 0B once, if it is still queued (any thread).
+  void expire(Waiting& w);
+  // The gateway's thread: answers each request still queued at its latest start.
+  void expireLoop();
+  double ownTransaction(const Request& sent) const;
 
   BusScheduler& scheduler_;
   ShareConfig config_;
   std::function<std::string(uint8_t)> device_of_;
   std::function<void(const Request&, const Result&)> wrote_;
+  TransactionTime transaction_time_;
+  Clock& clock_;
   std::unique_ptr<ModbusTcpServer> server_;
   std::atomic<int> in_flight_{0};
+  std::atomic<uint64_t> expired_{0};
+  double bound_ = 0.0;
+
+  std::mutex deadlines_mutex_;  // the three below
+  std::condition_variable deadlines_cv_;
+  std::multimap<Clock::time_point, std::shared_ptr<Waiting>> deadlines_;
+  bool stopping_ = false;
+  std::thread expiry_thread_;
 };
 
 }  // namespace modbus_rtu_driver
