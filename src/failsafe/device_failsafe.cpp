@@ -418,6 +418,17 @@ void DeviceFailsafe::externalWrite(const Request& request, const Result& result,
     externalWriteLost(request);
 }
 
+std::vector<bool> DeviceFailsafe::runsKeptOverCoilWrites() const {
+  std::vector<bool> runs(device_.outputCount(), false);
+  if (!device_.coilWriteKeepsRun()) return runs;
+  const bool read = device_.selfTimedRead();
+  if (read)
+    for (size_t ch = 0; ch < runs.size(); ++ch) runs[ch] = device_.outputSelfTimed(ch);
+  for (const TimedIntent& t : intents_.runningTimed())
+    if (t.channel < runs.size() && (t.seconds >= 0 || !read)) runs[t.channel] = true;
+  return runs;
+}
+
 void DeviceFailsafe::externalWriteLost(const Request& request) {
   for (uint8_t ch : device_.outputsWrittenBy(request).channels)
     intents_.adoptNextPoll(ch, CommandSource::kFound);
@@ -453,14 +464,7 @@ void DeviceFailsafe::externalWriteConfirmed(const Request& request, CommandSourc
   // write kept, count as read running), and the node's timed commands before their end. A run
   // the device drives with no end (the device's, or a continuous one) counts from the intents
   // only while no read is known: a read since that shows it ended makes the write a plain one.
-  std::vector<bool> runs(device_.outputCount(), false);
-  if (device_.coilWriteKeepsRun()) {
-    const bool read = device_.selfTimedRead();
-    if (read)
-      for (size_t ch = 0; ch < runs.size(); ++ch) runs[ch] = device_.outputSelfTimed(ch);
-    for (const TimedIntent& t : intents_.runningTimed())
-      if (t.channel < runs.size() && (t.seconds >= 0 || !read)) runs[t.channel] = true;
-  }
+  const std::vector<bool> runs = runsKeptOverCoilWrites();
   for (size_t i = 0; i < set.channels.size(); ++i) {
     const uint8_t ch = set.channels[i];
     if (ch >= runs.size() || !runs[ch]) {

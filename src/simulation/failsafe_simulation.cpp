@@ -70,9 +70,10 @@ const std::vector<SimInvariant>& simInvariants() {
 }
 
 const std::set<std::string>& simKnownOpen() {
-  // None since stop 41 (docs/simulation.md, "Known open defects"): an invariant a case shows
-  // broken on today's code goes here, with its case "status known".
-  static const std::set<std::string> known = {};
+  // docs/simulation.md, "Known open defects": an invariant a case shows broken on today's code
+  // goes here, with its case "status known". I6 since 2026-12-06: a lost coil write over a
+  // client's PWM run, then a confirmed one (broadcast_over_client_pwm_false_restart*).
+  static const std::set<std::string> known = {"I6"};
   return known;
 }
 
@@ -230,6 +231,10 @@ struct Chan {
   TP adopt_not_before{};
   TP adopt_at{};                 // when the write was confirmed
   bool shown_otherwise = false;  // held, and the last poll showed it not in its safe state
+  // Held, and a write nobody confirmed (its answer lost, a broadcast) may have changed it since
+  // then: safe again once a poll found it otherwise (the share's row of "What happens when").
+  TP disturbed_at{};
+  TP disturbed_poll_at{};  // the good poll that found it after that write (none yet: {})
   bool adopt_prev_known = false, adopt_prev_level = false;  // what it should show before
 };
 
@@ -246,6 +251,9 @@ struct DevModel {
   uint64_t polls_started = 0;
   uint64_t poll_running = 0;  // the sequence number of the poll running now
   bool in_poll = false;       // between a poll's start and its end
+  // ... and a write to the device was noted since that start: its reads may predate the write,
+  // so it is no "good poll" for found states (docs:65).
+  bool written_in_poll = false;
   // A fail-safe write went out: its read back (docs:90, a read of the device's state) is next.
   bool readback_pending = false;
   std::vector<bool> fs_written = std::vector<bool>(8, false);  // ... the channels it wrote
@@ -706,6 +714,7 @@ bool World::expected(const Chan& c, TP t, bool* level) const {
 }
 
 void World::commanded(int d, int ch, bool level) {
+  if (model_[d].in_poll) model_[d].written_in_poll = true;
   Chan& c = model_[d].ch[ch];
   const auto deadline = c.deadline;  // only C/command moves the dead man (docs:33)
   c = Chan{};
@@ -744,6 +753,11 @@ void World::unconfirmed(int d, int ch, double not_before_s, bool as_command) {
     c.adopt_prev_known = true;
     c.adopt_prev_level = !safeLevel(d, ch);
   }
+  if (c.held) {
+    c.disturbed_at = clock_.now();
+    c.disturbed_poll_at = TP{};
+  }
+  if (model_[d].in_poll) model_[d].written_in_poll = true;
   c.adopt_at = clock_.now();
   c.known = false;
   c.adopt = true;
@@ -945,6 +959,7 @@ void World::onPollStarting(const std::string& device) {
   const int d = devOf(device);
   model_[d].poll_running = ++model_[d].polls_started;
   model_[d].in_poll = true;
+  model_[d].written_in_poll = false;
   model_[d].readback_pending = false;
   model_[d].fs_written.assign(kChannels, false);
 }
@@ -959,7 +974,7 @@ void World::onPolled(const std::string& device, const Result& r) {
   for (int ch = 0; ch < kChannels; ++ch) {
     Chan& c = m.ch[ch];
     c.shown_otherwise = c.held && outputs[ch] != safeLevel(d, ch);
-    if (!m.found && !c.known && !c.adopt) {
+    if (!m.found && !c.known && !c.adopt && !m.written_in_poll) {
       // docs:62-63: where the node has commanded nothing, the intent is the state found at its
       // first good poll. A running PWM is the device's (docs:73).
       // A run as the node last read it (docs:66): an LD58A08 channel's registers, read before
@@ -972,7 +987,7 @@ void World::onPolled(const std::string& device, const Result& r) {
     }
     const bool registers_read = d != kLd || m.pwm_read_in_poll[ch] == m.poll_running;
     if (c.adopt && m.poll_running > c.adopt_after_poll && clock_.now() >= c.adopt_not_before &&
-        registers_read) {
+        registers_read && !m.written_in_poll) {
       // docs:35, 64-65: what an undecoded write changed is taken as commanded at the next
       // poll; it ends a hold on the channels it changed.
       const bool level = outputs[ch];
@@ -998,17 +1013,29 @@ void World::onPolled(const std::string& device, const Result& r) {
       if (!ends) {
         c.held = kept.held;
         c.held_since = kept.held_since;
+        c.disturbed_at = kept.disturbed_at;
+        c.disturbed_poll_at = kept.disturbed_poll_at;
         c.owed = kept.owed;
         c.triggered = kept.triggered;
         c.trigger_at = kept.trigger_at;
       }
     }
   }
-  m.found = true;
+  if (!m.written_in_poll)
+    for (int ch = 0; ch < kChannels; ++ch) {
+      Chan& c = m.ch[ch];
+      const bool registers_read = d != kLd || m.pwm_read_in_poll[ch] == m.poll_running;
+      if (c.held && c.disturbed_at != TP{} && c.disturbed_poll_at == TP{} && registers_read)
+        c.disturbed_poll_at = clock_.now();
+    }
+  if (!m.written_in_poll) m.found = true;
   // docs:34: a device that answers again after being offline has restarted: on_restart's
   // writes computed from here on have that reason (found states included).
   if (m.unanswered) m.cause_at = clock_.now();
   m.unanswered = false;
+  // Only a good poll shows the node what changed (docs:65): one with a write in it is not
+  // compared.
+  if (m.written_in_poll) return;
   m.prev_poll_at = m.last_poll_at;
   m.last_poll_at = clock_.now();
 }
@@ -1313,7 +1340,11 @@ void World::checkHeld() {
     if (now - m.reachable_since < dur(budget(m.queued_at_reachable) + pollPeriod(d))) continue;
     for (int ch = 0; ch < kChannels; ++ch) {
       const Chan& c = m.ch[ch];
-      if (!c.held || now - c.held_since < dur(budget(c.queued_at_hold))) continue;
+      // Disturbed since it was held (a write nobody confirmed): from the good poll that found
+      // it (polls wait behind the writes queued meanwhile).
+      if (c.held && c.disturbed_at != TP{} && c.disturbed_poll_at == TP{}) continue;
+      const TP from = std::max(c.held_since, c.disturbed_poll_at);
+      if (!c.held || now - from < dur(budget(c.queued_at_hold))) continue;
       if (simCoil(d, ch) != safeLevel(d, ch))
         fail("I2", std::string(kNames[d]) + " out" + std::to_string(ch) + " is held safe (" +
                        safeStateName(safeOf(d, ch)) +
@@ -1581,6 +1612,20 @@ void World::doCommandStep(const SimStep& s) {
       }
     };
     pending_.push_back(share ? node_->share(op(k).id, req, done) : node_->raw(op(k).id, req, done));
+  } else if (k == "share15_broadcast") {
+    // docs "What happens when", the share's row: a broadcast (unit 0) confirms nothing. Every
+    // device that listens applies it (a silent one does not); on each, the coils it names are
+    // as after a write whose answer was lost: unknown until the next poll, taken as found,
+    // no hold ended, no owed write cancelled (I2, I3 and I4 keep watching them).
+    const int n = 1 + arg(3) % std::min(4, kChannels - ch);
+    std::vector<bool> bits(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) bits[static_cast<size_t>(i)] = ((arg(2) >> i) & 1) != 0;
+    const Request req = Request::writeMultipleCoils(kBroadcastAddress, ch, bits);
+    pending_.push_back(node_->share(op(k).id, req, [this, ch, n](const Result& r) {
+      if (!r.ok() && !answerLost(r.error)) return;  // refused or unsent: nothing changed
+      for (int d = 0; d < kGen; ++d)
+        for (int i = 0; i < n; ++i) lostAnswer(d, ch + i, 0);
+    }));
   } else if (k == "share16_flash" || k == "raw16_flash") {
     // An LC flash through its registers (docs:60-61): mode 4 close, 2 open; delay in 0.1 s.
     const bool close = arg(2) % 2 == 0;
@@ -1653,12 +1698,14 @@ std::optional<SimStep> SimStep::parse(const std::string& line, std::string* erro
     return std::nullopt;
   }
   static const std::set<std::string> kinds = {
-      "wait",        "set",         "set2",         "command",   "pulse",   "pwm",
-      "pwm_stop",    "share05",     "share15",      "raw05",     "raw15",   "share16_flash",
-      "raw16_flash", "share16_pwm", "share06_stop", "signal",    "hb_stop", "hb_resume",
-      "dhb_stop",    "dhb_resume",  "silent",       "lose",      "late",    "garble",
-      "power",       "ld_save",     "port_lost",    "port_back", "stop",    "kill",
-      "start"};
+      "wait",        "set",         "set2",         "command",
+      "pulse",       "pwm",         "pwm_stop",     "share05",
+      "share15",     "raw05",       "raw15",        "share16_flash",
+      "raw16_flash", "share16_pwm", "share06_stop", "signal",
+      "hb_stop",     "hb_resume",   "dhb_stop",     "dhb_resume",
+      "silent",      "lose",        "late",         "garble",
+      "power",       "ld_save",     "port_lost",    "port_back",
+      "stop",        "kill",        "start",        "share15_broadcast"};
   if (!kinds.count(s.kind)) {
     if (error) *error = "unknown step '" + s.kind + "'";
     return std::nullopt;
@@ -1720,7 +1767,7 @@ std::vector<SimStep> FailsafeSimulation::generate(size_t n) const {
       {"hb_stop", 3},     {"hb_resume", 4},   {"dhb_stop", 2},     {"dhb_resume", 3},
       {"silent", 3},      {"lose", 2},        {"late", 1},         {"garble", 2},
       {"power", 2},       {"ld_save", 1},     {"port_lost", 1},    {"port_back", 2},
-      {"stop", 1},        {"kill", 1},        {"start", 3}};
+      {"stop", 1},        {"kill", 1},        {"start", 3},        {"share15_broadcast", 1}};
   int total = 0;
   for (const Kind& k : kinds) total += k.weight;
   while (steps.size() < n) {

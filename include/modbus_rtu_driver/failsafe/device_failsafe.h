@@ -145,6 +145,9 @@ class DeviceFailsafe {
   void adoptAfterLost(const TimedIntent& intent);
   void externalWriteConfirmed(const Request& request, CommandSource source);
   void externalWriteLost(const Request& request);
+  // Per channel: a run a coil write there would leave running (the LD58A08 keeps its PWM over
+  // a coil write): as the node last read it, or a timed command of the node's before its end.
+  std::vector<bool> runsKeptOverCoilWrites() const;
   // Writes `targets`, reads back, reports. `owe_since`: the write carries a trigger's safe
   // states (fired then), owed per channel when it does not get through. `until_silent`: a
   // lasting trigger's write goes through it (`t`; `held_only` is its channel filter): when it
