@@ -10,7 +10,7 @@ board. Starts its own rosmaster, the simulator and the node (free ports, a tempo
 Prints a table: RSS, fds and threads of the node over time; SetBool calls ok, refused and failed;
 share answers by kind with p50/p99/max latency and the bound; answers later than the bound and
 answers out of step. Exits 1 when an answer came late or out of step, the node's RSS grew more
-than 0.5 MB after the first minute, or its fds or threads grew.
+than 0.5 MB after the first minute, or its threads or (by more than 2) its fds grew.
 
     scripts/soak.sh --minutes N [--period S] [--timeout S]
 """
@@ -34,6 +34,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
 
 RELAYS, PWM, PDU = "8", "1", "2"
+kFdSlack = 2  # fds a node may hold more for a while (roscpp's connections come and go)
 SIM_YAML = """baud: 115200
 parity: none
 devices:
@@ -316,9 +317,11 @@ def main():
         growth = after_minute[-1][1] - after_minute[0][1]
         if growth > 0.5:
             problems.append("RSS grew %.2f MB after the first minute" % growth)
-    # From 30 s on: the clients' connections and roscpp's threads are there by then.
+    # From 30 s on: the clients' connections and roscpp's threads are there by then. roscpp
+    # opens and closes a connection now and then (one fd more for a while): a leak grows on.
     settled = [s for s in samples if s[0] >= 30.0]
-    if len(settled) >= 2 and (settled[-1][2] > settled[0][2] or settled[-1][3] > settled[0][3]):
+    if len(settled) >= 2 and (settled[-1][2] > settled[0][2] + kFdSlack or
+                              settled[-1][3] > settled[0][3]):
         problems.append("fds or threads grew (%d -> %d fds, %d -> %d threads)"
                         % (settled[0][2], settled[-1][2], settled[0][3], settled[-1][3]))
     print("\n" + ("soak: " + "; ".join(problems) if problems else "soak: passed"))
