@@ -34,7 +34,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
 
 RELAYS, PWM, PDU = "8", "1", "2"
-kFdSlack = 2  # fds a node may hold more for a while (roscpp's connections come and go)
+FD_SLACK = 2  # fds a node may hold more for a while (roscpp's connections come and go)
 SIM_YAML = """baud: 115200
 parity: none
 devices:
@@ -320,7 +320,7 @@ def main():
     # From 30 s on: the clients' connections and roscpp's threads are there by then. roscpp
     # opens and closes a connection now and then (one fd more for a while): a leak grows on.
     settled = [s for s in samples if s[0] >= 30.0]
-    if len(settled) >= 2 and (settled[-1][2] > settled[0][2] + kFdSlack or
+    if len(settled) >= 2 and (settled[-1][2] > settled[0][2] + FD_SLACK or
                               settled[-1][3] > settled[0][3]):
         problems.append("fds or threads grew (%d -> %d fds, %d -> %d threads)"
                         % (settled[0][2], settled[-1][2], settled[0][3], settled[-1][3]))
