@@ -12,6 +12,7 @@ std::vector<std::string> withDefaults(const std::vector<std::string>& given, siz
                                       const char* prefix) {
   if (given.size() == n) return given;
   std::vector<std::string> names;
+  names.reserve(n);
   for (size_t i = 0; i < n; ++i) names.push_back(prefix + std::to_string(i));
   return names;
 }
@@ -77,6 +78,7 @@ Result Device::writeOutputs(Transport& link, const std::vector<uint8_t>& channel
   Result last = Result::success();
   for (const CoilRun& run : runs) {
     std::vector<uint8_t> run_channels;
+    run_channels.reserve(run.states.size());
     for (size_t i = 0; i < run.states.size(); ++i)
       run_channels.push_back(static_cast<uint8_t>(run.first + i));
     Result r = run.states.size() == 1

@@ -169,6 +169,8 @@ Result GenericDevice::writeSafeValues(Transport& link, const std::vector<size_t>
 Result GenericDevice::writeSafeValue(Transport& link, size_t i, bool* answered) {
   *answered = true;
   const SignalConfig& s = signals()[i];
+  if (!s.safe_value)
+    return Result::failure(ErrorKind::kInvalidArgument, s.name + ": no safe value");
   std::vector<uint16_t> words;
   const std::string problem = encodeWrite(i, *s.safe_value, &words);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);

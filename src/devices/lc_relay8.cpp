@@ -95,7 +95,7 @@ std::vector<TimedIntent> LcRelay8::timedWrittenBy(const Request& request) const 
     const uint16_t tenths = request.values[mode + 1 - request.address];
     if ((kind != kFlashClose && kind != kFlashOpen) || tenths == 0) continue;
     const bool close = kind == kFlashClose;  // closes (on) for the delay, then opens
-    timed.push_back(TimedIntent{ch, close, !close, tenths / 10.0});
+    timed.emplace_back(ch, close, !close, tenths / 10.0);
   }
   return timed;
 }

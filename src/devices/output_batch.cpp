@@ -30,7 +30,7 @@ Result OutputBatch::write(Device& device, Transport& link, const std::vector<uin
 Result OutputBatch::complete(Device& device, Transport& link, const std::shared_ptr<Entry>& entry,
                              const WrittenCallback& on_written,
                              const NotConfirmedCallback& on_not_confirmed) {
-  if (entry->result) return *entry->result;
+  if (const std::optional<Result>& refused = entry->result) return *refused;
   std::vector<std::shared_ptr<Entry>> batch;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -56,16 +56,17 @@ Result OutputBatch::complete(Device& device, Transport& link, const std::shared_
     r.message = (r.message.empty() ? "" : r.message + "; ") + "merged with " +
                 std::to_string(batch.size() - 1) + " other request(s) into one write";
   for (const auto& e : batch) {
-    e->result = r;
+    Result mine = r;
     for (size_t i = 0; r.ok() && i < e->channels.size() && i < e->states.size(); ++i) {
       if (wanted[e->channels[i]] == e->states[i]) continue;
-      e->result->message += "; output " + std::to_string(e->channels[i]) +
-                            " superseded by a newer request in the same write";
+      mine.message += "; output " + std::to_string(e->channels[i]) +
+                      " superseded by a newer request in the same write";
       break;
     }
+    e->result = std::move(mine);
   }
   // `entry` was in this batch: it was added before its job was queued, and jobs run in order.
-  return entry->result ? *entry->result : r;
+  return entry->result.value_or(r);
 }
 
 }  // namespace modbus_rtu_driver

@@ -124,8 +124,7 @@ std::string YespeedPdu::validateLimits(const PduLimitValues& l, PduLimitRegister
 PduLimitRegisters YespeedPdu::mergeLimits(const PduLimitRegisters& current,
                                           const PduLimitChange& change) {
   PduLimitRegisters merged = current;
-  for (size_t i = 0; i < 3; ++i)
-    if (change[i]) merged[i] = *change[i];
+  for (size_t i = 0; i < 3; ++i) merged[i] = change[i].value_or(current[i]);
   return merged;
 }
 

@@ -106,7 +106,7 @@ ChannelIntents::Intent ChannelIntents::adoptingIntent(uint8_t channel, CommandSo
   in.source = source;
   in.at = now;
   in.adopt = true;
-  if (intent_[channel]) in.level = intent_[channel]->level;
+  if (const std::optional<Intent>& was = intent_[channel]) in.level = was->level;
   return in;
 }
 
@@ -121,8 +121,9 @@ void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double
   // may have passed by now (the write's timeout and its read back outlast the flash), but not
   // its slack: polls within it may still show either level (docs/failsafe.md line 105).
   const auto& was = intent_[channel];
-  if (was && was->ends && *was->ends + endSlack(*was) > now) {
-    in.adopt_from = std::max(in.adopt_from.value_or(now), *was->ends + endSlack(*was));
+  if (was && was->ends) {
+    const Clock::time_point settled = *was->ends + endSlack(was->at, *was->ends);
+    if (settled > now) in.adopt_from = std::max(in.adopt_from.value_or(now), settled);
   }
   // An earlier lost write there already waits for such an end: whichever write the device
   // heard, the timed command may still run, so this one waits as long.
@@ -234,9 +235,10 @@ OutputTargets ChannelIntents::owed() const {
   std::lock_guard<std::mutex> lock(mutex_);
   OutputTargets t;
   for (size_t ch = 0; ch < channels_; ++ch) {
-    if (!owed_[ch]) continue;
+    const std::optional<Owed>& o = owed_[ch];
+    if (!o) continue;
     t.channels.push_back(static_cast<uint8_t>(ch));
-    t.states.push_back(owed_[ch]->level);
+    t.states.push_back(o->level);
   }
   return t;
 }
@@ -249,9 +251,9 @@ std::string ChannelIntents::owedTrigger() const {
   return oldest ? oldest->trigger : std::string();
 }
 
-Clock::duration ChannelIntents::endSlack(const Intent& in) {
+Clock::duration ChannelIntents::endSlack(Clock::time_point at, Clock::time_point ends) {
   return seconds(kEndSlackSeconds) +
-         std::chrono::duration_cast<Clock::duration>((*in.ends - in.at) * kEndSlackFraction);
+         std::chrono::duration_cast<Clock::duration>((ends - at) * kEndSlackFraction);
 }
 
 std::vector<uint8_t> ChannelIntents::pollStarting() {
@@ -274,15 +276,17 @@ Expectation ChannelIntents::expected(uint8_t channel, Clock::time_point t) const
 
 Expectation ChannelIntents::expectedLocked(uint8_t channel, Clock::time_point t) const {
   Expectation e;
-  if (channel >= channels_ || !intent_[channel]) return e;
-  const Intent& in = *intent_[channel];
+  if (channel >= channels_) return e;
+  const std::optional<Intent>& slot = intent_[channel];
+  if (!slot) return e;
+  const Intent& in = *slot;
   if (in.adopt || in.driven) return e;
   e.level = in.level;
   if (!in.ends) {
     e.kind = Expectation::Kind::kLevel;
     return e;
   }
-  const auto slack = endSlack(in);
+  const auto slack = endSlack(in.at, *in.ends);
   if (t < *in.ends - slack) {
     if (!in.during) return Expectation{};  // the device switches it by itself meanwhile
     e.kind = Expectation::Kind::kLevel;
@@ -492,7 +496,7 @@ OutputTargets ChannelIntents::afterPollTargets(Verdict verdict,
       }
     }
     for (size_t ch = 0; ch < channels_; ++ch)
-      if (owed_[ch]) by_channel[static_cast<uint8_t>(ch)] = owed_[ch]->level;
+      if (const std::optional<Owed>& o = owed_[ch]) by_channel[static_cast<uint8_t>(ch)] = o->level;
     // A hold keeps its channels safe whatever on_restart says (docs/failsafe.md, precedence).
     for (size_t ch = 0; ch < channels_; ++ch)
       if (held_[ch] != 0 && held_not_safe_[ch])
@@ -567,8 +571,9 @@ std::vector<uint8_t> ChannelIntents::expiredCommands() {
   std::vector<uint8_t> expired;
   const auto now = clock_.now();
   for (size_t i = 0; i < channels_; ++i) {
-    if (!command_deadline_[i] || now < *command_deadline_[i]) continue;
-    command_deadline_[i].reset();
+    std::optional<Clock::time_point>& deadline = command_deadline_[i];
+    if (!deadline || now < *deadline) continue;
+    deadline.reset();
     expired.push_back(static_cast<uint8_t>(i));
   }
   return expired;

@@ -8,7 +8,7 @@ DeviceCommands::DeviceCommands(Device& device, DeviceFailsafe& failsafe, Submit 
 std::future<Result> DeviceCommands::write(const std::vector<uint8_t>& channels,
                                           const std::vector<bool>& states) {
   auto entry = batch_.add(device_, channels, states);  // checked there, once
-  if (entry->result) return readyResult(*entry->result);
+  if (const std::optional<Result>& refused = entry->result) return readyResult(*refused);
   return submit_([this, entry](Transport& t) { return complete(t, entry); });
 }
 
@@ -16,9 +16,10 @@ std::future<Result> DeviceCommands::command(uint8_t channel, bool state, Done do
   failsafe_.commandReceived(channel, state);  // the dead man's deadline
   std::lock_guard<std::mutex> lock(commands_mutex_);
   auto entry = batch_.add(device_, {channel}, {state});
-  if (entry->result) {  // refused (never, for a channel a topic subscribes for)
-    if (done) done(*entry->result);
-    return readyResult(*entry->result);
+  if (const std::optional<Result>& refused = entry->result) {
+    // Refused (never, for a channel a topic subscribes for).
+    if (done) done(*refused);
+    return readyResult(*refused);
   }
   newest_command_ = std::move(entry);
   command_done_.push_back(std::move(done));

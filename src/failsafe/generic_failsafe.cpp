@@ -80,7 +80,7 @@ Result GenericFailsafe::writeSafe(Transport& t, const std::string& trigger,
   r.reason = reason;
   r.action = "safe";
   for (size_t i : due) {
-    const double v = *device_.signals()[i].safe_value;
+    const double v = device_.signals()[i].safe_value.value_or(0.0);  // set: a safe signal
     r.channels.push_back(device_.signals()[i].name);
     r.states.push_back(v != 0.0);
     r.values.push_back(v);
@@ -108,6 +108,7 @@ Result GenericFailsafe::writeSafe(Transport& t, const std::string& trigger,
 
 std::string GenericFailsafe::describeSafeValue(size_t i) const {
   const SignalConfig& s = device_.signals()[i];
+  if (!s.safe_value) return s.name;
   if (s.type == SignalType::kBool) return s.name + (*s.safe_value != 0 ? " on" : " off");
   return s.name + " " + numberText(*s.safe_value) + (s.unit.empty() ? "" : " " + s.unit);
 }

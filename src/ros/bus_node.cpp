@@ -78,6 +78,7 @@ void BusNode::checkDeadlines() {
 
 std::vector<DeviceAdapter*> BusNode::answeringFirst() const {
   std::vector<DeviceAdapter*> order;
+  order.reserve(adapters_.size());
   for (const auto& a : adapters_) order.push_back(a.get());
   std::stable_sort(order.begin(), order.end(), [this](DeviceAdapter* x, DeviceAdapter* y) {
     return scheduler_->health(x->name()).consecutive_failures == 0 &&

@@ -195,8 +195,9 @@ class GenericAdapter : public DeviceAdapter {
       all.units.push_back(signals[i].unit);
       all.values.push_back(st.value);
       all.valid.push_back(st.valid);
-      if (!st.valid || (published_[i] && sameReading(*published_[i], st.value))) continue;
-      published_[i] = st.value;
+      std::optional<double>& published = published_[i];
+      if (!st.valid || (published && sameReading(*published, st.value))) continue;
+      published = st.value;
       if (signals[i].type == SignalType::kBool) {
         std_msgs::Bool m;
         m.data = st.value != 0.0;

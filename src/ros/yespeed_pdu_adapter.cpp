@@ -75,8 +75,9 @@ class YespeedPduAdapter : public DeviceAdapter {
       return true;
     }
     if (change[0] && change[1] && change[2]) {  // all three: the rules before the bus is asked
+      // The three given registers (merged over zeros, none of which is left).
       const std::string problem =
-          YespeedPdu::checkLimitRegisters({*change[0], *change[1], *change[2]});
+          YespeedPdu::checkLimitRegisters(YespeedPdu::mergeLimits(PduLimitRegisters{}, change));
       if (!problem.empty()) {
         res.success = false;
         res.message = device_->name() + ": " + problem;

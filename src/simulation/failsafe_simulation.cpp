@@ -565,8 +565,9 @@ void World::resetModelForNewNode() {
       }
       c = Chan{};
       // Resumed as the previous node left it, not as a command of this node's (found).
-      if (ch < carried_[d].size() && carried_[d][ch] && carried_[d][ch]->ends > now) {
-        const Chan& k = *carried_[d][ch];
+      const std::optional<Chan>* carried = ch < carried_[d].size() ? &carried_[d][ch] : nullptr;
+      if (carried && *carried && (*carried)->ends > now) {
+        const Chan& k = **carried;
         c.known = true;
         c.level = k.level;
         c.timed = k.timed;
@@ -1103,6 +1104,7 @@ void World::onReport(const FailsafeReport& r) {
   DevModel& m = model_[d];
   const TP now = clock_.now();
   std::vector<int> chs;
+  chs.reserve(r.channels.size());
   for (const std::string& name : r.channels) chs.push_back(name[3] - '0');  // out0..out7
   if (r.trigger == "restart") {
     // I6 (docs:34-35, 66-74): the outputs changed only if something changed them. A change in
@@ -1731,7 +1733,13 @@ std::string FailsafeSimulation::describe() const {
     o << "  " << d.name << " (" << d.type << " @" << d.address << ", " << d.poll_rate << " Hz): ";
     if (d.type == "generic") {
       o << "safe values";
-      for (const SignalConfig& s : d.generic.signals) o << " " << s.name << "=" << *s.safe_value;
+      for (const SignalConfig& s : d.generic.signals) {
+        o << " " << s.name << "=";
+        if (s.safe_value)
+          o << *s.safe_value;
+        else
+          o << "none";
+      }
       o << (c.generic_refuses ? " (mode refused)" : "") << ", on_start "
         << (d.failsafe.on_start_safe ? "safe" : "keep") << "\n";
       continue;

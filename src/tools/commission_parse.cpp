@@ -9,6 +9,21 @@
 
 namespace modbus_rtu_driver::commission_args {
 
+namespace {
+
+// The value of a word its validator (commission_validators.cpp) has already checked, parsed by
+// `parse` (parseParity, parseTableName). Should the two ever disagree: the parser's message.
+template <typename T>
+T parseChecked(std::optional<T> (*parse)(std::string_view, std::string*), std::string_view text,
+               const std::string& what) {
+  std::string why;
+  const std::optional<T> value = parse(text, &why);
+  if (!value) bad(what + ": " + why);
+  return *value;
+}
+
+}  // namespace
+
 void parseLink(const Parsed& p, CommissionCommand& c) {
   if (!p.top.count("--port")) bad("--port: missing (the serial device, e.g. /dev/ttyUSB0)");
   c.link.port = p.w.port;
@@ -63,7 +78,7 @@ void parseScan(const Parsed& p, CommissionCommand& c) {
     for (const auto& row : kParityNames) c.parities.push_back(row.value);
   else
     for (const std::string& name : splitList(parities))
-      c.parities.push_back(*parseParity(name, nullptr));
+      c.parities.push_back(parseChecked(parseParity, name, "--parities"));
   if (c.addresses.empty() || c.bauds.empty() || c.parities.empty())
     bad("--addresses / --bauds / --parities: empty list");
   c.first_only = p.has("--first");
@@ -143,7 +158,7 @@ void parseDevice(const Parsed& p, CommissionCommand& c) {
       break;
     case BoardFeature::kParity:  // the name was checked by parityWords
       // The stored codes 0 none, 1 even, 2 odd are Parity's order (enum class Parity).
-      c.new_value = static_cast<int>(*parseParity(v, nullptr));
+      c.new_value = static_cast<int>(parseChecked(parseParity, v, "value"));
       break;
     case BoardFeature::kReturnDelay: {
       // A type with a return delay has a step of at least 1 ms (a 0 would divide by zero).
@@ -223,7 +238,7 @@ void parseTable(const Parsed& p, CommissionCommand& c) {
   const Words& w = p.w;
   parseAnyAddress(p, c);
   if (!p.has("table")) bad("table: missing (" + namesIn(kTableNames) + ")");
-  c.table = *parseTableName(w.table, nullptr);  // checked by tableName
+  c.table = parseChecked(parseTableName, w.table, "table");  // checked by tableName
   const bool bits = isBitTable(c.table);
   if (!p.has("start")) bad("start: missing (0-65535)");
   c.start = w.start;

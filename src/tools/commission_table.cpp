@@ -51,6 +51,7 @@ class TableCommands {
     const Result r = s_.transport.execute(readRequest());
     if (!r.ok()) return s_.out.fail(r);
     std::vector<std::string> lines;
+    lines.reserve(r.values.size());
     for (size_t i = 0; i < r.values.size(); ++i)
       lines.push_back(item(static_cast<int>(i)) + ": " + std::to_string(r.values[i]));
     s_.out.result(join(lines, "\n"), fields().add("values", r.values));

@@ -628,9 +628,11 @@ TEST(ChannelIntents, TheNodesContinuousRunReadStoppedIsARestartAndARestoreStarts
   const auto again = t.runsToStartAgain(Verdict::kOutputsChanged, none);
   ASSERT_EQ(again.size(), 1u);
   EXPECT_EQ(again[0].channel, 6);
-  ASSERT_TRUE(again[0].restart.has_value());
-  EXPECT_EQ(again[0].restart->values, (std::vector<uint16_t>{500, 40, 65535}));
-  EXPECT_FALSE(again[0].restart->repeatable);
+  // `if (!...) FAIL()`, not ASSERT_TRUE: clang-tidy 19 sees that FAIL() returns, not ASSERT_TRUE.
+  const auto& restart = again[0].restart;
+  if (!restart) FAIL() << "no restart request";
+  EXPECT_EQ(restart->values, (std::vector<uint16_t>{500, 40, 65535}));
+  EXPECT_FALSE(restart->repeatable);
   EXPECT_TRUE(t.runsToStartAgain(Verdict::kOutputsChanged, fan_runs).empty());
   EXPECT_TRUE(t.runsToStartAgain(Verdict::kNormal, none).empty());
   const OutputTargets levels = t.afterPollTargets(Verdict::kOutputsChanged, none);

@@ -105,13 +105,16 @@ TEST(OutputBatch, ALoneRequestIsOneFc05) {
 TEST(OutputBatch, ABadRequestIsRefusedAsItIsAdded) {
   LcRelay8 board(relays());
   OutputBatch batch;
+  // `if (!...) FAIL()`, not ASSERT_TRUE: clang-tidy 19 sees that FAIL() returns, not ASSERT_TRUE.
   auto bad = batch.add(board, {9}, {true});
-  ASSERT_TRUE(bad->result.has_value());
-  EXPECT_EQ(bad->result->error, ErrorKind::kInvalidArgument);
-  EXPECT_EQ(bad->result->message, "channel: 9 is outside 0-7");
+  const std::optional<Result>& bad_result = bad->result;
+  if (!bad_result) FAIL() << "channel 9 was not refused";
+  EXPECT_EQ(bad_result->error, ErrorKind::kInvalidArgument);
+  EXPECT_EQ(bad_result->message, "channel: 9 is outside 0-7");
   auto twice = batch.add(board, {2, 2}, {true, false});
-  ASSERT_TRUE(twice->result.has_value());
-  EXPECT_EQ(twice->result->message, "channel: 2 is given twice");
+  const std::optional<Result>& twice_result = twice->result;
+  if (!twice_result) FAIL() << "channel 2 given twice was not refused";
+  EXPECT_EQ(twice_result->message, "channel: 2 is given twice");
   auto good = batch.add(board, {1}, {true});
   EXPECT_FALSE(good->result.has_value());
   ScriptedTransport bus;

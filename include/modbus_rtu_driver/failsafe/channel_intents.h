@@ -174,8 +174,9 @@ class ChannelIntents {
   void newCommand(uint8_t channel, CommandSource source);
   Intent adoptingIntent(uint8_t channel, CommandSource source, Clock::time_point now) const;
   Expectation expectedLocked(uint8_t channel, Clock::time_point t) const;
-  // How near a timed command's end (`in.ends` set) either level may show (docs/failsafe.md).
-  static Clock::duration endSlack(const Intent& in);
+  // How near the end of a timed command given at `at` and ending at `ends` either level may show
+  // (docs/failsafe.md).
+  static Clock::duration endSlack(Clock::time_point at, Clock::time_point ends);
   // The device runs a PWM on the channel (as read now): the channel is the device's unless a
   // timed command of the node's still runs there.
   void deviceRunsLocked(uint8_t channel, Clock::time_point now);

@@ -42,6 +42,7 @@ const LinkType* LinkTypes::find(const std::string& port) const {
 
 std::vector<const LinkType*> LinkTypes::types() const {
   std::vector<const LinkType*> out;
+  out.reserve(by_scheme_.size());
   for (const auto& kv : by_scheme_) out.push_back(kv.second);
   std::stable_sort(out.begin(), out.end(), [](const LinkType* a, const LinkType* b) {
     return std::strlen(a->scheme) < std::strlen(b->scheme);

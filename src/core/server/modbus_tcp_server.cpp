@@ -233,25 +233,35 @@ void ModbusTcpServer::closeClient(ClientId id) {
 }
 
 void ModbusTcpServer::receive(ClientId id) {
+  // recv runs without the lock: replies from other threads are not held up by it. The fd stays
+  // this client's meanwhile, as only this thread (the poll loop) closes clients.
+  int fd = -1;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = clients_.find(id);
+    if (it == clients_.end()) return;
+    if (it->second.read_closed) {  // POLLHUP / POLLERR after its FIN: the connection is gone
+      closeClient(id);
+      return;
+    }
+    fd = it->second.fd;
+  }
+  uint8_t buf[1024];
+  const ssize_t n = recv(fd, buf, sizeof buf, 0);
+  const int err = errno;
   std::vector<Bytes> frames;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     auto it = clients_.find(id);
     if (it == clients_.end()) return;
     Client& c = it->second;
-    uint8_t buf[1024];
-    if (c.read_closed) {  // POLLHUP / POLLERR after its FIN: the connection is gone
-      closeClient(id);
-      return;
-    }
-    const ssize_t n = recv(c.fd, buf, sizeof buf, 0);
     if (n == 0 && (c.unanswered > 0 || !c.output.empty())) {
       // FIN after its requests (a half-close): their answers still go out, then it is closed.
       c.read_closed = true;
       ++stats_.half_closed;
       return;
     }
-    if (n == 0 || (n < 0 && errno != EAGAIN && errno != EINTR)) {
+    if (n == 0 || (n < 0 && err != EAGAIN && err != EINTR)) {
       closeClient(id);  // the client went (or its socket failed): its pending replies go too
       return;
     }

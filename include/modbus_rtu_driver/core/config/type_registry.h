@@ -43,11 +43,13 @@ class TypeRegistry {
   // In alphabetical order, the order messages list them in.
   std::vector<const DeviceDescriptor*> types() const {
     std::vector<const DeviceDescriptor*> out;
+    out.reserve(entries_.size());
     for (const auto& kv : entries_) out.push_back(kv.second.type);
     return out;
   }
   std::vector<std::string> names() const {
     std::vector<std::string> out;
+    out.reserve(entries_.size());
     for (const auto& kv : entries_) out.push_back(kv.first);
     return out;
   }

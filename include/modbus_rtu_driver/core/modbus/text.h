@@ -37,7 +37,7 @@ std::optional<E> valueIn(const NameTable<E, N>& table, std::string_view name) {
 
 // "a, b, c" (or with another separator): each item as `show` writes it, or as `<<` writes it.
 template <typename Range, typename Show>
-std::string join(const Range& items, std::string_view separator, Show show) {
+std::string join(const Range& items, std::string_view separator, const Show& show) {
   std::string out;
   bool first = true;
   for (const auto& item : items) {
