@@ -24,10 +24,9 @@ std::future<Result> GenericFailsafe::applySafe(const std::string& trigger,
 
 void GenericFailsafe::afterPoll(const Result& poll) {
   if (noProperAnswer(poll.error)) return;
-  // The owed signals, each with its own trigger: one write of all of them, under the oldest
-  // trigger (a signal set since its own trigger is dropped here, and writeSafe checks again).
+  // The owed signals, each with its own trigger, in one write (a signal set since its own
+  // trigger is dropped here, and again in the job for a set that comes before it runs).
   std::vector<size_t> owed;
-  uint64_t oldest = 0;
   for (size_t i = 0; i < owed_since_.size(); ++i) {
     if (owed_since_[i] == 0) continue;
     if (set_at_[i] > owed_since_[i]) {
@@ -35,7 +34,6 @@ void GenericFailsafe::afterPoll(const Result& poll) {
       continue;
     }
     owed.push_back(i);
-    if (oldest == 0 || owed_since_[i] < oldest) oldest = owed_since_[i];
   }
   if (owed.empty()) return;
   // One retry queued; writeSafe owes them again if it fails too.
