@@ -152,11 +152,13 @@ void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
     // The latest start that still ends within the bound.
     w->start_by = clock_.now() + std::chrono::duration_cast<Clock::duration>(
                                      std::chrono::duration<double>(bound_ - ownTransaction(sent)));
+    bool earliest = false;  // the expiry thread sleeps until the earliest: wake it only then
     {
       std::lock_guard<std::mutex> lock(deadlines_mutex_);
+      earliest = deadlines_.empty() || w->start_by < deadlines_.begin()->first;
       deadlines_.emplace(w->start_by, w);
     }
-    clock_.notifyAll(deadlines_cv_);
+    if (earliest) clock_.notifyAll(deadlines_cv_);
   }
   scheduler_.submitShared(
       device,
