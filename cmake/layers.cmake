@@ -17,9 +17,10 @@
 # goes the wrong way a link error, and scripts/check_conventions.sh checks the includes:
 #   core (ROS-free; five libraries, one per folder of src/core: see below)
 #   <- devices (one class per device type) <- failsafe (channel intents) <- node_config (the bus
-#   node's YAML; not core/config, the link, slave and signal settings)
+#   node's YAML; not core/config, the link, slave and signal settings) <- runtime (one bus
+#   composed: its devices, fail-safes, trigger clock, start and stop, share)
 #   <- ros (adapters, node).   sim and tools sit on core (tools also on devices); simulation
-#   (the fail-safe's deterministic simulation) on failsafe and sim.
+#   (the fail-safe's deterministic simulation) on runtime and sim.
 # The executables on these layers: cmake/executables.cmake; the ROS library and the node:
 # cmake/ros_node.cmake; the unit tests: cmake/unit_tests.cmake.
 
@@ -81,6 +82,13 @@ add_library(modbus_rtu_node_config ${MODBUS_RTU_LIBRARY_TYPE} ${node_config_sour
 target_link_libraries(modbus_rtu_node_config PUBLIC modbus_rtu_failsafe)
 layer(modbus_rtu_node_config)
 
+# The bus runtime (ROS-free): the composition root of one bus, which the node and the
+# fail-safe's simulation both run.
+layer_sources(runtime_sources runtime)
+add_library(modbus_rtu_runtime ${MODBUS_RTU_LIBRARY_TYPE} ${runtime_sources})
+target_link_libraries(modbus_rtu_runtime PUBLIC modbus_rtu_node_config)
+layer(modbus_rtu_runtime)
+
 # Simulator (ROS-free): simulated devices, the line on a pty, fault injection, control socket.
 layer_sources(sim_sources sim)
 add_library(modbus_rtu_sim ${MODBUS_RTU_LIBRARY_TYPE} ${sim_sources})
@@ -92,7 +100,7 @@ layer(modbus_rtu_sim)
 # clock; its main (failsafe_simulation_main.cpp) is the includer's.
 layer_sources(simulation_sources simulation)
 add_library(modbus_rtu_simulation ${MODBUS_RTU_LIBRARY_TYPE} ${simulation_sources})
-target_link_libraries(modbus_rtu_simulation PUBLIC modbus_rtu_failsafe modbus_rtu_sim)
+target_link_libraries(modbus_rtu_simulation PUBLIC modbus_rtu_runtime modbus_rtu_sim)
 layer(modbus_rtu_simulation)
 
 # Commissioning tool (ROS-free): a library the unit tests use (its main is the includer's).

@@ -18,8 +18,9 @@ if out=$(cd "$REPO" && catkin_lint --strict --ignore unknown_package . 2>&1); th
 else
   echo "$out"; junit catkin_lint_strict "catkin_lint found problems"; status=1
 fi
-# The layers include only downwards: core <- devices <- failsafe <- node_config <- ros; sim and
-# tools never ROS; simulation (the fail-safe's deterministic simulation) sits on failsafe and sim.
+# The layers include only downwards: core <- devices <- failsafe <- node_config <- runtime <- ros;
+# sim and tools never ROS; simulation (the fail-safe's deterministic simulation) sits on runtime
+# and sim.
 # (The build links each library only on the ones below, with --no-undefined.)
 layering=""
 forbid() {  # layer directory, pattern of includes it must not have
@@ -27,18 +28,19 @@ forbid() {  # layer directory, pattern of includes it must not have
   hits=$(cd "$REPO" && grep -rnE "#include [<\"]($2)" "src/$1" "include/modbus_rtu_driver/$1" 2>/dev/null || true)
   [ -z "$hits" ] || layering+="$1 reaches up: $hits; "
 }
-forbid core 'ros/|modbus_rtu_driver/(devices|failsafe|node_config|ros|sim|simulation|tools)/|modbus_rtu_driver/[A-Z]'
+forbid core 'ros/|modbus_rtu_driver/(devices|failsafe|node_config|runtime|ros|sim|simulation|tools)/|modbus_rtu_driver/[A-Z]'
 # Inside core, the jobs go one way too: modbus <- config <- link <- bus <- server.
 forbid core/modbus 'modbus_rtu_driver/core/(config|link|bus|server)/'
 forbid core/config 'modbus_rtu_driver/core/(link|bus|server)/'
 forbid core/link 'modbus_rtu_driver/core/(bus|server)/'
 forbid core/bus 'modbus_rtu_driver/core/server/'
-forbid devices 'ros/|modbus_rtu_driver/(failsafe|node_config|ros|sim|simulation|tools)/|modbus_rtu_driver/[A-Z]'
-forbid failsafe 'ros/|modbus_rtu_driver/(node_config|ros|sim|simulation|tools)/|modbus_rtu_driver/[A-Z]'
-forbid node_config 'ros/|modbus_rtu_driver/(ros|sim|simulation|tools)/|modbus_rtu_driver/[A-Z]'
-forbid sim 'ros/|modbus_rtu_driver/(devices|failsafe|node_config|ros|tools|simulation)/|modbus_rtu_driver/[A-Z]'
-forbid tools 'ros/|modbus_rtu_driver/(failsafe|node_config|ros|sim|simulation)/|modbus_rtu_driver/[A-Z]'
-forbid simulation 'ros/|modbus_rtu_driver/(node_config|ros|tools)/|modbus_rtu_driver/[A-Z]'
+forbid devices 'ros/|modbus_rtu_driver/(failsafe|node_config|runtime|ros|sim|simulation|tools)/|modbus_rtu_driver/[A-Z]'
+forbid failsafe 'ros/|modbus_rtu_driver/(node_config|runtime|ros|sim|simulation|tools)/|modbus_rtu_driver/[A-Z]'
+forbid node_config 'ros/|modbus_rtu_driver/(runtime|ros|sim|simulation|tools)/|modbus_rtu_driver/[A-Z]'
+forbid runtime 'ros/|modbus_rtu_driver/(ros|sim|simulation|tools)/|modbus_rtu_driver/[A-Z]'
+forbid sim 'ros/|modbus_rtu_driver/(devices|failsafe|node_config|runtime|ros|tools|simulation)/|modbus_rtu_driver/[A-Z]'
+forbid tools 'ros/|modbus_rtu_driver/(failsafe|node_config|runtime|ros|sim|simulation)/|modbus_rtu_driver/[A-Z]'
+forbid simulation 'ros/|modbus_rtu_driver/(ros|tools)/|modbus_rtu_driver/[A-Z]'
 if [ -z "$layering" ]; then
   junit layering_includes_go_down ""
 else

@@ -91,7 +91,7 @@ PHASES+=("$(printf '%5d s  %5d s  %s' $((${background_end:-0} - BACKGROUND_START
 # (scripts/simulate.sh for hours); and the ROS-free unit tests and the node again under
 # AddressSanitizer + UndefinedBehaviorSanitizer (one test binary at a time).
 mkdir -p "$WS/build/test_results/simulation"
-"$WS/devel/lib/modbus_rtu_driver/failsafe_simulation" --seed 1 --seconds 60 --quiet \
+"$WS/devel/lib/modbus_rtu_driver/failsafe_simulation" --seed 1 --seconds 60 --quiet --require-coverage \
   --cases "$WS/build/test_results/simulation" \
   --junit "$WS/build/test_results/simulation/failsafe_simulation.xml" >"$WS/simulation.log" 2>&1 &
 simulation=$!

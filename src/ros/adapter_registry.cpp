@@ -7,10 +7,10 @@ TypeRegistry<AdapterFactory>& adapterClasses() {
   return registry;
 }
 
-std::unique_ptr<DeviceAdapter> createAdapter(std::shared_ptr<Device> device,
-                                             BusScheduler& scheduler, const ros::NodeHandle& node) {
-  const auto* entry = adapterClasses().find(device->type());
-  return entry ? entry->make(std::move(device), scheduler, node) : nullptr;
+std::unique_ptr<DeviceAdapter> createAdapter(DeviceUnit& unit, BusScheduler& scheduler,
+                                             const ros::NodeHandle& node) {
+  const auto* entry = adapterClasses().find(unit.device().type());
+  return entry ? entry->make(unit, scheduler, node) : nullptr;
 }
 
 }  // namespace modbus_rtu_driver

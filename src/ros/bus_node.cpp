@@ -13,7 +13,6 @@
 #include "modbus_rtu_driver/core/bus/realtime.h"
 #include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/core/link/make_link.h"
-#include "modbus_rtu_driver/devices/registry.h"
 #include "modbus_rtu_driver/ros/adapter_registry.h"
 #include "modbus_rtu_driver/ros/publish_shared.h"
 #include "modbus_rtu_driver/ros/yaml_params.h"
@@ -23,93 +22,49 @@ namespace modbus_rtu_driver {
 BusNode::BusNode(const ros::NodeHandle& private_nh) : nh_(private_nh) {}
 
 BusNode::~BusNode() {
-  // The bus thread calls into the adapters and the share: stop it before they go.
-  if (share_) share_->stop();
-  if (scheduler_) scheduler_->stop();
+  // The bus thread calls into the adapters and the share: the runtime (the share, then the bus)
+  // stops before they go.
+  runtime_.reset();
   if (publish_queue_) publish_queue_->stop();  // what the bus thread left to publish
 }
 
+// ~failsafe, the heartbeat subscriptions (any message type) and the deadline timer; the
+// decisions are the runtime's.
 void BusNode::startFailsafe() {
   failsafe_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 10, true);
   ros::NodeHandle topics;  // heartbeat topics resolve in the node's namespace
-  double shortest = 0.5;
-  bool deadlines = false;  // no heartbeat and no command timeout: no timer at all
-  auto watch = [&](const std::string& topic, double timeout, Watchdog* dog) {
+  auto watch = [&](const std::string& topic, Watchdog* dog) {
     heartbeat_subs_.push_back(topics.subscribe<topic_tools::ShapeShifter>(
         topic, 1, [dog](const topic_tools::ShapeShifter::ConstPtr&) { dog->feed(); }));
-    shortest = std::min(shortest, timeout);
-    deadlines = true;
   };
-  if (!config_.heartbeat_topic.empty()) {
-    bus_heartbeat_ = std::make_unique<Watchdog>(config_.heartbeat_timeout);
-    watch(config_.heartbeat_topic, config_.heartbeat_timeout, bus_heartbeat_.get());
-  }
-  for (auto& a : adapters_) {
-    a->setBusHeartbeat(bus_heartbeat_.get(), config_.heartbeat_topic);
+  if (Watchdog* dog = runtime_->busHeartbeat()) watch(config_.heartbeat_topic, dog);
+  for (const auto& u : runtime_->units())
+    if (Watchdog* dog = u->failsafe().heartbeat())
+      watch(u->failsafe().config().heartbeat_topic, dog);
+  for (auto& a : adapters_)
     a->setFailsafeSink([this](const FailsafeEvent& e) {
       postOrRun(rosPublishing(), [this, e] { publishShared(failsafe_pub_, e); });
     });
-    const FailsafeConfig& fs = a->failsafeConfig();
-    if (a->heartbeat()) watch(fs.heartbeat_topic, fs.heartbeat_timeout, a->heartbeat());
-    for (double s : fs.command_timeout) {
-      if (s <= 0) continue;
-      shortest = std::min(shortest, s);
-      deadlines = true;
-    }
-  }
-  if (!deadlines) return;
-  // Deadlines are checked at a tenth of the shortest timeout: a trigger fires at most 10 % late.
+  if (runtime_->checkPeriod() <= 0) return;  // no heartbeat and no command timeout
   failsafe_timer_ =
-      nh_.createSteadyTimer(ros::WallDuration(std::max(0.005, shortest / 10)),
-                            [this](const ros::SteadyTimerEvent&) { checkDeadlines(); });
-}
-
-void BusNode::checkDeadlines() {
-  // Devices that answer first: the bus runs the safe writes in the order they are queued, and a
-  // silent device's would hold the others' back by response_timeout x (retries + 1) per frame.
-  const std::vector<DeviceAdapter*> order = answeringFirst();
-  if (bus_heartbeat_ && bus_heartbeat_->expired()) {
-    const std::string reason = "no message on " + config_.heartbeat_topic + " within " +
-                               numberText(config_.heartbeat_timeout) + " s";
-    for (DeviceAdapter* a : order) a->applySafe("heartbeat", reason);
-  }
-  for (DeviceAdapter* a : order) a->checkDeadlines();
-}
-
-std::vector<DeviceAdapter*> BusNode::answeringFirst() const {
-  std::vector<DeviceAdapter*> order;
-  order.reserve(adapters_.size());
-  for (const auto& a : adapters_) order.push_back(a.get());
-  std::stable_sort(order.begin(), order.end(), [this](DeviceAdapter* x, DeviceAdapter* y) {
-    return scheduler_->health(x->name()).consecutive_failures == 0 &&
-           scheduler_->health(y->name()).consecutive_failures > 0;
-  });
-  return order;
-}
-
-void BusNode::externalWrite(const Request& request, const Result& result, CommandSource source) {
-  for (auto& a : adapters_)
-    if (request.slave == kBroadcastAddress || a->address() == request.slave)
-      a->externalWrite(request, result, source);
+      nh_.createSteadyTimer(ros::WallDuration(runtime_->checkPeriod()),
+                            [this](const ros::SteadyTimerEvent&) { runtime_->checkDeadlines(); });
 }
 
 void BusNode::shutdown() {
-  if (!scheduler_) return;
+  if (!runtime_) return;
   failsafe_timer_.stop();
-  if (share_) share_->stop();  // no client request after the safe states, queued ones refused
-  // Safe states before the port closes, bounded: a device that cannot be reached is logged and
-  // the node exits anyway. The whole stop fits in roslaunch's 15 s between SIGINT and SIGTERM
-  // (SIGKILL 2 s later): shutdown_timeout is at most kMaxShutdownTimeout, and the bus thread,
-  // which first finishes the transaction it is in, gets kBusStopGrace more.
+  // The runtime closes the share (no client request after the safe states, queued ones
+  // refused) and queues the safe writes, devices that answer first. Bounded: a device that
+  // cannot be reached is logged and the node exits anyway. The whole stop fits in roslaunch's
+  // 15 s between SIGINT and SIGTERM (SIGKILL 2 s later): shutdown_timeout is at most
+  // kMaxShutdownTimeout, and the bus thread, which first finishes the transaction it is in,
+  // gets kBusStopGrace more.
   const auto start = std::chrono::steady_clock::now();
   const auto deadline = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                     std::chrono::duration<double>(config_.shutdown_timeout));
-  // Devices that answer first: one that does not (its last transaction failed) would take
-  // response_timeout x (retries + 1) per frame and leave the others' safe writes waiting.
-  std::vector<std::pair<std::string, std::future<Result>>> pending;
-  for (DeviceAdapter* a : answeringFirst())
-    if (a->hasSafeStates()) pending.emplace_back(a->name(), a->applySafe("shutdown", "node stops"));
-  for (auto& [name, done] : pending) {
+  runtime_->beginStop();
+  for (auto& [name, done] : runtime_->takeStopWrites()) {
     // rosconsole has shut down with ROS: stderr is what the user sees now.
     if (done.wait_until(deadline) != std::future_status::ready) {
       std::fprintf(stderr,
@@ -123,7 +78,7 @@ void BusNode::shutdown() {
       std::fprintf(stderr, "[ERROR] %s: safe states not reached before exit: %s\n", name.c_str(),
                    r.message.c_str());
   }
-  if (!scheduler_->stopBy(deadline + kBusStopGrace)) {
+  if (!runtime_->stopBus(deadline + kBusStopGrace)) {
     // Still in one transaction (a silent device with long timeouts): waiting on would run into
     // roslaunch's SIGKILL. The port is closed by the kernel as the process ends.
     std::fprintf(stderr,
@@ -170,28 +125,28 @@ bool BusNode::start() {
     ROS_FATAL("wire_log: %s", error.c_str());
     return false;
   }
-  scheduler_ = std::make_unique<BusScheduler>(*link_, schedulingOptions());
+  // A share that cannot listen stops the node before the bus is touched (no on_start write).
+  if (config_.share.enabled && !ShareBridge::canStart(config_.share, &error)) {
+    ROS_FATAL("%s", error.c_str());
+    return false;
+  }
   running_timed_ = RunningTimedParameter::onParameterServer(nh_);
-  for (const DeviceConfig& dc : config_.devices) {
-    std::shared_ptr<Device> device = createDevice(dc);  // dc was validated as it was parsed
-    link_->setReplyDelay(device->address(), dc.reply_delay);
-    scheduler_->addDevice(dc.name);
-    auto adapter = createAdapter(device, *scheduler_, nh_);
+  BusRuntime::Options options;
+  options.scheduling = schedulingOptions();
+  options.link = link_.get();
+  options.kept_timed = running_timed_.get();
+  options.info = [](const std::string& line) { ROS_INFO("%s", line.c_str()); };
+  runtime_ = std::make_unique<BusRuntime>(config_, *link_, std::move(options));
+  for (const auto& unit : runtime_->units()) {
+    auto adapter = createAdapter(*unit, runtime_->scheduler(), nh_);
     if (!adapter) {
-      ROS_FATAL("devices/%s/type: '%s' has no ROS interface", dc.name.c_str(), dc.type.c_str());
+      ROS_FATAL("devices/%s/type: '%s' has no ROS interface", unit->name().c_str(),
+                unit->device().type());
       return false;
     }
-    adapter->keepTimedIn(*running_timed_);
     adapters_.push_back(std::move(adapter));
   }
-
-  std::map<uint8_t, std::string> by_address;
-  for (const DeviceConfig& dc : config_.devices)
-    by_address[static_cast<uint8_t>(dc.address)] = dc.name;
-  raw_writes_ = std::make_unique<RawWrites>(nh_, *scheduler_, config_.allow_raw_writes, by_address,
-                                            [this](const Request& r, const Result& done) {
-                                              externalWrite(r, done, CommandSource::kRaw);
-                                            });
+  raw_writes_ = std::make_unique<RawWrites>(nh_, *runtime_);
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>();
   diagnostics_->setHardwareID(config_.link.port);
@@ -205,40 +160,24 @@ bool BusNode::start() {
       nh_.createTimer(ros::Duration(config_.diagnostic_period),
                       [this](const ros::TimerEvent&) { diagnostics_->force_update(); });
 
-  // A share that cannot listen stops the node before the bus is touched (no on_start write).
-  if (config_.share.enabled && !ShareBridge::canStart(config_.share, &error)) {
-    ROS_FATAL("%s", error.c_str());
-    return false;
-  }
   startFailsafe();
-  scheduler_->start();
   // on_start: safe puts those outputs there before any command is taken (and before the first
   // poll, so a restart is never seen in them). All are queued at once; none has answered yet.
-  std::vector<std::pair<std::string, std::future<Result>>> starting;
-  for (auto& a : adapters_)
-    if (a->safeOnStart()) starting.emplace_back(a->name(), a->applySafe("start", "on_start: safe"));
-  for (auto& [name, done] : starting)
+  runtime_->beginStart();
+  for (auto& [name, done] : runtime_->takeStartWrites())
     if (done.wait_for(std::chrono::duration<double>(config_.shutdown_timeout + 5.0)) !=
         std::future_status::ready)
       ROS_ERROR("%s: start-up safe states not confirmed in time", name.c_str());
-  // The heartbeats count from here: no message could arrive while start() blocked on those
-  // writes (the spinner runs after it), so a live controller is not taken as lost at start.
-  if (bus_heartbeat_) bus_heartbeat_->feed();
-  for (auto& a : adapters_)
-    if (a->heartbeat()) a->heartbeat()->feed();
   for (auto& a : adapters_) {
     a->setPublishPolicy({config_.publish_on_change, config_.keep_alive});
     a->setPublishQueue(rosPublishing());
     a->start();
   }
-  if (config_.share.enabled) {
-    const Link* link = link_.get();
-    share_ = std::make_unique<ShareBridge>(
-        *scheduler_, config_,
-        [this](const Request& r, const Result& done) {
-          externalWrite(r, done, CommandSource::kShare);
-        },
-        [link](const Request& r) { return link->worstTransactionSeconds(r); });
+  // The heartbeats count from here (no message could arrive while start() blocked on those
+  // writes: the spinner runs after it), then the polls, which publish on the topics above.
+  runtime_->finishStart();
+  if (ShareGateway* gateway = runtime_->share()) {
+    share_ = std::make_unique<ShareBridge>(*gateway, config_.share);
     if (!share_->start(&error)) {
       ROS_FATAL("%s", error.c_str());  // names the share's key
       return false;
@@ -319,11 +258,12 @@ void BusNode::diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const LinkStats s = link_->stats();
   const uint64_t recent = recentLineErrors(s);
   logRecoveries();
-  if (!scheduler_->connected()) {
-    status.summary(DiagnosticStatus::ERROR, "port not open: " + scheduler_->connectionError());
+  if (!runtime_->scheduler().connected()) {
+    status.summary(DiagnosticStatus::ERROR,
+                   "port not open: " + runtime_->scheduler().connectionError());
     // A wrong port or a second node on it must show in the log, not only in /diagnostics.
     ROS_ERROR_THROTTLE(10.0, "bus %s: port not open: %s (retrying with backoff)",
-                       config_.link.port.c_str(), scheduler_->connectionError().c_str());
+                       config_.link.port.c_str(), runtime_->scheduler().connectionError().c_str());
   } else if (logged_all_silent_) {
     status.summary(DiagnosticStatus::ERROR, silentBusAdvice());
   } else if (recent > 0) {
@@ -382,15 +322,16 @@ std::string BusNode::silentBusAdvice() const {
 // Recoveries are logged as they are seen (diagnostics thread), so a bus that heals itself
 // still leaves a trace; and a bus where nobody answers says what to check, once.
 void BusNode::logRecoveries() {
-  const PortReopens reopens = scheduler_->portReopens();
+  const PortReopens reopens = runtime_->scheduler().portReopens();
   if (reopens.count != logged_reopens_) {
     logged_reopens_ = reopens.count;
     ROS_INFO("bus %s: port open again after %s", config_.link.port.c_str(),
              secondsText(reopens.last_outage_seconds).c_str());
   }
-  const bool all_silent = !adapters_.empty() && scheduler_->connected() &&
-                          std::all_of(adapters_.begin(), adapters_.end(), [this](const auto& a) {
-                            return !scheduler_->health(a->name()).online;
+  const BusScheduler& bus = runtime_->scheduler();
+  const bool all_silent = !adapters_.empty() && bus.connected() &&
+                          std::all_of(adapters_.begin(), adapters_.end(), [&bus](const auto& a) {
+                            return !bus.health(a->name()).online;
                           });
   if (all_silent && !logged_all_silent_)
     ROS_WARN("bus %s: %s", config_.link.port.c_str(), silentBusAdvice().c_str());

@@ -8,48 +8,19 @@
 
 namespace modbus_rtu_driver {
 
-DeviceAdapter::DeviceAdapter(std::shared_ptr<Device> device, BusScheduler& scheduler,
-                             const ros::NodeHandle& node)
-    : device_(std::move(device)),
-      scheduler_(scheduler),
-      nh_(node, device_->name()),
-      failsafe_(*device_, scheduler),
-      commands_(*device_, failsafe_, [this](BusScheduler::Job job) {
-        return scheduler_.submit(device_->name(), std::move(job));
-      }) {
-  // Here, not in start(): the start-up safe states are reported before start().
-  if (device_->outputCount() > 0) failsafe_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 1, true);
-  failsafe_.setReportSink(
-      [this](const FailsafeReport& r) { publishReport(r, r.text(), failsafe_pub_); });
-  failsafe_.setOutputsWritten([this] { publishOutputs(); });
-  commands_.setWritten(
-      [this](const std::vector<uint8_t>&, const std::vector<bool>&) { publishOutputs(); });
-}
-
-// A node killed during a flash (or restarted by roslaunch's respawn) must not take the flash's
-// end for a restart: the running timed commands are kept on the parameter server, whose life is
-// the robot's roscore, with their ends in wall-clock time, and the next node resumes them before
-// its first poll (issue #32 item 6; docs/failsafe.md, "What the node cannot do").
-void DeviceAdapter::keepTimedIn(RunningTimedParameter& parameter) {
-  if (device_->outputCount() == 0) return;
-  const std::vector<TimedIntent> running = resumeTimedCommands(
-      parameter.read(device_->name()), ros::WallTime::now().toSec(), device_->outputCount());
-  if (!running.empty()) {
-    std::string told;
-    for (const TimedIntent& t : running)
-      told += (told.empty() ? "" : ", ") + device_->outputNames()[t.channel] + " (" +
-              secondsText(t.seconds) + " left)";  // only commands with an end are kept
-    failsafe_.resumeTimed(running);
-    ROS_INFO("%s: the previous node's timed commands still run: %s", device_->name().c_str(),
-             told.c_str());
-  }
-  // From the thread that confirmed the command (the bus thread), only while a timed command
-  // runs or just stopped running, also for the shutdown's safe writes; the parameter's own
-  // thread writes it.
-  failsafe_.setTimedChanged(
-      [&parameter, name = device_->name()](const std::vector<TimedIntent>& now_running) {
-        parameter.keep(name, keepTimedCommands(now_running, ros::WallTime::now().toSec()));
-      });
+DeviceAdapter::DeviceAdapter(DeviceUnit& unit, BusScheduler& scheduler, const ros::NodeHandle& node)
+    : unit_(unit), device_(unit.sharedDevice()), scheduler_(scheduler), nh_(node, device_->name()) {
+  // Here, not in start(): the start-up safe states are reported before start(). Latched: this
+  // device's newest event, for a late subscriber.
+  if (device_->outputCount() > 0 || unit_.hasSafeStates())
+    failsafe_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 1, true);
+  DeviceUnit::Observers o;
+  o.polled = [this](size_t group, const Result& r) { onPoll(group, r); };
+  o.changed = [this] { onChanged(); };
+  o.report = [this](const FailsafeReport& r, const std::string& text) {
+    publishReport(r, text, failsafe_pub_);
+  };
+  unit_.observe(std::move(o));
 }
 
 void DeviceAdapter::start() {
@@ -76,28 +47,15 @@ void DeviceAdapter::start() {
   if (n > 0)
     services_.push_back(nh_.advertiseService("set_outputs", &DeviceAdapter::onSetOutputs, this));
   advertise();
-  addPolls();
 }
 
-void DeviceAdapter::addPolls() {
-  auto device = device_;
-  scheduler_.addPoll(
-      device_->name(), device_->config().poll_rate,
-      [this, device](Transport& t) {
-        failsafe_.pollStarting();
-        return device->poll(t);
-      },
-      [this](const Result& r) { onPoll(r); });
-}
-
-void DeviceAdapter::onPoll(const Result& result) {
+void DeviceAdapter::onPoll(size_t /*group*/, const Result& result) {
   if (result.ok()) {
     publishOutputs();
     if (inputs_)
       publishLater([this, states = device_->inputs(), stamp = ros::Time::now()] {
         inputs_->publish(states, stamp);
       });
-    failsafe_.afterPoll();
   } else if (offline()) {
     publishLater([this] {
       if (outputs_) outputs_->markStale();
@@ -132,7 +90,7 @@ std::string DeviceAdapter::answer(const Result& result, const std::string& what)
 bool DeviceAdapter::onSet(uint8_t channel, std_srvs::SetBool::Request& req,
                           std_srvs::SetBool::Response& res) {
   const bool state = req.data;
-  const Result r = commands_.write({channel}, {state}).get();
+  const Result r = unit_.set({channel}, {state}).get();
   res.success = r.ok();
   res.message = answer(r, device_->outputNames()[channel] + (state ? " on" : " off"));
   return true;
@@ -141,7 +99,7 @@ bool DeviceAdapter::onSet(uint8_t channel, std_srvs::SetBool::Request& req,
 bool DeviceAdapter::onSetOutputs(SetOutputs::Request& req, SetOutputs::Response& res) {
   std::vector<uint8_t> channels(req.channels.begin(), req.channels.end());
   std::vector<bool> states(req.states.begin(), req.states.end());
-  const Result r = commands_.write(channels, states).get();
+  const Result r = unit_.set(channels, states).get();
   res.success = r.ok();
   res.message = answer(r, std::to_string(channels.size()) + " output(s) set");
   return true;
@@ -150,10 +108,12 @@ bool DeviceAdapter::onSetOutputs(SetOutputs::Request& req, SetOutputs::Response&
 // Commands join the same batch as service writes (newest state per channel wins, one frame); a
 // topic's caller gets no answer, so a write that failed is logged.
 void DeviceAdapter::onCommand(uint8_t channel, const std_msgs::Bool::ConstPtr& msg) {
-  commands_.command(channel, msg->data, [this](const Result& w) {
-    if (!w.ok())
-      ROS_WARN_THROTTLE(1.0, "%s: command failed: %s", device_->name().c_str(), w.message.c_str());
-  });
+  unit_.command(channel, msg->data, {0, [this](const Result& w) {
+                                       if (!w.ok())
+                                         ROS_WARN_THROTTLE(1.0, "%s: command failed: %s",
+                                                           device_->name().c_str(),
+                                                           w.message.c_str());
+                                     }});
 }
 
 // Going offline and coming back are logged when they happen, and an offline device again every
@@ -246,7 +206,7 @@ void DeviceAdapter::publishReport(const FailsafeReport& r, const std::string& te
 }
 
 void DeviceAdapter::diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status) {
-  const FailsafeStatus s = failsafe_.status();
+  const FailsafeStatus s = unit_.failsafe().status();
   status.add("safe states", s.safe_states);
   status.add("on_restart", s.on_restart);
   if (s.bus_heartbeat_lost) status.add("bus heartbeat", *s.bus_heartbeat_lost ? "lost" : "alive");

@@ -23,24 +23,15 @@ namespace {
 
 class GenericAdapter : public DeviceAdapter {
  public:
-  GenericAdapter(std::shared_ptr<Device> device, BusScheduler& scheduler,
-                 const ros::NodeHandle& node)
-      : DeviceAdapter(std::move(device), scheduler, node), safe_(generic(), scheduler) {
-    safe_.setReportSink(
-        [this](const FailsafeReport& r) { publishReport(r, safe_.text(r), event_pub_); });
-    safe_.setSignalsWritten([this] {
-      if (!pubs_.empty()) publishSignals(false);  // not before start() (on_start: safe)
-    });
-    // Latched: this device's newest fail-safe event, for a late subscriber (as the node's
-    // ~failsafe, which holds only the newest event of all devices). Advertised here, before
-    // on_start's safe write, so that its event is kept too.
-    if (safe_.hasSafeValues()) event_pub_ = nh_.advertise<FailsafeEvent>("failsafe", 1, true);
-  }
+  // The base advertises D/failsafe (latched) in its constructor, before on_start's safe write,
+  // so that its event is kept for a late subscriber too.
+  using DeviceAdapter::DeviceAdapter;
 
   void advertise() override {
     const auto& signals = generic().signals();
     published_.assign(signals.size(), std::nullopt);
     warned_.assign(signals.size(), false);
+    polled_.assign(generic().groups().size(), false);
     all_pub_ = nh_.advertise<SignalValues>("signals", 50);
     for (size_t i = 0; i < signals.size(); ++i) {
       const SignalConfig& s = signals[i];
@@ -83,26 +74,6 @@ class GenericAdapter : public DeviceAdapter {
     }
   }
 
-  // One poll per rate group with signals in it: fast values do not drag slow ones along.
-  void addPolls() override {
-    polled_.assign(generic().groups().size(), false);
-    for (size_t g = 0; g < generic().groups().size(); ++g) {
-      if (generic().groups()[g].signals.empty()) continue;
-      auto device = device_;
-      scheduler_.addPoll(
-          device_->name(), generic().groups()[g].rate,
-          [device, g](Transport& t) {
-            return static_cast<GenericDevice&>(*device).pollGroup(t, g);
-          },
-          [this, g](const Result& r) {
-            polled_[g] = true;
-            rates_[g].record(std::chrono::steady_clock::now());
-            onPoll(r);
-            warnRefusedOnce(g, r);
-          });
-    }
-  }
-
   // The scheduler counts every group's polls under the device's name (a sum of different
   // rates that says nothing): each group's own rates instead.
   void diagnosePollRate(diagnostic_updater::DiagnosticStatusWrapper& status,
@@ -116,27 +87,18 @@ class GenericAdapter : public DeviceAdapter {
     }
   }
 
-  // Fail-safe: the signals' safe values stand for the outputs' safe states
-  // (failsafe/generic_failsafe.h). The triggers are the base's and the node's (shutdown,
-  // heartbeat, on_start); they reach the device here.
-  bool hasSafeStates() const override { return safe_.hasSafeValues(); }
-
-  std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
-                                const std::vector<uint8_t>&) override {
-    return safe_.applySafe(trigger, reason);
-  }
-
   // Only what a generic device has: no output safe states, no on_restart, no restart count.
   void diagnoseFailsafe(diagnostic_updater::DiagnosticStatusWrapper& status) override {
-    if (!hasSafeStates()) return;  // no fail-safe at all
+    const GenericFailsafe& safe = *unit_.genericSafe();
+    if (!safe.hasSafeValues()) return;  // no fail-safe at all
     status.add("safe values", join(generic().safeSignals(), ", ",
-                                   [this](size_t i) { return safe_.describeSafeValue(i); }));
-    const FailsafeConfig& fs = failsafeConfig();
+                                   [&safe](size_t i) { return safe.describeSafeValue(i); }));
+    const FailsafeConfig& fs = unit_.failsafe().config();
     status.add("on_start", fs.on_start_safe ? "safe" : "keep");
     if (!fs.heartbeat_topic.empty())
       status.add("device heartbeat",
                  fs.heartbeat_topic + " within " + numberText(fs.heartbeat_timeout) + " s");
-    const GenericFailsafe::Status s = safe_.status();
+    const GenericFailsafe::Status s = safe.status();
     status.add("fail-safe events", s.events);
     status.add("last fail-safe event", s.last_event.empty() ? "none" : s.last_event);
     if (!s.active.empty())
@@ -166,22 +128,20 @@ class GenericAdapter : public DeviceAdapter {
   GenericDevice& generic() const { return static_cast<GenericDevice&>(*device_); }
 
   // No outputs (the base's topics stay silent, no restart detection): only the signals. Safe
-  // values not reached (the device was silent) are written once it answers again.
-  void onPoll(const Result& r) override {
+  // values not reached (the device was silent) are written once it answers again (the unit).
+  void onPoll(size_t group, const Result& r) override {
+    polled_[group] = true;
+    rates_[group].record(std::chrono::steady_clock::now());
     publishSignals(true);
-    safe_.afterPoll(r);
+    warnRefusedOnce(group, r);
   }
 
-  Result write(size_t i, double value) {
-    std::vector<uint16_t> words;
-    const std::string problem = generic().encodeWrite(i, value, &words);
-    if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
-    return runOnBus([this, i, value](Transport& t) {
-      Result r = safe_.write(t, i, value);
-      publishSignals(false);
-      return r;
-    });
+  // A set, or the safe values written: the signals' topics (not before start(): on_start).
+  void onChanged() override {
+    if (!pubs_.empty()) publishSignals(false);
   }
+
+  Result write(size_t i, double value) { return unit().writeSignal(i, value).get(); }
 
   // Bus thread: each signal's topic when its value changed, D/signals after a poll.
   void publishSignals(bool after_poll) {
@@ -247,9 +207,7 @@ class GenericAdapter : public DeviceAdapter {
   std::vector<bool> warned_;                      // by signal: refused and logged; bus thread
   // By poll group: recorded on the bus thread, read by diagnostics (each locks itself).
   std::vector<RateMeter> rates_ = std::vector<RateMeter>(generic().groups().size());
-  GenericFailsafe safe_;
-  ros::Publisher event_pub_;  // D/failsafe (latched), from the constructor on
-  std::mutex splits_mutex_;   // the two below: copies for diagnostics
+  std::mutex splits_mutex_;  // the two below: copies for diagnostics
   std::vector<std::string> splits_;
   std::string unread_;
 };

@@ -17,35 +17,19 @@ class LcRelay8Adapter : public DeviceAdapter {
   }
 
  private:
-  LcRelay8& board() { return static_cast<LcRelay8&>(*device_); }
-
   bool onPulse(Pulse::Request& req, Pulse::Response& res) {
-    const std::string problem = LcRelay8::validatePulse(req.channel, req.duration);
-    if (!problem.empty()) {
-      res.success = false;
-      res.message = device_->name() + ": " + problem;
-      return true;
-    }
     const uint8_t channel = req.channel;
     const bool state = req.state;
     const double duration = req.duration;
-    // Flash-close: on for `duration`, then off by itself; flash-open the other way round.
-    const Result r =
-        commands()
-            .timed(
-                TimedIntent{channel, state, !state, duration},
-                [this, channel, state, duration](Transport& t) {
-                  return board().pulse(t, channel, state, duration);
-                },
-                // The board changed the output by itself: read it back so the topics show it now.
-                [this](Transport& t) {
-                  if (board().poll(t).ok()) publishOutputs();
-                })
-            .get();
+    // Checked there (refused: nothing queued). Flash-close: on for `duration`, then off by
+    // itself; flash-open the other way round.
+    const Result r = unit().pulse(channel, state, duration).get();
     res.success = r.ok();
-    res.message =
-        answer(r, std::string(state ? "flash-close " : "flash-open ") +
-                      device_->outputNames()[channel] + " for " + numberText(duration) + " s");
+    // Refused, the channel may be outside the board's: the refusal names it.
+    res.message = r.ok() ? answer(r, std::string(state ? "flash-close " : "flash-open ") +
+                                         device_->outputNames()[channel] + " for " +
+                                         numberText(duration) + " s")
+                         : answer(r, "");
     return true;
   }
 

@@ -23,14 +23,15 @@ class Ld58a08Adapter : public DeviceAdapter {
  private:
   Ld58a08& board() { return static_cast<Ld58a08&>(*device_); }
 
-  void onPoll(const Result& result) override {
-    DeviceAdapter::onPoll(result);
+  void onPoll(size_t group, const Result& result) override {
+    DeviceAdapter::onPoll(group, result);
     if (result.ok()) publishPwm();
   }
 
-  // Bus thread: after a confirmed PWM command, what the board runs now.
-  void readPwmAndPublish(Transport& t) {
-    if (board().readPwm(t).ok()) publishPwm();
+  // After a command (a PWM command's read back included): what the board runs now.
+  void onChanged() override {
+    DeviceAdapter::onChanged();
+    publishPwm();
   }
 
   // Bus thread: publish the PWM settings when they changed.
@@ -65,39 +66,16 @@ class Ld58a08Adapter : public DeviceAdapter {
     s.frequency = req.frequency;
     s.duty_cycle = req.duty_cycle;
     s.duration = req.duration;
-    const std::string problem = Ld58a08::validatePwm(s);
-    if (!problem.empty()) {
-      res.success = false;
-      res.message = device_->name() + ": " + problem;
-      return true;
-    }
-    // The PWM drives the output from now on: for a burst or a timed run until its end, then
-    // off; a continuous run until stopped.
-    const Result r =
-        commands()
-            .timed(
-                board().pwmIntent(s), [this, s](Transport& t) { return board().setPwm(t, s); },
-                [this](Transport& t) { readPwmAndPublish(t); })
-            .get();
+    // Checked there (refused: nothing queued); the PWM drives the output from now on.
+    const Result r = unit().setPwm(s).get();
     res.success = r.ok();
     res.message = answer(r, "PWM set on channel " + std::to_string(s.channel));
     return true;
   }
 
   bool onStopPwm(StopPwm::Request& req, StopPwm::Response& res) {
-    if (req.channel >= Ld58a08::kChannels) {
-      res.success = false;
-      res.message =
-          device_->name() + ": channel: " + std::to_string(req.channel) + " is outside 0-7";
-      return true;
-    }
     const uint8_t channel = req.channel;
-    const Result r =
-        commands()
-            .stopTimed(
-                channel, [this, channel](Transport& t) { return board().stopPwm(t, channel); },
-                [this](Transport& t) { readPwmAndPublish(t); })
-            .get();
+    const Result r = unit().stopPwm(channel).get();
     res.success = r.ok();
     res.message = answer(r, "PWM stopped on channel " + std::to_string(channel));
     return true;

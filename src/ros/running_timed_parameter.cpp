@@ -1,10 +1,15 @@
 #include "modbus_rtu_driver/ros/running_timed_parameter.h"
 
 #include <pthread.h>
+#include <ros/time.h>
 
 #include <utility>
 
 namespace modbus_rtu_driver {
+
+double RunningTimedParameter::seconds() const {
+  return ros::WallTime::now().toSec();
+}
 
 namespace {
 

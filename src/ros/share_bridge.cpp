@@ -2,25 +2,12 @@
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
 
-#include <map>
+#include <utility>
 
 namespace modbus_rtu_driver {
 
-ShareBridge::ShareBridge(BusScheduler& scheduler, const BusConfig& config,
-                         std::function<void(const Request&, const Result&)> wrote,
-                         ShareGateway::TransactionTime transaction_time)
-    : config_(config.share) {
-  std::map<uint8_t, std::string> device_at;
-  for (const DeviceConfig& d : config.devices) device_at[static_cast<uint8_t>(d.address)] = d.name;
-  gateway_ = std::make_unique<ShareGateway>(
-      scheduler, config_,
-      [device_at](uint8_t slave) {
-        auto it = device_at.find(slave);
-        return it == device_at.end() ? std::string() : it->second;
-      },
-      std::move(transaction_time));
-  gateway_->onWriteDone(std::move(wrote));
-}
+ShareBridge::ShareBridge(ShareGateway& gateway, ShareConfig config)
+    : gateway_(gateway), config_(std::move(config)) {}
 
 // Errors name the key to change: a second bus left on the default listen address (1502) is the
 // usual cause of a taken port (docs/share.md, "Several buses").
@@ -35,8 +22,8 @@ std::string startError(const ShareConfig& config, bool in_use, const std::string
 
 bool ShareBridge::start(std::string* error) {
   std::string why;
-  if (gateway_->start(&why)) return true;
-  if (error) *error = startError(config_, gateway_->server().addressInUse(), why);
+  if (gateway_.start(&why)) return true;
+  if (error) *error = startError(config_, gateway_.server().addressInUse(), why);
   return false;
 }
 
@@ -50,24 +37,20 @@ bool ShareBridge::canStart(const ShareConfig& config, std::string* error) {
   return false;
 }
 
-void ShareBridge::stop() {
-  gateway_->stop();
-}
-
 void ShareBridge::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   using diagnostic_msgs::DiagnosticStatus;
-  const ModbusTcpServer::Stats s = gateway_->server().stats();
-  const std::string where = config_.server.host + ":" + std::to_string(gateway_->server().port());
+  const ModbusTcpServer::Stats s = gateway_.server().stats();
+  const std::string where = config_.server.host + ":" + std::to_string(gateway_.server().port());
   status.summary(DiagnosticStatus::OK,
                  "Modbus TCP on " + where + ", " + std::to_string(s.connected) + " client(s)");
   status.add("listen", where);
   status.add("read only", config_.read_only ? "yes" : "no");
   status.add("clients", s.connected);
   status.add("max clients", config_.server.max_clients);
-  status.add("queued", gateway_->queued());
+  status.add("queued", gateway_.queued());
   status.add("max queue", config_.max_queue);
-  status.add("answer bound [s]", gateway_->answerBound());
-  status.add("answered 0B at the bound (unsent)", gateway_->expired());
+  status.add("answer bound [s]", gateway_.answerBound());
+  status.add("answered 0B at the bound (unsent)", gateway_.expired());
   status.add("accepted", s.accepted);
   status.add("refused (not allowed)", s.refused_not_allowed);
   status.add("refused (too many clients)", s.refused_too_many);

@@ -23,8 +23,8 @@ class YespeedPduAdapter : public DeviceAdapter {
  private:
   YespeedPdu& pdu() { return static_cast<YespeedPdu&>(*device_); }
 
-  void onPoll(const Result& result) override {
-    DeviceAdapter::onPoll(result);
+  void onPoll(size_t group, const Result& result) override {
+    DeviceAdapter::onPoll(group, result);
     // A failed read publishes nothing rather than an old value.
     if (pdu().readingFresh()) {
       const PduReading& r = pdu().reading();

@@ -13,12 +13,13 @@
 #include "modbus_rtu_driver/core/bus/clock.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/runtime/bus_runtime.h"
 #include "modbus_rtu_driver/sim/sim_generic.h"
 #include "modbus_rtu_driver/sim/sim_lc_relay8.h"
 #include "modbus_rtu_driver/sim/sim_ld58a08.h"
 #include "modbus_rtu_driver/sim/sim_yespeed_pdu.h"
+#include "modbus_rtu_driver/simulation/memory_kept_timed.h"
 #include "modbus_rtu_driver/simulation/memory_link.h"
-#include "modbus_rtu_driver/simulation/sim_node.h"
 
 namespace modbus_rtu_driver {
 
@@ -69,6 +70,40 @@ const std::vector<SimInvariant>& simInvariants() {
   return list;
 }
 
+const std::vector<std::string>& simRequiredCoverage() {
+  static const std::vector<std::string> rows = [] {
+    std::vector<std::string> r;
+    for (const char* k :
+         {"wait", "set", "set2", "command", "pulse", "pwm", "pwm_stop", "share05", "share15",
+          "raw05", "raw15", "share16_flash", "raw16_flash", "share16_pwm", "share06_stop", "signal",
+          "hb_stop", "hb_resume", "dhb_stop", "dhb_resume", "silent", "lose", "late", "garble",
+          "power", "ld_save", "port_lost", "port_back", "stop", "kill", "start",
+          "share15_broadcast"})
+      r.push_back(std::string("step ") + k);
+    for (const SimInvariant& i : simInvariants()) r.push_back(std::string("check ") + i.id);
+    for (const char* f : {"silent", "lose", "late", "garble", "power"})
+      for (const char* t : {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"})
+        r.push_back(std::string("fault ") + f + " " + t);
+    // The fail-safe's events, by trigger, device type and action (docs/failsafe.md, "What
+    // happens when"): written and confirmed, or owed ("(unconfirmed)": the device was silent).
+    for (const char* t : {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"}) {
+      const std::string type = t;
+      for (const char* trigger : {"heartbeat", "start", "shutdown"}) {
+        r.push_back(std::string("report ") + trigger + " " + type + " safe");
+        r.push_back(std::string("report ") + trigger + " " + type + " safe (unconfirmed)");
+      }
+      r.push_back("report restart " + type + " safe");  // on_restart: safe; generic: owed values
+      if (type == "generic") continue;
+      r.push_back("report command_timeout " + type + " safe");
+      r.push_back("report command_timeout " + type + " safe (unconfirmed)");
+      r.push_back("report restart " + type + " restore");
+      r.push_back("report restart " + type + " leave");
+    }
+    return r;
+  }();
+  return rows;
+}
+
 const std::set<std::string>& simKnownOpen() {
   // docs/simulation.md, "Known open defects": an invariant a case shows broken on today's code
   // goes here, with its case "status known". I6 since 2026-12-06: a lost coil write over a
@@ -105,6 +140,7 @@ struct Rng {
 
 enum Dev { kLc = 0, kLd = 1, kPdu = 2, kGen = 3, kDevices = 4 };
 const char* const kNames[kDevices] = {"relays", "pwm", "pdu", "drive"};
+const char* const kTypes[kDevices] = {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"};
 const uint8_t kAddr[kDevices] = {1, 2, 3, 4};
 constexpr int kChannels = 8;
 
@@ -128,11 +164,10 @@ Config drawConfig(uint64_t seed) {
   c.link.retries = r.pick({0, 1, 2});
   c.link.late_reply_guard = 0;
   c.heartbeat = r.pick({0.3, 0.5, 1.0});
-  const char* types[kDevices] = {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"};
   for (int d = 0; d < kDevices; ++d) {
     DeviceConfig dc;
     dc.name = kNames[d];
-    dc.type = types[d];
+    dc.type = kTypes[d];
     dc.address = kAddr[d];
     dc.poll_rate = r.pick({2.0, 5.0, 10.0});
     FailsafeConfig& fs = dc.failsafe;
@@ -329,6 +364,7 @@ class World {
   uint64_t frames() const { return link_.frames(); }
   double simSeconds() const { return secs(clock_.now() - start_); }
   const std::map<std::string, uint64_t>& knownFailures() const { return known_hits_; }
+  const std::map<std::string, uint64_t>& coverage() const { return coverage_; }
   const std::string& knownExample() const { return known_example_; }
   void setHistory(const std::deque<std::string>* steps) { steps_ = steps; }
 
@@ -366,6 +402,13 @@ class World {
   double normalTransaction() const { return 60.0 * 10.0 / config_.link.baud; }
 
   void fail(const std::string& invariant, const std::string& message);
+  // Counts a coverage row (docs/simulation.md, "Coverage").
+  void cover(const std::string& row) { ++coverage_[row]; }
+  // An invariant is about to be compared in a state where it could fail: counted; true.
+  bool checked(const char* invariant) {
+    cover(std::string("check ") + invariant);
+    return true;
+  }
   void runFor(double seconds);
   void runUntil(TP end, const std::function<bool()>& done = {});
   void tick();
@@ -400,6 +443,43 @@ class World {
                   const std::string& what);
   // Steps.
   void doCommandStep(const SimStep& s);
+  // The node's calls as its services, topics, share and raw write services make them, tagged
+  // with the step's operation; `done` (the model) runs on the bus thread at the job's end.
+  using Done = DeviceUnit::Done;
+  DeviceUnit& unitOf(const std::string& device) { return *node_->unit(device); }
+  std::future<Result> set(uint64_t op, const std::string& device,
+                          const std::vector<uint8_t>& channels, const std::vector<bool>& states,
+                          Done done) {
+    return unitOf(device).set(channels, states, {op, std::move(done)});
+  }
+  std::future<Result> command(uint64_t op, const std::string& device, uint8_t channel, bool state,
+                              Done done) {
+    return unitOf(device).command(channel, state, {op, std::move(done)});
+  }
+  std::future<Result> pulse(uint64_t op, const std::string& device, uint8_t channel, bool state,
+                            double seconds, Done done) {
+    return unitOf(device).pulse(channel, state, seconds, {op, std::move(done)});
+  }
+  std::future<Result> setPwm(uint64_t op, const std::string& device, const PwmSettings& p,
+                             Done done) {
+    return unitOf(device).setPwm(p, {op, std::move(done)});
+  }
+  std::future<Result> stopPwm(uint64_t op, const std::string& device, uint8_t channel, Done done) {
+    return unitOf(device).stopPwm(channel, {op, std::move(done)});
+  }
+  std::future<Result> writeSignal(uint64_t op, const std::string& device, size_t signal,
+                                  double value, Done done) {
+    return unitOf(device).writeSignal(signal, value, {op, std::move(done)});
+  }
+  std::future<Result> raw(uint64_t op, const Request& request, Done done) {
+    return node_->rawWrite(request, {op, std::move(done)});
+  }
+  // A share client's request (its answer's bytes go nowhere: no client checks them here).
+  std::future<Result> share(uint64_t op, const Request& request, Done done) {
+    node_->share()->forward(
+        request, [](const Bytes&) {}, std::move(done), op);
+    return {};
+  }
   Operation op(const std::string& what) { return {++op_seq_, what}; }
 
   Config config_;
@@ -407,10 +487,12 @@ class World {
   ManualClock clock_;
   MemoryLink link_;
   CountingTransport transport_;
-  // running_timed/<device> on the parameter server (SimNodeOptions::kept_timed): kept across
-  // nodes, as roscore outlives a killed or respawned node.
-  std::map<std::string, std::vector<KeptTimedCommand>> kept_timed_;
-  std::unique_ptr<SimNode> node_;  // after kept_timed_: it writes there
+  // running_timed/<device> on the parameter server: kept across nodes, as roscore outlives a
+  // killed or respawned node.
+  MemoryKeptTimed kept_timed_{clock_};
+  // The node's bus runtime, the node's own (runtime/bus_runtime.h), stepped on the manual clock.
+  std::unique_ptr<BusRuntime> node_;  // after kept_timed_: it writes there
+  std::map<std::string, uint64_t> coverage_;
   bool dying_ = false;
   bool stopping_ = false;
   TP start_{};
@@ -612,20 +694,39 @@ void World::keepRunningTimed() {
 void World::startNode() {
   if (node_) return;
   resetModelForNewNode();
-  SimNodeOptions o;
-  o.devices = config_.devices;
-  o.heartbeat_timeout = config_.heartbeat;
-  o.shutdown_timeout = config_.shutdown_timeout;
+  // The bus configuration the node parses from its YAML (BusConfig), drawn by the seed.
+  BusConfig bus;
+  bus.devices = config_.devices;
+  if (config_.heartbeat > 0) {
+    bus.heartbeat_topic = "/alive";
+    bus.heartbeat_timeout = config_.heartbeat;
+  }
+  bus.shutdown_timeout = config_.shutdown_timeout;
+  bus.allow_raw_writes = true;
+  bus.share.enabled = true;
+  // No sockets here (ShareGateway::open, forward). The broadcast turnaround is a sleep on the
+  // bus thread, in real time: none in the simulation, whose model has no turnaround.
+  bus.share.broadcast_turnaround = 0;
+  BusRuntime::Options o;
+  o.clock = &clock_;
+  o.stepped = true;
   o.kept_timed = &kept_timed_;  // the parameter server's: a new node resumes what runs
-  SimNodeHooks h;
-  h.report = [this](const FailsafeReport& r) {
-    if (!dying_) onReport(r);
-  };
-  h.poll_starting = [this](const std::string& d) { onPollStarting(d); };
-  h.polled = [this](const std::string& d, const Result& r) { onPolled(d, r); };
-  h.written = [this](const std::string& d, const std::vector<uint8_t>& c,
-                     const std::vector<bool>& s) { onWritten(d, c, s); };
-  node_ = std::make_unique<SimNode>(o, transport_, clock_, h);
+  node_ = std::make_unique<BusRuntime>(std::move(bus), transport_, std::move(o));
+  for (const auto& u : node_->units()) {
+    const std::string name = u->name();
+    DeviceUnit::Observers seen;
+    seen.report = [this](const FailsafeReport& r, const std::string&) {
+      if (!dying_) onReport(r);
+    };
+    seen.poll_starting = [this, name] { onPollStarting(name); };
+    seen.polled = [this, name](size_t, const Result& r) { onPolled(name, r); };
+    seen.written = [this, name](const std::vector<uint8_t>& c, const std::vector<bool>& st) {
+      onWritten(name, c, st);
+    };
+    u->observe(std::move(seen));
+  }
+  std::string share_error;
+  if (!node_->share()->open(&share_error)) fail("harness", "share: " + share_error);
   const TP started = clock_.now();
   for (int d = 0; d < kGen; ++d)
     if (config_.devices[d].failsafe.on_start_safe)
@@ -645,7 +746,7 @@ void World::startNode() {
         port_lost_)
       continue;
     for (int ch = 0; ch < kChannels; ++ch)
-      if (hasSafe(d, ch) && simCoil(d, ch) != safeLevel(d, ch))
+      if (hasSafe(d, ch) && checked("I9") && simCoil(d, ch) != safeLevel(d, ch))
         fail("I9", std::string(kNames[d]) + " out" + std::to_string(ch) + " is " +
                        (simCoil(d, ch) ? "on" : "off") + " after on_start: safe");
   }
@@ -679,7 +780,7 @@ void World::stopNode() {
     for (int d = 0; d < kGen; ++d) {
       if (model_[d].reachable_since > began) continue;
       for (int ch = 0; ch < kChannels; ++ch)
-        if (hasSafe(d, ch) && simCoil(d, ch) != safeLevel(d, ch))
+        if (hasSafe(d, ch) && checked("I10") && simCoil(d, ch) != safeLevel(d, ch))
           fail("I10", std::string(kNames[d]) + " out" + std::to_string(ch) + " is " +
                           (simCoil(d, ch) ? "on" : "off") + " after the node stopped");
     }
@@ -807,7 +908,7 @@ void World::onAttempt(const LineEvent& e) {
     m.pwm_read_running[ch] = runs;
     // Read by a poll: running, the node's (or the device's, docs:176-186) from now on; a saved
     // run read stopped, its end is seen by this poll.
-    if (m.in_poll && node_ && node_->currentOp() == 0) {
+    if (m.in_poll && node_ && node_->currentTag() == 0) {
       Chan& read = m.ch[ch];
       if (runs) read.run_stop_unseen = read.saved_run_unseen = false;
       if (!runs && read.saved_run_unseen && read.saved_stop_read_at == TP{})
@@ -822,7 +923,7 @@ void World::onAttempt(const LineEvent& e) {
     // Only a poll's read or a fail-safe write's read back on a channel it left (docs:90):
     // not a command's read back, and not the reads before the fail-safe's own write (the read
     // just before a restore counts at its report, below).
-    const bool fs_op = node_ && node_->currentOp() == 0;
+    const bool fs_op = node_ && node_->currentTag() == 0;
     const bool readback = fs_op && m.readback_pending && !m.fs_written[ch];
     if (fs_op && m.readback_pending) {
       m.readback_pending = false;
@@ -848,12 +949,12 @@ void World::onAttempt(const LineEvent& e) {
       e.request.values.size() == 3 && e.request.address % 0x10 == 0 &&
       e.request.address / 0x10 < kChannels) {
     const int ch = e.request.address / 0x10;
-    if (node_ && node_->currentOp() == 0) {
+    if (node_ && node_->currentTag() == 0) {
       // The fail-safe's own PWM write: a restore starting a continuous run again, as it was
       // written (docs "What restore writes").
       m.run_read_at_start[ch] = m.pwm_read_running[ch];
       const Chan& c = m.ch[ch];
-      if (c.node_run.empty() || e.request.values != c.node_run)
+      if (checked("I5") && (c.node_run.empty() || e.request.values != c.node_run))
         fail("I5", "pwm out" + std::to_string(ch) + ": the fail-safe writes " +
                        e.request.describe() +
                        (c.node_run.empty() ? ", which is no continuous run the node started"
@@ -898,13 +999,14 @@ void World::onAttempt(const LineEvent& e) {
     if (d == kGen) m.gen_unanswered = true;
   }
   // I7: a write that starts something reaches the device once per transaction.
-  if (e.heard && sim(d)->startsSomething(e.request) && ++starts_by_transaction_[e.execute_id] > 1)
+  if (e.heard && sim(d)->startsSomething(e.request) && checked("I7") &&
+      ++starts_by_transaction_[e.execute_id] > 1)
     fail("I7", std::string(kNames[d]) + ": " + e.request.describe() +
                    " reached the device twice in one transaction");
   if (d == kGen || !write || !node_) return;
   const bool coils = e.request.function == FunctionCode::kWriteSingleCoil ||
                      e.request.function == FunctionCode::kWriteMultipleCoils;
-  if (!coils || node_->currentOp() != 0) return;
+  if (!coils || node_->currentTag() != 0) return;
   m.pwm_read_at_write = m.pwm_read_running;
   // Its read back follows (a poll of the device: coils, then one channel's PWM registers).
   if (e.answered) {
@@ -920,14 +1022,16 @@ void World::onAttempt(const LineEvent& e) {
     const Chan& c = m.ch[ch];
     const std::string name = std::string(kNames[d]) + " out" + std::to_string(ch);
     if (c.held) {
-      if (v != safeLevel(d, ch))
+      if (checked("I3") && v != safeLevel(d, ch))
         fail("I3", name + " is held safe (" + safeStateName(safeOf(d, ch)) +
                        ") but a fail-safe write sets it " + (v ? "on" : "off"));
       continue;
     }
     if (c.owed && hasSafe(d, ch) && v == safeLevel(d, ch)) continue;
     bool level = false;
-    if (!expected(c, e.at, &level) || level == v) continue;
+    if (!expected(c, e.at, &level)) continue;
+    checked("I4");  // a write on a channel whose intent is known
+    if (level == v) continue;
     if (hasSafe(d, ch) && v == safeLevel(d, ch) && c.triggered && c.trigger_at >= c.at) continue;
     // docs:31, 99-100: the stop's safe writes run after what was queued before them, and they
     // are what the outputs are left with.
@@ -970,7 +1074,7 @@ void World::onPolled(const std::string& device, const Result& r) {
   model_[d].in_poll = false;
   if (d == kGen || !r.ok()) return;
   DevModel& m = model_[d];
-  const auto& outputs = node_->device(device)->outputs();
+  const auto& outputs = node_->unit(device)->device().outputs();
   if (outputs.size() < kChannels) return;
   for (int ch = 0; ch < kChannels; ++ch) {
     Chan& c = m.ch[ch];
@@ -1052,7 +1156,7 @@ void World::checkCoils(int d, const std::vector<uint8_t>& chs, const std::vector
                        const std::string& what) {
   // I1: reported done means the device shows it now.
   for (size_t i = 0; i < chs.size(); ++i)
-    if (simCoil(d, chs[i]) != sts[i])
+    if (checked("I1") && simCoil(d, chs[i]) != sts[i])
       fail("I1", std::string(kNames[d]) + " out" + std::to_string(chs[i]) + ": " + what +
                      " was confirmed (" + (sts[i] ? "on" : "off") + ") but the device shows " +
                      (sts[i] ? "off" : "on"));
@@ -1064,7 +1168,7 @@ void World::takeFoundAfterRestart(int d, const FailsafeReport& r) {
   // has the level the poll that saw the restart showed as its intent, as found: a later poll or
   // a client's stop is compared with that level, not with the one the power cycle dropped.
   const bool restore = onRestart(d) == OnRestart::kRestore;
-  const auto& outputs = node_->device(r.device)->outputs();
+  const auto& outputs = node_->unit(r.device)->device().outputs();
   if (restore || outputs.size() < kChannels) return;
   const auto names_at = r.reason.find("outputs ");
   const auto names_end = r.reason.find(" changed with no command");
@@ -1098,6 +1202,10 @@ void World::takeFoundAfterRestart(int d, const FailsafeReport& r) {
 }
 
 void World::onReport(const FailsafeReport& r) {
+  for (int d = 0; d < kDevices; ++d)
+    if (r.device == kNames[d])
+      cover("report " + r.trigger + " " + kTypes[d] + " " + r.action +
+            (r.confirmed ? "" : " (unconfirmed)"));
   if (trace_) std::fprintf(trace_, "report %s: %s\n", r.device.c_str(), r.text().c_str());
   const int d = devOf(r.device);
   if (d == kGen) return onGenericReport(r);
@@ -1125,7 +1233,8 @@ void World::onReport(const FailsafeReport& r) {
         named.run_stop_unseen = false;
         if (named.saved_stop_read_at != TP{}) named.saved_run_unseen = false;
       }
-    if (r.reason.find("changed with no command") != std::string::npos && !m.justified &&
+    if (r.reason.find("changed with no command") != std::string::npos && checked("I6") &&
+        !m.justified &&
         m.prev_poll_at >= m.justified_until && !run_stopped)
       fail("I6", std::string(kNames[d]) + ": restart reported (" + r.reason +
                      ") though nothing changed its outputs without a confirmed command");
@@ -1144,7 +1253,7 @@ void World::onReport(const FailsafeReport& r) {
   if (r.action == "safe") {
     // I11 (docs:4-5): "Nothing changes unless it is configured: the default safe state is hold".
     for (size_t i = 0; i < chs.size(); ++i)
-      if (!hasSafe(d, chs[i]))
+      if (checked("I11") && !hasSafe(d, chs[i]))
         fail("I11", std::string(kNames[d]) + " out" + std::to_string(chs[i]) +
                         " (safe state hold) is written by a safe write (" + r.trigger + ")");
   }
@@ -1272,7 +1381,7 @@ void World::onGenericReport(const FailsafeReport& r) {
   if (!link_.connected()) m.gen_unanswered = true;
   // I8 (docs:144-146): a value refused is reported, not retried: a "restart" write comes only
   // when the device did not answer the write before.
-  if (r.trigger == "restart" && !m.gen_prev_silent)
+  if (r.trigger == "restart" && checked("I8") && !m.gen_prev_silent)
     fail("I8", std::string("drive: safe values written again (") + r.reason +
                    ") though the device answered the previous safe write");
   // docs:172-174: a signal set since the trigger is not written. An owed write's trigger fired
@@ -1347,7 +1456,7 @@ void World::checkHeld() {
       if (c.held && c.disturbed_at != TP{} && c.disturbed_poll_at == TP{}) continue;
       const TP from = std::max(c.held_since, c.disturbed_poll_at);
       if (!c.held || now - from < dur(budget(c.queued_at_hold))) continue;
-      if (simCoil(d, ch) != safeLevel(d, ch))
+      if (checked("I2") && simCoil(d, ch) != safeLevel(d, ch))
         fail("I2", std::string(kNames[d]) + " out" + std::to_string(ch) + " is held safe (" +
                        safeStateName(safeOf(d, ch)) +
                        ") since t=" + std::to_string(secs(c.held_since - start_)) +
@@ -1382,6 +1491,7 @@ void World::checkHeld() {
 bool World::step(const SimStep& s, size_t index) {
   step_index_ = index;
   const std::string& k = s.kind;
+  bool k_ran = true;
   auto arg = [&s](size_t i) { return i < s.args.size() ? s.args[i] : 0; };
   if (k == "wait") {
     runFor(arg(0) / 1000.0);
@@ -1396,15 +1506,18 @@ bool World::step(const SimStep& s, size_t index) {
   } else if (k == "silent") {
     const int d = arg(0) % kDevices;
     link_.faults(kAddr[d]).silent = arg(1) != 0;
+    if (arg(1) != 0) cover(std::string("fault silent ") + kTypes[d]);
     deviceDisturbed(d, false);
   } else if (k == "lose" || k == "late" || k == "garble") {
     const int d = arg(0) % kDevices;
     MemoryLinkFaults& f = link_.faults(kAddr[d]);
     (k == "lose" ? f.lost : k == "late" ? f.late : f.garbled) = 1 + arg(1) % 3;
+    cover("fault " + k + " " + kTypes[d]);
     deviceDisturbed(d, false);
   } else if (k == "power") {
     const int d = arg(0) % kDevices;
     sim(d)->powerCycle(clock_.now());
+    cover(std::string("fault power ") + kTypes[d]);
     deviceDisturbed(d, true);
     for (int ch = 0; ch < kChannels; ++ch) {
       Chan& c = model_[d].ch[ch];
@@ -1445,7 +1558,10 @@ bool World::step(const SimStep& s, size_t index) {
     startNode();
   } else if (node_ && node_->started()) {
     doCommandStep(s);
+  } else {
+    k_ran = false;  // a command while no node runs: nothing to take it
   }
+  if (k_ran) cover("step " + k);
   // Every step lets the bus run a little: commands are sent, their answers come.
   if (k != "wait") runFor(0.02);
   if (!failure_) checkHeld();
@@ -1465,7 +1581,7 @@ void World::doCommandStep(const SimStep& s) {
       chs.push_back(static_cast<uint8_t>((ch + 2) % kChannels));
       sts.push_back(arg(3) != 0);
     }
-    pending_.push_back(node_->set(op("set").id, dn, chs, sts, [this, outd, chs](const Result& r) {
+    pending_.push_back(set(op("set").id, dn, chs, sts, [this, outd, chs](const Result& r) {
       if (answerLost(r.error))
         for (uint8_t c : chs) lostAnswer(outd, c, 0);
     }));
@@ -1478,30 +1594,29 @@ void World::doCommandStep(const SimStep& s) {
       c.deadline = clock_.now() + dur(timeout);
     else
       c.deadline.reset();
-    pending_.push_back(
-        node_->command(op("command").id, dn, ch, st, [this, outd, ch](const Result& r) {
-          // The merged write's channels come through onWritten; a lost answer leaves the channel
-          // unknown until the next poll (docs:92-94: a service's or topic's command alike).
-          if (answerLost(r.error)) lostAnswer(outd, ch, 0);
-        }));
+    pending_.push_back(command(op("command").id, dn, ch, st, [this, outd, ch](const Result& r) {
+      // The merged write's channels come through onWritten; a lost answer leaves the channel
+      // unknown until the next poll (docs:92-94: a service's or topic's command alike).
+      if (answerLost(r.error)) lostAnswer(outd, ch, 0);
+    }));
   } else if (k == "pulse") {
     const bool st = arg(2) != 0;
     const double seconds = (1 + arg(3) % 40) / 10.0;
-    pending_.push_back(node_->pulse(op("pulse").id, kNames[kLc], ch, st, seconds,
-                                    [this, ch, st, seconds](const Result& r) {
-                                      if (r.ok()) {
-                                        checkCoils(kLc, {ch}, {st}, "a pulse");
-                                        commandedTimed(kLc, ch, st, !st, seconds);
-                                        // docs:71-75: its end counts from the board's answer,
-                                        // not from the read back after it (model change 16).
-                                        Chan& c = model_[kLc].ch[ch];
-                                        const TP answered = model_[kLc].flash_answered[ch];
-                                        if (answered != TP{} && answered <= clock_.now())
-                                          c.ends = c.ends_earliest = answered + dur(seconds);
-                                      } else if (answerLost(r.error)) {
-                                        lostAnswer(kLc, ch, seconds);
-                                      }
-                                    }));
+    pending_.push_back(pulse(op("pulse").id, kNames[kLc], ch, st, seconds,
+                             [this, ch, st, seconds](const Result& r) {
+                               if (r.ok()) {
+                                 checkCoils(kLc, {ch}, {st}, "a pulse");
+                                 commandedTimed(kLc, ch, st, !st, seconds);
+                                 // docs:71-75: its end counts from the board's answer,
+                                 // not from the read back after it (model change 16).
+                                 Chan& c = model_[kLc].ch[ch];
+                                 const TP answered = model_[kLc].flash_answered[ch];
+                                 if (answered != TP{} && answered <= clock_.now())
+                                   c.ends = c.ends_earliest = answered + dur(seconds);
+                               } else if (answerLost(r.error)) {
+                                 lostAnswer(kLc, ch, seconds);
+                               }
+                             }));
   } else if (k == "pwm") {
     PwmSettings p;
     p.channel = ch;
@@ -1519,7 +1634,7 @@ void World::doCommandStep(const SimStep& s) {
       if (mode == 0) seconds = p.duration;
     }
     pending_.push_back(
-        node_->setPwm(op("pwm").id, kNames[kLd], p, [this, ch, seconds, p](const Result& r) {
+        setPwm(op("pwm").id, kNames[kLd], p, [this, ch, seconds, p](const Result& r) {
           if (r.ok()) {
             if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) == 0 && seconds > 1.5)
               fail("I1", "pwm out" + std::to_string(ch) +
@@ -1545,26 +1660,25 @@ void World::doCommandStep(const SimStep& s) {
           }
         }));
   } else if (k == "pwm_stop") {
-    pending_.push_back(
-        node_->stopPwm(op("pwm_stop").id, kNames[kLd], ch, [this, ch](const Result& r) {
-          if (r.ok()) {
-            if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0)
-              fail("I1", "pwm out" + std::to_string(ch) + ": stop_pwm was confirmed but it runs");
-            // A PWM command (docs:77) ends the hold; the level shows at the next poll.
-            commanded(kLd, ch, false);
-            unconfirmed(kLd, ch, 0, true);
-            // Precedence counts from when the device confirmed the stop (docs:77, "a command
-            // confirmed after that"), not from when the step saw its result (model change 15).
-            Chan& stopped = model_[kLd].ch[ch];
-            const TP answered = model_[kLd].stop_answered[ch];
-            if (answered != TP{} && answered <= clock_.now()) stopped.adopt_at = answered;
-            model_[kLd].ch[ch].known = false;
-          } else if (answerLost(r.error)) {
-            lostAnswer(kLd, ch, 0);
-          }
-        }));
+    pending_.push_back(stopPwm(op("pwm_stop").id, kNames[kLd], ch, [this, ch](const Result& r) {
+      if (r.ok()) {
+        if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0)
+          fail("I1", "pwm out" + std::to_string(ch) + ": stop_pwm was confirmed but it runs");
+        // A PWM command (docs:77) ends the hold; the level shows at the next poll.
+        commanded(kLd, ch, false);
+        unconfirmed(kLd, ch, 0, true);
+        // Precedence counts from when the device confirmed the stop (docs:77, "a command
+        // confirmed after that"), not from when the step saw its result (model change 15).
+        Chan& stopped = model_[kLd].ch[ch];
+        const TP answered = model_[kLd].stop_answered[ch];
+        if (answered != TP{} && answered <= clock_.now()) stopped.adopt_at = answered;
+        model_[kLd].ch[ch].known = false;
+      } else if (answerLost(r.error)) {
+        lostAnswer(kLd, ch, 0);
+      }
+    }));
   } else if (k == "share05" || k == "raw05" || k == "share15" || k == "raw15") {
-    const bool share = k[0] == 's';
+    const bool via_share = k[0] == 's';
     Request req;
     std::vector<uint8_t> chs;
     std::vector<bool> sts;
@@ -1572,7 +1686,7 @@ void World::doCommandStep(const SimStep& s) {
       req = Request::writeSingleCoil(kAddr[outd], ch, arg(2) != 0);
       chs = {ch};
       sts = {arg(2) != 0};
-      if (!share) req = Request::writeMultipleCoils(kAddr[outd], ch, {arg(2) != 0});
+      if (!via_share) req = Request::writeMultipleCoils(kAddr[outd], ch, {arg(2) != 0});
     } else {
       const int n = 1 + arg(3) % std::min(4, kChannels - ch);
       std::vector<bool> bits;
@@ -1583,7 +1697,7 @@ void World::doCommandStep(const SimStep& s) {
       sts = bits;
       req = Request::writeMultipleCoils(kAddr[outd], ch, bits);
     }
-    SimNode::Done done = [this, outd, chs, sts, k](const Result& r) {
+    DeviceUnit::Done done = [this, outd, chs, sts, k](const Result& r) {
       if (r.ok()) {
         for (size_t i = 0; i < chs.size(); ++i) {
           // A client's coil write is the device's to confirm (the node passes its answer on):
@@ -1613,7 +1727,7 @@ void World::doCommandStep(const SimStep& s) {
         for (uint8_t c : chs) lostAnswer(outd, c, 0);
       }
     };
-    pending_.push_back(share ? node_->share(op(k).id, req, done) : node_->raw(op(k).id, req, done));
+    pending_.push_back(via_share ? share(op(k).id, req, done) : raw(op(k).id, req, done));
   } else if (k == "share15_broadcast") {
     // docs "What happens when", the share's row: a broadcast (unit 0) confirms nothing. Every
     // device that listens applies it (a silent one does not); on each, the coils it names are
@@ -1623,7 +1737,7 @@ void World::doCommandStep(const SimStep& s) {
     std::vector<bool> bits(static_cast<size_t>(n));
     for (int i = 0; i < n; ++i) bits[static_cast<size_t>(i)] = ((arg(2) >> i) & 1) != 0;
     const Request req = Request::writeMultipleCoils(kBroadcastAddress, ch, bits);
-    pending_.push_back(node_->share(op(k).id, req, [this, ch, n](const Result& r) {
+    pending_.push_back(share(op(k).id, req, [this, ch, n](const Result& r) {
       if (!r.ok() && !answerLost(r.error)) return;  // refused or unsent: nothing changed
       for (int d = 0; d < kGen; ++d)
         for (int i = 0; i < n; ++i) lostAnswer(d, ch + i, 0);
@@ -1634,7 +1748,7 @@ void World::doCommandStep(const SimStep& s) {
     const auto tenths = static_cast<uint16_t>(1 + arg(3) % 40);
     const Request req = Request::writeMultipleRegisters(
         kAddr[kLc], static_cast<uint16_t>(3 + 5 * ch), {close ? uint16_t{4} : uint16_t{2}, tenths});
-    SimNode::Done done = [this, ch, close, tenths, k](const Result& r) {
+    DeviceUnit::Done done = [this, ch, close, tenths, k](const Result& r) {
       if (r.ok()) {
         checkCoils(kLc, {ch}, {close}, k);
         commandedTimed(kLc, ch, close, !close, tenths / 10.0);
@@ -1642,8 +1756,7 @@ void World::doCommandStep(const SimStep& s) {
         lostAnswer(kLc, ch, tenths / 10.0);
       }
     };
-    pending_.push_back(k[0] == 's' ? node_->share(op(k).id, req, done)
-                                   : node_->raw(op(k).id, req, done));
+    pending_.push_back(k[0] == 's' ? share(op(k).id, req, done) : raw(op(k).id, req, done));
   } else if (k == "share16_pwm") {
     // An LD58A08 PWM run through its registers (period, on-time, enable = pulses).
     const auto c6 = static_cast<uint8_t>(ch % 6);
@@ -1651,7 +1764,7 @@ void World::doCommandStep(const SimStep& s) {
     const auto pulses = static_cast<uint16_t>(arg(2) % 2 == 0 ? 1 + arg(3) % 5 : 0xFFFF);
     const Request req = Request::writeMultipleRegisters(
         kAddr[kLd], static_cast<uint16_t>(c6 * 0x10), {period, 1, pulses});
-    pending_.push_back(node_->share(op(k).id, req, [this, c6, period, pulses](const Result& r) {
+    pending_.push_back(share(op(k).id, req, [this, c6, period, pulses](const Result& r) {
       if (r.ok()) {
         commandedTimed(
             kLd, c6, std::nullopt, false, pulses == 0xFFFF ? -1.0 : pulses * period / 10.0,
@@ -1664,7 +1777,7 @@ void World::doCommandStep(const SimStep& s) {
     // The enable register to 0: a write the type does not decode as a run (docs:64-65).
     const Request req =
         Request::writeSingleRegister(kAddr[kLd], static_cast<uint16_t>(ch * 0x10 + 2), 0);
-    pending_.push_back(node_->share(op(k).id, req, [this, ch](const Result& r) {
+    pending_.push_back(share(op(k).id, req, [this, ch](const Result& r) {
       if (r.ok()) {
         unconfirmed(kLd, ch, 0, true);
         // The run is stopped (docs:68: no longer one the node knows not yet ended).
@@ -1676,7 +1789,7 @@ void World::doCommandStep(const SimStep& s) {
     const size_t signal = static_cast<size_t>(arg(0) % 2);
     const double value = signal == 0 ? arg(1) % 2 : (arg(1) % 6) * 10.0;
     pending_.push_back(
-        node_->writeSignal(op(k).id, kNames[kGen], signal, value, [this, signal](const Result& r) {
+        writeSignal(op(k).id, kNames[kGen], signal, value, [this, signal](const Result& r) {
           if (r.ok()) model_[kGen].gen_set_at[signal] = clock_.now();
         }));
   }
@@ -1822,6 +1935,7 @@ SimRunResult FailsafeSimulation::run(const std::vector<SimStep>& steps,
   out.failure = world->failure();
   for (const auto& [id, n] : world->knownFailures()) out.known_failures.emplace_back(id, n);
   out.known_example = world->knownExample();
+  out.coverage = world->coverage();
   return out;
 }
 

@@ -1,12 +1,15 @@
 // failsafe_simulation: the deterministic simulation of the fail-safe (docs/simulation.md).
 //   failsafe_simulation [--seed S] [--seeds N | --seconds T] [--steps N] [--known I5,I6]
-//                       [--cases DIR] [--junit FILE] [--replay FILE]
+//                       [--cases DIR] [--junit FILE] [--require-coverage] [--replay FILE]
 // Runs seeds S, S+1, ... (each a bus configuration and `steps` steps) for N seeds or T seconds;
 // every seed runs twice at first to show that its digest repeats. A failure prints the seed,
 // the step, the invariant, the last frames and steps, is shrunk, and is written to DIR as a
-// regression case. Exit 1 on a failure (invariants in --known are counted, not failed).
+// regression case. At the end, the coverage table: how often each path ran; with
+// --require-coverage a required row without a hit is a failure. Exit 1 on a failure
+// (invariants in --known are counted, not failed).
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -25,7 +28,8 @@ namespace {
 void usage() {
   std::fprintf(stderr,
                "usage: failsafe_simulation [--seed S] [--seeds N | --seconds T] [--steps N]\n"
-               "         [--known I5,I6] [--cases DIR] [--junit FILE] [--replay FILE [--trace]] "
+               "         [--known I5,I6] [--cases DIR] [--junit FILE] [--require-coverage]\n"
+               "         [--replay FILE [--trace]] "
                "[--quiet]\n");
 }
 
@@ -69,6 +73,7 @@ int main(int argc, char** argv) {
   bool known_given = false;
   std::string cases, junit, replay;
   bool quiet = false;
+  bool require_coverage = false;  // a required coverage row without a hit is a failure
   bool trace = false;  // --replay: every step, frame and report on stderr
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -96,6 +101,8 @@ int main(int argc, char** argv) {
         replay = value("--replay");
       else if (a == "--quiet")
         quiet = true;
+      else if (a == "--require-coverage")
+        require_coverage = true;
       else if (a == "--trace")
         trace = true;
       else if (a == "--known") {
@@ -156,6 +163,7 @@ int main(int argc, char** argv) {
   uint64_t total_steps = 0, total_frames = 0, runs = 0, failures = 0;
   double sim_seconds = 0;
   std::map<std::string, uint64_t> known_hits;
+  std::map<std::string, uint64_t> coverage;
   std::vector<std::string> failure_texts;
   std::string known_example;
   double last_print = 0;
@@ -170,6 +178,7 @@ int main(int argc, char** argv) {
     total_frames += r.frames;
     sim_seconds += r.sim_seconds;
     for (const auto& [id, n] : r.known_failures) known_hits[id] += n;
+    for (const auto& [row, n] : r.coverage) coverage[row] += n;
     if (known_example.empty()) known_example = r.known_example;
     if (runs == 1) {
       // The same seed gives the same frames, byte for byte.
@@ -223,6 +232,29 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
   }
   const double wall = elapsed();
+  // Coverage (docs/simulation.md): every row hit, the required ones first, with the misses.
+  std::vector<std::string> missing;
+  std::printf("\n| coverage | hits |\n|---|---|\n");
+  for (const std::string& row : simRequiredCoverage()) {
+    const auto it = coverage.find(row);
+    const uint64_t n = it == coverage.end() ? 0 : it->second;
+    std::printf("| %s | %llu%s |\n", row.c_str(), static_cast<unsigned long long>(n),
+                n == 0 ? " (required: NONE)" : "");
+    if (n == 0) missing.push_back(row);
+  }
+  const auto& required = simRequiredCoverage();
+  for (const auto& [row, n] : coverage)
+    if (std::find(required.begin(), required.end(), row) == required.end())
+      std::printf("| %s | %llu (not required) |\n", row.c_str(),
+                  static_cast<unsigned long long>(n));
+  if (require_coverage && !missing.empty()) {
+    ++failures;
+    std::string rows;
+    for (const std::string& m : missing) rows += (rows.empty() ? "" : ", ") + m;
+    std::printf("FAILURE coverage: %zu required row(s) never hit: %s\n", missing.size(),
+                rows.c_str());
+    failure_texts.push_back("coverage: never hit: " + rows);
+  }
   std::printf(
       "\n| runs | steps | frames | simulated s | wall s | steps/min | failures |\n"
       "|---|---|---|---|---|---|---|\n| %llu | %llu | %llu | %.0f | %.1f | %.0f | %llu |\n",

@@ -1,6 +1,6 @@
 // A device's callers' commands on their way to the bus (failsafe/device_commands.h): what is
 // queued, what goes on the wire (byte exact, scripted transport), who learns the outcome, and
-// what the fail-safe then expects of each channel. The jobs run by hand, in the order queued, as
+// what the fail-safe then expects of each channel. The bus runs by hand, in the order queued, as
 // the bus thread would run them.
 #include <gtest/gtest.h>
 
@@ -17,24 +17,32 @@ namespace {
 
 struct Commands : ::testing::Test {
   ManualClock clock;
-  ScriptedTransport unused;  // the scheduler's: nothing here runs through it
-  BusScheduler scheduler{unused, {}, clock};
+  ScriptedTransport bus;
+  BusScheduler scheduler{bus, {}, clock};
   LcRelay8 board{devtest::config("lc_relay8", 255)};
   DeviceFailsafe failsafe{board, scheduler, clock};
-  std::deque<BusScheduler::Job> queued;
-  DeviceCommands commands{board, failsafe, [this](BusScheduler::Job job) {
-                            queued.push_back(std::move(job));
-                            return std::future<Result>();  // the tests take outcomes from jobs
-                          }};
-  ScriptedTransport bus;
+  DeviceCommands commands{board, failsafe, scheduler};
 
-  Result runNext() {
-    EXPECT_FALSE(queued.empty());
-    if (queued.empty()) return Result::failure(ErrorKind::kInvalidArgument, "nothing queued");
-    BusScheduler::Job job = std::move(queued.front());
-    queued.pop_front();
-    return job(bus);
+  // The bus runs by hand: no thread, no poll (none is added), one step at a time.
+  Commands() {
+    scheduler.addDevice(board.name());
+    scheduler.startStepping();
   }
+  // Jobs still queued fail unsent as the bus stops: before the commands they call into go.
+  ~Commands() override { scheduler.stop(); }
+  // Runs the bus until the job whose future is `f` has run; its outcome.
+  Result runUntilDone(std::future<Result>& f) {
+    EXPECT_TRUE(f.valid());
+    if (!f.valid()) return Result::failure(ErrorKind::kInvalidArgument, "nothing queued");
+    Clock::time_point next;
+    while (f.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+      if (!scheduler.step(&next)) {
+        ADD_FAILURE() << "the job never ran";
+        return Result::failure(ErrorKind::kInvalidArgument, "never ran");
+      }
+    return f.get();
+  }
+  size_t queued() const { return scheduler.queuedJobs(); }
   Expectation expected(uint8_t channel) {
     return failsafe.intents().expected(channel, clock.now());
   }
@@ -49,22 +57,22 @@ TEST_F(Commands, ARefusedWriteQueuesNothingAndTellsTheCallerWhy) {
   EXPECT_EQ(r.error, ErrorKind::kInvalidArgument);
   EXPECT_NE(r.message.find("channel: 8 is outside 0-7"), std::string::npos) << r.message;
   bool told = false;
-  commands.command(9, true, [&](const Result& w) {
-    told = true;
-    EXPECT_EQ(w.error, ErrorKind::kInvalidArgument);
-  });
+  commands.command(9, true, {0, [&](const Result& w) {
+                               told = true;
+                               EXPECT_EQ(w.error, ErrorKind::kInvalidArgument);
+                             }});
   EXPECT_TRUE(told);
-  EXPECT_TRUE(queued.empty());
+  EXPECT_EQ(queued(), 0u);
   EXPECT_EQ(bus.executed(), 0);
 }
 
 TEST_F(Commands, CommandsThatCameMeanwhileGoOutInOneWriteAndEachLearnsItsOutcome) {
   std::vector<Result> outcomes;
   auto done = [&](const Result& r) { outcomes.push_back(r); };
-  commands.command(1, true, done);
-  commands.command(2, true, done);
-  commands.command(1, false, done);  // newer than the first for channel 1
-  ASSERT_EQ(queued.size(), 1u) << "one job for the commands";
+  std::future<Result> job = commands.command(1, true, {0, done});
+  commands.command(2, true, {0, done});
+  commands.command(1, false, {0, done});  // newer than the first for channel 1
+  ASSERT_EQ(queued(), 1u) << "one job for the commands";
   std::vector<uint8_t> written_channels;
   std::vector<bool> written_states;
   commands.setWritten([&](const std::vector<uint8_t>& c, const std::vector<bool>& s) {
@@ -72,7 +80,7 @@ TEST_F(Commands, CommandsThatCameMeanwhileGoOutInOneWriteAndEachLearnsItsOutcome
     written_states = s;
   });
   bus.expectEcho(toHex(encodeRequest(Request::writeMultipleCoils(255, 1, {false, true}))));
-  EXPECT_TRUE(runNext().ok());
+  EXPECT_TRUE(runUntilDone(job).ok());
   ASSERT_EQ(outcomes.size(), 3u);
   for (const Result& r : outcomes) EXPECT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(written_channels, (std::vector<uint8_t>{1, 2}));
@@ -83,8 +91,8 @@ TEST_F(Commands, CommandsThatCameMeanwhileGoOutInOneWriteAndEachLearnsItsOutcome
   EXPECT_EQ(expected(2).kind, Expectation::Kind::kLevel);
   EXPECT_TRUE(expected(2).level);
   // A command after that job ran queues the next one.
-  commands.command(3, true, done);
-  EXPECT_EQ(queued.size(), 1u);
+  commands.command(3, true, {0, done});
+  EXPECT_EQ(queued(), 1u);
   EXPECT_SCRIPT_DONE(bus);
 }
 
@@ -97,16 +105,16 @@ TEST_F(Commands, CommandsMergedIntoAWriteWithoutAnAnswerAreEachToldItFailedInArr
       outcomes.push_back(r);
     };
   };
-  commands.command(3, true, doneAs(0));
-  commands.command(4, true, doneAs(1));
-  commands.command(3, false, doneAs(2));
-  ASSERT_EQ(queued.size(), 1u);
+  std::future<Result> job = commands.command(3, true, {0, doneAs(0)});
+  commands.command(4, true, {0, doneAs(1)});
+  commands.command(3, false, {0, doneAs(2)});
+  ASSERT_EQ(queued(), 1u);
   EXPECT_TRUE(order.empty()) << "nobody is told before the write went out";
   // One FC15 of channels 3-4 (3 off, the newest for it; 4 on), then silence, and silence again
   // for the read back.
   bus.expect(toHex(encodeRequest(Request::writeMultipleCoils(255, 3, {false, true}))));
   bus.expect(toHex(encodeRequest(Request::readCoils(255, 0, 8))));
-  EXPECT_FALSE(runNext().ok());
+  EXPECT_FALSE(runUntilDone(job).ok());
   EXPECT_EQ(order, (std::vector<int>{0, 1, 2}));
   for (const Result& r : outcomes) EXPECT_FALSE(r.ok());
   EXPECT_EQ(expected(3).kind, Expectation::Kind::kAny);
@@ -118,17 +126,17 @@ TEST_F(Commands, AWriteWithoutAnAnswerIsNotConfirmedToItsCallerNorTheFailsafe) {
   bool written = false;
   commands.setWritten(
       [&](const std::vector<uint8_t>&, const std::vector<bool>&) { written = true; });
-  commands.write({4}, {false});
+  std::future<Result> first = commands.write({4}, {false});
   bus.expectEcho(toHex(encodeRequest(Request::writeSingleCoil(255, 4, false))));
-  EXPECT_TRUE(runNext().ok());
+  EXPECT_TRUE(runUntilDone(first).ok());
   ASSERT_TRUE(written);
   ASSERT_EQ(expected(4).kind, Expectation::Kind::kLevel);
   written = false;
-  commands.write({4}, {true});
+  std::future<Result> second = commands.write({4}, {true});
   // Silent, and silent again for the read back that might have confirmed it.
   bus.expect(toHex(encodeRequest(Request::writeSingleCoil(255, 4, true))));
   bus.expect(toHex(encodeRequest(Request::readCoils(255, 0, 8))));
-  const Result r = runNext();
+  const Result r = runUntilDone(second);
   EXPECT_FALSE(r.ok());
   EXPECT_FALSE(written);
   // The device may have done it: the channel is whatever the next poll shows.
@@ -138,13 +146,13 @@ TEST_F(Commands, AWriteWithoutAnAnswerIsNotConfirmedToItsCallerNorTheFailsafe) {
 
 TEST_F(Commands, ATimedCommandConfirmedIsTheCallersWithItsEndAndFinalLevel) {
   int after = 0;
-  commands.timed(
+  std::future<Result> confirmed = commands.timed(
       TimedIntent{5, true, false, 2.0}, [&](Transport& t) { return board.pulse(t, 5, true, 2.0); },
       [&](Transport&) { ++after; });
   const Request flash =
       Request::writeMultipleRegisters(255, LcRelay8::flashRegister(5), {LcRelay8::kFlashClose, 20});
   bus.expectEcho(toHex(encodeRequest(flash)));
-  EXPECT_TRUE(runNext().ok());
+  EXPECT_TRUE(runUntilDone(confirmed).ok());
   EXPECT_EQ(after, 1);
   EXPECT_EQ(expected(5).kind, Expectation::Kind::kLevel);
   EXPECT_TRUE(expected(5).level) << "on during the flash-close";
@@ -152,13 +160,13 @@ TEST_F(Commands, ATimedCommandConfirmedIsTheCallersWithItsEndAndFinalLevel) {
   EXPECT_EQ(expected(5).kind, Expectation::Kind::kLevel);
   EXPECT_FALSE(expected(5).level) << "off after it";
   // Not confirmed: `after` does not run, the channel may show either level.
-  commands.timed(
+  std::future<Result> refused = commands.timed(
       TimedIntent{6, true, false, 2.0}, [&](Transport& t) { return board.pulse(t, 6, true, 2.0); },
       [&](Transport&) { ++after; });
   const Request flash6 =
       Request::writeMultipleRegisters(255, LcRelay8::flashRegister(6), {LcRelay8::kFlashClose, 20});
   bus.expect(toHex(encodeRequest(flash6)), toHex(encodeException(255, 0x10, 4)));
-  EXPECT_FALSE(runNext().ok());
+  EXPECT_FALSE(runUntilDone(refused).ok());
   EXPECT_EQ(after, 1);
   EXPECT_SCRIPT_DONE(bus);
 }
@@ -167,20 +175,20 @@ TEST_F(Commands, ATimedCommandAWriteWhoseAnswerWasLostMayHaveReplacedIsNoLongerK
   std::vector<std::vector<TimedIntent>> told;
   failsafe.setTimedChanged(
       [&](const std::vector<TimedIntent>& running) { told.push_back(running); });
-  commands.timed(
+  std::future<Result> flash = commands.timed(
       TimedIntent{5, true, false, 2.0}, [&](Transport& t) { return board.pulse(t, 5, true, 2.0); },
       [](Transport&) {});
   bus.expectEcho(toHex(encodeRequest(Request::writeMultipleRegisters(
       255, LcRelay8::flashRegister(5), {LcRelay8::kFlashClose, 20}))));
-  EXPECT_TRUE(runNext().ok());
+  EXPECT_TRUE(runUntilDone(flash).ok());
   ASSERT_EQ(told.size(), 1u);
   ASSERT_EQ(told[0].size(), 1u);
   EXPECT_EQ(told[0][0].channel, 5);
   // A plain write on that channel during the flash: no answer, none to its read back either.
-  commands.write({5}, {true});
+  std::future<Result> plain = commands.write({5}, {true});
   bus.expect(toHex(encodeRequest(Request::writeSingleCoil(255, 5, true))));
   bus.expect(toHex(encodeRequest(Request::readCoils(255, 0, 8))));
-  EXPECT_FALSE(runNext().ok());
+  EXPECT_FALSE(runUntilDone(plain).ok());
   // The flash may have been replaced: the next node must not resume it (the first poll after
   // its end plus the slack decides the channel here).
   ASSERT_EQ(told.size(), 2u);

@@ -1,19 +1,21 @@
 // Combinations an independent review found with outputs wrong (issue 48 items 1 and 2), on the
-// node's own parts (SimNode: the bus node's scheduler, fail-safes and commands) against the
+// node's own bus runtime (runtime/bus_runtime.h: the scheduler, fail-safes, commands and share)
+// against the
 // simulated devices in memory, under a manual clock. What is asserted is the simulated device's
 // state, not the node's.
 //   docs/failsafe.md, "What happens when": a broadcast (unit 0) confirms nothing;
 //   docs/failsafe.md, "Generic devices": a signal set since the trigger is not written.
 #include <gtest/gtest.h>
 
+#include <future>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "modbus_rtu_driver/runtime/bus_runtime.h"
 #include "modbus_rtu_driver/sim/sim_generic.h"
 #include "modbus_rtu_driver/sim/sim_lc_relay8.h"
 #include "modbus_rtu_driver/simulation/memory_link.h"
-#include "modbus_rtu_driver/simulation/sim_node.h"
 
 using namespace modbus_rtu_driver;
 
@@ -26,16 +28,31 @@ constexpr uint8_t kPump = 0, kValve = 1, kLamp = 2, kFan = 3;
 struct NodeOnMemoryLine : ::testing::Test {
   ManualClock clock;
   std::unique_ptr<MemoryLink> memory;
-  std::unique_ptr<SimNode> node;
+  std::unique_ptr<BusRuntime> node;
   std::vector<std::string> reports;
   bool alive = true;
 
-  void start(SimNodeOptions options) {
-    SimNodeHooks hooks;
-    hooks.report = [this](const FailsafeReport& r) {
-      reports.push_back(r.device + " " + r.text());
-    };
-    node = std::make_unique<SimNode>(std::move(options), *memory, clock, hooks);
+  // The node's bus, `devices` on it, a bus heartbeat of 0.5 s, the share open (no sockets).
+  void start(std::vector<DeviceConfig> devices) {
+    BusConfig config;
+    config.devices = std::move(devices);
+    config.heartbeat_topic = "/alive";
+    config.heartbeat_timeout = 0.5;
+    config.share.enabled = true;
+    config.share.broadcast_turnaround = 0;  // a real sleep on the bus thread otherwise
+    BusRuntime::Options options;
+    options.clock = &clock;
+    options.stepped = true;
+    node = std::make_unique<BusRuntime>(std::move(config), *memory, std::move(options));
+    for (const auto& unit : node->units()) {
+      DeviceUnit::Observers seen;
+      seen.report = [this](const FailsafeReport& r, const std::string& text) {
+        reports.push_back(r.device + " " + text);
+      };
+      unit->observe(std::move(seen));
+    }
+    std::string error;
+    ASSERT_TRUE(node->share()->open(&error)) << error;
     node->beginStart();
     run(0.5);
     node->finishStart();
@@ -67,6 +84,14 @@ struct NodeOnMemoryLine : ::testing::Test {
       if (node->scheduler().step(&next)) continue;
       clock.advanceTo(std::min({next, end, check}));
     }
+  }
+  // A share client's request; the future holds the transaction's outcome.
+  std::future<Result> share(const Request& request) {
+    auto outcome = std::make_shared<std::promise<Result>>();
+    std::future<Result> f = outcome->get_future();
+    node->share()->forward(
+        request, [](const Bytes&) {}, [outcome](const Result& r) { outcome->set_value(r); });
+    return f;
   }
   uint16_t board(uint8_t address, Table table, uint16_t at) const {
     uint16_t value = 0;
@@ -100,12 +125,9 @@ TEST_F(NodeOnMemoryLine, AShareBroadcastConfirmsNothingOnABoardThatNeverHeardIt)
   line.baud = 19200;
   memory->addDevice(std::make_unique<SimLcRelay8>(1, line));
   memory->addDevice(std::make_unique<SimLcRelay8>(2, line));
-  SimNodeOptions options;
-  options.heartbeat_timeout = 0.5;
-  options.devices = {relayBoard("a", 1), relayBoard("b", 2)};
-  start(options);
+  start({relayBoard("a", 1), relayBoard("b", 2)});
   for (const char* name : {"a", "b"}) {
-    auto set = node->set(1, name, {kPump, kValve}, {true, true}, nullptr);
+    auto set = node->unit(name)->set({kPump, kValve}, {true, true});
     run(0.3);
     ASSERT_TRUE(set.get().ok()) << name;
   }
@@ -115,8 +137,8 @@ TEST_F(NodeOnMemoryLine, AShareBroadcastConfirmsNothingOnABoardThatNeverHeardIt)
   run(2.0);  // the heartbeat is lost: a safe, b's safe write owed
   ASSERT_EQ(board(1, Table::kCoil, kPump), 0);
   ASSERT_EQ(board(2, Table::kCoil, kPump), 1) << "b never heard the safe write";
-  auto broadcast = node->share(
-      2, Request::writeMultipleCoils(kBroadcastAddress, 0, {true, true, true, true}), nullptr);
+  auto broadcast =
+      share(Request::writeMultipleCoils(kBroadcastAddress, 0, {true, true, true, true}));
   run(0.5);
   ASSERT_TRUE(broadcast.get().ok()) << "sent";
   ASSERT_EQ(board(1, Table::kCoil, kLamp), 1) << "a heard it";
@@ -169,16 +191,13 @@ TEST_F(NodeOnMemoryLine, AGenericDevicesOwedSafeValuesDoNotOverwriteANewerSet) {
   SimGenericConfig gc;
   gc.map = drive.generic;
   memory->addDevice(std::make_unique<SimGeneric>(4, line, gc));
-  SimNodeOptions options;
-  options.heartbeat_timeout = 0.5;
-  options.devices = {drive};
-  start(options);
+  start({drive});
   memory->faults(4).silent = true;
   alive = false;
   run(1.0);  // lost: the safe write finds the drive silent, its safe values owed
   memory->faults(4).silent = false;
-  auto set_run = node->writeSignal(1, "drive", 0, 1.0, nullptr);
-  auto set_speed = node->writeSignal(2, "drive", 1, 30.0, nullptr);
+  auto set_run = node->unit("drive")->writeSignal(0, 1.0);
+  auto set_speed = node->unit("drive")->writeSignal(1, 30.0);
   run(0.5);
   ASSERT_TRUE(set_run.get().ok());
   ASSERT_TRUE(set_speed.get().ok());

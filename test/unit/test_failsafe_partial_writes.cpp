@@ -1,5 +1,5 @@
 // docs/failsafe.md, "A command whose answer was lost" (the port failed while it went out) and
-// "A write that failed after part of it was done": the node's own classes (SimNode: the bus
+// "A write that failed after part of it was done": the node's own classes (BusRuntime: the bus
 // node's DeviceCommands, DeviceFailsafe and scheduler) against the simulated boards in memory,
 // under a manual clock. The state asserted is the simulated board's, not the node's.
 #include <gtest/gtest.h>
@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "modbus_rtu_driver/devices/ld58a08.h"
+#include "modbus_rtu_driver/runtime/bus_runtime.h"
 #include "modbus_rtu_driver/sim/sim_lc_relay8.h"
 #include "modbus_rtu_driver/sim/sim_ld58a08.h"
 #include "modbus_rtu_driver/simulation/memory_link.h"
-#include "modbus_rtu_driver/simulation/sim_node.h"
 
 using namespace modbus_rtu_driver;
 
@@ -55,7 +55,7 @@ struct PartialWrites : ::testing::Test {
   ManualClock clock;
   std::unique_ptr<MemoryLink> memory;
   std::unique_ptr<FailingLink> link;
-  std::unique_ptr<SimNode> node;
+  std::unique_ptr<BusRuntime> node;
   std::vector<std::string> reports;
 
   void SetUp() override {
@@ -71,8 +71,7 @@ struct PartialWrites : ::testing::Test {
     memory->addDevice(std::make_unique<SimLcRelay8>(1, line));
     memory->addDevice(std::make_unique<SimLd58a08>(2, line));
     link = std::make_unique<FailingLink>(*memory);
-    SimNodeOptions options;
-    options.heartbeat_timeout = 0;  // no heartbeat here: the writes are the subject
+    BusConfig bus;  // no heartbeat here: the writes are the subject
     const char* names[] = {"relays", "pwm"};
     const char* types[] = {"lc_relay8", "ld58a08"};
     for (int d = 0; d < 2; ++d) {
@@ -84,13 +83,19 @@ struct PartialWrites : ::testing::Test {
       device.failsafe.on_restart = OnRestart::kRestore;
       device.failsafe.safe_state.assign(8, SafeState::kOff);
       device.failsafe.command_timeout.assign(8, 0.0);
-      options.devices.push_back(device);
+      bus.devices.push_back(device);
     }
-    SimNodeHooks hooks;
-    hooks.report = [this](const FailsafeReport& r) {
-      reports.push_back(r.device + ": " + r.text());
-    };
-    node = std::make_unique<SimNode>(options, *link, clock, hooks);
+    BusRuntime::Options options;
+    options.clock = &clock;
+    options.stepped = true;
+    node = std::make_unique<BusRuntime>(bus, *link, std::move(options));
+    for (const auto& unit : node->units()) {
+      DeviceUnit::Observers seen;
+      seen.report = [this](const FailsafeReport& r, const std::string& text) {
+        reports.push_back(r.device + ": " + text);
+      };
+      unit->observe(std::move(seen));
+    }
     node->beginStart();
     run(0.5);
     node->finishStart();
@@ -123,7 +128,7 @@ struct PartialWrites : ::testing::Test {
 
 TEST_F(PartialWrites, AUsersWriteThatWentOutBeforeThePortFailedIsTakenAsFound) {
   link->failNext(FunctionCode::kWriteSingleCoil, /*delivered=*/true, ErrorKind::kIo);
-  auto set = node->set(1, "relays", {3}, {true}, nullptr);
+  auto set = node->unit("relays")->set({3}, {true});
   run(0.3);
   EXPECT_FALSE(set.get().ok()) << "the caller is told it failed";
   ASSERT_EQ(board(1, Table::kCoil, 3), 1) << "the board heard it";
@@ -136,7 +141,7 @@ TEST_F(PartialWrites, AUsersWriteThatWentOutBeforeThePortFailedIsTakenAsFound) {
 TEST_F(PartialWrites, AMergedWriteWhoseLaterFrameFailedLeavesTheEarlierOneAsFound) {
   // Channels 0-1 go in one FC15, channel 5 in an FC05 the board refuses.
   link->failNext(FunctionCode::kWriteSingleCoil, /*delivered=*/false, ErrorKind::kException);
-  auto set = node->set(1, "relays", {0, 1, 5}, {true, true, true}, nullptr);
+  auto set = node->unit("relays")->set({0, 1, 5}, {true, true, true});
   run(0.3);
   const Result written = set.get();
   EXPECT_FALSE(written.ok());
@@ -156,14 +161,14 @@ TEST_F(PartialWrites, AContinuousRunStoppedBeforeAFailedPlainWriteIsNotStartedAg
   pwm.period = 1.0;
   pwm.on_time = 0.5;
   pwm.pulses = 0;  // continuous: a restore would start it again
-  auto started = node->setPwm(1, "pwm", pwm, nullptr);
+  auto started = node->unit("pwm")->setPwm(pwm);
   run(0.5);
   ASSERT_TRUE(started.get().ok());
   const uint16_t enable = Ld58a08::pwmRegister(0) + 2;
   ASSERT_EQ(board(2, Table::kHoldingRegister, enable), 0xFFFF);
   // out0 off: the run is stopped (confirmed), then the coil write never reaches the board.
   link->failNext(FunctionCode::kWriteSingleCoil, /*delivered=*/false, ErrorKind::kIo);
-  auto set = node->set(2, "pwm", {0}, {false}, nullptr);
+  auto set = node->unit("pwm")->set({0}, {false});
   run(0.3);
   EXPECT_FALSE(set.get().ok());
   ASSERT_EQ(board(2, Table::kHoldingRegister, enable), 0) << "stopped";

@@ -9,18 +9,18 @@
 
 namespace modbus_rtu_driver {
 
-using AdapterFactory = std::unique_ptr<DeviceAdapter> (*)(std::shared_ptr<Device>, BusScheduler&,
+using AdapterFactory = std::unique_ptr<DeviceAdapter> (*)(DeviceUnit&, BusScheduler&,
                                                           const ros::NodeHandle&);
 TypeRegistry<AdapterFactory>& adapterClasses();
-// The factory of an adapter built from the device, the bus and the device's node handle.
+// The factory of an adapter built from the device's unit, the bus and the node's handle.
 template <typename T>
-std::unique_ptr<DeviceAdapter> makeAdapter(std::shared_ptr<Device> device, BusScheduler& scheduler,
+std::unique_ptr<DeviceAdapter> makeAdapter(DeviceUnit& unit, BusScheduler& scheduler,
                                            const ros::NodeHandle& node) {
-  return std::make_unique<T>(std::move(device), scheduler, node);
+  return std::make_unique<T>(unit, scheduler, node);
 }
 
 // Null for a type without an adapter.
-std::unique_ptr<DeviceAdapter> createAdapter(std::shared_ptr<Device> device,
-                                             BusScheduler& scheduler, const ros::NodeHandle& node);
+std::unique_ptr<DeviceAdapter> createAdapter(DeviceUnit& unit, BusScheduler& scheduler,
+                                             const ros::NodeHandle& node);
 
 }  // namespace modbus_rtu_driver

@@ -1,5 +1,7 @@
 // One node per bus (a serial port or a gateway): reads the configuration from the private
-// namespace, owns the link, the bus thread and every device on it, and reports to /diagnostics.
+// namespace, opens the link, and runs the bus's BusRuntime (runtime/bus_runtime.h: the bus
+// thread, the devices, their fail-safe, the share), with one ROS adapter per device; it turns
+// ROS messages and timers into the runtime's calls and reports to /diagnostics.
 #pragma once
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -13,15 +15,14 @@
 #include <string>
 #include <vector>
 
-#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
 #include "modbus_rtu_driver/core/bus/task_queue.h"
-#include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/core/link/link.h"
 #include "modbus_rtu_driver/node_config/bus_config.h"
 #include "modbus_rtu_driver/ros/device_adapter.h"
 #include "modbus_rtu_driver/ros/raw_writes.h"
 #include "modbus_rtu_driver/ros/running_timed_parameter.h"
 #include "modbus_rtu_driver/ros/share_bridge.h"
+#include "modbus_rtu_driver/runtime/bus_runtime.h"
 
 namespace modbus_rtu_driver {
 
@@ -39,13 +40,6 @@ class BusNode {
   void diagnoseBus(diagnostic_updater::DiagnosticStatusWrapper& status);
   // Fail-safe: ~failsafe, heartbeat subscriptions (any type), the deadline timer.
   void startFailsafe();
-  void checkDeadlines();
-  // Bus thread: a share client's or raw write to `slave` (0: every device) went out: confirmed
-  // (a command), or its answer lost (its channels unknown until the next poll).
-  void externalWrite(const Request& request, const Result& result, CommandSource source);
-  // The adapters, those whose last transaction succeeded first (a silent device's safe write
-  // costs response_timeout x (retries + 1) per frame: it goes last).
-  std::vector<DeviceAdapter*> answeringFirst() const;
   uint64_t recentLineErrors(const LinkStats& stats);
   // realtime_priority and lock_memory: asked for here, their outcome shown in the diagnostics.
   BusScheduler::Options schedulingOptions();
@@ -69,21 +63,22 @@ class BusNode {
   ros::NodeHandle nh_;
   BusConfig config_;
   std::unique_ptr<Link> link_;  // serial, Modbus TCP or RTU over TCP (by `port`)
-  std::unique_ptr<BusScheduler> scheduler_;
-  // Declared before the adapters, which keep their timed commands in it: it outlives them.
+  // Declared before the runtime, which keeps the timed commands in it: it outlives it.
   std::unique_ptr<RunningTimedParameter> running_timed_;
   std::vector<std::unique_ptr<DeviceAdapter>> adapters_;
+  // The bus composed (runtime/bus_runtime.h); destroyed first (~BusNode), as its bus thread
+  // calls into the adapters.
+  std::unique_ptr<BusRuntime> runtime_;
   // wire_log's writes, and with realtime_priority the bus thread's publishing, run here; none
   // without either (stopped after the bus, before the adapters go).
   std::unique_ptr<TaskQueue> publish_queue_;
   std::unique_ptr<FILE, int (*)(FILE*)> wire_log_{nullptr, &std::fclose};  // publishing thread
   std::unique_ptr<RawWrites> raw_writes_;
-  std::unique_ptr<ShareBridge> share_;  // Modbus TCP clients of the bus; goes after the bus stops
+  std::unique_ptr<ShareBridge> share_;  // the runtime's share's listening and /diagnostics
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::Timer diagnostics_timer_;
   ros::Publisher failsafe_pub_;
   std::vector<ros::Subscriber> heartbeat_subs_;
-  std::unique_ptr<Watchdog> bus_heartbeat_;
   ros::SteadyTimer failsafe_timer_;
   std::mutex realtime_mutex_;  // the two below: set on the bus thread, read by diagnostics
   std::string realtime_status_ = "off";

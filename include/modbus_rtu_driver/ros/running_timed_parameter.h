@@ -19,11 +19,11 @@
 #include <thread>
 #include <vector>
 
-#include "modbus_rtu_driver/failsafe/kept_timed_commands.h"
+#include "modbus_rtu_driver/runtime/kept_timed_store.h"
 
 namespace modbus_rtu_driver {
 
-class RunningTimedParameter {
+class RunningTimedParameter : public KeptTimedStore {
  public:
   using Read = std::function<std::vector<KeptTimedCommand>(const std::string& device)>;
   using Write =
@@ -39,15 +39,19 @@ class RunningTimedParameter {
   // Where the lists come from and go to (tests: a write that blocks as a master can).
   RunningTimedParameter(Read read, Write write);
   // Ends the thread; one still in a write is left to the process's exit.
-  ~RunningTimedParameter();
+  ~RunningTimedParameter() override;
   RunningTimedParameter(const RunningTimedParameter&) = delete;
   RunningTimedParameter& operator=(const RunningTimedParameter&) = delete;
 
   // What the previous node kept for `device`.
-  std::vector<KeptTimedCommand> read(const std::string& device) const { return read_(device); }
+  std::vector<KeptTimedCommand> read(const std::string& device) const override {
+    return read_(device);
+  }
   // Any thread, without waiting: `device`'s running timed commands are now `kept` (none: the
   // key is deleted). Only the newest list not yet written is written.
-  void keep(const std::string& device, std::vector<KeptTimedCommand> kept);
+  void keep(const std::string& device, std::vector<KeptTimedCommand> kept) override;
+  // Wall-clock time: the list outlives the node.
+  double seconds() const override;
   // Waits until every list kept so far is written, or `deadline`: false when it passed.
   bool flush(std::chrono::steady_clock::time_point deadline);
 

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -44,7 +45,15 @@ struct SimRunResult {
   // goes on after them.
   std::vector<std::pair<std::string, uint64_t>> known_failures;
   std::string known_example;  // the first known failure's message
+  // How often each path ran (docs/simulation.md, "Coverage"): "step K", "check I", "report
+  // TRIGGER TYPE ACTION", "fault F TYPE".
+  std::map<std::string, uint64_t> coverage;
 };
+
+// The coverage rows a run must hit (`--require-coverage`): every step kind, every invariant
+// checked where it could fail, each trigger, device type and action the docs give, each fault
+// on each device type.
+const std::vector<std::string>& simRequiredCoverage();
 
 class FailsafeSimulation {
  public:

@@ -126,10 +126,20 @@ void BusScheduler::addPoll(const std::string& device, double rate_hz, Job poll,
   clock_.notifyAll(wake_);  // the bus thread may be waiting with nothing to poll
 }
 
-std::future<Result> BusScheduler::submit(const std::string& device, Job job) {
+BusScheduler::Job BusScheduler::tagged(Job job, uint64_t tag) {
+  if (tag == 0) return job;
+  return [this, tag, job = std::move(job)](Transport& t) {
+    const uint64_t outer = current_tag_.exchange(tag, std::memory_order_relaxed);
+    Result r = job(t);
+    current_tag_.store(outer, std::memory_order_relaxed);
+    return r;
+  };
+}
+
+std::future<Result> BusScheduler::submit(const std::string& device, Job job, uint64_t tag) {
   Pending p;
   p.device = device;
-  p.job = std::move(job);
+  p.job = tagged(std::move(job), tag);
   std::future<Result> f = p.promise.get_future();
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -143,7 +153,8 @@ std::future<Result> BusScheduler::submit(const std::string& device, Job job) {
   return f;
 }
 
-void BusScheduler::submitShared(const std::string& device, Job job, ResultCallback done) {
+void BusScheduler::submitShared(const std::string& device, Job job, ResultCallback done,
+                                uint64_t tag) {
   Result refused = Result::failure(ErrorKind::kIo, "bus stopped");
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -151,7 +162,7 @@ void BusScheduler::submitShared(const std::string& device, Job job, ResultCallba
     if (running_ && !shared_closed_) {
       Pending p;
       p.device = device;
-      p.job = std::move(job);
+      p.job = tagged(std::move(job), tag);
       p.done = std::move(done);
       p.shared = true;
       shared_.push_back(std::move(p));

@@ -62,6 +62,10 @@ double ShareGateway::ownTransaction(const Request& sent) const {
 }
 
 bool ShareGateway::start(std::string* error) {
+  return open(error) && server_->start(error);
+}
+
+bool ShareGateway::open(std::string* error) {
   if (config_.max_queue < 1) {
     if (error) *error = "max_queue: must be at least 1";
     return false;
@@ -93,7 +97,7 @@ bool ShareGateway::start(std::string* error) {
     if (!expiry_thread_.joinable()) expiry_thread_ = std::thread([this] { expireLoop(); });
   }
   scheduler_.openShared();
-  return server_->start(error);
+  return true;
 }
 
 // No new request (the server stops first), then none of the queued ones: the node calls this
@@ -114,7 +118,8 @@ void ShareGateway::expire(Waiting& w) {
   int queued = Waiting::kQueued;
   if (!w.state.compare_exchange_strong(queued, Waiting::kExpired)) return;
   ++expired_;
-  server_->replyException(w.in, kGatewayTargetFailed);
+  w.answer(encodeException(w.request.slave, static_cast<uint8_t>(w.request.function),
+                           kGatewayTargetFailed));
 }
 
 void ShareGateway::expireLoop() {
@@ -134,19 +139,25 @@ void ShareGateway::expireLoop() {
   }
 }
 
-// On the server's thread: never waits for the bus.
+// On the server's thread.
 void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
-  const Request& request = in.request;
+  forward(in.request, [this, in](const Bytes& rtu_adu) { server_->reply(in, rtu_adu); });
+}
+
+void ShareGateway::forward(const Request& request, Answer answer,
+                           std::function<void(const Result&)> ran, uint64_t tag) {
   if (++in_flight_ > config_.max_queue) {
     --in_flight_;
-    return server_->replyException(in, kSlaveDeviceBusy);
+    return answer(
+        encodeException(request.slave, static_cast<uint8_t>(request.function), kSlaveDeviceBusy));
   }
   const Request sent = forwarded(request);
   const std::string device = device_of_ ? device_of_(request.slave) : "";
   const auto turnaround = std::chrono::duration<double>(
       sent.slave == kBroadcastAddress ? config_.broadcast_turnaround : 0.0);
   auto w = std::make_shared<Waiting>();
-  w->in = in;
+  w->request = request;
+  w->answer = std::move(answer);
   const bool bounded = bound_ > 0;
   if (bounded) {
     // The latest start that still ends within the bound.
@@ -162,7 +173,7 @@ void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
   }
   scheduler_.submitShared(
       device,
-      [this, sent, turnaround, w, bounded](Transport& t) {
+      [this, sent, turnaround, w, bounded, ran = std::move(ran)](Transport& t) {
         // Too late to be answered in time (the expiry thread may not have run yet): 0B, unsent.
         if (bounded && clock_.now() > w->start_by) expire(*w);
         int queued = Waiting::kQueued;
@@ -173,6 +184,7 @@ void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
                                      "answer bound (answered 0B)");
         Result r = t.execute(sent);
         if (!isReadFunction(sent.function) && wrote_) wrote_(sent, r);
+        if (ran) ran(r);
         // On the bus thread, on purpose: nothing else may go on the line during the delay.
         if (r.ok() && turnaround.count() > 0) std::this_thread::sleep_for(turnaround);
         return r;
@@ -183,9 +195,10 @@ void ShareGateway::handle(const ModbusTcpServer::Incoming& in) {
         int queued = Waiting::kQueued;
         if (w->state.load() == Waiting::kRunning ||
             w->state.compare_exchange_strong(queued, Waiting::kDone))
-          server_->reply(w->in, shareReplyFor(w->in.request, r));
+          w->answer(shareReplyFor(w->request, r));
         --in_flight_;
-      });
+      },
+      tag);
 }
 
 }  // namespace modbus_rtu_driver

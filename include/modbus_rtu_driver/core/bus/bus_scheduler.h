@@ -8,6 +8,7 @@
 // Time comes from a Clock (the real steady clock unless one is given; tests use a ManualClock).
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -107,13 +108,18 @@ class BusScheduler {
   // Every submitted job runs exactly once: while the port is not open (or once the bus stops)
   // it runs against a transport that refuses every request, so a job that took requests from a
   // shared queue (merged writes, command topics) fails them all and keeps nothing for later.
-  std::future<Result> submit(const std::string& device, Job job);
+  // `tag` names the caller's operation: currentTag() says it while the job runs (0: none).
+  std::future<Result> submit(const std::string& device, Job job, uint64_t tag = 0);
   // Runs `job` on the bus thread after every queued write and ahead of every poll (a shared
   // request from a Modbus TCP client), with submit's guarantees: it runs exactly once, against
   // the refusing transport while the port is not open or once the bus stops. `done` gets the
   // outcome exactly once: on the bus thread, or on the caller's when the bus is not running.
   // An empty `device` (a slave address no configured device has) keeps no health.
-  void submitShared(const std::string& device, Job job, ResultCallback done);
+  void submitShared(const std::string& device, Job job, ResultCallback done, uint64_t tag = 0);
+  // Bus thread: the tag of the submitted job running now (0: a poll, or a job given none), for
+  // a trace of whose request is on the line (the fail-safe's simulation tells its callers'
+  // writes from the fail-safe's own by it).
+  uint64_t currentTag() const { return current_tag_.load(std::memory_order_relaxed); }
   // Stops taking shared requests: those queued now and every later one fail unsent with
   // `reason` (kNotConnected), the one on the bus right now finishes. The node calls it before
   // its safe writes at shutdown, so no client's request runs after them. openShared() undoes it.
@@ -174,6 +180,8 @@ class BusScheduler {
     std::string reason;
   };
 
+  // `job`, with currentTag() saying `tag` while it runs (nested: a poll runs queued writes).
+  Job tagged(Job job, uint64_t tag);
   void run();
   // One pass of the bus thread's loop (`lock` held on entry and on return): true when it ran
   // something, else false with `wait` = when to look again.
@@ -227,6 +235,7 @@ class BusScheduler {
   // that again gets none (docs/failsafe.md "Timing": one transaction per job, not a write and
   // then its read back, each with every retry).
   std::set<std::string> unanswered_;
+  std::atomic<uint64_t> current_tag_{0};
   std::thread thread_;
 };
 

@@ -59,6 +59,17 @@ class ShareGateway {
   // Checks the configuration (answer_within against the longest transaction, naming both) and
   // listens.
   bool start(std::string* error);
+  // start() without listening: requests come only through forward() (the fail-safe's
+  // simulation, which has no sockets).
+  bool open(std::string* error);
+  // What a client's request gets: the RTU ADU of its reply or exception, exactly once (on the
+  // bus thread, the gateway's thread at the bound, or the caller's when refused at once).
+  using Answer = std::function<void(const Bytes& rtu_adu)>;
+  // One client's request, on its way to the bus (the server's thread calls it for each request;
+  // never waits for the bus). `ran`, if given, gets the transaction's outcome on the bus thread
+  // right after it (the simulation's model); `tag` is the job's (BusScheduler::currentTag).
+  void forward(const Request& request, Answer answer,
+               std::function<void(const Result&)> ran = nullptr, uint64_t tag = 0);
   // Closes the server and refuses every request still queued on the bus (unsent): none runs
   // after this returns, except the one on the bus right now.
   void stop();
@@ -83,7 +94,8 @@ class ShareGateway {
   // A request between its arrival and its answer: queued, on the bus, or answered 0B unsent.
   struct Waiting {
     enum State { kQueued, kRunning, kExpired, kDone };
-    ModbusTcpServer::Incoming in;
+    Request request;
+    Answer answer;
     Clock::time_point start_by;
     std::atomic<int> state{kQueued};
   };

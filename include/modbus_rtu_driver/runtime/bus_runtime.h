@@ -1,0 +1,133 @@
+// One bus, composed: the composition root of everything the node runs for a bus, ROS-free. It
+// owns, and is the only place that wires:
+//   - the scheduler (the bus thread) on the given transport, and one DeviceUnit per device
+//     (the device, its fail-safe, its commands; a generic device's safe values in the same shape);
+//   - the trigger clock: the bus heartbeat, each device's own heartbeat and command deadlines,
+//     and the deadline check's period;
+//   - the start sequence (on_start safe writes, then the heartbeats armed, then the polls) and
+//     the stop sequence (the share closed first, then the safe writes, devices that answered
+//     first, then the bus);
+//   - the one address map: external writes (the share's, raw writes) reach the device they name;
+//   - the share (Modbus TCP clients), when configured;
+//   - the running timed commands kept for the next node, through a KeptTimedStore.
+// The ROS node (ros/bus_node.h) turns messages into its calls and its state into topics and
+// /diagnostics; the fail-safe's simulation runs this same object on a manual clock and an
+// in-memory line (docs/architecture.md).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <future>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "modbus_rtu_driver/core/bus/bus_scheduler.h"
+#include "modbus_rtu_driver/core/bus/clock.h"
+#include "modbus_rtu_driver/core/bus/watchdog.h"
+#include "modbus_rtu_driver/core/link/link.h"
+#include "modbus_rtu_driver/core/server/share_gateway.h"
+#include "modbus_rtu_driver/node_config/bus_config.h"
+#include "modbus_rtu_driver/runtime/device_unit.h"
+#include "modbus_rtu_driver/runtime/kept_timed_store.h"
+
+namespace modbus_rtu_driver {
+
+class BusRuntime {
+ public:
+  struct Options {
+    Clock* clock = &Clock::steady();  // what timeouts and deadlines are measured on
+    // The simulation runs the bus itself (BusScheduler::step) instead of the bus thread.
+    bool stepped = false;
+    BusScheduler::Options scheduling;
+    // The link under `transport` (the serial port, a gateway): the share's answer bound is
+    // computed from its worst transaction, devices' reply delays are set on it. None: no bound.
+    Link* link = nullptr;
+    // Where running timed commands are kept for the next node; none: nothing is kept.
+    KeptTimedStore* kept_timed = nullptr;
+    // Log lines of the runtime's own (what the previous node left running).
+    std::function<void(const std::string&)> info;
+  };
+  using Pending = std::vector<std::pair<std::string, std::future<Result>>>;
+
+  // `config` was checked by parseBusConfig; `transport` outlives the runtime.
+  BusRuntime(BusConfig config, Transport& transport, Options options);
+  // Without stop(): a killed node. Queued jobs fail unsent; nothing more is kept.
+  ~BusRuntime();
+  BusRuntime(const BusRuntime&) = delete;
+  BusRuntime& operator=(const BusRuntime&) = delete;
+
+  const BusConfig& config() const { return config_; }
+  BusScheduler& scheduler() { return *scheduler_; }
+  const std::vector<std::unique_ptr<DeviceUnit>>& units() const { return units_; }
+  DeviceUnit* unit(const std::string& name);
+  // The address map: the configured device at `slave`, or "" (none, or 0: every device).
+  std::string deviceAt(uint8_t slave) const;
+  // The share, when `share` is configured (nullptr otherwise).
+  ShareGateway* share() { return share_.get(); }
+
+  // ---- the trigger clock ----
+  // A message on the bus heartbeat's topic, and on `device`'s own.
+  void feedHeartbeat();
+  void feedDeviceHeartbeat(const std::string& device);
+  Watchdog* busHeartbeat() { return bus_heartbeat_.get(); }
+  bool heartbeatLost() const { return bus_heartbeat_ && bus_heartbeat_->tripped(); }
+  // s between deadline checks (a tenth of the shortest timeout, 5-500 ms); 0: nothing to check.
+  double checkPeriod() const { return check_period_; }
+  // Heartbeats lost and command deadlines passed: their safe writes, devices that answer first.
+  void checkDeadlines();
+
+  // ---- start and stop, each in two halves (the bus runs in between) ----
+  // The bus starts (its thread, or stepping), the on_start safe writes are queued.
+  void beginStart();
+  bool startWritesDone() const;
+  // The on_start writes, by device, for the caller to wait on (once).
+  Pending takeStartWrites() { return std::move(start_writes_); }
+  // The heartbeats count from here; the polls start (commands are taken from now on).
+  void finishStart();
+  bool started() const { return started_; }
+  // The share stops (queued requests refused unsent), then the safe writes are queued, devices
+  // that answered first (a silent device's would hold the others back).
+  void beginStop();
+  bool stopWritesDone() const;
+  Pending takeStopWrites() { return std::move(stop_writes_); }
+  // Ends the bus thread, waiting for its transaction until `deadline`: false when it is still
+  // in it (BusScheduler::stopBy).
+  bool stopBus(std::chrono::steady_clock::time_point deadline);
+
+  // ---- what the node carries for others ----
+  // A raw write (write_registers, write_coils): refused unless allow_raw_writes, never a
+  // broadcast; sent once (it may start something); confirmed or lost, the fail-safe learns it.
+  std::future<Result> rawWrite(const Request& request, DeviceUnit::Call call = {});
+  // Why no raw write may go to `slave` (raw writes off, or a broadcast); empty: it may.
+  std::string rawWriteRefusal(uint8_t slave) const;
+  // Bus thread: a share client's or raw write to `slave` (0: every device) went out.
+  void externalWrite(const Request& request, const Result& result, CommandSource source);
+
+  // Output writes and other jobs queued on the bus now.
+  size_t queuedJobs() const { return scheduler_->queuedJobs(); }
+  // The tag of the job on the bus now (BusScheduler::currentTag).
+  uint64_t currentTag() const { return scheduler_->currentTag(); }
+
+ private:
+  std::vector<DeviceUnit*> answeringFirst() const;
+  Pending applySafeEverywhere(const std::string& trigger, const std::string& reason,
+                              bool only_on_start);
+
+  BusConfig config_;
+  Options options_;
+  Clock& clock_;
+  std::unique_ptr<BusScheduler> scheduler_;
+  std::unique_ptr<Watchdog> bus_heartbeat_;
+  std::vector<std::unique_ptr<DeviceUnit>> units_;
+  std::map<uint8_t, DeviceUnit*> by_address_;
+  std::unique_ptr<ShareGateway> share_;  // after the units: its jobs call into them
+  double check_period_ = 0;
+  bool started_ = false;
+  Pending start_writes_, stop_writes_;
+};
+
+}  // namespace modbus_rtu_driver
