@@ -147,6 +147,7 @@ bool BusNode::start() {
     adapters_.push_back(std::move(adapter));
   }
   raw_writes_ = std::make_unique<RawWrites>(nh_, *runtime_);
+  stateSafeTimes();
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>();
   diagnostics_->setHardwareID(config_.link.port);
@@ -196,6 +197,25 @@ bool BusNode::start() {
            link_->target().type->name, config_.link.baud, parityName(config_.link.parity),
            adapters_.size());
   return true;
+}
+
+// docs/failsafe.md, "How long until safe": ahead of a safe write, at most one write per service
+// thread (a service call waits for its write) and one command job per device with outputs.
+void BusNode::stateSafeTimes() {
+  size_t writes_ahead = kServiceThreads;
+  for (const auto& u : runtime_->units())
+    if (u->device().outputCount() > 0) ++writes_ahead;
+  for (size_t i = 0; i < adapters_.size(); ++i) {
+    const DeviceUnit& unit = *runtime_->units()[i];
+    const std::optional<SafeTime> t = runtime_->safeTime(unit, writes_ahead);
+    if (!t) continue;
+    adapters_[i]->setSafeTime(*t);
+    ROS_INFO(
+        "%s: safe within %.3f s of its last heartbeat or command (timeout %.3f s, deadline check "
+        "%.3f s, %.3f s after it: %zu write(s) ahead, %zu device(s))",
+        unit.name().c_str(), t->total(), t->trigger_timeout, t->check_period, t->afterTrigger(),
+        t->writes_ahead, t->devices);
+  }
 }
 
 // The bus thread copies each frame and its times; the publishing thread formats and writes it

@@ -13,7 +13,7 @@ int run(const ros::NodeHandle& nh) {
   Node node(nh);
   if (!node.start()) return 1;
   // Service callbacks wait for the bus; several threads keep callers from queueing on each other.
-  ros::AsyncSpinner spinner(4);
+  ros::AsyncSpinner spinner(modbus_rtu_driver::BusNode::kServiceThreads);
   spinner.start();
   ros::waitForShutdown();
   spinner.stop();

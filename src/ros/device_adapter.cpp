@@ -164,6 +164,8 @@ void DeviceAdapter::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("shared requests failed", h.shared_failed);
   status.add("consecutive failures", h.consecutive_failures);
   status.add("last error", h.last_error.empty() ? "none" : h.last_error);
+  // docs/failsafe.md, "How long until safe".
+  if (safe_time_) status.add("safe within [s]", safe_time_->total());
   diagnoseFailsafe(status);
   diagnoseType(status);
 }

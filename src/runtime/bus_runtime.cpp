@@ -57,8 +57,10 @@ BusRuntime::BusRuntime(BusConfig config, Transport& transport, Options options)
   // Deadlines are checked at a tenth of the shortest timeout: a trigger fires at most 10 % late.
   if (deadlines) check_period_ = std::max(0.005, shortest / 10);
   if (config_.share.enabled) {
+    // The answer bound needs the link's worst transaction, and a thread that answers at the
+    // bound: none on a stepped bus (the simulation's steps run alone, deterministic).
     ShareGateway::TransactionTime transaction_time;
-    if (Link* link = options_.link)
+    if (Link* link = options_.link; link && !options_.stepped)
       transaction_time = [link](const Request& r) { return link->worstTransactionSeconds(r); };
     share_ = std::make_unique<ShareGateway>(
         *scheduler_, config_.share, [this](uint8_t slave) { return deviceAt(slave); },
@@ -119,6 +121,52 @@ void BusRuntime::checkDeadlines() {
     for (DeviceUnit* u : order) u->applySafe("heartbeat", reason);
   }
   for (DeviceUnit* u : order) u->checkDeadlines();
+}
+
+// docs/failsafe.md, "How long until safe". The transactions are those of the largest frames the
+// node writes or reads for outputs and signals (8 registers: 25 bytes out, 21 back).
+std::optional<SafeTime> BusRuntime::safeTime(const DeviceUnit& unit, size_t writes_ahead) const {
+  if (!unit.hasSafeStates()) return std::nullopt;
+  const FailsafeConfig& fs = unit.failsafe().config();
+  double timeout = 0;
+  if (bus_heartbeat_) timeout = std::max(timeout, config_.heartbeat_timeout);
+  if (!fs.heartbeat_topic.empty()) timeout = std::max(timeout, fs.heartbeat_timeout);
+  for (double s : fs.command_timeout) timeout = std::max(timeout, s);
+  if (timeout <= 0) return std::nullopt;
+  SafeTime t = safeAfterTrigger(writes_ahead);
+  t.trigger_timeout = timeout;
+  return t;
+}
+
+SafeTime BusRuntime::safeAfterTrigger(size_t writes_ahead) const {
+  SafeTime t;
+  t.check_period = check_period_;
+  t.writes_ahead = writes_ahead;
+  t.devices = units_.size();
+  const double character = characterTime(config_.link);
+  // Through a gateway each answer also takes the network's time.
+  const bool networked = config_.link_target.type && config_.link_target.type->networked;
+  const double network = networked ? config_.link.network_allowance : 0.0;
+  constexpr size_t kRequestBytes = 25, kReplyBytes = 21, kRegisters = 8;
+  for (const auto& u : units_) {
+    const uint8_t slave = u->address();
+    const double worst =
+        options_.link
+            ? std::max(options_.link->worstTransactionSeconds(Request::writeMultipleRegisters(
+                           slave, 0, std::vector<uint16_t>(kRegisters))),
+                       options_.link->worstTransactionSeconds(
+                           Request::readHoldingRegisters(slave, 0, kRegisters)))
+            : (1 + std::max(0, config_.link.retries)) *
+                  (effectiveResponseTimeout(config_.link, kRequestBytes) +
+                   static_cast<double>(kRequestBytes + kReplyBytes) * character +
+                   effectiveByteTimeout(config_.link) + u->device().config().reply_delay);
+    t.worst_transaction = std::max(t.worst_transaction, worst);
+    t.answered_transaction =
+        std::max(t.answered_transaction,
+                 static_cast<double>(kRequestBytes + kReplyBytes) * character +
+                     2 * frameGap(config_.link) + u->device().config().reply_delay + network);
+  }
+  return t;
 }
 
 // ---- start and stop ---------------------------------------------------------------------------

@@ -73,12 +73,14 @@ const std::vector<SimInvariant>& simInvariants() {
 const std::vector<std::string>& simRequiredCoverage() {
   static const std::vector<std::string> rows = [] {
     std::vector<std::string> r;
-    for (const char* k :
-         {"wait", "set", "set2", "command", "pulse", "pwm", "pwm_stop", "share05", "share15",
-          "raw05", "raw15", "share16_flash", "raw16_flash", "share16_pwm", "share06_stop", "signal",
-          "hb_stop", "hb_resume", "dhb_stop", "dhb_resume", "silent", "lose", "late", "garble",
-          "power", "ld_save", "port_lost", "port_back", "stop", "kill", "start",
-          "share15_broadcast"})
+    for (const char* k : {"wait",        "set",         "set2",         "command",
+                          "pulse",       "pwm",         "pwm_stop",     "share05",
+                          "share15",     "raw05",       "raw15",        "share16_flash",
+                          "raw16_flash", "share16_pwm", "share06_stop", "signal",
+                          "hb_stop",     "hb_resume",   "dhb_stop",     "dhb_resume",
+                          "silent",      "lose",        "late",         "garble",
+                          "power",       "ld_save",     "port_lost",    "port_back",
+                          "stop",        "kill",        "start",        "share15_broadcast"})
       r.push_back(std::string("step ") + k);
     for (const SimInvariant& i : simInvariants()) r.push_back(std::string("check ") + i.id);
     for (const char* f : {"silent", "lose", "late", "garble", "power"})
@@ -395,11 +397,6 @@ class World {
     return -1;
   }
   double pollPeriod(int d) const { return 1.0 / config_.devices[d].poll_rate; }
-  // The longest one transaction can take: every attempt timed out.
-  double worstTransaction() const {
-    return (config_.link.response_timeout + 0.03) * (config_.link.retries + 1);
-  }
-  double normalTransaction() const { return 60.0 * 10.0 / config_.link.baud; }
 
   void fail(const std::string& invariant, const std::string& message);
   // Counts a coverage row (docs/simulation.md, "Coverage").
@@ -711,6 +708,7 @@ void World::startNode() {
   o.clock = &clock_;
   o.stepped = true;
   o.kept_timed = &kept_timed_;  // the parameter server's: a new node resumes what runs
+  o.link = &link_;              // its timing (the safe time); the transport counts on top of it
   node_ = std::make_unique<BusRuntime>(std::move(bus), transport_, std::move(o));
   for (const auto& u : node_->units()) {
     const std::string name = u->name();
@@ -1234,8 +1232,7 @@ void World::onReport(const FailsafeReport& r) {
         if (named.saved_stop_read_at != TP{}) named.saved_run_unseen = false;
       }
     if (r.reason.find("changed with no command") != std::string::npos && checked("I6") &&
-        !m.justified &&
-        m.prev_poll_at >= m.justified_until && !run_stopped)
+        !m.justified && m.prev_poll_at >= m.justified_until && !run_stopped)
       fail("I6", std::string(kNames[d]) + ": restart reported (" + r.reason +
                      ") though nothing changed its outputs without a confirmed command");
     // docs:34, 90-92: the restart is what the poll that saw it showed; on_restart's writes may
@@ -1435,9 +1432,10 @@ void World::checkHeld() {
   // transaction for each output write queued ahead (docs:188-201; a silent device's is one
   // with its retries, an answering LD58A08's a few: its PWM reads, the write, its read back),
   // and the safe writes of each device.
+  // The node's own stated bound (BusRuntime::safeAfterTrigger, docs/failsafe.md "How long until
+  // safe"), with the writes actually queued ahead.
   const auto budget = [this](size_t queued) {
-    return node_->checkPeriod() + static_cast<double>(1 + queued) * worstTransaction() +
-           static_cast<double>(kDevices + queued) * 6 * normalTransaction();
+    return node_->safeAfterTrigger(queued).afterTrigger();
   };
   for (int d = 0; d < kGen; ++d) {
     DevModel& m = model_[d];

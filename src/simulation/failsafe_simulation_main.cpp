@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
   std::string cases, junit, replay;
   bool quiet = false;
   bool require_coverage = false;  // a required coverage row without a hit is a failure
-  bool trace = false;  // --replay: every step, frame and report on stderr
+  bool trace = false;             // --replay: every step, frame and report on stderr
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](const char* name) -> std::string {

@@ -238,6 +238,38 @@ class FailsafeTest(unittest.TestCase):
         finally:
             del self.config["share"]
 
+    def test_9_the_stated_safe_time_holds_on_a_bus_with_a_silent_device(self):
+        # Issue 48: each device with a trigger states at start how long its outputs may take to
+        # be safe after its last heartbeat or command (docs/failsafe.md, "How long until safe"),
+        # in the log and in /diagnostics. With the PDU silent (its polls cost every retry) the
+        # heartbeat is lost: both boards are safe within what they stated.
+        if not self.node.running:
+            self.start_node()
+        stated = {}
+        for device in ("relays", "pwm_board"):
+            stated[device] = float(helpers.device_value(self.diag, device, "safe within [s]"))
+            self.assertIn("%s: safe within %.3f s of its last heartbeat" % (device, stated[device]),
+                          self.node.output)
+        self.assertNotIn("pdu: safe within", self.node.output, "every socket holds: no safe time")
+        self.set("relays/pump", True)
+        self.set("pwm_board/out1", False)
+        self.sim.silence("2", True)
+        try:
+            time.sleep(1.0)  # the PDU's polls fail (retries, then backoff) from here
+            self.beating.clear()
+            t0 = time.time()
+            # The last heartbeat went out at most one beat (0.05 s) before t0.
+            for device, dev, safe in (("relays", RELAYS, [0, 0, 1]), ("pwm_board", PWM, [0, 1])):
+                helpers.wait_until(lambda: self.coils(dev, len(safe)) == safe,
+                                   stated[device] + 5, device + " safe")
+                took = time.time() - t0 + 0.05
+                self.assertLessEqual(took, stated[device],
+                                     "%s safe after %.3f s, stated %.3f s" %
+                                     (device, took, stated[device]))
+        finally:
+            self.sim.silence("2", False)
+            self.beating.set()
+
 
 if __name__ == "__main__":
     rostest.rosrun("modbus_rtu_driver", "failsafe", FailsafeTest)

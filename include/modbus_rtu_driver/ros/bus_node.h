@@ -28,6 +28,9 @@ namespace modbus_rtu_driver {
 
 class BusNode {
  public:
+  // The spinner's threads (bus_node_main.cpp): at most this many service calls wait on the bus
+  // at once, each with one write queued (the safe time counts them ahead of a safe write).
+  static constexpr int kServiceThreads = 4;
   explicit BusNode(const ros::NodeHandle& private_nh);
   ~BusNode();
   // False (with the reason logged once) when the configuration is invalid.
@@ -47,6 +50,8 @@ class BusNode {
   TaskQueue* rosPublishing() const;
   // wire_log: opens the file and has the link report every frame to it.
   bool openWireLog(std::string* error);
+  // Logs each device's safe time and hands it to its /diagnostics.
+  void stateSafeTimes();
 
   static constexpr int kErrorWindowSeconds = 10;
   // After shutdown_timeout, how long the stop still waits for the bus thread to end the

@@ -24,6 +24,7 @@
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/ros/digital_states_publisher.h"
 #include "modbus_rtu_driver/ros/publish_shared.h"
+#include "modbus_rtu_driver/runtime/bus_runtime.h"
 #include "modbus_rtu_driver/runtime/device_unit.h"
 
 namespace modbus_rtu_driver {
@@ -49,6 +50,8 @@ class DeviceAdapter {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   const std::string& name() const { return device_->name(); }
 
+  // The stated safe time (BusRuntime::safeTime), for /diagnostics; before start().
+  void setSafeTime(const SafeTime& t) { safe_time_ = t; }
   // Where fail-safe events go besides this device's topic (the node's latched ~failsafe).
   using EventSink = std::function<void(const FailsafeEvent&)>;
   void setFailsafeSink(EventSink sink) { failsafe_sink_ = std::move(sink); }
@@ -115,6 +118,7 @@ class DeviceAdapter {
   std::vector<ros::ServiceServer> services_;
 
   std::optional<bool> logged_online_;  // what the log last said
+  std::optional<SafeTime> safe_time_;
   ros::WallTime last_offline_log_;
 };
 

@@ -21,6 +21,7 @@
 #include <future>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -36,6 +37,26 @@
 
 namespace modbus_rtu_driver {
 
+// How long a device's outputs can take to reach their safe state after a trigger
+// (docs/failsafe.md, "How long until safe"): its parts, from the configuration.
+struct SafeTime {
+  double trigger_timeout = 0;       // s, the longest of the device's triggers' timeouts
+  double check_period = 0;          // s, between deadline checks
+  double worst_transaction = 0;     // s, one transaction nobody answers, every retry
+  double answered_transaction = 0;  // s, one transaction answered (its frames and reply delay)
+  size_t writes_ahead = 0;          // writes that may be queued before the safe write
+  size_t devices = 0;               // every device's safe writes may go first
+  // s from the trigger's deadline to the confirmed safe state: the check, the transaction on
+  // the line and one per write ahead (each may find a silent device), and up to 6 answered
+  // transactions per device and write ahead (a write, its read back, an LD58A08's PWM reads).
+  double afterTrigger() const {
+    return check_period + static_cast<double>(1 + writes_ahead) * worst_transaction +
+           static_cast<double>(devices + writes_ahead) * 6 * answered_transaction;
+  }
+  // s from the last heartbeat (or command) to the confirmed safe state.
+  double total() const { return trigger_timeout + afterTrigger(); }
+};
+
 class BusRuntime {
  public:
   struct Options {
@@ -43,8 +64,9 @@ class BusRuntime {
     // The simulation runs the bus itself (BusScheduler::step) instead of the bus thread.
     bool stepped = false;
     BusScheduler::Options scheduling;
-    // The link under `transport` (the serial port, a gateway): the share's answer bound is
-    // computed from its worst transaction, devices' reply delays are set on it. None: no bound.
+    // The link under `transport` (the serial port, a gateway): devices' reply delays are set on
+    // it, the safe time and the share's answer bound (not on a stepped bus) are computed from
+    // its worst transaction. None: from the configuration alone; the share has no bound.
     Link* link = nullptr;
     // Where running timed commands are kept for the next node; none: nothing is kept.
     KeptTimedStore* kept_timed = nullptr;
@@ -79,6 +101,12 @@ class BusRuntime {
   double checkPeriod() const { return check_period_; }
   // Heartbeats lost and command deadlines passed: their safe writes, devices that answer first.
   void checkDeadlines();
+  // How long `unit`'s outputs take to reach their safe state after a trigger, with
+  // `writes_ahead` writes queued before its safe write; none when it has no trigger (no
+  // heartbeat, no command timeout) or no safe state.
+  std::optional<SafeTime> safeTime(const DeviceUnit& unit, size_t writes_ahead) const;
+  // The same from the trigger's deadline on, any device (trigger_timeout 0).
+  SafeTime safeAfterTrigger(size_t writes_ahead) const;
 
   // ---- start and stop, each in two halves (the bus runs in between) ----
   // The bus starts (its thread, or stepping), the on_start safe writes are queued.
