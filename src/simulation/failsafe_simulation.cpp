@@ -70,20 +70,30 @@ const std::vector<SimInvariant>& simInvariants() {
   return list;
 }
 
+// Every step kind, once (SimStep::parse, the draw, the coverage rows), with its weight in the
+// draw: mostly commands and time, then triggers, faults and the node's life.
+struct StepKind {
+  const char* name;
+  int weight;
+};
+constexpr StepKind kStepKinds[] = {
+    {"wait", 26},       {"set", 8},         {"set2", 3},          {"command", 6},
+    {"pulse", 4},       {"pwm", 4},         {"pwm_stop", 2},      {"share05", 3},
+    {"share15", 2},     {"raw05", 1},       {"raw15", 1},         {"share16_flash", 2},
+    {"raw16_flash", 1}, {"share16_pwm", 2}, {"share06_stop", 1},  {"signal", 2},
+    {"hb_stop", 3},     {"hb_resume", 4},   {"dhb_stop", 2},      {"dhb_resume", 3},
+    {"silent", 3},      {"lose", 2},        {"late", 1},          {"garble", 2},
+    {"power", 2},       {"ld_save", 1},     {"port_lost", 1},     {"port_back", 3},
+    {"stop", 1},        {"kill", 1},        {"start", 3},         {"share15_broadcast", 1},
+    {"refuse", 2},      {"foreign", 2},     {"port_fail_sent", 1}};
+
 const std::vector<std::string>& simRequiredCoverage() {
   static const std::vector<std::string> rows = [] {
     std::vector<std::string> r;
-    for (const char* k : {"wait",        "set",         "set2",         "command",
-                          "pulse",       "pwm",         "pwm_stop",     "share05",
-                          "share15",     "raw05",       "raw15",        "share16_flash",
-                          "raw16_flash", "share16_pwm", "share06_stop", "signal",
-                          "hb_stop",     "hb_resume",   "dhb_stop",     "dhb_resume",
-                          "silent",      "lose",        "late",         "garble",
-                          "power",       "ld_save",     "port_lost",    "port_back",
-                          "stop",        "kill",        "start",        "share15_broadcast"})
-      r.push_back(std::string("step ") + k);
+    for (const StepKind& k : kStepKinds) r.push_back(std::string("step ") + k.name);
     for (const SimInvariant& i : simInvariants()) r.push_back(std::string("check ") + i.id);
-    for (const char* f : {"silent", "lose", "late", "garble", "power"})
+    for (const char* f : {"silent", "lose", "late", "garble", "power", "refuse", "inserted",
+                          "masquerade", "addressing"})
       for (const char* t : {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"})
         r.push_back(std::string("fault ") + f + " " + t);
     // The fail-safe's events, by trigger, device type and action (docs/failsafe.md, "What
@@ -319,7 +329,10 @@ struct DevModel {
   // generic (I8)
   bool gen_unanswered = false;  // an attempt to it went unanswered since its last report
   bool gen_prev_silent = true;  // ... before its previous report
-  TP gen_report_at{};           // its previous report
+  // Addresses whose write the device refused with an exception since its last report (a
+  // refused safe value is reported, not on the device: docs:166-174).
+  std::set<uint16_t> gen_refused;
+  TP gen_report_at{};  // its previous report
   // per signal: its newest set the device confirmed, and the newest report that wrote it
   std::vector<TP> gen_set_at = std::vector<TP>(3, TP{});
   std::vector<TP> gen_written_at = std::vector<TP>(3, TP{});
@@ -894,8 +907,26 @@ void World::deviceDisturbed(int d, bool justified, double extra) {
 }
 
 void World::onAttempt(const LineEvent& e) {
+  if (e.port_failed) {
+    // The adapter failed with this request out: as a lost port (below, the request's device
+    // heard it and its answer is lost).
+    port_lost_ = true;
+    for (int dev = 0; dev < kDevices; ++dev) deviceDisturbed(dev, false);
+  }
   const int d = devOf(e.request.slave);
   if (d < 0) return;
+  if (e.refused) {  // an exception the fault injected: the device did nothing
+    if (d == kGen && !isReadFunction(e.request.function))
+      model_[kGen].gen_refused.insert(e.request.address);
+    // docs "What happens when", a safe write that fails: a refused one (its write, or the read
+    // an LD58A08's safe write needs first) is owed like one that got no reply, written when the
+    // device answers a poll again. Nothing changed on the device (no cause of a restart): only
+    // the time it counts as reachable moves.
+    DevModel& m = model_[d];
+    m.reachable_since = std::max(m.reachable_since, clock_.now());
+    m.queued_noted = false;
+    return;
+  }
   DevModel& m = model_[d];
   const bool write = !isReadFunction(e.request.function);
   if (d == kLd && e.answered && e.request.function == FunctionCode::kReadHoldingRegisters &&
@@ -1406,6 +1437,7 @@ void World::onGenericReport(const FailsafeReport& r) {
       const SignalConfig& s = signals[i];
       if (!s.safe_value || !listed[i]) continue;
       if (config_.generic_refuses && s.address == 0x20) continue;
+      if (m.gen_refused.count(s.address)) continue;  // refused now: reported, not retried
       uint16_t raw = 0;
       const Table t = s.table;
       sim(kGen)->read(t, s.address, clock_.now(), &raw);
@@ -1419,6 +1451,7 @@ void World::onGenericReport(const FailsafeReport& r) {
   }
   m.gen_prev_silent = m.gen_unanswered;
   m.gen_unanswered = false;
+  m.gen_refused.clear();
 }
 
 // I2 (docs:32-33, 76, 173-175): a held channel of a device that answers shows its safe state
@@ -1440,7 +1473,7 @@ void World::checkHeld() {
   for (int d = 0; d < kGen; ++d) {
     DevModel& m = model_[d];
     const MemoryLinkFaults& f = link_.faults(kAddr[d]);
-    if (f.silent || f.lost || f.late || f.garbled) continue;
+    if (f.silent || f.lost || f.late || f.garbled || f.refused || f.foreign) continue;
     // An owed write goes when the device answers a poll again, behind what is queued then.
     if (now >= m.reachable_since && !m.queued_noted) {
       m.queued_at_reachable = node_->queuedJobs();
@@ -1512,6 +1545,28 @@ bool World::step(const SimStep& s, size_t index) {
     (k == "lose" ? f.lost : k == "late" ? f.late : f.garbled) = 1 + arg(1) % 3;
     cover("fault " + k + " " + kTypes[d]);
     deviceDisturbed(d, false);
+  } else if (k == "refuse") {
+    // Exception replies (01, 02, 03, 04, 06) to the device's next requests, whatever they are:
+    // polls, commands, safe writes; the device does nothing.
+    const int d = arg(0) % kDevices;
+    static const uint8_t kCodes[] = {0x01, 0x02, 0x03, 0x04, 0x06};
+    MemoryLinkFaults& f = link_.faults(kAddr[d]);
+    f.refused = 1 + arg(2) % 3;
+    f.refused_code = kCodes[arg(1) % 5];
+    cover(std::string("fault refuse ") + kTypes[d]);
+    deviceDisturbed(d, false);
+  } else if (k == "foreign") {
+    // Insertion, masquerade, addressing: a well-formed frame instead of the device's reply.
+    const int d = arg(0) % kDevices;
+    static const char* const kKinds[] = {"inserted", "masquerade", "addressing"};
+    MemoryLinkFaults& f = link_.faults(kAddr[d]);
+    f.foreign = 1 + arg(2) % 3;
+    f.foreign_kind = static_cast<ForeignFrame>(arg(1) % 3);
+    cover(std::string("fault ") + kKinds[arg(1) % 3] + " " + kTypes[d]);
+    deviceDisturbed(d, false);
+  } else if (k == "port_fail_sent") {
+    // The adapter fails during the next transaction, after its request went out.
+    link_.failPortAfterNextFrame();
   } else if (k == "power") {
     const int d = arg(0) % kDevices;
     sim(d)->powerCycle(clock_.now());
@@ -1580,7 +1635,7 @@ void World::doCommandStep(const SimStep& s) {
       sts.push_back(arg(3) != 0);
     }
     pending_.push_back(set(op("set").id, dn, chs, sts, [this, outd, chs](const Result& r) {
-      if (answerLost(r.error))
+      if (outcomeUnknown(r.error))
         for (uint8_t c : chs) lostAnswer(outd, c, 0);
     }));
   } else if (k == "command") {
@@ -1595,7 +1650,7 @@ void World::doCommandStep(const SimStep& s) {
     pending_.push_back(command(op("command").id, dn, ch, st, [this, outd, ch](const Result& r) {
       // The merged write's channels come through onWritten; a lost answer leaves the channel
       // unknown until the next poll (docs:92-94: a service's or topic's command alike).
-      if (answerLost(r.error)) lostAnswer(outd, ch, 0);
+      if (outcomeUnknown(r.error)) lostAnswer(outd, ch, 0);
     }));
   } else if (k == "pulse") {
     const bool st = arg(2) != 0;
@@ -1611,7 +1666,7 @@ void World::doCommandStep(const SimStep& s) {
                                  const TP answered = model_[kLc].flash_answered[ch];
                                  if (answered != TP{} && answered <= clock_.now())
                                    c.ends = c.ends_earliest = answered + dur(seconds);
-                               } else if (answerLost(r.error)) {
+                               } else if (outcomeUnknown(r.error)) {
                                  lostAnswer(kLc, ch, seconds);
                                }
                              }));
@@ -1653,7 +1708,7 @@ void World::doCommandStep(const SimStep& s) {
             Chan& c = model_[kLd].ch[ch];
             if (c.timed && model_[kLd].pwm_write_answered[ch] != TP{})
               c.ends_earliest = std::min(c.ends, model_[kLd].pwm_write_answered[ch] + dur(seconds));
-          } else if (answerLost(r.error)) {
+          } else if (outcomeUnknown(r.error)) {
             lostAnswer(kLd, ch, seconds);
           }
         }));
@@ -1671,7 +1726,7 @@ void World::doCommandStep(const SimStep& s) {
         const TP answered = model_[kLd].stop_answered[ch];
         if (answered != TP{} && answered <= clock_.now()) stopped.adopt_at = answered;
         model_[kLd].ch[ch].known = false;
-      } else if (answerLost(r.error)) {
+      } else if (outcomeUnknown(r.error)) {
         lostAnswer(kLd, ch, 0);
       }
     }));
@@ -1721,7 +1776,7 @@ void World::doCommandStep(const SimStep& s) {
           }
           if (may_run) model_[kLd].ch[chs[i]].maybe_devices = true;
         }
-      } else if (answerLost(r.error)) {
+      } else if (outcomeUnknown(r.error)) {
         for (uint8_t c : chs) lostAnswer(outd, c, 0);
       }
     };
@@ -1736,7 +1791,7 @@ void World::doCommandStep(const SimStep& s) {
     for (int i = 0; i < n; ++i) bits[static_cast<size_t>(i)] = ((arg(2) >> i) & 1) != 0;
     const Request req = Request::writeMultipleCoils(kBroadcastAddress, ch, bits);
     pending_.push_back(share(op(k).id, req, [this, ch, n](const Result& r) {
-      if (!r.ok() && !answerLost(r.error)) return;  // refused or unsent: nothing changed
+      if (!r.ok() && !outcomeUnknown(r.error)) return;  // refused or unsent: nothing changed
       for (int d = 0; d < kGen; ++d)
         for (int i = 0; i < n; ++i) lostAnswer(d, ch + i, 0);
     }));
@@ -1750,7 +1805,7 @@ void World::doCommandStep(const SimStep& s) {
       if (r.ok()) {
         checkCoils(kLc, {ch}, {close}, k);
         commandedTimed(kLc, ch, close, !close, tenths / 10.0);
-      } else if (answerLost(r.error)) {
+      } else if (outcomeUnknown(r.error)) {
         lostAnswer(kLc, ch, tenths / 10.0);
       }
     };
@@ -1767,7 +1822,7 @@ void World::doCommandStep(const SimStep& s) {
         commandedTimed(
             kLd, c6, std::nullopt, false, pulses == 0xFFFF ? -1.0 : pulses * period / 10.0,
             pulses == 0xFFFF ? std::vector<uint16_t>{period, 1, pulses} : std::vector<uint16_t>{});
-      } else if (answerLost(r.error)) {
+      } else if (outcomeUnknown(r.error)) {
         lostAnswer(kLd, c6, pulses == 0xFFFF ? 0.0 : pulses * period / 10.0);
       }
     }));
@@ -1781,7 +1836,7 @@ void World::doCommandStep(const SimStep& s) {
         // The run is stopped (docs:68: no longer one the node knows not yet ended).
         model_[kLd].ch[ch].continuous = model_[kLd].ch[ch].timed = false;
       }
-      if (answerLost(r.error)) lostAnswer(kLd, ch, 0);
+      if (outcomeUnknown(r.error)) lostAnswer(kLd, ch, 0);
     }));
   } else if (k == "signal") {
     const size_t signal = static_cast<size_t>(arg(0) % 2);
@@ -1810,15 +1865,11 @@ std::optional<SimStep> SimStep::parse(const std::string& line, std::string* erro
     if (error) *error = "empty line";
     return std::nullopt;
   }
-  static const std::set<std::string> kinds = {
-      "wait",        "set",         "set2",         "command",
-      "pulse",       "pwm",         "pwm_stop",     "share05",
-      "share15",     "raw05",       "raw15",        "share16_flash",
-      "raw16_flash", "share16_pwm", "share06_stop", "signal",
-      "hb_stop",     "hb_resume",   "dhb_stop",     "dhb_resume",
-      "silent",      "lose",        "late",         "garble",
-      "power",       "ld_save",     "port_lost",    "port_back",
-      "stop",        "kill",        "start",        "share15_broadcast"};
+  static const std::set<std::string> kinds = [] {
+    std::set<std::string> names;
+    for (const StepKind& k : kStepKinds) names.insert(k.name);
+    return names;
+  }();
   if (!kinds.count(s.kind)) {
     if (error) *error = "unknown step '" + s.kind + "'";
     return std::nullopt;
@@ -1874,19 +1925,8 @@ std::vector<SimStep> FailsafeSimulation::generate(size_t n) const {
   std::vector<SimStep> steps;
   steps.push_back({"start", {}});
   // Weights: mostly commands and time, then triggers, faults and the node's life.
-  struct Kind {
-    const char* name;
-    int weight;
-  };
-  static const Kind kinds[] = {
-      {"wait", 26},       {"set", 8},         {"set2", 3},         {"command", 6},
-      {"pulse", 4},       {"pwm", 4},         {"pwm_stop", 2},     {"share05", 3},
-      {"share15", 2},     {"raw05", 1},       {"raw15", 1},        {"share16_flash", 2},
-      {"raw16_flash", 1}, {"share16_pwm", 2}, {"share06_stop", 1}, {"signal", 2},
-      {"hb_stop", 3},     {"hb_resume", 4},   {"dhb_stop", 2},     {"dhb_resume", 3},
-      {"silent", 3},      {"lose", 2},        {"late", 1},         {"garble", 2},
-      {"power", 2},       {"ld_save", 1},     {"port_lost", 1},    {"port_back", 2},
-      {"stop", 1},        {"kill", 1},        {"start", 3},        {"share15_broadcast", 1}};
+  using Kind = StepKind;
+  const auto& kinds = kStepKinds;
   int total = 0;
   for (const Kind& k : kinds) total += k.weight;
   while (steps.size() < n) {
@@ -1901,7 +1941,8 @@ std::vector<SimStep> FailsafeSimulation::generate(size_t n) const {
       s.args = {r.below(kDevices), r.chance(50) ? 1 : 0};
     } else if (s.kind == "hb_stop" || s.kind == "hb_resume" || s.kind == "dhb_stop" ||
                s.kind == "dhb_resume" || s.kind == "port_lost" || s.kind == "port_back" ||
-               s.kind == "stop" || s.kind == "kill" || s.kind == "start") {
+               s.kind == "stop" || s.kind == "kill" || s.kind == "start" ||
+               s.kind == "port_fail_sent") {
     } else {
       s.args = {r.below(kDevices), r.below(kChannels), r.below(16), r.below(64)};
     }

@@ -98,10 +98,55 @@ Result MemoryLink::attempt(const EncodedRequest& request) {
     return Result::failure(ErrorKind::kTimeout, request.request().describe() + ": " + why);
   };
   if (!target) return timeout("no reply");
+  MemoryLinkFaults& f = faults_[target->address()];
+  if (f.refused > 0) {
+    // The device answers with an exception and does nothing.
+    --f.refused;
+    const Bytes refusal =
+        encodeException(slave, static_cast<uint8_t>(request.request().function), f.refused_code);
+    fold(false, refusal);
+    wire(refusal.size());
+    event.answered = event.refused = true;
+    if (observer_) observer_(event);
+    return decodeReply(request, refusal);
+  }
   event.heard = true;
   std::optional<Bytes> reply = target->handle(request.request(), clock_.now());
+  if (fail_after_frame_) {
+    // The adapter fails with the request out: the device acted, no reply is read.
+    fail_after_frame_ = false;
+    setPortLost(true);
+    event.port_failed = true;
+    if (observer_) observer_(event);
+    return Result::failure(ErrorKind::kIo,
+                           request.request().describe() + ": the adapter failed after sending");
+  }
   if (!reply) return timeout("no reply");
-  MemoryLinkFaults& f = faults_[target->address()];
+  if (f.foreign > 0 && reply->size() >= 4) {
+    // A well-formed frame that is not this request's reply (its CRC good): the node must
+    // reject it; the device acted.
+    --f.foreign;
+    Bytes other;
+    if (f.foreign_kind == ForeignFrame::kInserted) {
+      other =
+          encodeRequest(Request::readCoils(static_cast<uint8_t>(slave == 247 ? 246 : 247), 0, 8));
+    } else {
+      other.assign(reply->begin(), reply->end() - 2);  // without its CRC
+      if (f.foreign_kind == ForeignFrame::kMasquerade)
+        other[1] = static_cast<uint8_t>(other[1] == 0x03 ? 0x04 : 0x03);
+      else
+        other[0] = static_cast<uint8_t>(other[0] == 247 ? 246 : other[0] + 1);
+      appendCrc(other);
+    }
+    fold(false, other);
+    wire(other.size());
+    Result r = decodeReply(request, other);
+    // Taken as the reply (a defect of the reply check) it counts as an answer with its values.
+    event.answered = r.ok();
+    if (r.ok()) event.values = r.values;
+    if (observer_) observer_(event);
+    return r;
+  }
   if (f.lost > 0) {
     --f.lost;
     return timeout("no reply (reply lost)");

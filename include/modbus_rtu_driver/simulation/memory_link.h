@@ -21,11 +21,26 @@
 
 namespace modbus_rtu_driver {
 
+// A frame on the line that is not the reply the node waits for, with a good CRC (IEC 61784-3's
+// insertion, masquerade and addressing); the device acted on the request all the same.
+enum class ForeignFrame {
+  kInserted,    // an unsolicited frame: another master's read of another address
+  kMasquerade,  // the reply claims another function code
+  kAddressing,  // the reply comes from (claims) another address
+};
+
 struct MemoryLinkFaults {
   bool silent = false;  // hears nothing, answers nothing
   int lost = 0;         // the next N replies are lost (the device acted)
   int late = 0;         // the next N replies come after the response timeout (acted)
   int garbled = 0;      // the next N replies arrive with a bad CRC (acted)
+  // The next N requests are refused with exception `refused_code` (01, 02, 03, 04, 06): the
+  // device answers and does nothing.
+  int refused = 0;
+  uint8_t refused_code = 0x04;
+  // The next N replies are replaced by a foreign frame of `foreign_kind` (the device acted).
+  int foreign = 0;
+  ForeignFrame foreign_kind = ForeignFrame::kInserted;
 };
 
 // What one attempt did, for the invariants: the request as the device decoded it, whether the
@@ -34,6 +49,8 @@ struct LineEvent {
   Request request;
   bool heard = false;
   bool answered = false;         // a reply the node could decode (a normal one or an exception)
+  bool refused = false;          // an exception the fault injected: the device did nothing
+  bool port_failed = false;      // the port failed with this request out (heard, no reply)
   std::vector<uint16_t> values;  // a read's answer as the node got it (the device's state
                                  // at the request, not at the observer's later clock)
   uint64_t execute_id = 0;
@@ -51,6 +68,9 @@ class MemoryLink : public Link {
 
   // The port: lost (every attempt fails with an i/o error, connect fails) or back.
   void setPortLost(bool lost);
+  // The port fails during the next attempt, after its request went out (the device hears it and
+  // acts; the node gets an i/o error and no reply), and stays lost.
+  void failPortAfterNextFrame() { fail_after_frame_ = true; }
   bool portLost() const { return port_lost_; }
 
   // Called after each attempt the line carried (not for a closed port).
@@ -89,6 +109,7 @@ class MemoryLink : public Link {
   std::vector<std::unique_ptr<SimDevice>> devices_;
   MemoryLinkFaults faults_[256];
   bool port_lost_ = false;
+  bool fail_after_frame_ = false;
   bool connected_ = false;
   double char_time_;
   std::function<void(const LineEvent&)> observer_;
