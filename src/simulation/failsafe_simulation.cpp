@@ -66,6 +66,10 @@ const std::vector<SimInvariant>& simInvariants() {
       {"I11", "docs/failsafe.md:4-5,31-32,34",
        "a write of safe states (a trigger's, on_restart: safe, an owed one) writes only channels "
        "whose safe state is not hold: a channel nobody asked to write is not written"},
+      {"L1", "docs/failsafe.md:32-33,37 (\"safe state until commanded again\", owed writes)",
+       "liveness: once every fault heals (the devices answer, the port is back, a node runs), "
+       "every channel held safe (the heartbeat lost, for good in half the seeds, or a command "
+       "timeout) shows its safe state within the node's stated bound"},
   };
   return list;
 }
@@ -374,6 +378,10 @@ class World {
 
   // Runs one step; false when an invariant failed (failure_ says which).
   bool step(const SimStep& s, size_t index);
+  // After the steps (docs/simulation.md, "Liveness"): every fault heals, a node runs, the bus
+  // drains; then the heartbeat is lost for good (`heartbeat_lost`) or stays alive, and every
+  // held channel must show its safe state within the stated bound (L1).
+  bool liveness(bool heartbeat_lost);
   const std::optional<SimFailure>& failure() const { return failure_; }
   uint64_t digest() const { return link_.digest(); }
   uint64_t frames() const { return link_.frames(); }
@@ -381,6 +389,7 @@ class World {
   const std::map<std::string, uint64_t>& knownFailures() const { return known_hits_; }
   const std::map<std::string, uint64_t>& coverage() const { return coverage_; }
   const std::string& knownExample() const { return known_example_; }
+  void setStepsSize(size_t n) { steps_size_ = n; }
   void setHistory(const std::deque<std::string>* steps) { steps_ = steps; }
 
  private:
@@ -515,6 +524,7 @@ class World {
   bool alive_ = true;
   TP last_feed_{};
   bool lost_ = false;
+  size_t steps_size_ = 0;  // the run's steps: the liveness phase's step index
   // The LD58A08's own heartbeat and its controller.
   bool dev_alive_ = true;
   TP dev_last_feed_{};
@@ -1621,6 +1631,49 @@ bool World::step(const SimStep& s, size_t index) {
   return !failure_;
 }
 
+bool World::liveness(bool heartbeat_lost) {
+  step_index_ = steps_size_;
+  // Every fault heals: the devices answer, the port is back (opened again with backoff, up to
+  // reconnect_max; each device probed again with backoff, up to backoff_max: 5 s each).
+  link_.clearFaults();
+  link_.setPortLost(false);
+  port_lost_ = false;
+  for (int d = 0; d < kDevices; ++d) deviceDisturbed(d, false, 5.0);
+  alive_ = dev_alive_ = true;
+  if (!node_) startNode();
+  // The commands still queued and the owed writes run; what a restart asks is done.
+  runFor(15.0);
+  if (failure_) return false;
+  if (heartbeat_lost) alive_ = dev_alive_ = false;
+  // The bound: the longest heartbeat, then the node's stated time after a trigger with what is
+  // queued now, and two polls of the slowest device (a held channel disturbed is written again
+  // after the good poll that finds it).
+  double timeout = config_.heartbeat;
+  const DeviceConfig& ld = config_.devices[kLd];
+  if (!ld.failsafe.heartbeat_topic.empty())
+    timeout = std::max(timeout, ld.failsafe.heartbeat_timeout);
+  double slowest = 0;
+  for (int d = 0; d < kDevices; ++d) slowest = std::max(slowest, pollPeriod(d));
+  const double bound =
+      timeout + node_->safeAfterTrigger(node_->queuedJobs()).afterTrigger() + 2 * slowest;
+  runFor(bound);
+  if (failure_) return false;
+  checked("L1");
+  for (int d = 0; d < kGen; ++d)
+    for (int ch = 0; ch < kChannels; ++ch) {
+      const Chan& c = model_[d].ch[ch];
+      if (!c.held || !hasSafe(d, ch) || simCoil(d, ch) == safeLevel(d, ch)) continue;
+      fail("L1", std::string(kNames[d]) + " out" + std::to_string(ch) + " is held safe (" +
+                     safeStateName(safeOf(d, ch)) +
+                     ") since t=" + std::to_string(secs(c.held_since - start_)) + " but shows " +
+                     (simCoil(d, ch) ? "on" : "off") + " " + std::to_string(bound) +
+                     " s after every fault healed and the bus drained (heartbeat " +
+                     (heartbeat_lost ? "lost for good" : "alive") + ")");
+      return false;
+    }
+  return !failure_;
+}
+
 void World::doCommandStep(const SimStep& s) {
   const std::string& k = s.kind;
   auto arg = [&s](size_t i) { return i < s.args.size() ? s.args[i] : 0; };
@@ -1968,6 +2021,13 @@ SimRunResult FailsafeSimulation::run(const std::vector<SimStep>& steps,
                    steps[i].text().c_str());
     if (!world->step(steps[i], i)) break;
   }
+  // The liveness phase, after every step ran without a failure: the heartbeat lost for good in
+  // half the seeds.
+  if (!world->failure() && out.steps == steps.size()) {
+    if (trace_) std::fprintf(trace_, "liveness t=%.3f\n", world->simSeconds());
+    world->setStepsSize(steps.size());
+    world->liveness(seed_ % 2 == 0);
+  }
   out.digest = world->digest();
   out.frames = world->frames();
   out.sim_seconds = world->simSeconds();
@@ -1988,7 +2048,8 @@ std::vector<SimStep> FailsafeSimulation::shrink(std::vector<SimStep> steps,
   {
     const SimRunResult r = run(steps, known, false);
     if (!r.failure || r.failure->invariant != invariant) return steps;
-    steps.resize(r.failure->step + 1);
+    // (A failure of the liveness phase is at step steps.size(): every step stays.)
+    steps.resize(std::min(steps.size(), r.failure->step + 1));
   }
   // Drop chunks, halving their size, while it still fails (delta debugging, roughly).
   for (size_t chunk = std::max<size_t>(1, steps.size() / 2); chunk >= 1; chunk /= 2) {

@@ -30,6 +30,7 @@ SimDevice* MemoryLink::device(uint8_t address) {
 
 void MemoryLink::clearFaults() {
   for (auto& f : faults_) f = MemoryLinkFaults{};
+  fail_after_frame_ = false;
 }
 
 void MemoryLink::setPortLost(bool lost) {

@@ -64,6 +64,7 @@ class MemoryLink : public Link {
   void addDevice(std::unique_ptr<SimDevice> device);
   SimDevice* device(uint8_t address);
   MemoryLinkFaults& faults(uint8_t address) { return faults_[address]; }
+  // Every device's faults, and a port failure armed for the next frame (not the port's state).
   void clearFaults();
 
   // The port: lost (every attempt fails with an i/o error, connect fails) or back.
