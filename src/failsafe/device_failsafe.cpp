@@ -489,6 +489,16 @@ void DeviceFailsafe::externalWriteConfirmed(const Request& request, CommandSourc
   timedMaybeChanged();
 }
 
+void DeviceFailsafe::resumeTimed(const std::vector<TimedIntent>& running) {
+  intents_.resumeTimed(running);
+  // The kept list holds them already: without this, a resumed command dropped before any other
+  // change left the list unchanged in our eyes (empty before, empty after) and was never told,
+  // so the next node resumed a flash a lost write had replaced.
+  const double now =
+      std::chrono::duration<double>(intents_.clock().now().time_since_epoch()).count();
+  timed_told_ = keepTimedCommands(intents_.runningTimed(), now);
+}
+
 void DeviceFailsafe::timedMaybeChanged() {
   const std::vector<TimedIntent> running = intents_.runningTimed();
   const double now =

@@ -66,6 +66,8 @@ const std::vector<SimInvariant>& simInvariants() {
       {"I11", "docs/failsafe.md:4-5,31-32,34",
        "a write of safe states (a trigger's, on_restart: safe, an owed one) writes only channels "
        "whose safe state is not hold: a channel nobody asked to write is not written"},
+      {"I12", "docs/ros_api.md (write_coils, write_registers)",
+       "a raw write to slave 0 (broadcast) is refused at once, and nothing goes on the line"},
       {"L1", "docs/failsafe.md:32-33,37 (\"safe state until commanded again\", owed writes)",
        "liveness: once every fault heals (the devices answer, the port is back, a node runs), "
        "every channel held safe (the heartbeat lost, for good in half the seeds, or a command "
@@ -81,15 +83,16 @@ struct StepKind {
   int weight;
 };
 constexpr StepKind kStepKinds[] = {
-    {"wait", 26},       {"set", 8},         {"set2", 3},          {"command", 6},
-    {"pulse", 4},       {"pwm", 4},         {"pwm_stop", 2},      {"share05", 3},
-    {"share15", 2},     {"raw05", 1},       {"raw15", 1},         {"share16_flash", 2},
-    {"raw16_flash", 1}, {"share16_pwm", 2}, {"share06_stop", 1},  {"signal", 2},
-    {"hb_stop", 3},     {"hb_resume", 4},   {"dhb_stop", 2},      {"dhb_resume", 3},
-    {"silent", 3},      {"lose", 2},        {"late", 1},          {"garble", 2},
-    {"power", 2},       {"ld_save", 1},     {"port_lost", 1},     {"port_back", 3},
-    {"stop", 1},        {"kill", 1},        {"start", 3},         {"share15_broadcast", 1},
-    {"refuse", 2},      {"foreign", 2},     {"port_fail_sent", 1}};
+    {"wait", 26},        {"set", 8},         {"set2", 3},           {"command", 6},
+    {"pulse", 4},        {"pwm", 4},         {"pwm_stop", 2},       {"share05", 3},
+    {"share15", 2},      {"raw05", 1},       {"raw15", 1},          {"share16_flash", 2},
+    {"raw16_flash", 1},  {"share16_pwm", 2}, {"share06_stop", 1},   {"signal", 2},
+    {"hb_stop", 3},      {"hb_resume", 4},   {"dhb_stop", 2},       {"dhb_resume", 3},
+    {"silent", 3},       {"lose", 2},        {"late", 1},           {"garble", 2},
+    {"power", 2},        {"ld_save", 1},     {"port_lost", 1},      {"port_back", 3},
+    {"stop", 1},         {"kill", 1},        {"start", 3},          {"share15_broadcast", 1},
+    {"refuse", 2},       {"foreign", 2},     {"port_fail_sent", 1}, {"share05_broadcast", 1},
+    {"raw_broadcast", 1}};
 
 const std::vector<std::string>& simRequiredCoverage() {
   static const std::vector<std::string> rows = [] {
@@ -1848,6 +1851,26 @@ void World::doCommandStep(const SimStep& s) {
       for (int d = 0; d < kGen; ++d)
         for (int i = 0; i < n; ++i) lostAnswer(d, ch + i, 0);
     }));
+  } else if (k == "share05_broadcast") {
+    // The same with FC05: one coil on every listening device.
+    const Request req = Request::writeSingleCoil(kBroadcastAddress, ch, arg(2) % 2 != 0);
+    pending_.push_back(share(op(k).id, req, [this, ch](const Result& r) {
+      if (!r.ok() && !outcomeUnknown(r.error)) return;  // refused or unsent: nothing changed
+      for (int d = 0; d < kGen; ++d) lostAnswer(d, ch, 0);
+    }));
+  } else if (k == "raw_broadcast") {
+    // docs/ros_api.md (write_coils, write_registers): a raw write to slave 0 is refused at
+    // once, unsent (a broadcast is never confirmed).
+    const uint64_t frames = link_.frames();
+    const Request req = arg(2) % 2 == 0
+                            ? Request::writeMultipleCoils(kBroadcastAddress, ch, {arg(3) % 2 != 0})
+                            : Request::writeMultipleRegisters(kBroadcastAddress, ch, {1});
+    std::future<Result> f = raw(op(k).id, req, nullptr);
+    const bool refused = f.wait_for(std::chrono::seconds(0)) == std::future_status::ready &&
+                         f.get().error == ErrorKind::kInvalidArgument;
+    if (checked("I12") && (!refused || link_.frames() != frames))
+      fail("I12", "a raw " + req.describe() + " was " +
+                      (refused ? "refused but something went on the line" : "not refused at once"));
   } else if (k == "share16_flash" || k == "raw16_flash") {
     // An LC flash through its registers (docs:60-61): mode 4 close, 2 open; delay in 0.1 s.
     const bool close = arg(2) % 2 == 0;

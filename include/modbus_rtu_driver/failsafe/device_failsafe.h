@@ -83,7 +83,9 @@ class DeviceFailsafe {
     timed_changed_ = std::move(changed);
   }
   // A previous node's timed commands (seconds left), before the first poll.
-  void resumeTimed(const std::vector<TimedIntent>& running) { intents_.resumeTimed(running); }
+  // The previous node's timed commands, still running: they are what is kept now, so that one
+  // dropped later (ended, or replaced by a write whose answer was lost) is told.
+  void resumeTimed(const std::vector<TimedIntent>& running);
   // The bus-wide heartbeat (none: nullptr), for the status.
   void setBusHeartbeat(const Watchdog* heartbeat, std::string topic);
 
