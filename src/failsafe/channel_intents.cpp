@@ -130,6 +130,14 @@ void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double
   if (was && was->adopt && was->adopt_from && *was->adopt_from > now) {
     in.adopt_from = std::max(in.adopt_from.value_or(now), *was->adopt_from);
   }
+  // The run the device drove there goes on whatever the write did, where coil writes keep runs.
+  if (was && was->adopt) {
+    in.run_ends = was->run_ends;
+    in.run_driven = was->run_driven;
+  } else if (was && (was->driven || (was->ends && *was->ends > now))) {
+    in.run_ends = was->ends;
+    in.run_driven = was->driven;
+  }
   intent_[channel] = in;
   newCommand(channel, source);
 }
@@ -531,6 +539,18 @@ std::vector<TimedIntent> ChannelIntents::runsToStartAgain(
     again.push_back(t);
   }
   return again;
+}
+
+std::vector<bool> ChannelIntents::runsUnderAdoption(bool driven_too) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<bool> runs(channels_, false);
+  const auto now = clock_.now();
+  for (size_t ch = 0; ch < channels_; ++ch) {
+    const auto& in = intent_[ch];
+    if (!in || !in->adopt) continue;
+    runs[ch] = (in->run_ends && *in->run_ends > now) || (driven_too && in->run_driven);
+  }
+  return runs;
 }
 
 std::vector<TimedIntent> ChannelIntents::runningTimed() const {

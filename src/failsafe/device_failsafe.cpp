@@ -426,6 +426,11 @@ std::vector<bool> DeviceFailsafe::runsKeptOverCoilWrites() const {
     for (size_t ch = 0; ch < runs.size(); ++ch) runs[ch] = device_.outputSelfTimed(ch);
   for (const TimedIntent& t : intents_.runningTimed())
     if (t.channel < runs.size() && (t.seconds >= 0 || !read)) runs[t.channel] = true;
+  // A run a write whose outcome is unknown went over: the channel waits for the poll that tells
+  // its level, but the run goes on (a coil write does not stop it).
+  const std::vector<bool> adopted = intents_.runsUnderAdoption(!read);
+  for (size_t ch = 0; ch < runs.size() && ch < adopted.size(); ++ch)
+    runs[ch] = runs[ch] || adopted[ch];
   return runs;
 }
 

@@ -125,9 +125,9 @@ const std::vector<std::string>& simRequiredCoverage() {
 
 const std::set<std::string>& simKnownOpen() {
   // docs/simulation.md, "Known open defects": an invariant a case shows broken on today's code
-  // goes here, with its case "status known". I6 since 2026-12-06: a lost coil write over a
-  // client's PWM run, then a confirmed one (broadcast_over_client_pwm_false_restart*).
-  static const std::set<std::string> known = {"I6"};
+  // goes here, with its case "status known". None since stop 55 (the I6 family of a coil write
+  // of unknown outcome over a client's PWM run is fixed).
+  static const std::set<std::string> known = {};
   return known;
 }
 
@@ -252,6 +252,10 @@ struct Chan {
   std::optional<bool> during;  // a timed command's level until its end (none: any)
   TP ends{};
   double duration = 0;
+  // docs:73: a poll after the end (within its slack: one showing the final level) ended the
+  // timed command there; a write whose answer is lost after that waits for no end (model
+  // change 26: the model followed which poll that was only for restores before).
+  bool settled = false;
   bool continuous = false;  // a PWM run with no end: the device's (docs:68, 88)
   // docs "What restore writes": a continuous run this node started (set_pwm, a client's FC16 of
   // the channel's three registers), its registers; a restore starts it again when the read just
@@ -864,6 +868,7 @@ void World::commandedTimed(int d, int ch, std::optional<bool> during, bool after
     return;
   }
   c.timed = true;
+  c.settled = false;
   c.during = during;
   c.duration = seconds;
   c.ends = c.ends_earliest = clock_.now() + dur(seconds);
@@ -898,7 +903,8 @@ void World::lostAnswer(int d, int ch, double seconds) {
   // Counted from now, when the caller learns the answer was lost, as the node counts it: the
   // device, if it heard the write, started it before now and so ends it before the window does.
   TP until = seconds > 0 ? now + dur(seconds + 0.5 + 0.02 * seconds) : now;
-  if (c.known && c.timed) until = std::max(until, c.ends + dur(0.5 + 0.02 * c.duration));
+  if (c.known && c.timed && !c.settled)
+    until = std::max(until, c.ends + dur(0.5 + 0.02 * c.duration));
   // docs:105 "also when another write whose answer was lost came between": a timed command
   // that earlier lost write may have started (or left running) still decides (model change 14).
   if (c.adopt) until = std::max(until, c.adopt_not_before);
@@ -1120,6 +1126,18 @@ void World::onPolled(const std::string& device, const Result& r) {
   if (outputs.size() < kChannels) return;
   for (int ch = 0; ch < kChannels; ++ch) {
     Chan& c = m.ch[ch];
+    // docs:68-73: the poll that ends a timed command, as the node counts its end (from the
+    // device's answer) and its slack: after the window any poll, within it one showing the
+    // final level (for a run the device toggles, only from the end on). A poll during which a
+    // write ran is not compared.
+    if (c.known && c.timed && !c.settled && !c.adopt && !c.continuous && !m.written_in_poll) {
+      const TP end = c.ends_earliest != TP{} ? c.ends_earliest : c.ends;
+      const TP now = clock_.now();
+      const Clock::duration slack = dur(0.5 + 0.02 * c.duration);
+      if (now > end + slack ||
+          (now >= end - slack && outputs[ch] == c.level && (c.during || now >= end)))
+        c.settled = true;
+    }
     c.shown_otherwise = c.held && outputs[ch] != safeLevel(d, ch);
     if (!m.found && !c.known && !c.adopt && !m.written_in_poll) {
       // docs:62-63: where the node has commanded nothing, the intent is the state found at its

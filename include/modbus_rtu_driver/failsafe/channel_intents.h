@@ -142,6 +142,11 @@ class ChannelIntents {
   // The timed commands not ended at `now`, with the seconds left (< 0: no end), for the next
   // node to resume if this one is killed (a flash's end is then not taken for a restart).
   std::vector<TimedIntent> runningTimed() const;
+  // Channels left unknown by a write whose outcome is unknown (adoptNextPoll) while a run the
+  // device drives went on there: a run with an end not ended yet, or (`driven_too`) one with no
+  // end. A coil write does not stop such a run on a device that keeps runs (the LD58A08), so it
+  // still goes on whatever the write did (DeviceFailsafe::runsKeptOverCoilWrites).
+  std::vector<bool> runsUnderAdoption(bool driven_too) const;
   // Resumes a previous node's timed commands (before the first poll): compared like its own.
   void resumeTimed(const std::vector<TimedIntent>& running);
 
@@ -164,6 +169,9 @@ class ChannelIntents {
     std::optional<Clock::time_point> adopt_from;  // adopt: not before then
     std::optional<bool> adopt_prev;               // adoptChangeNextPoll: the level expected before
     bool adopt_change = false;  // adoptChangeNextPoll: a change is the source's command
+    // adopt: the run that went on when the write went out (runsUnderAdoption).
+    std::optional<Clock::time_point> run_ends;
+    bool run_driven = false;
   };
   struct Owed {
     bool level = false;
