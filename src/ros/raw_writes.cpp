@@ -8,7 +8,7 @@ RawWrites::RawWrites(ros::NodeHandle& nh, BusRuntime& runtime) : runtime_(runtim
 }
 
 std::string RawWrites::refusal(uint8_t slave, uint16_t address, size_t count, size_t max) const {
-  const std::string refused = runtime_.rawWriteRefusal(slave);  // off, or a broadcast
+  std::string refused = runtime_.rawWriteRefusal(slave);  // off, or a broadcast
   if (!refused.empty()) return refused;
   if (count < 1 || count > max)
     return "values: " + std::to_string(count) + " given, 1-" + std::to_string(max) + " allowed";

@@ -1510,7 +1510,13 @@ void World::checkHeld() {
       m.queued_at_reachable = node_->queuedJobs();
       m.queued_noted = true;
     }
-    if (now - m.reachable_since < dur(budget(m.queued_at_reachable) + pollPeriod(d))) continue;
+    // docs:37 "as soon as the device answers a poll again": that poll's own transactions come
+    // first (an LD58A08's first poll after it answers reads every channel's PWM registers, then
+    // the coils: 9; model change 27).
+    const double poll_transactions = d == kLd ? 9 : 2;
+    const double one_poll = poll_transactions * node_->safeAfterTrigger(0).answered_transaction;
+    if (now - m.reachable_since < dur(budget(m.queued_at_reachable) + pollPeriod(d) + one_poll))
+      continue;
     for (int ch = 0; ch < kChannels; ++ch) {
       const Chan& c = m.ch[ch];
       // Disturbed since it was held (a write nobody confirmed): from the good poll that found

@@ -86,7 +86,7 @@ struct NodeOnMemoryLine : ::testing::Test {
     }
   }
   // A share client's request; the future holds the transaction's outcome.
-  std::future<Result> share(const Request& request) {
+  std::future<Result> share(const Request& request) const {
     auto outcome = std::make_shared<std::promise<Result>>();
     std::future<Result> f = outcome->get_future();
     node->share()->forward(
