@@ -2,8 +2,8 @@
 // topic's message, a timed command (an LC flash, an LD58A08 PWM run or its stop). Each is
 // checked before anything is queued, runs as one bus job, is written through OutputBatch (merged
 // with the writes queued meanwhile), and its outcome goes to the fail-safe, which decides what
-// the channel should be from then on. The ROS adapters and the simulation's SimNode both call
-// this, so the job bodies the simulation searches are the node's. ROS-free.
+// the channel should be from then on. The bus runtime's DeviceUnit calls it (runtime/), for the
+// ROS adapters and the fail-safe's simulation alike. ROS-free.
 //
 // Threads: every call comes from any thread; `done`, `after` and the written callback run on
 // the bus thread, in the job, right after the device's answer.

@@ -4,8 +4,8 @@
 // each back, reports what it did, and writes them again once a device that was silent answers
 // a poll. It also carries the user's writes (write()): a signal set since a trigger fired is not
 // written safe by that trigger, now or later (docs/failsafe.md, "Generic devices"). No restart
-// detection and no on_restart: a generic device's signals say nothing of it. The ROS adapter
-// (ros/generic_adapter.cpp) and the simulation's SimNode both use it.
+// detection and no on_restart: a generic device's signals say nothing of it. The bus runtime's
+// DeviceUnit owns it (runtime/device_unit.h), for the node and the simulation alike.
 #pragma once
 
 #include <atomic>

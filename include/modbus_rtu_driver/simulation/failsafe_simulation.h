@@ -1,10 +1,10 @@
 // The deterministic simulation of the fail-safe (issue #32; docs/simulation.md): one bus with an
-// LC relay board, an LD58A08 (PWM), a Yespeed PDU and a generic device, the node's real parts
-// (sim_node.h) against the simulator's device models (memory_link.h), on a manual clock and one
-// thread. A seed draws the bus's configuration and a sequence of steps (commands from every
-// source, triggers, faults, node stop / kill / start); after every step the outcome is checked
-// against a model of docs/failsafe.md written apart from the code (failsafe_simulation.cpp, each
-// invariant with its line in the docs). The same seed and steps give the same frames, byte for
+// LC relay board, an LD58A08 (PWM), a Yespeed PDU and a generic device, the node's own bus runtime
+// (runtime/bus_runtime.h) against the simulator's device models (memory_link.h), on a manual
+// clock and one thread. A seed draws the bus's configuration and a sequence of steps (commands from
+// every source, triggers, faults, node stop / kill / start); after every step the outcome is
+// checked against a model of docs/failsafe.md written apart from the code (failsafe_simulation.cpp,
+// each invariant with its line in the docs). The same seed and steps give the same frames, byte for
 // byte: their digest says so.
 #pragma once
 
