@@ -56,6 +56,7 @@ BusRuntime::BusRuntime(BusConfig config, Transport& transport, Options options)
   }
   // Deadlines are checked at a tenth of the shortest timeout: a trigger fires at most 10 % late.
   if (deadlines) check_period_ = std::max(0.005, shortest / 10);
+  bus_safe_time_ = busSafeTime();  // after the reply delays and the check period
   if (config_.share.enabled) {
     // The answer bound needs the link's worst transaction, and a thread that answers at the
     // bound: none on a stepped bus (the simulation's steps run alone, deterministic).
@@ -139,9 +140,15 @@ std::optional<SafeTime> BusRuntime::safeTime(const DeviceUnit& unit, size_t writ
 }
 
 SafeTime BusRuntime::safeAfterTrigger(size_t writes_ahead) const {
+  SafeTime t = bus_safe_time_;
+  t.writes_ahead = writes_ahead;
+  return t;
+}
+
+// The configuration's part of every safe time, once: the simulation asks for it after every step.
+SafeTime BusRuntime::busSafeTime() const {
   SafeTime t;
   t.check_period = check_period_;
-  t.writes_ahead = writes_ahead;
   t.devices = units_.size();
   const double character = characterTime(config_.link);
   // Through a gateway each answer also takes the network's time.

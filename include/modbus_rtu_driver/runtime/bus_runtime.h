@@ -142,6 +142,7 @@ class BusRuntime {
 
  private:
   std::vector<DeviceUnit*> answeringFirst() const;
+  SafeTime busSafeTime() const;
   Pending applySafeEverywhere(const std::string& trigger, const std::string& reason,
                               bool only_on_start);
 
@@ -154,6 +155,7 @@ class BusRuntime {
   std::map<uint8_t, DeviceUnit*> by_address_;
   std::unique_ptr<ShareGateway> share_;  // after the units: its jobs call into them
   double check_period_ = 0;
+  SafeTime bus_safe_time_;  // safeAfterTrigger's parts from the configuration
   bool started_ = false;
   Pending start_writes_, stop_writes_;
 };
