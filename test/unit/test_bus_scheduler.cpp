@@ -807,3 +807,43 @@ TEST(BusSchedulerStepMode, AJobForASilentDeviceStopsAtItsFirstUnansweredRequest)
   EXPECT_EQ(line.log, (std::vector<std::string>{"1w", "1r"}));
   scheduler.stop();
 }
+
+// docs/share.md: a poll overdue by a whole period of its device goes before the next queued
+// job, and the queued jobs then get one transaction of it each. Its first request went after
+// one queued job (stop 56: a silent board's write went ahead of a returning PDU's overdue poll,
+// and with it that PDU's owed safe write: case held_safe_late_after_port_failure_and_broadcast).
+TEST(BusSchedulerStepMode, AnOverduePollSendsItsFirstRequestBeforeTheNextQueuedJob) {
+  struct Line : Transport {
+    std::vector<std::string> log;
+    Result execute(const Request& r) override {
+      log.push_back(std::to_string(r.slave) + (isReadFunction(r.function) ? "r" : "w"));
+      return Result::success({0});
+    }
+  } line;
+  ManualClock clock;
+  BusScheduler scheduler(line, {}, clock);
+  scheduler.startStepping();
+  scheduler.addPoll(
+      "a", 10.0,
+      [](Transport& t) {
+        Result r = t.execute(Request::readCoils(1, 0, 1));
+        return r.ok() ? t.execute(Request::readHoldingRegisters(1, 0, 1)) : r;
+      },
+      nullptr);
+  Clock::time_point next{};
+  ASSERT_TRUE(scheduler.step(&next));  // the first poll, due at once
+  line.log.clear();
+  clock.advanceTo(clock.now() + 250ms);  // overdue by more than its period (100 ms)
+  std::vector<std::future<Result>> writes;
+  for (int i = 0; i < 3; ++i)
+    writes.push_back(scheduler.submit(
+        "b", [](Transport& t) { return t.execute(Request::writeSingleCoil(2, 0, true)); }));
+  ASSERT_TRUE(scheduler.step(&next));  // the overdue poll, one queued write between its requests
+  EXPECT_EQ(line.log, (std::vector<std::string>{"1r", "2w", "1r"}));
+  // It is not overdue by a whole period any more: the queued writes go first again.
+  ASSERT_TRUE(scheduler.step(&next));
+  ASSERT_TRUE(scheduler.step(&next));
+  EXPECT_EQ(line.log, (std::vector<std::string>{"1r", "2w", "1r", "2w", "2w"}));
+  for (auto& w : writes) EXPECT_TRUE(w.get().ok());
+  scheduler.stop();
+}

@@ -336,9 +336,12 @@ Result BusScheduler::PollTransport::execute(const Request& request) {
   owner.transport_.awaitLineFree();  // a write that comes during the gap still goes first
   {
     std::unique_lock<std::mutex> lock(owner.mutex_);
-    // A poll that went before them lets one queued job go per transaction, not the whole queue.
+    // A poll that went before them sends its first request first, then lets one queued job go
+    // before each of its later ones, not the whole queue (docs/share.md: it goes before the
+    // next queued one, which then gets one transaction of it each).
     if (owner.starving_poll_running_) {
-      if (owner.transport_.connected()) owner.runOneQueued(lock);
+      if (owner.starving_poll_sent_ && owner.transport_.connected()) owner.runOneQueued(lock);
+      owner.starving_poll_sent_ = true;
     } else {
       while (owner.transport_.connected() && owner.runOneQueued(lock)) {
       }
@@ -454,6 +457,7 @@ bool BusScheduler::stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_po
     return false;
   }
   starving_poll_running_ = starving;
+  starving_poll_sent_ = false;
   last_ran_starving_poll_ = starving;
   lock.unlock();
   Result r = next->job(poll_transport_);

@@ -217,6 +217,7 @@ class BusScheduler {
   std::map<std::string, RateMeter> poll_rates_;
   PollTransport poll_transport_;
   bool starving_poll_running_ = false;  // a poll that went before queued jobs: runs them 1:1
+  bool starving_poll_sent_ = false;     // its first request went: queued jobs may go between
   bool last_ran_starving_poll_ = false;
   bool running_ = false;
   bool finished_ = false;                // run() has returned
