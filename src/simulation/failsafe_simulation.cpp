@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "modbus_rtu_driver/core/bus/clock.h"
+#include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/devices/ld58a08.h"
 #include "modbus_rtu_driver/runtime/bus_runtime.h"
@@ -103,6 +104,10 @@ const std::vector<std::string>& simRequiredCoverage() {
                           "masquerade", "addressing"})
       for (const char* t : {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"})
         r.push_back(std::string("fault ") + f + " " + t);
+    // A kill between a change of the kept timed commands and its parameter write (model
+    // change 28), and a new node resuming a command from a list that was behind.
+    r.push_back("fault kill before a kept list landed");
+    r.push_back("fault resumed from a list behind the killed node");
     // The fail-safe's events, by trigger, device type and action (docs/failsafe.md, "What
     // happens when"): written and confirmed, or owed ("(unconfirmed)": the device was silent).
     for (const char* t : {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"}) {
@@ -172,6 +177,8 @@ struct Config {
   std::vector<DeviceConfig> devices;
   bool generic_refuses = false;  // one safe value lands in a hole of the device's map
   bool ld_save = false;          // the LD58A08's power-down save at the start
+  // s the parameter server's kept lists lag the node (its parameter thread; 0: none).
+  double kept_latency = 0;
 };
 
 Config drawConfig(uint64_t seed) {
@@ -239,6 +246,8 @@ Config drawConfig(uint64_t seed) {
     c.devices[kLd].failsafe.heartbeat_topic = "pwm_alive";
     c.devices[kLd].failsafe.heartbeat_timeout = r.pick({0.3, 1.0});
   }
+  // Drawn after every other draw, so that those stay what they were.
+  c.kept_latency = r.pick({0.0, 0.0, 0.05, 0.3});
   return c;
 }
 
@@ -276,7 +285,11 @@ struct Chan {
   TP ends_earliest{};
   bool from_old_node = false;  // a timed command the previous node kept, resumed by this one
   TP at{};
-  bool held = false;  // docs:76-80
+  // When what the node keeps for this channel for the next node last changed (a command, a
+  // timed command, a write whose outcome is unknown): the list lags it by kept_latency.
+  TP kept_changed_at{};
+  bool kept_lagging = false;  // carried from a list that had not caught up (model change 28)
+  bool held = false;          // docs:76-80
   TP held_since{};
   size_t queued_at_hold = 0;  // jobs queued on the bus when the hold began
   bool owed = false;          // docs:81-84
@@ -364,6 +377,7 @@ class World {
         trace_(trace) {
     link_.keepHistory(keep_history ? 40 : 0);
     link_.trace(trace);
+    kept_timed_.setLatency(config_.kept_latency);
     SimLineSettings line;
     line.baud = config_.link.baud;
     link_.addDevice(std::make_unique<SimLcRelay8>(kAddr[kLc], line));
@@ -687,6 +701,14 @@ void World::resetModelForNewNode() {
         c.continuous = k.continuous;
         c.at = now;
         c.from_old_node = true;
+        // From a list that had not caught up with the killed node: the device may no longer
+        // run it (a write ended it), and its end may then show as a change (model change 28).
+        if (k.kept_lagging) {
+          cover("fault resumed from a list behind the killed node");
+          running_unknown = true;
+          m.justified_until =
+              std::max(m.justified_until, k.ends + dur(0.5 + 0.02 * k.duration) + dur(2.0));
+        }
       }
     }
     carried_[d].clear();
@@ -705,15 +727,46 @@ void World::resetModelForNewNode() {
 
 void World::keepRunningTimed() {
   // What DeviceFailsafe's timed-changed callback last put on the parameter server: each channel
-  // whose timed command runs (a known one, not ended).
+  // whose timed command runs (a known one, not ended). The server lags the node by
+  // kept_latency (docs/failsafe.md, "A node started during a flash"): a change younger than that
+  // may not have landed, and the next node reads the list as it is (model change 28).
   const TP now = clock_.now();
+  const double now_s = kept_timed_.seconds();
+  const auto& landed = kept_timed_.landed();
   for (int d = 0; d < kGen; ++d) {
     carried_[d].assign(kChannels, std::nullopt);
+    std::vector<std::optional<KeptTimedCommand>> stored(kChannels);
+    if (const auto it = landed.find(kNames[d]); it != landed.end())
+      for (const KeptTimedCommand& k : it->second)
+        if (k.channel < kChannels && k.ends > now_s) stored[k.channel] = k;
     for (int ch = 0; ch < kChannels; ++ch) {
       const Chan& c = model_[d].ch[ch];
       // Model change 23 (failsafe.md line 198): only a timed command with an end; a run with
       // none is found by the next node.
-      if (c.known && !c.adopt && !c.continuous && c.timed && c.ends > now) carried_[d][ch] = c;
+      const bool runs = c.known && !c.adopt && !c.continuous && c.timed && c.ends > now;
+      // Not landed yet: changed after the list that landed was kept, and within two writes
+      // (one in flight, the newest waiting) of the kill. With no latency nothing is late: the
+      // node's list must match the model's.
+      const bool recent = config_.kept_latency > 0 &&
+                          c.kept_changed_at > kept_timed_.landedKeptAt(kNames[d]) &&
+                          now - c.kept_changed_at <= dur(2 * config_.kept_latency);
+      if (!recent) {
+        if (runs) carried_[d][ch] = c;
+        continue;
+      }
+      // Not landed: the next node resumes the list as it is; a command missing from it ends as
+      // a change the new node cannot place (resetModelForNewNode justifies it).
+      if (!stored[ch]) continue;
+      const KeptTimedCommand& k = *stored[ch];
+      Chan x;
+      x.known = x.timed = true;
+      x.level = k.after;
+      if (k.during >= 0) x.during = k.during == 1;
+      x.ends = x.ends_earliest = now + dur(k.ends - now_s);
+      x.duration = k.ends - now_s;
+      x.at = now;
+      x.kept_lagging = true;
+      carried_[d][ch] = x;
     }
   }
 }
@@ -801,7 +854,8 @@ void World::stopNode() {
   stopping_ = true;
   runUntil(began + dur(config_.shutdown_timeout), [this] { return node_->stopWritesDone(); });
   // Model change 22 (failsafe.md, the stop's step 5): the list kept for the next node is the
-  // one the safe writes left, written after the bus thread ended.
+  // one the safe writes left, written after the bus thread ended (the stop flushes it).
+  kept_timed_.flush();
   keepRunningTimed();
   // I10 (docs:31): a device that answered throughout shows its safe states.
   if (node_->stopWritesDone() && !port_lost_)
@@ -817,7 +871,11 @@ void World::stopNode() {
 
 void World::killNode() {
   if (!node_) return;
-  if (!stopping_) keepRunningTimed();
+  if (!stopping_) {
+    // SIGKILL: the parameter thread's writes not done are lost.
+    if (kept_timed_.dropPending() > 0) cover("fault kill before a kept list landed");
+    keepRunningTimed();
+  }
   dying_ = true;
   stopping_ = false;
   node_.reset();  // queued jobs fail unsent: nothing reaches the line
@@ -852,6 +910,7 @@ void World::commanded(int d, int ch, bool level) {
   c.known = c.command = true;
   c.level = level;
   c.at = clock_.now();
+  c.kept_changed_at = c.at;
   // docs:77-78: a confirmed command ends the hold and cancels what was owed; a trigger before
   // it no longer covers it.
 }
@@ -875,6 +934,7 @@ void World::commandedTimed(int d, int ch, std::optional<bool> during, bool after
 }
 
 void World::unconfirmed(int d, int ch, double not_before_s, bool as_command) {
+  model_[d].ch[ch].kept_changed_at = clock_.now();  // a timed command it may replace is dropped
   // The docs do not say what the intent is after a write whose answer was lost: nothing is
   // checked on the channel until a poll shows it again.
   Chan& c = model_[d].ch[ch];
@@ -1167,6 +1227,7 @@ void World::onPolled(const std::string& device, const Result& r) {
       const bool unknown = c.adopt_is_command && !c.adopt_prev_known;
       Chan kept = c;
       c = Chan{};
+      c.kept_changed_at = clock_.now();  // its kept timed command may go (model change 28)
       c.known = true;
       c.command = kept.adopt_is_command && !unknown;
       c.level = level;
@@ -1244,6 +1305,7 @@ void World::takeFoundAfterRestart(int d, const FailsafeReport& r) {
     if (!c.known || c.adopt || !changed) continue;
     Chan kept = c;
     c = Chan{};
+    c.kept_changed_at = clock_.now();  // its kept timed command may go (model change 28)
     c.known = true;
     c.level = outputs[ch];
     c.at = clock_.now();
@@ -1422,14 +1484,19 @@ void World::onReport(const FailsafeReport& r) {
       c.known = true;
       c.level = r.states[i];
       c.at = now;
+      // The write ended any timed command the node kept for the next node (model change 28).
+      c.kept_changed_at = now;
       c.held = held;
       c.held_since = held_since;
       c.triggered = triggered;
       c.trigger_at = trigger_at;
       c.deadline = deadline;
     }
-  } else if (r.trigger == "heartbeat" || r.trigger == "command_timeout" || r.trigger == "start") {
-    // docs:37, 81-82: owed on the channels it carried.
+  } else if (r.trigger == "heartbeat" || r.trigger == "command_timeout" || r.trigger == "start" ||
+             r.trigger == "shutdown") {
+    // docs:37, 81-82: owed on the channels it carried; the stop's too (its "safe write that
+    // fails" row names no trigger: the stop reads such a device after the others' safe writes
+    // and writes it again when it answers; model change 29).
     for (int ch : chs) m.ch[ch].owed = true;
   }
 }
@@ -1990,7 +2057,9 @@ std::string FailsafeSimulation::describe() const {
   std::ostringstream o;
   o << "link " << c.link.baud << " baud, response_timeout " << c.link.response_timeout
     << " s, retries " << c.link.retries << "; heartbeat " << c.heartbeat << " s"
-    << (c.ld_save ? "; LD58A08 power-down save on" : "") << "\n";
+    << (c.ld_save ? "; LD58A08 power-down save on" : "")
+    << (c.kept_latency > 0 ? "; kept lists land " + numberText(c.kept_latency) + " s late" : "")
+    << "\n";
   for (const DeviceConfig& d : c.devices) {
     o << "  " << d.name << " (" << d.type << " @" << d.address << ", " << d.poll_rate << " Hz): ";
     if (d.type == "generic") {
