@@ -72,6 +72,8 @@ unit_test(test_kept_timed_commands modbus_rtu_failsafe)
 # The fail-safe's deterministic simulation (docs/simulation.md): regression cases, determinism,
 # a bounded run (the 60 s run is scripts/test.sh's, hours: scripts/simulate.sh).
 unit_test(test_failsafe_simulation modbus_rtu_simulation)
+# The link's late-reply guard on the real Link over the in-memory line (manual clock).
+unit_test(test_late_reply_guard modbus_rtu_simulation)
 # Writes that failed after part of them was done, on the node's bus runtime in memory.
 unit_test(test_failsafe_partial_writes modbus_rtu_simulation)
 unit_test(test_failsafe_node_cases modbus_rtu_simulation)

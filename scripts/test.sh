@@ -106,6 +106,8 @@ phase_done "fail-safe simulation and sanitized tests, side by side"
 phase_done "fuzz"
 # catkin_lint (strict) and clang-format applied to every C++ file.
 "$REPO/scripts/check_conventions.sh" "$WS/build/test_results/conventions" || true
+# One catalog of invariant ids for the simulation and the scenario model (docs/invariants.md).
+/usr/bin/python3 "$REPO/scripts/check_invariants.py" --junit "$WS/build/test_results/conventions/invariants_one_catalog.xml" || true
 phase_done "conventions"
 # catkin_make install gives an install space that works on its own.
 "$REPO/scripts/check_install.sh" "$WS/build/test_results/install" || true

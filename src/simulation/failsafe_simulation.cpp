@@ -1,6 +1,7 @@
 #include "modbus_rtu_driver/simulation/failsafe_simulation.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <deque>
@@ -25,51 +26,54 @@
 namespace modbus_rtu_driver {
 
 // ---------------------------------------------------------------------------------------------
-// The invariants. Each stands on a line of docs/failsafe.md (the spec); the model below is
-// written from those lines, not from the code. Where the docs are silent the model checks
-// nothing (docs/simulation.md lists those questions).
+// The invariants (docs/invariants.md). Each stands on rules of docs/failsafe.md (F1, F2, ...:
+// the spec); the model below is written from those rules, not from the code. Where the docs
+// are silent the model checks nothing (docs/simulation.md lists those questions).
 const std::vector<SimInvariant>& simInvariants() {
   static const std::vector<SimInvariant> list = {
-      {"I1", "docs/failsafe.md:35,59; README (writes are confirmed)",
+      {"I1", "docs/failsafe.md F21, F28, F29, F49; README (writes are confirmed)",
        "a command reported as done (service, topic, pulse, PWM, share, raw write) is on the "
        "device when its answer comes"},
-      {"I2", "docs/failsafe.md:32-33,81,188-201",
+      {"I2", "docs/failsafe.md F6-F9, F16, F17, F58, F59, F87",
        "a channel held safe (heartbeat lost, command timeout) shows its safe state on a device "
        "that answers, within the timeout's tenth plus the bus transactions before it"},
-      {"I3", "docs/failsafe.md:34,76-80,85",
+      {"I3", "docs/failsafe.md F12, F16, F19, F20, F36",
        "a fail-safe write (restore, safe states, owed writes) never writes a held channel other "
        "than safe"},
-      {"I4", "docs/failsafe.md:34,37,59-65,77-78,81-84,90-92",
+      {"I4", "docs/failsafe.md F12, F21, F22, F25, F36, F44",
        "a fail-safe write changes a channel from its intent (the newest confirmed command, or "
        "the found state) only for a reason: a trigger since, or a restart of the device since "
        "(on_restart: safe writes safe, restore the timed command's final level)"},
-      {"I5", "docs/failsafe.md:34,62-63,85-101,176-186",
+      {"I5", "docs/failsafe.md F12, F36-F39, F41, F78",
        "a restore writes, channel by channel, the safe state of a held or owed channel, else a "
        "timed command's final level, else the intent's level (found states included); never a "
        "continuous PWM channel as a level; and every channel whose intent is known; it starts "
        "again, as written, the node's continuous PWM run the read before shows stopped, and a "
        "power cycle that stopped one is seen within 8 polls of the device answering"},
-      {"I6", "docs/failsafe.md:34-35,66-74,169-172",
+      {"I6", "docs/failsafe.md F11, F25, F32-F35, F45, F77, F80, F81, F84",
        "a restart 'outputs changed with no command in between' is reported only after "
        "something did change them without the node's confirmed command (a power cycle, a "
        "write whose reply was lost, a flash of a killed node)"},
       {"I7", "docs/troubleshooting.md (writes that start something are never sent twice)",
        "a frame that starts something (a flash, a PWM run) reaches the device at most once per "
        "transaction"},
-      {"I8", "docs/failsafe.md:166-174",
+      {"I8", "docs/failsafe.md F70-F72",
        "generic device: a safe value the device refuses does not stop the others, and is not "
        "retried while the device answers; a signal set since the trigger is not written, one "
        "not set since is"},
-      {"I9", "docs/failsafe.md:36",
+      {"I9", "docs/failsafe.md F10",
        "on_start: safe: the safe states are on every answering device before commands are taken"},
-      {"I10", "docs/failsafe.md:31,99-100",
+      {"I10", "docs/failsafe.md F5, F60-F64, F66",
        "node stop: the safe states are on every answering device when the stop's writes end"},
-      {"I11", "docs/failsafe.md:4-5,31-32,34",
+      {"I11", "docs/failsafe.md F1, F5, F7",
        "a write of safe states (a trigger's, on_restart: safe, an owed one) writes only channels "
        "whose safe state is not hold: a channel nobody asked to write is not written"},
       {"I12", "docs/ros_api.md (write_coils, write_registers)",
        "a raw write to slave 0 (broadcast) is refused at once, and nothing goes on the line"},
-      {"L1", "docs/failsafe.md:32-33,37 (\"safe state until commanded again\", owed writes)",
+      {"I21", "docs/failsafe.md F90; troubleshooting.md (late replies)",
+       "a device's reply that comes within late_reply_guard after its request timed out is "
+       "never taken as the reply to a different request"},
+      {"L1", "docs/failsafe.md F8, F16, F17, F41, F58 (safe until commanded again, owed writes)",
        "liveness: once every fault heals (the devices answer, the port is back, a node runs), "
        "every channel held safe (the heartbeat lost, for good in half the seeds, or a command "
        "timeout) shows its safe state within the node's stated bound"},
@@ -84,16 +88,16 @@ struct StepKind {
   int weight;
 };
 constexpr StepKind kStepKinds[] = {
-    {"wait", 26},        {"set", 8},         {"set2", 3},           {"command", 6},
-    {"pulse", 4},        {"pwm", 4},         {"pwm_stop", 2},       {"share05", 3},
-    {"share15", 2},      {"raw05", 1},       {"raw15", 1},          {"share16_flash", 2},
-    {"raw16_flash", 1},  {"share16_pwm", 2}, {"share06_stop", 1},   {"signal", 2},
-    {"hb_stop", 3},      {"hb_resume", 4},   {"dhb_stop", 2},       {"dhb_resume", 3},
-    {"silent", 3},       {"lose", 2},        {"late", 1},           {"garble", 2},
-    {"power", 2},        {"ld_save", 1},     {"port_lost", 1},      {"port_back", 3},
-    {"stop", 1},         {"kill", 1},        {"start", 3},          {"share15_broadcast", 1},
-    {"refuse", 2},       {"foreign", 2},     {"port_fail_sent", 1}, {"share05_broadcast", 1},
-    {"raw_broadcast", 1}};
+    {"wait", 26},         {"set", 8},         {"set2", 3},           {"command", 6},
+    {"pulse", 4},         {"pwm", 4},         {"pwm_stop", 2},       {"share05", 3},
+    {"share15", 2},       {"raw05", 1},       {"raw15", 1},          {"share16_flash", 2},
+    {"raw16_flash", 1},   {"share16_pwm", 2}, {"share06_stop", 1},   {"signal", 2},
+    {"hb_stop", 3},       {"hb_resume", 4},   {"dhb_stop", 2},       {"dhb_resume", 3},
+    {"silent", 3},        {"lose", 2},        {"late", 1},           {"garble", 2},
+    {"power", 2},         {"ld_save", 1},     {"port_lost", 1},      {"port_back", 3},
+    {"stop", 1},          {"kill", 1},        {"start", 3},          {"share15_broadcast", 1},
+    {"refuse", 2},        {"foreign", 2},     {"port_fail_sent", 1}, {"share05_broadcast", 1},
+    {"raw_broadcast", 1}, {"repeat", 2},      {"kill_sent", 1}};
 
 const std::vector<std::string>& simRequiredCoverage() {
   static const std::vector<std::string> rows = [] {
@@ -101,13 +105,14 @@ const std::vector<std::string>& simRequiredCoverage() {
     for (const StepKind& k : kStepKinds) r.push_back(std::string("step ") + k.name);
     for (const SimInvariant& i : simInvariants()) r.push_back(std::string("check ") + i.id);
     for (const char* f : {"silent", "lose", "late", "garble", "power", "refuse", "inserted",
-                          "masquerade", "addressing"})
+                          "masquerade", "addressing", "repeat"})
       for (const char* t : {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"})
         r.push_back(std::string("fault ") + f + " " + t);
     // A kill between a change of the kept timed commands and its parameter write (model
     // change 28), and a new node resuming a command from a list that was behind.
     r.push_back("fault kill before a kept list landed");
     r.push_back("fault resumed from a list behind the killed node");
+    r.push_back("fault kill with a frame on the line");
     // The fail-safe's events, by trigger, device type and action (docs/failsafe.md, "What
     // happens when"): written and confirmed, or owed ("(unconfirmed)": the device was silent).
     for (const char* t : {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"}) {
@@ -248,6 +253,8 @@ Config drawConfig(uint64_t seed) {
   }
   // Drawn after every other draw, so that those stay what they were.
   c.kept_latency = r.pick({0.0, 0.0, 0.05, 0.3});
+  // The link's late-reply guard (docs/ros_api.md; default 0.1 s), or none.
+  c.link.late_reply_guard = r.pick({0.1, 0.1, 0.0});
   return c;
 }
 
@@ -311,7 +318,12 @@ struct Chan {
 
 struct DevModel {
   std::vector<Chan> ch;
-  bool justified = false;      // I6: something changed outputs the node did not confirm
+  bool justified = false;  // I6: something changed outputs the node did not confirm
+  // Polls since the node took a repeated or late frame as a read's reply: that poll may report
+  // a change, and the next one the change back (what it took as found was not the device's);
+  // on an LD58A08 the poll that reads that channel's PWM registers again, up to 8 polls on.
+  int polls_since_stale = 1000;
+  TP stale_read_at{};
   TP justified_at{};           // ... at this time
   TP justified_until{};        // ... and goes on changing them until then (a timed command)
   std::optional<TP> cause_at;  // I4: the newest thing that may make the node see a restart
@@ -444,6 +456,10 @@ class World {
   void fail(const std::string& invariant, const std::string& message);
   // Counts a coverage row (docs/simulation.md, "Coverage").
   void cover(const std::string& row) { ++coverage_[row]; }
+  // F90: the node took a repeated or late frame as a read of device `d`, and no poll has read
+  // the same again since (on an LD58A08, the one that reads that channel's PWM registers: up
+  // to 8 polls on).
+  bool staleReadShows(int d) const { return model_[d].polls_since_stale <= (d == kLd ? 10 : 2); }
   // An invariant is about to be compared in a state where it could fail: counted; true.
   bool checked(const char* invariant) {
     cover(std::string("check ") + invariant);
@@ -535,6 +551,7 @@ class World {
   std::map<std::string, uint64_t> coverage_;
   bool dying_ = false;
   bool stopping_ = false;
+  bool killed_frame_out_ = false;  // kill_sent: the frame it waits for went out
   TP start_{};
   DevModel model_[kDevices];
   // docs/failsafe.md "A node started during a flash": the timed commands still running when the
@@ -990,10 +1007,33 @@ void World::onAttempt(const LineEvent& e) {
     // The adapter failed with this request out: as a lost port (below, the request's device
     // heard it and its answer is lost).
     port_lost_ = true;
+    killed_frame_out_ = true;
     for (int dev = 0; dev < kDevices; ++dev) deviceDisturbed(dev, false);
   }
+  // Incorrect sequence, repetition: the node read a frame that was not this request's reply
+  // (a late or repeated one, or a foreign frame), and took it or rejected it.
+  if (e.stale) cover(e.answered ? "line another's reply taken" : "line another's reply rejected");
   const int d = devOf(e.request.slave);
   if (d < 0) return;
+  // A repeated or late reply of the same shape, taken as this read's (Modbus RTU has no
+  // transaction number: failsafe.md F-rule "Replies the line repeats or delays"): the node read
+  // outputs that are not the device's now, and a change it reports from them has a cause.
+  if (e.stale && e.answered && isReadFunction(e.request.function)) {
+    DevModel& m = model_[d];
+    m.polls_since_stale = 0;
+    m.stale_read_at = clock_.now();
+    // What it took as found may also hide a timed command's end: until it ends (and its slack).
+    for (const Chan& c : m.ch)
+      if (c.timed && !c.continuous)
+        m.justified_until =
+            std::max(m.justified_until, c.ends + dur(0.5 + 0.02 * c.duration) + dur(2.0));
+  }
+  // I21 (F90): within late_reply_guard of its request's time-out, a late reply is never taken
+  // as another request's.
+  if (e.stale && e.answered && checked("I21") && e.taken_within_guard)
+    fail("I21", std::string(kNames[d]) + ": " + e.request.describe() +
+                    " took a late reply to another request, within late_reply_guard (" +
+                    std::to_string(config_.link.late_reply_guard) + " s) of its time-out");
   if (e.refused) {  // an exception the fault injected: the device did nothing
     if (d == kGen && !isReadFunction(e.request.function))
       model_[kGen].gen_refused.insert(e.request.address);
@@ -1157,7 +1197,10 @@ void World::onAttempt(const LineEvent& e) {
     });
     const bool seeable =
         m.cause_pending || m.justified || e.at < m.justified_until || run_stop_seeable;
-    if ((m.cause_at && *m.cause_at >= c.at) || (seeable && c.at <= m.last_poll_at)) {
+    // F90: a read that took another's frame may show the node a change that is none; a
+    // command confirmed before it is then older than the restart it reports.
+    const bool stale_seen = staleReadShows(d) && c.at <= m.stale_read_at;
+    if ((m.cause_at && *m.cause_at >= c.at) || (seeable && c.at <= m.last_poll_at) || stale_seen) {
       if (onRestart(d) == OnRestart::kSafe && hasSafe(d, ch) && v == safeLevel(d, ch)) continue;
       if (onRestart(d) == OnRestart::kRestore && c.timed && v == c.level) continue;
     }
@@ -1264,6 +1307,7 @@ void World::onPolled(const std::string& device, const Result& r) {
   if (m.written_in_poll) return;
   m.prev_poll_at = m.last_poll_at;
   m.last_poll_at = clock_.now();
+  m.polls_since_stale = std::min(m.polls_since_stale + 1, 1000);
 }
 
 void World::onWritten(const std::string& device, const std::vector<uint8_t>& chs,
@@ -1275,7 +1319,9 @@ void World::onWritten(const std::string& device, const std::vector<uint8_t>& chs
 
 void World::checkCoils(int d, const std::vector<uint8_t>& chs, const std::vector<bool>& sts,
                        const std::string& what) {
-  // I1: reported done means the device shows it now.
+  // I1: reported done means the device shows it now. Not after the node took a repeated or
+  // late frame as a read of this device (F90): a PWM run it missed may drive the channel.
+  if (staleReadShows(d)) return;
   for (size_t i = 0; i < chs.size(); ++i)
     if (checked("I1") && simCoil(d, chs[i]) != sts[i])
       fail("I1", std::string(kNames[d]) + " out" + std::to_string(chs[i]) + ": " + what +
@@ -1356,7 +1402,7 @@ void World::onReport(const FailsafeReport& r) {
         if (named.saved_stop_read_at != TP{}) named.saved_run_unseen = false;
       }
     if (r.reason.find("changed with no command") != std::string::npos && checked("I6") &&
-        !m.justified && m.prev_poll_at >= m.justified_until && !run_stopped)
+        !m.justified && m.prev_poll_at >= m.justified_until && !run_stopped && !staleReadShows(d))
       fail("I6", std::string(kNames[d]) + ": restart reported (" + r.reason +
                      ") though nothing changed its outputs without a confirmed command");
     // docs:34, 90-92: the restart is what the poll that saw it showed; on_restart's writes may
@@ -1494,6 +1540,12 @@ void World::onReport(const FailsafeReport& r) {
     }
   } else if (r.trigger == "heartbeat" || r.trigger == "command_timeout" || r.trigger == "start" ||
              r.trigger == "shutdown") {
+    // Not confirmed (its answer or its read back lost, or garbled): it may have been done, a
+    // change the node did not confirm (I6's "a write whose reply was lost"; model change 30).
+    if (!chs.empty()) {
+      m.justified = true;
+      m.justified_at = now;
+    }
     // docs:37, 81-82: owed on the channels it carried; the stop's too (its "safe write that
     // fails" row names no trigger: the stop reads such a device after the others' safe writes
     // and writes it again when it answers; model change 29).
@@ -1647,8 +1699,19 @@ bool World::step(const SimStep& s, size_t index) {
     const int d = arg(0) % kDevices;
     MemoryLinkFaults& f = link_.faults(kAddr[d]);
     (k == "lose" ? f.lost : k == "late" ? f.late : f.garbled) = 1 + arg(1) % 3;
+    // A late reply arrives just after the timeout (a retry reads it), within the late-reply
+    // guard, or after it (a later request's window: incorrect sequence).
+    if (k == "late") f.late_by = std::array<double, 3>{0.001, 0.05, 0.3}[arg(2) % 3];
     cover("fault " + k + " " + kTypes[d]);
     deviceDisturbed(d, false);
+  } else if (k == "repeat") {
+    // The device's next 1-3 replies arrive twice (a repeater sends them again), the copy at
+    // once, within an inter-frame time, or 0.15 s later (in the next transaction's window).
+    const int d = arg(0) % kDevices;
+    MemoryLinkFaults& f = link_.faults(kAddr[d]);
+    f.repeated = 1 + arg(1) % 3;
+    f.repeat_after = std::array<double, 3>{0.0, 0.02, 0.15}[arg(2) % 3];
+    cover(std::string("fault repeat ") + kTypes[d]);
   } else if (k == "refuse") {
     // Exception replies (01, 02, 03, 04, 06) to the device's next requests, whatever they are:
     // polls, commands, safe writes; the device does nothing.
@@ -1711,6 +1774,19 @@ bool World::step(const SimStep& s, size_t index) {
     stopNode();
   } else if (k == "kill") {
     killNode();
+  } else if (k == "kill_sent") {
+    // SIGKILL while a transaction is on the line: its request went out (the device acts on
+    // it), and the node dies before the reply. The adapter is not gone: the next node opens it.
+    if (node_ && node_->started() && !link_.portLost()) {
+      link_.failPortAfterNextFrame();
+      killed_frame_out_ = false;
+      runUntil(clock_.now() + dur(2.0), [this] { return killed_frame_out_; });
+      if (killed_frame_out_) cover("fault kill with a frame on the line");
+      link_.clearPortFailure();
+      killNode();
+      link_.setPortLost(false);
+      port_lost_ = false;
+    }
   } else if (k == "start") {
     startNode();
   } else if (node_ && node_->started()) {
@@ -1805,7 +1881,11 @@ void World::doCommandStep(const SimStep& s) {
     pending_.push_back(pulse(op("pulse").id, kNames[kLc], ch, st, seconds,
                              [this, ch, st, seconds](const Result& r) {
                                if (r.ok()) {
-                                 checkCoils(kLc, {ch}, {st}, "a pulse");
+                                 // Unless it has ended since the board took it (its job's read
+                                 // back may wait out the late-reply guard).
+                                 const TP took = model_[kLc].flash_answered[ch];
+                                 if (took == TP{} || took + dur(seconds) > clock_.now())
+                                   checkCoils(kLc, {ch}, {st}, "a pulse");
                                  commandedTimed(kLc, ch, st, !st, seconds);
                                  // docs:71-75: its end counts from the board's answer,
                                  // not from the read back after it (model change 16).
@@ -2110,7 +2190,7 @@ std::vector<SimStep> FailsafeSimulation::generate(size_t n) const {
       s.args = {r.below(kDevices), r.chance(50) ? 1 : 0};
     } else if (s.kind == "hb_stop" || s.kind == "hb_resume" || s.kind == "dhb_stop" ||
                s.kind == "dhb_resume" || s.kind == "port_lost" || s.kind == "port_back" ||
-               s.kind == "stop" || s.kind == "kill" || s.kind == "start" ||
+               s.kind == "stop" || s.kind == "kill" || s.kind == "kill_sent" || s.kind == "start" ||
                s.kind == "port_fail_sent") {
     } else {
       s.args = {r.below(kDevices), r.below(kChannels), r.below(16), r.below(64)};

@@ -1,5 +1,6 @@
 #include "modbus_rtu_driver/simulation/memory_link.h"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace modbus_rtu_driver {
@@ -44,6 +45,7 @@ bool MemoryLink::connect(std::string* error) {
     return false;
   }
   connected_ = true;
+  input_.clear();  // a port opened again starts with nothing in its input
   noteConnected();
   return true;
 }
@@ -74,11 +76,84 @@ void MemoryLink::fold(bool outgoing, const Bytes& frame) {
   while (history_.size() > history_size_) history_.pop_front();
 }
 
+Clock::duration MemoryLink::onWire(size_t bytes) const {
+  return seconds(static_cast<double>(bytes) * char_time_);
+}
+
+void MemoryLink::deliver(Clock::time_point at, Bytes frame, uint64_t answers, const Bytes& request,
+                         double late_by) {
+  auto it = input_.begin();
+  while (it != input_.end() && it->at <= at) ++it;
+  input_.insert(it, Arrival{at, std::move(frame), answers, request, late_by});
+}
+
+void MemoryLink::dropInput(Clock::time_point up_to) {
+  uint64_t dropped = 0;
+  while (!input_.empty() && input_.front().at <= up_to) {
+    fold(false, input_.front().frame);
+    dropped += input_.front().frame.size();
+    input_.pop_front();
+    ++stale_dropped_;
+  }
+  if (dropped > 0) addStaleBytes(dropped);
+}
+
+void MemoryLink::awaitQuiet(Clock::time_point until) {
+  const Clock::time_point give_up = clock_.now() + std::chrono::seconds(1);
+  Clock::time_point now = clock_.now();
+  while (now < until && now < give_up) {
+    if (input_.empty() || input_.front().at >= until) {
+      now = until;
+      break;
+    }
+    now = std::max(now, input_.front().at + onWire(input_.front().frame.size()));
+    dropInput(input_.front().at);
+    until = std::max(until, now + seconds(config_.late_reply_guard));
+  }
+  if (now > clock_.now()) clock_.advanceTo(now);
+}
+
+Result MemoryLink::readReply(const EncodedRequest& request, LineEvent& event,
+                             const char* no_reply) {
+  const Clock::time_point deadline = clock_.now() + seconds(responseTimeout(request));
+  if (input_.empty() || input_.front().at > deadline) {
+    clock_.advanceTo(deadline);
+    if (observer_) observer_(event);
+    return Result::failure(ErrorKind::kTimeout, request.request().describe() + ": " + no_reply);
+  }
+  Arrival a = std::move(input_.front());
+  input_.pop_front();
+  if (a.at > clock_.now()) clock_.advanceTo(a.at);
+  fold(false, a.frame);
+  wire(a.frame.size());
+  Result r = decodeReply(request, a.frame);
+  event.stale = a.answers != attempt_id_;
+  if (event.stale) {
+    ++stale_read_;
+    event.refused = false;  // the node read another frame, not the device's refusal
+    event.taken_within_guard = r.ok() && a.late_by > 0 && a.late_by <= config_.late_reply_guard &&
+                               a.request != request.adu();
+  }
+  // Taken as the reply (a foreign or stale frame too, if it passes the reply checks) it counts
+  // as an answer with its values.
+  event.answered = r.ok() || (!event.stale && r.error == ErrorKind::kException);
+  if (r.ok()) event.values = r.values;
+  if (observer_) observer_(event);
+  return r;
+}
+
 Result MemoryLink::attempt(const EncodedRequest& request) {
   if (port_lost_) {
     connected_ = false;
     return Result::failure(ErrorKind::kIo, "the adapter is gone (simulated port loss)");
   }
+  ++attempt_id_;
+  // The link's late-reply guard, on this line's clock; then whatever has arrived is flushed.
+  if (const auto until = guardUntil(request)) {
+    awaitQuiet(*until);
+    lineSettled(request);
+  }
+  dropInput(clock_.now());
   const Bytes& adu = request.adu();
   fold(true, adu);
   wire(adu.size());
@@ -93,26 +168,21 @@ Result MemoryLink::attempt(const EncodedRequest& request) {
       target = d.get();
       break;
     }
-  auto timeout = [&](const char* why) {
-    clock_.advance(seconds(responseTimeout(request)));
-    if (observer_) observer_(event);
-    return Result::failure(ErrorKind::kTimeout, request.request().describe() + ": " + why);
-  };
-  if (!target) return timeout("no reply");
+  if (!target) return readReply(request, event, "no reply");
   MemoryLinkFaults& f = faults_[target->address()];
+  const Clock::time_point now = clock_.now();
   if (f.refused > 0) {
     // The device answers with an exception and does nothing.
     --f.refused;
-    const Bytes refusal =
-        encodeException(slave, static_cast<uint8_t>(request.request().function), f.refused_code);
-    fold(false, refusal);
-    wire(refusal.size());
-    event.answered = event.refused = true;
-    if (observer_) observer_(event);
-    return decodeReply(request, refusal);
+    deliver(
+        now,
+        encodeException(slave, static_cast<uint8_t>(request.request().function), f.refused_code),
+        attempt_id_);
+    event.refused = true;
+    return readReply(request, event, "no reply");
   }
   event.heard = true;
-  std::optional<Bytes> reply = target->handle(request.request(), clock_.now());
+  std::optional<Bytes> reply = target->handle(request.request(), now);
   if (fail_after_frame_) {
     // The adapter fails with the request out: the device acted, no reply is read.
     fail_after_frame_ = false;
@@ -122,7 +192,7 @@ Result MemoryLink::attempt(const EncodedRequest& request) {
     return Result::failure(ErrorKind::kIo,
                            request.request().describe() + ": the adapter failed after sending");
   }
-  if (!reply) return timeout("no reply");
+  if (!reply) return readReply(request, event, "no reply");
   if (f.foreign > 0 && reply->size() >= 4) {
     // A well-formed frame that is not this request's reply (its CRC good): the node must
     // reject it; the device acted.
@@ -139,40 +209,35 @@ Result MemoryLink::attempt(const EncodedRequest& request) {
         other[0] = static_cast<uint8_t>(other[0] == 247 ? 246 : other[0] + 1);
       appendCrc(other);
     }
-    fold(false, other);
-    wire(other.size());
-    Result r = decodeReply(request, other);
-    // Taken as the reply (a defect of the reply check) it counts as an answer with its values.
-    event.answered = r.ok();
-    if (r.ok()) event.values = r.values;
-    if (observer_) observer_(event);
-    return r;
+    deliver(now, std::move(other), 0);
+    return readReply(request, event, "no reply");
   }
   if (f.lost > 0) {
     --f.lost;
-    return timeout("no reply (reply lost)");
+    return readReply(request, event, "no reply (reply lost)");
   }
   if (f.late > 0) {
+    // After the response timeout: on the line when a later request may be waiting.
     --f.late;
-    Result r = timeout("no reply (it came late)");
-    fold(false, *reply);  // on the line after the timeout: thrown away as stale
-    return r;
+    deliver(now + seconds(responseTimeout(request) + f.late_by), *reply, attempt_id_, request.adu(),
+            f.late_by);
+    return readReply(request, event, "no reply (it came late)");
   }
   Bytes bytes = *reply;
   if (f.garbled > 0) {
     --f.garbled;
     bytes.back() ^= 0x5A;  // a bad CRC
   }
-  fold(false, bytes);
-  wire(bytes.size());
-  Result r = decodeReply(request, bytes);
-  event.answered = r.ok() || r.error == ErrorKind::kException;
-  if (r.ok()) event.values = r.values;
-  if (observer_) observer_(event);
-  return r;
+  if (f.repeated > 0) {
+    --f.repeated;
+    deliver(now + onWire(bytes.size()) + seconds(f.repeat_after), bytes, attempt_id_);
+  }
+  deliver(now, std::move(bytes), attempt_id_);
+  return readReply(request, event, "no reply");
 }
 
 Result MemoryLink::sendBroadcast(const EncodedRequest& request) {
+  dropInput(clock_.now());
   fold(true, request.adu());
   wire(request.adu().size());
   for (auto& d : devices_)

@@ -162,7 +162,7 @@ class Scenario(RuleBasedStateMachine):
                     for dev, model, name, v, allowed, why, i in bad)
                 dev, model, _, value, _, why, i = bad[0]
                 refused = model.ch[i].refused if model else None
-                invariant = "I2" if refused and refused[0] == value else why.split(" ")[0]
+                invariant = "I13" if refused and refused[0] == value else why.split(" ")[0]
                 fail(invariant, "after %s (%s): boards %s: %s" % (step, phase, boards, text))
             if phase == "settle" and self.m.node_running and not self.m.port_gone:
                 if not self.m.silenced:
@@ -178,11 +178,11 @@ class Scenario(RuleBasedStateMachine):
     def refused_text(model, i, value):
         refused = model.ch[i].refused
         if refused and refused[0] == value:
-            return " (I2: %s answered success:false earlier)" % refused[1]
+            return " (I13: %s answered success:false earlier)" % refused[1]
         return ""
 
     def check_diagnostics(self, step):
-        """I6: a device status claiming 'outputs in their safe state' must be true on the board."""
+        """I15: a device status claiming 'outputs in their safe state' must be true on the board."""
         if self.m.flash_running(time.time()):
             return
         if self.m.unreachable():
@@ -203,16 +203,16 @@ class Scenario(RuleBasedStateMachine):
         wrong = [NAMES[i] for i, s in claimed.items() if coils[i] != s and not self.m.ch[i].relaxed
                  and not (pulse_known and not self.m.ch[i].settled)]
         if wrong:
-            fail("I6", "after %s: /diagnostics says %r but %s not safe on the board %s"
+            fail("I15", "after %s: /diagnostics says %r but %s not safe on the board %s"
                  % (step, status.message, ", ".join(wrong), coils))
 
     def expect_event(self, trigger, since, confirmed, timeout=10.0, dev=DEV):
         try:
             e = self.h.event(trigger, since, timeout, dev)
         except Timeout as t:
-            fail("I6", str(t))
+            fail("I16", str(t))
         if e.confirmed != confirmed:
-            fail("I6", "%s event confirmed=%s, expected %s: %s" % (trigger, e.confirmed,
+            fail("I16", "%s event confirmed=%s, expected %s: %s" % (trigger, e.confirmed,
                                                                   confirmed, e.message))
         return e
 
@@ -248,7 +248,7 @@ class Scenario(RuleBasedStateMachine):
             return
         changes = self.h.sim.stats(harness.BOARD)["changes"] - before
         if changes > len(chs) and not self.m.flash_running(time.time()):
-            fail("I5", "set_outputs of %d channels made %d changes on the board" % (len(chs), changes))
+            fail("I14", "set_outputs of %d channels made %d changes on the board" % (len(chs), changes))
 
     @precondition(lambda self: self.m.node_running and not self.m.silenced)
     @rule(ch=NOT_DEAD_MAN, state=st.integers(0, 1))
@@ -275,7 +275,7 @@ class Scenario(RuleBasedStateMachine):
 
     def command_while_port_gone(self, ch, state):
         """A topic command while the port is gone is refused unsent (docs/share.md's `writes
-        refused unsent`): it must never reach the board later (I2)."""
+        refused unsent`): it must never reach the board later (I13)."""
         before = self.h.refused_unsent()
         self.h.commands[NAMES[ch]].publish(Bool(bool(state)))
         self.note("%s/command %d (port gone)" % (NAMES[ch], state))
@@ -283,7 +283,7 @@ class Scenario(RuleBasedStateMachine):
             wait_until(lambda: self.h.refused_unsent() > before, 10,
                        "the command refused unsent (/diagnostics of %s)" % DEV)
         except Timeout as t:
-            fail("I2", "%s/command %d while the port is gone: %s" % (NAMES[ch], state, t))
+            fail("I13", "%s/command %d while the port is gone: %s" % (NAMES[ch], state, t))
         self.m.user_write([ch], [state], False, "%s/command %d" % (NAMES[ch], state))
         self.check("command %s %d" % (NAMES[ch], state))
 
@@ -296,9 +296,9 @@ class Scenario(RuleBasedStateMachine):
         self.note("valve/command 1, then nothing (command_timeout 1.0 s)")
         e = self.expect_event("command_timeout", since, confirmed=True)
         if list(e.channels) != [NAMES[DEAD_MAN]] or list(e.states) != [False]:
-            fail("I6", "command_timeout event wrote %s %s, expected valve off" % (e.channels, e.states))
+            fail("I17", "command_timeout event wrote %s %s, expected valve off" % (e.channels, e.states))
         self.m.user_write([DEAD_MAN], [1], True, "valve/command 1")
-        self.m.failsafe([DEAD_MAN], "I3 (command timeout: valve safe until commanded again)")
+        self.m.failsafe([DEAD_MAN], "I2 (command timeout: valve safe until commanded again)")
         self.check("dead man valve")
 
     @precondition(lambda self: self.m.node_running)
@@ -330,20 +330,20 @@ class Scenario(RuleBasedStateMachine):
         except ShareError as e:
             self.note("share FC01 -> %s" % e)
             if not self.m.unreachable():
-                fail("I6", "share FC01 of an answering board failed: %s" % e)
+                fail("I20", "share FC01 of an answering board failed: %s" % e)
             if self.m.port_gone and e.code != 0x0A:
-                fail("I6", "share FC01 while the port is gone: %s, docs/share.md says "
+                fail("I20", "share FC01 while the port is gone: %s, docs/share.md says "
                      "exception 0A (gateway path unavailable)" % e)
             return
         now = time.time()
         self.note("share FC01 -> %s" % coils)
         if self.m.port_gone:
-            fail("I6", "the share read %s while the port is gone (no board)" % coils)
+            fail("I20", "the share read %s while the port is gone (no board)" % coils)
         self.m.settle_flashes(now)
         bad = [NAMES[i] for i in range(8) if coils[i] not in self.m.allowed(i, now)
                and self.m.ch[i].flash is None]
         if bad:
-            fail("I6", "the share read %s, the model says %s for %s" % (
+            fail("I20", "the share read %s, the model says %s for %s" % (
                 coils, [sorted(self.m.allowed(i, now)) for i in range(8)], bad))
         self.check("share read")
 
@@ -374,7 +374,7 @@ class Scenario(RuleBasedStateMachine):
             wrong = [(c, s) for c, s in zip(e.channels, e.states)
                      if names.index(c) not in model.safe or model.safe[names.index(c)] != int(s)]
             if wrong:
-                fail("I6", "heartbeat event of %s wrote %s, not the safe states" % (dev, wrong))
+                fail("I17", "heartbeat event of %s wrote %s, not the safe states" % (dev, wrong))
         for model in self.models():
             model.heartbeat_lost_event()
         self.check("heartbeat lost")
@@ -404,7 +404,7 @@ class Scenario(RuleBasedStateMachine):
         if seen:
             e = self.expect_event("restart", since, confirmed=True)
             if e.action != "restore":
-                fail("I6", "restart event with action %r, on_restart is restore" % e.action)
+                fail("I17", "restart event with action %r, on_restart is restore" % e.action)
         self.check("power cycle")
 
     @precondition(lambda self: self.m.node_running and not self.m.port_gone)
@@ -442,7 +442,7 @@ class Scenario(RuleBasedStateMachine):
         for model in self.models():
             model.node_stopped(reached=True)
         if code != 0:
-            fail("I4", "the node exited with %s on SIGINT:\n%s" % (code, self.h.output[-2000:]))
+            fail("I10", "the node exited with %s on SIGINT:\n%s" % (code, self.h.output[-2000:]))
         self.check("node stop")
         # Flashes end before the next start (a flash ending under a new node is a restart).
         # (LD58A08 timed runs too; a continuous run goes on: the next node finds it running.)
@@ -507,7 +507,7 @@ class Scenario(RuleBasedStateMachine):
             status = self.h.fresh_bus_status(lambda s: s.message.startswith("port not open"),
                                              20, "the bus's /diagnostics to say port not open")
         except Timeout as t:
-            fail("port", "after the port went away: %s; last bus status: %s"
+            fail("I19", "after the port went away: %s; last bus status: %s"
                  % (t, self.h.bus_diag[1].message if self.h.bus_diag else None))
         self.note("bus: %s" % status.message)
         if write is not None:
@@ -530,7 +530,7 @@ class Scenario(RuleBasedStateMachine):
             self.h.fresh_bus_status(lambda s: not s.message.startswith("port not open"), 40,
                                     "the bus's /diagnostics to say the port is open again")
         except Timeout as t:
-            fail("port", "the node did not reopen the port: %s; last bus status: %s"
+            fail("I19", "the node did not reopen the port: %s; last bus status: %s"
                  % (t, self.h.bus_diag[1].message if self.h.bus_diag else None))
         if seen:
             e = self.expect_event("restart", since, confirmed=True, timeout=30.0)
@@ -539,7 +539,7 @@ class Scenario(RuleBasedStateMachine):
             # no output it compares changed, the node sees no restart and writes just that.
             allowed = ("restore", "safe") if pending else ("restore",)
             if e.action not in allowed:
-                fail("I6", "restart event with action %r, on_restart is restore" % e.action)
+                fail("I17", "restart event with action %r, on_restart is restore" % e.action)
         else:
             self.h.wait_polls(3, timeout=30.0)
         for dev, model, seen_there in others:
@@ -621,7 +621,7 @@ class Scenario(RuleBasedStateMachine):
     @rule(fast=st.booleans())
     def pwm_then_heartbeat_lost(self, fast):
         """A PWM run on a channel with a safe state when the heartbeat goes. docs/failsafe.md's
-        table, heartbeat lost: "safe state until commanded again" on each output (I3)."""
+        table, heartbeat lost: "safe state until commanded again" on each output (I2)."""
         if fast:
             self.ld_set_pwm(6, 2, 1, 2, 100, 0)  # p6 (safe off) on continuously
         else:
@@ -684,7 +684,7 @@ class Scenario(RuleBasedStateMachine):
         if seen:
             e = self.expect_event("restart", since, confirmed=True, dev=LD_DEV)
             if e.action != "restore":
-                fail("I6", "LD58A08 restart event with action %r, on_restart is restore" % e.action)
+                fail("I17", "LD58A08 restart event with action %r, on_restart is restore" % e.action)
         self.check("LD58A08 power cycle")
 
     @precondition(lambda self: self.m.node_running and not self.m.port_gone)
@@ -697,7 +697,7 @@ class Scenario(RuleBasedStateMachine):
         if seen:
             e = self.expect_event("restart", since, confirmed=True, dev=PDU_DEV)
             if e.action != "safe":
-                fail("I6", "PDU restart event with action %r, on_restart is safe" % e.action)
+                fail("I17", "PDU restart event with action %r, on_restart is safe" % e.action)
         self.check("PDU power cycle")
 
     # --- the node killed (SIGKILL) and started again under the same roscore -----------------
@@ -709,7 +709,7 @@ class Scenario(RuleBasedStateMachine):
         and PWM runs go on); the next node's on_start: safe puts them safe. "A node started
         during a flash": the killed node's kept timed commands stay on the parameter server (the
         per-example reset is not called here) and the next node resumes them, so a flash's or
-        timed run's end is not taken for a restart (I8). `before`: a timed command started
+        timed run's end is not taken for a restart (I6). `before`: a timed command started
         just before the kill on a channel without a safe state (the next node's on_start: safe
         would end it on a safe one), so that its end comes under the next node."""
         # 6 s each: the next node starts 2-3 s after the kill, so the end comes under it.
@@ -745,7 +745,7 @@ class Scenario(RuleBasedStateMachine):
             self.h.wait_polls(9, timeout=10.0, dev=LD_DEV)
         restarts = [e for e in self.h.events[since:] if e.trigger == "restart"]
         if restarts:
-            fail("I8", "after a SIGKILL and a new node (timed commands running at the kill: %s), "
+            fail("I6", "after a SIGKILL and a new node (timed commands running at the kill: %s), "
                  "restart events with no restart: %s" % (", ".join(running) or "none",
                                                          "; ".join("%s: %s" % (e.device, e.message)
                                                                    for e in restarts)))

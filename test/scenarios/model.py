@@ -4,20 +4,28 @@ spec), docs/devices/ld58a08.md for the board itself, and the rules of issue 24, 
 node's code. Each channel's expectation carries the invariant it comes
 from, so a mismatch names the invariant that failed.
 
-Invariants (issue 24, "Prove it by randomized scenarios"):
+Invariants (issue 24, "Prove it by randomized scenarios"), with the ids of the one catalog,
+docs/invariants.md (the C++ simulation's ids where they mean the same; ids before issue 48 there):
   I1 a write answered success:true is on the board (unless a later event changed it)
-  I2 a write answered success:false never reaches the board later
-  I3 while the heartbeat is lost, no output with a safe state leaves it without a new command
-  I4 after a node stop, every output with a safe state is in it
-  I5 no write touches a channel it was not asked to
-  I6 what /diagnostics and ~failsafe claim matches the board
-  I7 a PWM run the device drives is not undone by a restore ("What restore writes")
-  I8 a node killed during a flash or timed run and started again under the same roscore takes
-     its end for no restart ("A node started during a flash")
-and docs/failsafe.md's "port lost" row: the node reports the port not open, cannot write
-anything meanwhile (a write answers success:false, I2), and once the port is back compares the
-outputs at the next poll: a restart (on_restart: restore) when they changed, and pending safe
-writes done with a restart event.
+  I13 a write answered success:false never reaches the board later
+  I2 while the heartbeat is lost, no output with a safe state leaves it without a new command
+  I3 a restore keeps a channel a trigger holds safe; I5 what else a restore writes (the last
+     confirmed state, a timed run's final level; a PWM run the device drives is not undone,
+     "What restore writes")
+  I10 after a node stop, every output with a safe state is in it
+  I9 on_start: safe puts the safe states on before commands are taken
+  I14 no write touches a channel it was not asked to
+  I15 a /diagnostics claim "outputs in their safe state" matches the board; I16 each trigger's
+     ~failsafe event comes, confirmed as expected; I17 an event names what was written (the
+     safe states, the restart's action); I18 on_restart: safe puts the safe states on; I20 the
+     share's reads match the board
+  I6 a node killed during a flash or timed run and started again under the same roscore takes
+     its end for no restart ("A node started during a flash"), as no restart is reported
+     without a change
+and docs/failsafe.md's "port lost" rule (F14): the node reports the port not open (I19), cannot
+write anything meanwhile (a write answers success:false, I13), and once the port is back
+compares the outputs at the next poll: a restart (on_restart: restore) when they changed, and
+pending safe writes done with a restart event.
 """
 import time
 
@@ -72,7 +80,7 @@ class Channel:
         self.pending_safe = False  # a safe write failed: written when the device answers
         self.commanded_in_loss = False
         self.relaxed = False      # a known defect leaves its state open (known_defects.txt)
-        self.refused = None       # the state a write answered success:false asked for (I2)
+        self.refused = None       # the state a write answered success:false asked for (I13)
         self.lost_answer = False  # a write to a silent device answered success:false
 
 
@@ -116,7 +124,7 @@ class Model:
         """A service, topic or share write of `channels`; ok: answered success (or seen done)."""
         if not ok:
             for i, s in zip(channels, states):
-                self.ch[i].why = "I2 (%s answered success:false: must never reach the board)" % why
+                self.ch[i].why = "I13 (%s answered success:false: must never reach the board)" % why
                 self.ch[i].refused = (s, why)
                 self.ch[i].lost_answer = self.unreachable()
             return
@@ -139,13 +147,13 @@ class Model:
 
     def pulse(self, i, state, ok, sent, answered, duration):
         if not ok:
-            self.ch[i].why = "I2 (pulse answered success:false: must never reach the board)"
+            self.ch[i].why = "I13 (pulse answered success:false: must never reach the board)"
             self.ch[i].lost_answer = self.unreachable()
             return
         c = self.ch[i]
         c.refused = None
         c.flash = Flash(state, sent, answered, duration)
-        c.why = "I5 (pulse answered success:true: it ends by itself unless its channel is written)"
+        c.why = "I14 (pulse answered success:true: it ends by itself unless its channel is written)"
         c.settled, c.restore, c.by_failsafe, c.held, c.pending_safe = False, set(BOTH), False, False, False
         c.commanded_in_loss = self.heartbeat_lost
         c.lost_answer = False
@@ -168,7 +176,7 @@ class Model:
 
     def heartbeat_lost_event(self):
         self.heartbeat_lost = True
-        self.failsafe(sorted(self.safe), "I3 (heartbeat lost: safe until commanded again)")
+        self.failsafe(sorted(self.safe), "I2 (heartbeat lost: safe until commanded again)")
 
     def heartbeat_back(self):
         self.heartbeat_lost = False
@@ -183,16 +191,16 @@ class Model:
             # docs/failsafe.md, device restart: `safe` writes the safe states; a hold channel is
             # left as the restart left it (the caller has set that in c.values).
             if i in self.safe:
-                return {self.safe[i]}, "I6 (on_restart: safe writes the safe state)"
+                return {self.safe[i]}, "I18 (on_restart: safe writes the safe state)"
             return set(c.values), "on_restart: safe leaves a hold channel as the restart left it"
         if c.pending_safe or c.held:
             values, why = {self.safe[i]}, "I3 (restore keeps a channel a trigger holds safe)"
         elif not c.settled:
             values, why = set(BOTH), "unknown (pulsed channel: not compared by the node)"
         elif c.by_failsafe:
-            values, why = set(c.restore), "I3 (restore writes the state the fail-safe confirmed)"
+            values, why = set(c.restore), "I5 (restore writes the state the fail-safe confirmed)"
         else:
-            values, why = set(c.restore), "I1 (restore writes the last confirmed state)"
+            values, why = set(c.restore), "I5 (restore writes the last confirmed state)"
             if c.commanded_in_loss and i in self.safe:
                 values.add(self.safe[i])  # the spec does not say whether the loss still holds it
         if c.by_failsafe and "restore_after_failsafe" in self.known:
@@ -285,7 +293,7 @@ class Model:
 
     def node_stopped(self, reached):
         if reached:
-            self.failsafe(sorted(self.safe), "I4 (node stopped: safe states)", hold=True)
+            self.failsafe(sorted(self.safe), "I10 (node stopped: safe states)", hold=True)
         self.node_running = False
 
     def node_started(self, now):
@@ -303,7 +311,7 @@ class Model:
                 # restore writes"), not the level found during it.
                 found = {c.flash.final()} if c.flash is not None else set(c.values)
                 c.restore, c.by_failsafe, c.held, c.settled = found | {0}, False, False, True
-        self.failsafe(sorted(self.safe), "on_start: safe", hold=False)
+        self.failsafe(sorted(self.safe), "I9 (on_start: safe)", hold=False)
 
 
 # --- the LD58A08 (bus.yaml `pwm`) and the Yespeed PDU (bus.yaml `pdu`) ----------------------
@@ -386,14 +394,14 @@ class LdModel(Model):
     def set_pwm(self, i, ok, during, sent, answered, duration, why):
         c = self.ch[i]
         if not ok:
-            c.why = "I2 (%s answered success:false: must never reach the board)" % why
+            c.why = "I13 (%s answered success:false: must never reach the board)" % why
             c.lost_answer = self.unreachable()
             return
         c.refused = None
         c.flash = Run(during, sent, answered, duration)
         c.kind = "continuous" if duration is None else "timed"
         c.why = "I1 (%s answered success:true: the device drives the run)" % why
-        # docs/failsafe.md: a PWM command ends a hold (precedence 2); restore writes the final
+        # docs/failsafe.md: a PWM command ends a hold (precedence 2, docs/failsafe.md F18); restore writes the final
         # level of a timed command; a continuous run is the device's (not compared).
         c.settled, c.restore, c.by_failsafe, c.held, c.pending_safe = False, {0}, False, False, False
         c.commanded_in_loss = self.heartbeat_lost
@@ -409,7 +417,7 @@ class LdModel(Model):
         reads the channel's PWM registers gives its level, taken as commanded (taken())."""
         c = self.ch[i]
         if not ok:
-            c.why = "I2 (%s answered success:false)" % why
+            c.why = "I13 (%s answered success:false)" % why
             return
         c.refused = None
         self._set(i, set(BOTH), "docs (after a stop the level is the device's until a poll reads it)")
@@ -427,7 +435,7 @@ class LdModel(Model):
     def failsafe(self, channels, why, hold=True):
         # docs/failsafe.md's table: "each output: safe state". Whether the node's safe write
         # stops a running PWM first (as its output writes do) is not said: the level is checked
-        # (I3/I4), the enable register and what power-down save keeps are not (open question).
+        # (I2/I10), the enable register and what power-down save keeps are not (open question).
         for i in channels:
             c = self.ch[i]
             if c.flash is not None or c.kind is not None:
@@ -450,11 +458,11 @@ class LdModel(Model):
         if not (c.pending_safe or c.held):
             if c.kind == "timed":
                 # "What restore writes": the final level of a timed command (not started again).
-                return {0}, "I1 (restore writes a timed PWM run's final level, off)"
+                return {0}, "I5 (restore writes a timed PWM run's final level, off)"
             if c.kind in ("device", "continuous") and c.flash is not None:
                 # "A restore does not write a channel the device reports running a PWM that is
                 # no timed command of the node's" (continuous runs, found runs, saved runs).
-                return set(c.flash.during), "I7 (a restore does not undo a PWM run the device drives)"
+                return set(c.flash.during), "I5 (a restore does not undo a PWM run the device drives)"
         return super().restore_values(i)
 
     def power_cycle(self, now, save=False):
@@ -467,7 +475,7 @@ class LdModel(Model):
             c = self.ch[i]
             if c.held or c.pending_safe:
                 if save and stored is not False:
-                    # precedence 1: a held channel the poll shows otherwise (a PWM run someone
+                    # precedence 1 (docs/failsafe.md F17): a held channel the poll shows otherwise (a PWM run someone
                     # else started) is written safe again. Whether that stops the run: open.
                     c.stored, c.enable, c.enable_why = None, None, "held channel under a saved run"
                 elif not save:
@@ -475,15 +483,15 @@ class LdModel(Model):
                 continue
             if save and stored is True and kind == "continuous":
                 c.flash, c.kind = Run(flash.during, now, now, None), "continuous"
-                c.values, c.why = set(flash.during), "I7 (a saved continuous run runs again; a " \
+                c.values, c.why = set(flash.during), "I5 (a saved continuous run runs again; a " \
                     "restore does not undo a PWM run the device drives)"
-                c.enable, c.enable_why = {CONTINUOUS}, "I7 (a restore does not stop a saved run)"
+                c.enable, c.enable_why = {CONTINUOUS}, "I5 (a restore does not stop a saved run)"
                 c.settled = False
             elif save and stored is not False:
                 # A saved burst or timed run starts again: the device's ("a run that a
                 # power-down save restarts ends at a level that is the device's doing").
                 c.flash, c.kind = Run(BOTH, now, now, None), "device"
-                c.values, c.why = set(BOTH), "I7 (a run power-down save started again: the device's)"
+                c.values, c.why = set(BOTH), "I5 (a run power-down save started again: the device's)"
                 c.enable, c.enable_why, c.settled = None, "a saved run", False
             else:
                 if not save:
@@ -496,17 +504,17 @@ class LdModel(Model):
                     # polls), so either until then; a node started since (a SIGKILL) did not
                     # start it and leaves it off.
                     c.flash, c.kind = Run(flash.during | {0}, now, now, None), "continuous"
-                    c.values, c.why, c.settled = flash.during | {0}, "I7 (a restore starts the " \
+                    c.values, c.why, c.settled = flash.during | {0}, "I5 (a restore starts the " \
                         "node's continuous run again)", False
                     c.stored = None
-                    c.enable, c.enable_why = {0, CONTINUOUS}, "I7 (off after the power cycle, " \
+                    c.enable, c.enable_why = {0, CONTINUOUS}, "I5 (off after the power cycle, " \
                         "then started again by the restore)"
                 elif kind == "device":
                     # A run the node took for the device's is not started again; the device's
                     # until a plain write.
                     c.flash, c.kind = Run({0}, now, now, None), "device"
-                    c.values, c.why, c.settled = {0}, "I7 (a PWM run a restart ended stays off)", False
+                    c.values, c.why, c.settled = {0}, "I5 (a PWM run a restart ended stays off)", False
                 elif kind == "timed":
                     c.kind, c.settled, c.restore = None, True, {0}
-                    self._set(i, {0}, "I1 (restore writes a timed run's final level, off)")
+                    self._set(i, {0}, "I5 (restore writes a timed run's final level, off)")
         return seen

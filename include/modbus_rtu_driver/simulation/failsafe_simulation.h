@@ -95,10 +95,10 @@ struct SimCase {
 bool writeSimCase(const std::string& path, const SimCase& c, std::string* error);
 bool readSimCase(const std::string& path, SimCase* c, std::string* error);
 
-// The invariants checked, by id, with the docs line each stands on (docs/simulation.md).
+// The invariants checked, by id, with the rules each stands on (docs/invariants.md).
 struct SimInvariant {
   const char* id;
-  const char* docs;  // "docs/failsafe.md:32"
+  const char* docs;  // "docs/failsafe.md F6, F7": the rules it checks (docs/invariants.md)
   const char* text;
 };
 const std::vector<SimInvariant>& simInvariants();

@@ -65,7 +65,7 @@ void Link::noteConnected() {
   }
   ever_connected_ = true;
   unsettled_.clear();  // a new connection carries nothing from the old one
-  last_activity_ = Steady::now();
+  last_activity_ = lineNow();
 }
 
 Result Link::execute(const Request& asked) {
@@ -103,22 +103,35 @@ Result Link::runAttempt(const EncodedRequest& request) {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.attempts;
   }
+  const auto began = lineNow();
   Result r = attempt(request);
   // The silence after a reply runs from its last byte as read, not from after its decoding.
-  last_activity_ = heard_at_.value_or(Steady::now());
+  last_activity_ = heard_at_.value_or(lineNow());
   heard_at_.reset();
   countAttempt(r);
   // A failure (not an answer) may be followed by a late reply. A success keeps an earlier
-  // entry: after a retry, the first attempt's reply may be the one taken, the second's late.
+  // entry: after a retry, the first attempt's reply may be the one taken, and then this
+  // attempt's own reply is the late one, up to its response timeout from its start (the
+  // simulation's late replies found the guard run out before it came, and the next request's
+  // read take it: stop 56).
+  // An attempt that ended early (it read noise, a garbled reply, another's reply) counts from
+  // when its own reply would have timed out too (the gap, the frame and the silence after it,
+  // then the response timeout): that reply may still be on its way.
+  const double frame = (static_cast<double>(request.adu().size()) + 3.5) * characterTime(config_);
+  const auto own_reply_by =
+      std::max(last_activity_, began + seconds(minGap() + frame + responseTimeout(request)));
+  const auto unsettled = unsettled_.find(request.request().slave);
   if (!r.ok() && r.error != ErrorKind::kException)
-    unsettled_[request.request().slave] = {last_activity_, request.adu()};
+    unsettled_[request.request().slave] = {own_reply_by, request.adu()};
+  else if (r.ok() && unsettled != unsettled_.end())
+    unsettled->second.failed_at = std::max(unsettled->second.failed_at, own_reply_by);
   if (r.error == ErrorKind::kIo) disconnect();
   return r;
 }
 
 Result Link::runBroadcast(const EncodedRequest& request) {
   Result r = sendBroadcast(request);
-  last_activity_ = Steady::now();
+  last_activity_ = lineNow();
   if (!r.ok()) {  // not sent: not an attempt
     countAttempt(r);
     account(r, 0);
@@ -288,15 +301,31 @@ Steady::duration Link::gapSpinMargin() const {
 // answer to it is the right answer; another slave's request cannot take it (the address
 // differs), so a dead device costs the others nothing.
 void Link::settleLine(int fd, const EncodedRequest& request) {
-  const auto now = Steady::now();
+  if (const auto until = guardUntil(request)) {
+    awaitQuietLine(fd, *until);
+    lineSettled(request);
+  }
+}
+
+std::optional<std::chrono::steady_clock::time_point> Link::guardUntil(
+    const EncodedRequest& request) {
+  const auto now = lineNow();
   const auto guard = seconds(config_.late_reply_guard);
   for (auto it = unsettled_.begin(); it != unsettled_.end();)
     it = now - it->second.failed_at >= guard ? unsettled_.erase(it) : std::next(it);
   const auto mine = unsettled_.find(request.request().slave);
-  if (mine != unsettled_.end() && mine->second.frame != request.adu()) {
-    awaitQuietLine(fd, mine->second.failed_at + guard);
-    unsettled_.clear();  // the line was quiet: nothing late is on its way
-  }
+  if (mine == unsettled_.end() || mine->second.frame == request.adu()) return std::nullopt;
+  return mine->second.failed_at + guard;
+}
+
+void Link::lineSettled(const EncodedRequest& request) {
+  // The line was quiet: nothing late is on its way from this slave, nor from one whose guard
+  // has run out; another's reply may still come later (its own guard is kept).
+  unsettled_.erase(request.request().slave);
+  const auto now = lineNow();
+  const auto guard = seconds(config_.late_reply_guard);
+  for (auto it = unsettled_.begin(); it != unsettled_.end();)
+    it = now - it->second.failed_at >= guard ? unsettled_.erase(it) : std::next(it);
 }
 
 // Reads and drops bytes until `until`, pushed back by late_reply_guard whenever bytes come
@@ -311,7 +340,9 @@ void Link::awaitQuietLine(int fd, Steady::time_point until) {
     const ssize_t n = read(fd, junk, sizeof junk);
     if (n <= 0) break;
     dropped += static_cast<uint64_t>(n);
-    until = Steady::now() + seconds(config_.late_reply_guard);
+    // Bytes push the end back, never forward: noise early in the wait must not cut short the
+    // guard a failed request's own late reply needs (the simulation found it: stop 56).
+    until = std::max(until, Steady::now() + seconds(config_.late_reply_guard));
   }
   last_activity_ = Steady::now();
   guard_wait_ = last_activity_ - began;

@@ -121,6 +121,16 @@ class Link : public Transport {
   // late_reply_guard ago and this is a different request, drops what `fd` brings until it
   // has been quiet that long.
   void settleLine(int fd, const EncodedRequest& request);
+  // The guard's decision, apart from the medium (an in-memory line waits on its own clock):
+  // until when the line must be quiet before `request` goes (none: it may go now); after
+  // that wait, lineSettled(request).
+  std::optional<std::chrono::steady_clock::time_point> guardUntil(const EncodedRequest& request);
+  void lineSettled(const EncodedRequest& request);
+  // The clock of the line's timing (the guard, the last activity): the steady clock; a
+  // simulated medium gives its own.
+  virtual std::chrono::steady_clock::time_point lineNow() const {
+    return std::chrono::steady_clock::now();
+  }
   void addStaleBytes(uint64_t n);
   // The failure a reader status means ("gateway" or the port in `medium` messages).
   Result readFailure(const Request& request, ReadStatus status, const Bytes& partial, int error,
@@ -160,6 +170,7 @@ class Link : public Transport {
   LinkStats stats_;
   bool ever_connected_ = false;
   struct Unsettled {  // a failed transaction whose reply may still come
+    // When its own reply would have timed out (not earlier, if it ended on another frame).
     std::chrono::steady_clock::time_point failed_at;
     Bytes frame;
   };

@@ -1,0 +1,136 @@
+// The link's late-reply guard (docs/failsafe.md F90, docs/troubleshooting.md): a device's reply
+// that comes within late_reply_guard after its request timed out is never taken as the reply to a
+// different request. On the real Link's guard (Link::guardUntil, lineSettled, runAttempt) over the
+// simulation's in-memory line, where time is a manual clock and a reply arrives exactly when the
+// fault says: each case fails on the guard as it was before stop 56, when the simulation's late
+// replies found it.
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+#include "modbus_rtu_driver/sim/sim_lc_relay8.h"
+#include "modbus_rtu_driver/sim/sim_ld58a08.h"
+#include "modbus_rtu_driver/simulation/memory_link.h"
+
+using namespace modbus_rtu_driver;
+
+namespace {
+
+constexpr double kGuard = 0.25;  // s
+
+// Every lateness within the guard, 1 ms apart: the simulated line answers at once, so a late
+// reply meets the next request's window (between its request and its own reply) for a few ms
+// of lateness only; the sweep covers them whatever the frames' times on the wire are.
+std::vector<double> latenessesWithinTheGuard() {
+  std::vector<double> l;
+  for (int ms = 1; ms <= static_cast<int>(kGuard * 1000); ++ms) l.push_back(ms / 1000.0);
+  return l;
+}
+
+struct Line {
+  explicit Line(int retries) : link(config(retries), clock) {
+    SimLineSettings line;
+    line.baud = 19200;
+    link.addDevice(std::make_unique<SimLcRelay8>(1, line));
+    link.addDevice(std::make_unique<SimLd58a08>(2, line));
+    std::string error;
+    EXPECT_TRUE(link.connect(&error)) << error;
+    // Channel 1's PWM registers differ from channel 0's (all 0): a read of one that takes the
+    // other's reply shows it.
+    const Result set = link.execute(Request::writeMultipleRegisters(2, 0x10, {5, 1, 0xFFFF}));
+    EXPECT_TRUE(set.ok()) << set.message;
+  }
+  static LinkConfig config(int retries) {
+    LinkConfig c;
+    c.port = "memory";
+    c.baud = 19200;
+    c.response_timeout = 0.2;
+    c.retries = retries;
+    c.late_reply_guard = kGuard;
+    return c;
+  }
+  Result channel0() { return link.execute(Request::readHoldingRegisters(2, 0x00, 3)); }
+  Result channel1() { return link.execute(Request::readHoldingRegisters(2, 0x10, 3)); }
+
+  ManualClock clock;
+  MemoryLink link;
+};
+
+const std::vector<uint16_t> kChannel0{0, 0, 0};
+
+}  // namespace
+
+// A request that ended early on another device's late reply (a wrong address): its own reply,
+// 1 ms after its time-out, is not the next request's. The guard counted from the early end.
+TEST(LateReplyGuard, AnAttemptThatEndedEarlyStillWaitsForItsOwnReply) {
+  for (const double late_by : latenessesWithinTheGuard()) {
+    Line l(0);
+    l.link.faults(1).late = 1;
+    l.link.faults(1).late_by = 0.05;
+    EXPECT_EQ(l.link.execute(Request::readCoils(1, 0, 8)).error, ErrorKind::kTimeout);
+    l.link.faults(2).late = 1;
+    l.link.faults(2).late_by = late_by;
+    const Result early = l.channel1();
+    EXPECT_FALSE(early.ok());
+    EXPECT_NE(early.error, ErrorKind::kTimeout) << "it read the LC board's late reply";
+    const Result next = l.channel0();
+    ASSERT_TRUE(next.ok()) << next.message;
+    EXPECT_EQ(next.values, kChannel0)
+        << "channel 0's read took channel 1's reply, " << late_by << " s late";
+  }
+}
+
+// A retry that took the first attempt's late reply: its own reply comes as late, after the
+// guard the first failure started. The next different request must not take it.
+TEST(LateReplyGuard, ARetryAnsweredByTheFirstAttemptsReplyWaitsForItsOwn) {
+  for (const double late_by : latenessesWithinTheGuard()) {
+    Line l(1);
+    l.link.faults(2).late = 2;
+    l.link.faults(2).late_by = late_by;
+    const Result retried = l.channel1();
+    if (!retried.ok()) continue;  // the first reply came after the retry's own window
+    const Result next = l.channel0();
+    ASSERT_TRUE(next.ok()) << next.message;
+    EXPECT_EQ(next.values, kChannel0)
+        << "channel 0's read took the retry's reply, " << late_by << " s late";
+  }
+}
+
+// The wait for one device's guard leaves another device's guard in place: the LD58A08's
+// request ended early (on the LC board's late reply) and its own reply is still on its way
+// when the LC board's guard has run out.
+TEST(LateReplyGuard, OneDevicesQuietLineDoesNotEndAnothersGuard) {
+  for (const double late_by : latenessesWithinTheGuard()) {
+    Line l(0);
+    l.link.faults(1).late = 1;
+    l.link.faults(1).late_by = 0.05;
+    EXPECT_FALSE(l.link.execute(Request::readCoils(1, 0, 8)).ok());
+    l.link.faults(2).late = 1;
+    l.link.faults(2).late_by = late_by;
+    EXPECT_FALSE(l.channel1().ok());
+    // A different request to the LC board: it waits out the board's own guard, which ends
+    // before the LD58A08's (the LD58A08's late reply may come in its window: from another
+    // address, it is refused, and this read fails).
+    l.link.execute(Request::readDiscreteInputs(1, 0, 8));
+    const Result next = l.channel0();
+    ASSERT_TRUE(next.ok()) << next.message;
+    EXPECT_EQ(next.values, kChannel0)
+        << "channel 0's read took channel 1's reply, " << late_by << " s late";
+  }
+}
+
+// Within the guard, the same request again (a retry, a poll) may take its late reply: it is
+// that request's answer. No wait for it, and the guard then holds for the next request.
+TEST(LateReplyGuard, TheSameRequestTakesItsOwnLateReply) {
+  Line l(0);
+  l.link.faults(2).late = 1;
+  l.link.faults(2).late_by = 0.001;
+  EXPECT_EQ(l.channel1().error, ErrorKind::kTimeout);
+  const auto before = l.clock.now();
+  const Result again = l.channel1();
+  ASSERT_TRUE(again.ok()) << again.message;
+  EXPECT_EQ(again.values, (std::vector<uint16_t>{5, 1, 0xFFFF}));
+  EXPECT_LT(l.clock.now() - before, std::chrono::milliseconds(50));
+  EXPECT_EQ(l.channel0().values, kChannel0);
+}
