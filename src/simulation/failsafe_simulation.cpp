@@ -1019,7 +1019,7 @@ void World::onAttempt(const LineEvent& e) {
   // A repeated or late reply of the same shape, taken as this read's (Modbus RTU has no
   // transaction number: failsafe.md F-rule "Replies the line repeats or delays"): the node read
   // outputs that are not the device's now, and a change it reports from them has a cause.
-  if (e.stale && e.answered && isReadFunction(e.request.function)) {
+  if (e.stale && e.answered) {  // a read's reply, or a write's echo (an earlier identical one)
     DevModel& m = model_[d];
     m.polls_since_stale = 0;
     m.stale_read_at = clock_.now();

@@ -128,6 +128,12 @@ Result MemoryLink::readReply(const EncodedRequest& request, LineEvent& event,
   wire(a.frame.size());
   Result r = decodeReply(request, a.frame);
   event.stale = a.answers != attempt_id_;
+  if (event.stale && r.ok()) {
+    // The node took this attempt as answered: its own reply, still on its way, comes after a
+    // request that did not fail, which the late-reply guard does not cover (F90: repetition).
+    for (Arrival& mine : input_)
+      if (mine.answers == attempt_id_) mine.late_by = 0;
+  }
   if (event.stale) {
     ++stale_read_;
     event.refused = false;  // the node read another frame, not the device's refusal

@@ -85,6 +85,7 @@ Result Link::execute(const Request& asked) {
   const auto start = Steady::now();
   Result r;
   for (int attempt_no = 0;; ++attempt_no) {
+    retrying_ = attempt_no > 0;
     r = runAttempt(request);
     // Only a lost answer is retried, and only when doing it twice does no harm; a dropped
     // connection (kIo) is not: the request may have gone out, and the caller reads back.
@@ -296,10 +297,12 @@ Steady::duration Link::gapSpinMargin() const {
 }
 
 // Before a request: if a transaction with this slave failed less than late_reply_guard ago,
-// its reply may still come, and a different request of the same shape would take it: wait
-// until the line has been quiet that long. A retry (the same request) need not wait: a late
-// answer to it is the right answer; another slave's request cannot take it (the address
-// differs), so a dead device costs the others nothing.
+// its reply may still come, and a request of the same shape would take it: wait until the line
+// has been quiet that long. A retry of that transaction need not wait: a late answer to it is
+// the right answer. A new transaction waits even with the same frame: the old reply would
+// confirm a write the device may never have heard (the simulation found a share client's FC05
+// confirmed by the echo of an earlier command's, stop 56). Another slave's request cannot take
+// it (the address differs), so a dead device costs the others nothing.
 void Link::settleLine(int fd, const EncodedRequest& request) {
   if (const auto until = guardUntil(request)) {
     awaitQuietLine(fd, *until);
@@ -314,7 +317,8 @@ std::optional<std::chrono::steady_clock::time_point> Link::guardUntil(
   for (auto it = unsettled_.begin(); it != unsettled_.end();)
     it = now - it->second.failed_at >= guard ? unsettled_.erase(it) : std::next(it);
   const auto mine = unsettled_.find(request.request().slave);
-  if (mine == unsettled_.end() || mine->second.frame == request.adu()) return std::nullopt;
+  if (mine == unsettled_.end() || (retrying_ && mine->second.frame == request.adu()))
+    return std::nullopt;
   return mine->second.failed_at + guard;
 }
 

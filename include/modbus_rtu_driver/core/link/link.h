@@ -175,6 +175,7 @@ class Link : public Transport {
     Bytes frame;
   };
   std::map<uint8_t, Unsettled> unsettled_;  // by slave
+  bool retrying_ = false;                   // the attempt running is a retry (guardUntil)
   WireObserver wire_observer_;
   // keepGap: how late sleeps have woken, a slow average (27 us before the first: a 50 us margin).
   static constexpr std::chrono::microseconds kMaxGapSpin{200};
