@@ -110,9 +110,9 @@ const std::vector<std::string>& simRequiredCoverage() {
         r.push_back(std::string("fault ") + f + " " + t);
     // A kill between a change of the kept timed commands and its parameter write (model
     // change 28), and a new node resuming a command from a list that was behind.
-    r.push_back("fault kill before a kept list landed");
-    r.push_back("fault resumed from a list behind the killed node");
-    r.push_back("fault kill with a frame on the line");
+    r.emplace_back("fault kill before a kept list landed");
+    r.emplace_back("fault resumed from a list behind the killed node");
+    r.emplace_back("fault kill with a frame on the line");
     // The fail-safe's events, by trigger, device type and action (docs/failsafe.md, "What
     // happens when"): written and confirmed, or owed ("(unconfirmed)": the device was silent).
     for (const char* t : {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"}) {
@@ -359,6 +359,7 @@ struct DevModel {
   std::vector<TP> pwm_write_answered = std::vector<TP>(8, TP{});
   std::vector<TP> stop_answered = std::vector<TP>(8, TP{});   // a 0 to the enable register
   std::vector<TP> flash_answered = std::vector<TP>(8, TP{});  // an LC flash's FC16
+  std::vector<TP> pwm_heard = std::vector<TP>(8, TP{});       // an LD58A08 run's FC16 reached it
   // ... and whether it ran as last read when the fail-safe's write starting it again went out
   // (docs "What restore writes": started again only when the read just before shows it stopped)
   std::vector<bool> run_read_at_start = std::vector<bool>(8, false);
@@ -878,7 +879,8 @@ void World::stopNode() {
   // I10 (docs:31): a device that answered throughout shows its safe states.
   if (node_->stopWritesDone() && !port_lost_)
     for (int d = 0; d < kGen; ++d) {
-      if (model_[d].reachable_since > began) continue;
+      // F90: a read of the stop's that took another's frame may hide a PWM run there.
+      if (model_[d].reachable_since > began || staleReadShows(d)) continue;
       for (int ch = 0; ch < kChannels; ++ch)
         if (hasSafe(d, ch) && checked("I10") && simCoil(d, ch) != safeLevel(d, ch))
           fail("I10", std::string(kNames[d]) + " out" + std::to_string(ch) + " is " +
@@ -1087,6 +1089,9 @@ void World::onAttempt(const LineEvent& e) {
         c.maybe_devices = true;
     }
   }
+  if (d == kLd && e.heard && e.request.function == FunctionCode::kWriteMultipleRegisters &&
+      e.request.address % 0x10 == 0 && e.request.address / 0x10 < kChannels)
+    m.pwm_heard[e.request.address / 0x10] = e.at;
   // When the LC board confirmed a flash (its mode and delay registers, 3 + 5 n): when its answer
   // has come (docs:71-75), now, not when the request went out (e.at; model change 18).
   if (d == kLc && e.answered && e.request.function == FunctionCode::kWriteMultipleRegisters &&
@@ -1417,6 +1422,12 @@ void World::onReport(const FailsafeReport& r) {
     // write heard but its answer lost) is still to be seen, and so is one whose write back was
     // not confirmed (the next poll shows the same change again).
     if (m.justified_at <= m.last_poll_at && r.confirmed) m.justified = false;
+    // Its write not confirmed (its answer or its read back lost or refused): a write whose
+    // answer was lost, for I6 (model change 30), as for the triggers' writes below.
+    if (!r.levels_confirmed && !chs.empty()) {
+      m.justified = true;
+      m.justified_at = now;
+    }
     m.cause_pending = false;
     takeFoundAfterRestart(d, r);
   }
@@ -1923,7 +1934,12 @@ void World::doCommandStep(const SimStep& s) {
     pending_.push_back(
         setPwm(op("pwm").id, kNames[kLd], p, [this, ch, seconds, p](const Result& r) {
           if (r.ok()) {
-            if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) == 0 && seconds > 1.5)
+            // Unless it has ended since the device took it (the job's reads may wait out late
+            // replies and the late-reply guard).
+            const TP took = model_[kLd].pwm_heard[ch];
+            const bool may_run = seconds < 0 || took == TP{} || took + dur(seconds) > clock_.now();
+            if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) == 0 && seconds > 1.5 &&
+                may_run)
               fail("I1", "pwm out" + std::to_string(ch) +
                              ": set_pwm was confirmed but the channel "
                              "does not run");
