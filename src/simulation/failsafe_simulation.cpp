@@ -360,6 +360,7 @@ struct DevModel {
   std::vector<TP> stop_answered = std::vector<TP>(8, TP{});   // a 0 to the enable register
   std::vector<TP> flash_answered = std::vector<TP>(8, TP{});  // an LC flash's FC16
   std::vector<TP> pwm_heard = std::vector<TP>(8, TP{});       // an LD58A08 run's FC16 reached it
+  std::vector<TP> flash_heard = std::vector<TP>(8, TP{});     // an LC flash's FC16 reached it
   // ... and whether it ran as last read when the fail-safe's write starting it again went out
   // (docs "What restore writes": started again only when the read just before shows it stopped)
   std::vector<bool> run_read_at_start = std::vector<bool>(8, false);
@@ -1092,6 +1093,9 @@ void World::onAttempt(const LineEvent& e) {
   if (d == kLd && e.heard && e.request.function == FunctionCode::kWriteMultipleRegisters &&
       e.request.address % 0x10 == 0 && e.request.address / 0x10 < kChannels)
     m.pwm_heard[e.request.address / 0x10] = e.at;
+  if (d == kLc && e.heard && e.request.function == FunctionCode::kWriteMultipleRegisters &&
+      e.request.count == 2 && e.request.address % 5 == 3 && e.request.address / 5 < kChannels)
+    m.flash_heard[e.request.address / 5] = e.at;
   // When the LC board confirmed a flash (its mode and delay registers, 3 + 5 n): when its answer
   // has come (docs:71-75), now, not when the request went out (e.at; model change 18).
   if (d == kLc && e.answered && e.request.function == FunctionCode::kWriteMultipleRegisters &&
@@ -1901,7 +1905,7 @@ void World::doCommandStep(const SimStep& s) {
                                if (r.ok()) {
                                  // Unless it has ended since the board took it (its job's read
                                  // back may wait out the late-reply guard).
-                                 const TP took = model_[kLc].flash_answered[ch];
+                                 const TP took = model_[kLc].flash_heard[ch];
                                  if (took == TP{} || took + dur(seconds) > clock_.now())
                                    checkCoils(kLc, {ch}, {st}, "a pulse");
                                  commandedTimed(kLc, ch, st, !st, seconds);

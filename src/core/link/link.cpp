@@ -104,7 +104,7 @@ Result Link::runAttempt(const EncodedRequest& request) {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.attempts;
   }
-  const auto began = lineNow();
+  settled_at_ = lineNow();  // the guard's wait, if any, moves it (guardUntil, lineSettled)
   Result r = attempt(request);
   // The silence after a reply runs from its last byte as read, not from after its decoding.
   last_activity_ = heard_at_.value_or(lineNow());
@@ -120,7 +120,7 @@ Result Link::runAttempt(const EncodedRequest& request) {
   // then the response timeout): that reply may still be on its way.
   const double frame = (static_cast<double>(request.adu().size()) + 3.5) * characterTime(config_);
   const auto own_reply_by =
-      std::max(last_activity_, began + seconds(minGap() + frame + responseTimeout(request)));
+      std::max(last_activity_, settled_at_ + seconds(minGap() + frame + responseTimeout(request)));
   const auto unsettled = unsettled_.find(request.request().slave);
   if (!r.ok() && r.error != ErrorKind::kException)
     unsettled_[request.request().slave] = {own_reply_by, request.adu()};
@@ -317,8 +317,10 @@ std::optional<std::chrono::steady_clock::time_point> Link::guardUntil(
   for (auto it = unsettled_.begin(); it != unsettled_.end();)
     it = now - it->second.failed_at >= guard ? unsettled_.erase(it) : std::next(it);
   const auto mine = unsettled_.find(request.request().slave);
-  if (mine == unsettled_.end() || (retrying_ && mine->second.frame == request.adu()))
+  if (mine == unsettled_.end() || (retrying_ && mine->second.frame == request.adu())) {
+    settled_at_ = now;
     return std::nullopt;
+  }
   return mine->second.failed_at + guard;
 }
 
@@ -327,6 +329,7 @@ void Link::lineSettled(const EncodedRequest& request) {
   // has run out; another's reply may still come later (its own guard is kept).
   unsettled_.erase(request.request().slave);
   const auto now = lineNow();
+  settled_at_ = now;  // the request goes after the wait: its own reply is due from here
   const auto guard = seconds(config_.late_reply_guard);
   for (auto it = unsettled_.begin(); it != unsettled_.end();)
     it = now - it->second.failed_at >= guard ? unsettled_.erase(it) : std::next(it);

@@ -176,6 +176,9 @@ class Link : public Transport {
   };
   std::map<uint8_t, Unsettled> unsettled_;  // by slave
   bool retrying_ = false;                   // the attempt running is a retry (guardUntil)
+  // When the attempt running was through the guard (its request goes after the gap from here):
+  // its own reply is due by then plus the gap, the frame and the response timeout.
+  std::chrono::steady_clock::time_point settled_at_{};
   WireObserver wire_observer_;
   // keepGap: how late sleeps have woken, a slow average (27 us before the first: a 50 us margin).
   static constexpr std::chrono::microseconds kMaxGapSpin{200};
