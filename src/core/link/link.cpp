@@ -110,14 +110,13 @@ Result Link::runAttempt(const EncodedRequest& request) {
   last_activity_ = heard_at_.value_or(lineNow());
   heard_at_.reset();
   countAttempt(r);
-  // A failure (not an answer) may be followed by a late reply. A success keeps an earlier
-  // entry: after a retry, the first attempt's reply may be the one taken, and then this
-  // attempt's own reply is the late one, up to its response timeout from its start (the
-  // simulation's late replies found the guard run out before it came, and the next request's
-  // read take it: stop 56).
-  // An attempt that ended early (it read noise, a garbled reply, another's reply) counts from
-  // when its own reply would have timed out too (the gap, the frame and the silence after it,
-  // then the response timeout): that reply may still be on its way.
+  // A failure (not an answer) may be followed by a late reply, counted from when that reply
+  // would have timed out (the gap, the frame and the silence after it, then the response
+  // timeout, from when the request went through the guard): also when the attempt ended early
+  // on another frame (noise, a garbled reply, another's reply). A success keeps an earlier
+  // entry, moved on: after a retry, the first attempt's reply may be the one taken, and this
+  // attempt's own reply is then the late one (the simulation's late replies found each of these
+  // guards run out too early, and the next request take the reply: stop 56).
   const double frame = (static_cast<double>(request.adu().size()) + 3.5) * characterTime(config_);
   const auto own_reply_by =
       std::max(last_activity_, settled_at_ + seconds(minGap() + frame + responseTimeout(request)));
@@ -313,26 +312,27 @@ void Link::settleLine(int fd, const EncodedRequest& request) {
 std::optional<std::chrono::steady_clock::time_point> Link::guardUntil(
     const EncodedRequest& request) {
   const auto now = lineNow();
-  const auto guard = seconds(config_.late_reply_guard);
-  for (auto it = unsettled_.begin(); it != unsettled_.end();)
-    it = now - it->second.failed_at >= guard ? unsettled_.erase(it) : std::next(it);
+  forgetSettled(now);
   const auto mine = unsettled_.find(request.request().slave);
   if (mine == unsettled_.end() || (retrying_ && mine->second.frame == request.adu())) {
     settled_at_ = now;
     return std::nullopt;
   }
-  return mine->second.failed_at + guard;
+  return mine->second.failed_at + seconds(config_.late_reply_guard);
+}
+
+void Link::forgetSettled(std::chrono::steady_clock::time_point now) {
+  const auto guard = seconds(config_.late_reply_guard);
+  for (auto it = unsettled_.begin(); it != unsettled_.end();)
+    it = now - it->second.failed_at >= guard ? unsettled_.erase(it) : std::next(it);
 }
 
 void Link::lineSettled(const EncodedRequest& request) {
   // The line was quiet: nothing late is on its way from this slave, nor from one whose guard
   // has run out; another's reply may still come later (its own guard is kept).
   unsettled_.erase(request.request().slave);
-  const auto now = lineNow();
-  settled_at_ = now;  // the request goes after the wait: its own reply is due from here
-  const auto guard = seconds(config_.late_reply_guard);
-  for (auto it = unsettled_.begin(); it != unsettled_.end();)
-    it = now - it->second.failed_at >= guard ? unsettled_.erase(it) : std::next(it);
+  settled_at_ = lineNow();  // the request goes after the wait: its own reply is due from here
+  forgetSettled(settled_at_);
 }
 
 // Reads and drops bytes until `until`, pushed back by late_reply_guard whenever bytes come

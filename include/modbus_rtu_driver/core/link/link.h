@@ -160,6 +160,8 @@ class Link : public Transport {
   Result runAttempt(const EncodedRequest& request);
   Result runBroadcast(const EncodedRequest& request);
   void awaitQuietLine(int fd, std::chrono::steady_clock::time_point until);
+  // Drops the failed transactions whose late reply can no longer come (their guard ran out).
+  void forgetSettled(std::chrono::steady_clock::time_point now);
   // How much of a gap a real-time thread spins: 1.5 x the sleeps' lateness + 10 us, at most
   // kMaxGapSpin.
   std::chrono::steady_clock::duration gapSpinMargin() const;
