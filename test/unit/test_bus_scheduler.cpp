@@ -693,16 +693,21 @@ TEST(RateMeter, TheRateOfTheLastFiveSeconds) {
   EXPECT_NEAR(slow.rate(), 0.2, 1e-9);
 }
 
+namespace {
+// A line every request to which succeeds, logged as "<slave>r" (a read) or "<slave>w".
+struct LoggingLine : Transport {
+  std::vector<std::string> log;
+  Result execute(const Request& r) override {
+    log.push_back(std::to_string(r.slave) + (isReadFunction(r.function) ? "r" : "w"));
+    return Result::success({0});
+  }
+};
+}  // namespace
+
 // Step mode (the deterministic simulation's): no thread; step() runs one thing on the caller's
 // thread, writes ahead of polls, and otherwise says when the next poll falls due.
 TEST(BusSchedulerStepMode, RunsOneThingPerStepOnTheCallersThread) {
-  struct Counting : Transport {
-    std::vector<std::string> log;
-    Result execute(const Request& r) override {
-      log.push_back(std::to_string(r.slave) + (isReadFunction(r.function) ? "r" : "w"));
-      return Result::success({0});
-    }
-  } line;
+  LoggingLine line;
   ManualClock clock;
   BusScheduler scheduler(line, {}, clock);
   scheduler.startStepping();
@@ -813,13 +818,7 @@ TEST(BusSchedulerStepMode, AJobForASilentDeviceStopsAtItsFirstUnansweredRequest)
 // one queued job (stop 56: a silent board's write went ahead of a returning PDU's overdue poll,
 // and with it that PDU's owed safe write: case held_safe_late_after_port_failure_and_broadcast).
 TEST(BusSchedulerStepMode, AnOverduePollSendsItsFirstRequestBeforeTheNextQueuedJob) {
-  struct Line : Transport {
-    std::vector<std::string> log;
-    Result execute(const Request& r) override {
-      log.push_back(std::to_string(r.slave) + (isReadFunction(r.function) ? "r" : "w"));
-      return Result::success({0});
-    }
-  } line;
+  LoggingLine line;
   ManualClock clock;
   BusScheduler scheduler(line, {}, clock);
   scheduler.startStepping();
