@@ -481,7 +481,9 @@ class LdModel(Model):
                 elif not save:
                     c.stored, c.enable, c.enable_why = False, {0}, "power cycle: PWM off"
                 continue
-            if save and stored is True and kind == "continuous":
+            # A kind whose run a write since dropped (_set clears c.flash) has no run to start
+            # again: only a channel with its run still recorded is a continuous run here.
+            if save and stored is True and kind == "continuous" and flash is not None:
                 c.flash, c.kind = Run(flash.during, now, now, None), "continuous"
                 c.values, c.why = set(flash.during), "I5 (a saved continuous run runs again; a " \
                     "restore does not undo a PWM run the device drives)"
@@ -497,7 +499,7 @@ class LdModel(Model):
                 if not save:
                     c.stored = False
                 c.enable, c.enable_why = {0}, "power cycle: PWM registers off (no save)"
-                if kind == "continuous":
+                if kind == "continuous" and flash is not None:
                     # "a continuous PWM run the node started is started again by a restore when
                     # the read just before the restore shows it stopped" (docs/failsafe.md,
                     # "What restore writes"): at the poll that reads its registers (up to 8
