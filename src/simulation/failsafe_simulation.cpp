@@ -135,10 +135,8 @@ const std::vector<std::string>& simRequiredCoverage() {
 
 const std::set<std::string>& simKnownOpen() {
   // docs/simulation.md, "Known open defects": an invariant a case shows broken on today's code
-  // goes here, with its case "status known". I5 since stop 56: a restore of the LD58A08 that
-  // leaves out a channel whose intent the model knows, after repeated frames and a kill with a
-  // frame on the line (cases open_stop56_restore_leaves_out_a_known_channel, _2); not diagnosed.
-  static const std::set<std::string> known = {"I5"};
+  // goes here, with its case "status known". None since stop 57.
+  static const std::set<std::string> known = {};
   return known;
 }
 
@@ -351,6 +349,9 @@ struct DevModel {
   // ... and the poll that read each channel's registers (docs:92: a lost answer's channel is
   // taken at the first poll after its time that also reads them)
   std::vector<uint64_t> pwm_read_in_poll = std::vector<uint64_t>(8, 0);
+  // A channel's PWM registers as a fail-safe operation's own read (not a poll's, not a read back)
+  // last showed them since the last poll: what the read just before a restore found (F37).
+  std::vector<bool> run_read_in_op = std::vector<bool>(8, false);
   // ... and when the device last answered a PWM write (FC16 of a channel's three registers):
   // the node counts a set_pwm's end from there (docs:68), the model's op from its later callback
   // Jobs queued on the bus when it became reachable (checkHeld notes it once per spell).
@@ -1081,6 +1082,7 @@ void World::onAttempt(const LineEvent& e) {
       m.readback_pending = false;
       m.fs_written.assign(kChannels, false);
     }
+    if (fs_op && !m.in_poll && !readback) m.run_read_in_op[ch] = runs;
     if (runs && c.known && !c.adopt && ((m.in_poll && fs_op) || readback)) {
       if (!node_runs)
         c.continuous = true;
@@ -1228,6 +1230,7 @@ void World::onPollStarting(const std::string& device) {
   model_[d].poll_running = ++model_[d].polls_started;
   model_[d].in_poll = true;
   model_[d].written_in_poll = false;
+  std::fill(model_[d].run_read_in_op.begin(), model_[d].run_read_in_op.end(), false);
   model_[d].readback_pending = false;
   model_[d].fs_written.assign(kChannels, false);
 }
@@ -1450,6 +1453,20 @@ void World::onReport(const FailsafeReport& r) {
   if (r.action == "restore") {
     // I5 (docs:85-89): what a restore writes, channel by channel.
     std::vector<bool> written(kChannels, false);
+    for (const int ch : chs) written[ch] = true;
+    // F37: a run the read just before the restore found, on a channel it leaves, is the
+    // device's from then on, whatever became of the restore's own write (a read before it that
+    // failed, or took another request's frame): the node decided that when the read answered.
+    // Only when the read before answered: then the restore names channels, or is confirmed.
+    if (d == kLd && (r.confirmed || !chs.empty()))
+      for (int ch = 0; ch < kChannels; ++ch) {
+        Chan& c = m.ch[ch];
+        const bool node_runs = c.timed && now <= c.ends + dur(0.5 + 0.02 * c.duration);
+        const bool maybe_ended = node_runs && now > c.ends_earliest;
+        if (!written[ch] && m.run_read_in_op[ch] && (!node_runs || maybe_ended) && c.known &&
+            !c.adopt)
+          c.continuous = true;
+      }
     for (size_t i = 0; i < chs.size(); ++i) {
       const int ch = chs[i];
       written[ch] = true;
