@@ -69,7 +69,8 @@ OutputTargets Device::outputsWrittenBy(const Request& request) const {
 }
 
 Result Device::writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                            const std::vector<bool>& states, std::vector<uint8_t>* changed) {
+                            const std::vector<bool>& states, std::vector<uint8_t>* changed,
+                            const std::vector<bool>& timed_may_run) {
   // Only the channels asked for go on the wire: one frame per run of adjacent channels, so a
   // channel between two requested ones is never rewritten (a rewrite would cancel its flash
   // or fight its PWM on the board).
@@ -84,7 +85,7 @@ Result Device::writeOutputs(Transport& link, const std::vector<uint8_t>& channel
     Result r = run.states.size() == 1
                    ? link.execute(Request::writeSingleCoil(address(), run.first, run.states[0]))
                    : link.execute(Request::writeMultipleCoils(address(), run.first, run.states));
-    if (!r.ok()) r = confirmCoils(link, std::move(r), run_channels, run.states);
+    if (!r.ok()) r = confirmCoils(link, std::move(r), run_channels, run.states, timed_may_run);
     if (!r.ok()) {
       if (changed) changed->insert(changed->end(), written.begin(), written.end());
       if (!written.empty())
@@ -117,8 +118,17 @@ bool Device::mayHaveActed(const Result& r) {
 // A write whose reply was lost may still have been done: the coils read back tell. Success
 // only when they show every requested state; the snapshot takes what was read.
 Result Device::confirmCoils(Transport& link, Result failed, const std::vector<uint8_t>& channels,
-                            const std::vector<bool>& states) {
+                            const std::vector<bool>& states,
+                            const std::vector<bool>& timed_may_run) {
   if (!mayHaveActed(failed)) return failed;
+  for (uint8_t ch : channels) {
+    if (ch >= timed_may_run.size() || !timed_may_run[ch]) continue;
+    // Not read: the level a read shows there may be the timed command's, not the write's.
+    failed.message +=
+        "; not confirmed: a timed command (flash or PWM run) may still drive output " +
+        std::to_string(ch) + ", and a read cannot tell whether the write ended it";
+    return failed;
+  }
   Result now = link.execute(Request::readCoils(address(), 0, static_cast<uint16_t>(outputCount())));
   if (!now.ok()) {
     failed.message += "; not confirmed: reading the outputs back failed too (" + now.message + ")";

@@ -282,7 +282,8 @@ Result Ld58a08::poll(Transport& link) {
 // following the PWM. So the requested channels' PWM registers are read first (the snapshot may
 // be 8 polls old), a running PWM is stopped (confirmed), and then the outputs are written.
 Result Ld58a08::writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                             const std::vector<bool>& states, std::vector<uint8_t>* changed) {
+                             const std::vector<bool>& states, std::vector<uint8_t>* changed,
+                             const std::vector<bool>& timed_may_run) {
   std::vector<uint8_t> stopped;
   // A run stopped (confirmed) before the outputs failed stays stopped: the caller's failure
   // carries it (`changed`), so that the fail-safe does not take it as still running.
@@ -320,7 +321,11 @@ Result Ld58a08::writeOutputs(Transport& link, const std::vector<uint8_t>& channe
     pwm_[ch].enable = 0;
     stopped.push_back(ch);
   }
-  Result r = Device::writeOutputs(link, channels, states, changed);
+  // A run stopped here (confirmed) no longer drives its channel.
+  std::vector<bool> may_run = timed_may_run;
+  for (uint8_t ch : stopped)
+    if (ch < may_run.size()) may_run[ch] = false;
+  Result r = Device::writeOutputs(link, channels, states, changed, may_run);
   if (stopped.empty()) return r;
   if (r.ok()) {
     r.message = stoppedNote() + (r.message.empty() ? "" : "; " + r.message);

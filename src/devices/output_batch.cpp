@@ -21,15 +21,16 @@ std::shared_ptr<OutputBatch::Entry> OutputBatch::add(const Device& device,
 }
 
 Result OutputBatch::write(Device& device, Transport& link, const std::vector<uint8_t>& channels,
-                          const std::vector<bool>& states) {
+                          const std::vector<bool>& states, const std::vector<bool>& timed_may_run) {
   const std::string problem = device.checkOutputs(channels, states);
   if (!problem.empty()) return Result::failure(ErrorKind::kInvalidArgument, problem);
-  return device.writeOutputs(link, channels, states);
+  return device.writeOutputs(link, channels, states, nullptr, timed_may_run);
 }
 
 Result OutputBatch::complete(Device& device, Transport& link, const std::shared_ptr<Entry>& entry,
                              const WrittenCallback& on_written,
-                             const NotConfirmedCallback& on_not_confirmed) {
+                             const NotConfirmedCallback& on_not_confirmed,
+                             const std::vector<bool>& timed_may_run) {
   if (const std::optional<Result>& refused = entry->result) return *refused;
   std::vector<std::shared_ptr<Entry>> batch;
   {
@@ -49,7 +50,7 @@ Result OutputBatch::complete(Device& device, Transport& link, const std::shared_
   // Every entry was checked by add(), so their merge is a valid write: each channel in range and
   // once (the map), a state for each. It goes to the type's write without a second check.
   std::vector<uint8_t> changed;
-  Result r = device.writeOutputs(link, channels, states, &changed);
+  Result r = device.writeOutputs(link, channels, states, &changed, timed_may_run);
   if (r.ok() && on_written) on_written(channels, states);
   if (!r.ok() && on_not_confirmed) on_not_confirmed(channels, r, changed);
   if (batch.size() > 1 && r.ok())

@@ -282,6 +282,21 @@ Expectation ChannelIntents::expected(uint8_t channel, Clock::time_point t) const
   return expectedLocked(channel, t);
 }
 
+std::vector<bool> ChannelIntents::timedMayRun() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto now = clock_.now();
+  std::vector<bool> may_run(channels_, false);
+  for (size_t ch = 0; ch < channels_; ++ch) {
+    const std::optional<Intent>& slot = intent_[ch];
+    if (!slot) continue;
+    const Intent& in = *slot;
+    if (in.ends && !in.driven && now <= *in.ends + endSlack(in.at, *in.ends)) may_run[ch] = true;
+    if (in.adopt && in.run_ends && now <= *in.run_ends + endSlack(in.at, *in.run_ends))
+      may_run[ch] = true;
+  }
+  return may_run;
+}
+
 Expectation ChannelIntents::expectedLocked(uint8_t channel, Clock::time_point t) const {
   Expectation e;
   if (channel >= channels_) return e;

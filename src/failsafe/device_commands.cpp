@@ -68,7 +68,8 @@ Result DeviceCommands::complete(Transport& t, const std::shared_ptr<OutputBatch:
       [this](const std::vector<uint8_t>& channels, const Result& result,
              const std::vector<uint8_t>& changed) {
         failsafe_.userWriteNotConfirmed(channels, result, changed);
-      });
+      },
+      failsafe_.timedMayRun());
 }
 
 std::future<Result> DeviceCommands::timed(const TimedIntent& intent, BusScheduler::Job send,

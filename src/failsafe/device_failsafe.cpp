@@ -107,7 +107,8 @@ Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets
     r.runs_failed = runs_started->runs_failed;
   }
   intents_.writeRan();
-  Result w = OutputBatch::write(device_, t, targets.channels, targets.states);
+  Result w =
+      OutputBatch::write(device_, t, targets.channels, targets.states, intents_.timedMayRun());
   if (until_silent && until_silent->refused()) {
     // The device gave no reply: its read back waits behind the queued safe writes (the bus
     // runs writes in the order queued), and this write's event comes with it.

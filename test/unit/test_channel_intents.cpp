@@ -149,6 +149,23 @@ TEST(ChannelIntents, Item4RestoreWritesAFlashsFinalLevelNotTheStateBeforeIt) {
   EXPECT_EQ(std::count(w.channels.begin(), w.channels.end(), 3), 1);
 }
 
+// docs/ros_api.md: a read back does not confirm a write whose answer was lost on a channel a
+// flash may still drive (its level may be the flash's); from its end plus the slack on, it does.
+TEST(ChannelIntents, AFlashMayRunUntilItsEndPlusTheSlack) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kLeave), 4, clock);
+  poll(t, {false, false, false, false});
+  EXPECT_EQ(t.timedMayRun(), (std::vector<bool>{false, false, false, false}));
+  t.timed(TimedIntent{3, false, true, 2.0}, CommandSource::kTimed);  // flash-open 2 s
+  EXPECT_EQ(t.timedMayRun(), (std::vector<bool>{false, false, false, true}));
+  clock.advance(2s + 500ms);  // the end plus 0.5 s: the slack is 0.5 s + 2 % of 2 s
+  EXPECT_TRUE(t.timedMayRun()[3]);
+  clock.advance(100ms);
+  EXPECT_FALSE(t.timedMayRun()[3]);
+  t.commanded({1}, {true}, CommandSource::kUser);  // a plain level is no timed command
+  EXPECT_FALSE(t.timedMayRun()[1]);
+}
+
 // Item 4 (LD58A08): out0 on, a 3-pulse burst that ends off, then a power cycle.
 TEST(ChannelIntents, Item4RestoreAfterAPwmBurstWritesItsFinalLevel) {
   ManualClock clock;

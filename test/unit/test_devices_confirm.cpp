@@ -37,6 +37,27 @@ TEST(ConfirmByReadBack, ACoilWriteWhoseReplyWasLostIsConfirmedByItsState) {
   EXPECT_TRUE(bus.usedUp());
 }
 
+// A flash-open's off phase reads like the write of off: a read cannot tell whether the write
+// ended the flash (docs/ros_api.md, docs/devices/lc_relay8.md), so the coils are not read.
+TEST(ConfirmByReadBack, ALostWriteOnAChannelAFlashMayDriveIsNotConfirmedByARead) {
+  LcRelay8 board(config("lc_relay8", 255));
+  ScriptedTransport bus;
+  bus.expect(frame(Request::writeSingleCoil(255, 3, false)));  // reply lost
+  std::vector<bool> may_run(8, false);
+  may_run[3] = true;
+  const Result r = OutputBatch::write(board, bus, {3}, {false}, may_run);
+  EXPECT_EQ(r.error, ErrorKind::kTimeout) << r.message;
+  EXPECT_NE(r.message.find("may still drive output 3"), std::string::npos) << r.message;
+  EXPECT_TRUE(bus.usedUp());
+  EXPECT_EQ(bus.executed(), 1) << "no read back";
+  // The same write on another channel is confirmed by its read as before.
+  ScriptedTransport other;
+  other.expect(frame(Request::writeSingleCoil(255, 2, false)));  // reply lost
+  other.expect(frame(Request::readCoils(255, 0, 8)), coilsReply(255, 0x00));
+  EXPECT_TRUE(OutputBatch::write(board, other, {2}, {false}, may_run).ok());
+  EXPECT_TRUE(other.usedUp());
+}
+
 TEST(ConfirmByReadBack, ACoilWriteTheDeviceNeverHeardIsAFailureThatSaysSo) {
   LcRelay8 board(config("lc_relay8", 255));
   ScriptedTransport bus;

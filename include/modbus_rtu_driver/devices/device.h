@@ -152,15 +152,20 @@ class Device {
   // On failure, `changed` (if given) gets the channels the device confirmed changing before it
   // (the runs written before; an LD58A08's PWM runs stopped first): the fail-safe takes them as
   // found (docs/failsafe.md, "A write that failed after part of it was done").
+  // `timed_may_run[c]`: a timed command (an LC flash, a PWM burst) may still drive channel c;
+  // a read back cannot confirm a lost answer there (confirmCoils).
   virtual Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
                               const std::vector<bool>& states,
-                              std::vector<uint8_t>* changed = nullptr);
+                              std::vector<uint8_t>* changed = nullptr,
+                              const std::vector<bool>& timed_may_run = {});
   // True for failures after which the device may have done the write (its reply was lost or
   // garbled), as opposed to refusing it or never being asked.
   static bool mayHaveActed(const Result& result);
-  // After a failed coil write: reads the coils back; success if they show `states`.
+  // After a failed coil write: reads the coils back; success if they show `states`, unless a
+  // timed command may still drive one of the channels (`timed_may_run`): a plain write ends a
+  // flash, and a read that shows the level cannot tell whether it did (docs/ros_api.md).
   Result confirmCoils(Transport& link, Result failed, const std::vector<uint8_t>& channels,
-                      const std::vector<bool>& states);
+                      const std::vector<bool>& states, const std::vector<bool>& timed_may_run);
 
   std::vector<bool> outputs_;
   std::vector<bool> inputs_;

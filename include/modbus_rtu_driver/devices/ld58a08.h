@@ -130,8 +130,8 @@ class Ld58a08 : public Device {
   // channels' PWM registers, stops (FC06 0 to 0x00n2, confirmed) those that run, then writes the
   // outputs (FC05 / FC15). The message then says "PWM on channel N stopped first".
   Result writeOutputs(Transport& link, const std::vector<uint8_t>& channels,
-                      const std::vector<bool>& states,
-                      std::vector<uint8_t>* changed = nullptr) override;
+                      const std::vector<bool>& states, std::vector<uint8_t>* changed = nullptr,
+                      const std::vector<bool>& timed_may_run = {}) override;
 
  private:
   // A continuous run the device confirmed (set_pwm's, or a client's write the node carried):

@@ -45,15 +45,17 @@ class OutputBatch {
   // Bus thread: one request written alone, now, merged with nothing pending: checked as add()
   // checks it (a refused one is not sent). For writes that must carry exactly what they name
   // (the fail-safe's safe states; a caller with a bus job of its own).
+  // `timed_may_run`: as for Device::writeOutputs (the channels a timed command may still drive).
   static Result write(Device& device, Transport& link, const std::vector<uint8_t>& channels,
-                      const std::vector<bool>& states);
+                      const std::vector<bool>& states, const std::vector<bool>& timed_may_run = {});
 
   // Bus thread: the outcome of `entry`, writing the pending requests first if it is among them.
   // `device` is the one they were added for. `on_written` runs once per confirmed write,
   // `on_not_confirmed` once per write that failed.
   Result complete(Device& device, Transport& link, const std::shared_ptr<Entry>& entry,
                   const WrittenCallback& on_written = {},
-                  const NotConfirmedCallback& on_not_confirmed = {});
+                  const NotConfirmedCallback& on_not_confirmed = {},
+                  const std::vector<bool>& timed_may_run = {});
 
  private:
   std::mutex mutex_;

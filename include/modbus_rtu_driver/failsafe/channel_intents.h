@@ -126,6 +126,10 @@ class ChannelIntents {
 
   // What a poll at `t` may show on `channel` (docs/failsafe.md, "What the board should show").
   Expectation expected(uint8_t channel, Clock::time_point t) const;
+  // Per channel: a timed command of the node's (or one whose answer was lost) may still drive
+  // it now, up to its end plus the slack. A read back cannot confirm a plain write there whose
+  // answer was lost: the write would end the run, and the level may be the run's.
+  std::vector<bool> timedMayRun() const;
   // What to write after a poll with `verdict`, computed when the write runs (so a command
   // confirmed in between is not undone): on a restart, on_restart's targets (restore: every
   // channel's expected level; safe: the safe states); and every owed safe write, over them.

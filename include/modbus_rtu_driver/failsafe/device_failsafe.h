@@ -120,6 +120,9 @@ class DeviceFailsafe {
   void afterPoll();
   // A user's output write is about to be sent / was confirmed / was not confirmed.
   void userWriteSending() { intents_.writeRan(); }
+  // The channels a timed command may still drive (ChannelIntents::timedMayRun), for a write's
+  // read back.
+  std::vector<bool> timedMayRun() const { return intents_.timedMayRun(); }
   void userWriteConfirmed(const std::vector<uint8_t>& channels, const std::vector<bool>& states);
   // A user's write that failed: `changed`, the channels the device confirmed changing before
   // it failed, and every channel when it may have acted (its answer lost, or the port failed
