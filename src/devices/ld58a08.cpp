@@ -245,35 +245,36 @@ Result Ld58a08::readPwm(Transport& link) {
 
 Result Ld58a08::poll(Transport& link) {
   pwm_read_by_poll_.fill(false);
-  const bool first = !pwm_known_;
-  if (first) {
-    // The first poll: the PWM registers before the outputs. The outputs it reads are what the
-    // node finds; a run that ended between the two reads in the other order would leave its
-    // last on phase as that level (docs/devices/ld58a08.md). A run the registers show stays the
-    // device's whatever the outputs show; none can start between the reads but by a write,
-    // which the fail-safe sees.
+  // The PWM registers before the outputs (docs/devices/ld58a08.md): a run they show ended also
+  // ended before the outputs were read, so the level read is not the run's last on phase (a
+  // level the node finds, or takes for a write whose outcome was unknown). A run the registers
+  // show stays the device's whatever the outputs show; none can start between the reads but by
+  // a write, which the fail-safe sees.
+  if (!pwm_known_) {
+    // The first poll reads every channel.
     Result pwm = readPwm(link);
     if (!pwm.ok()) return pwm;
     pwm_read_by_poll_.fill(true);
     pwm_unsure_.fill(false);
+  } else {
+    // The manual allows reading 1-3 registers at a time: one channel per poll keeps a poll at
+    // two transactions, and a burst that ends on the board shows within 8 polls. A channel whose
+    // PWM write went unconfirmed goes first, out of turn.
+    const auto unsure = std::find(pwm_unsure_.begin(), pwm_unsure_.end(), true);
+    uint8_t ch = poll_cursor_;
+    if (unsure != pwm_unsure_.end()) {
+      ch = static_cast<uint8_t>(unsure - pwm_unsure_.begin());
+    } else {
+      poll_cursor_ = static_cast<uint8_t>((poll_cursor_ + 1) % kChannels);
+    }
+    Result pwm = readPwmChannel(link, ch, &pwm_[ch]);
+    if (!pwm.ok()) return pwm;
+    pwm_read_by_poll_[ch] = true;
+    pwm_unsure_[ch] = false;
   }
   Result r = link.execute(Request::readCoils(address(), 0, kChannels));
   if (!r.ok()) return r;
   outputs_.assign(r.values.begin(), r.values.end());
-  if (first) return r;
-  // The manual allows reading 1-3 registers at a time: one channel per poll keeps a poll at two
-  // transactions, and a burst that ends on the board shows within 8 polls. A channel whose PWM
-  // write went unconfirmed goes first, out of turn.
-  const auto unsure = std::find(pwm_unsure_.begin(), pwm_unsure_.end(), true);
-  uint8_t ch = poll_cursor_;
-  if (unsure != pwm_unsure_.end()) {
-    ch = static_cast<uint8_t>(unsure - pwm_unsure_.begin());
-  } else {
-    poll_cursor_ = static_cast<uint8_t>((poll_cursor_ + 1) % kChannels);
-  }
-  r = readPwmChannel(link, ch, &pwm_[ch]);
-  pwm_read_by_poll_[ch] = r.ok();
-  if (r.ok()) pwm_unsure_[ch] = false;
   return r;
 }
 

@@ -985,8 +985,12 @@ void World::lostAnswer(int d, int ch, double seconds) {
   // Counted from now, when the caller learns the answer was lost, as the node counts it: the
   // device, if it heard the write, started it before now and so ends it before the window does.
   TP until = seconds > 0 ? now + dur(seconds + 0.5 + 0.02 * seconds) : now;
-  if (c.known && c.timed && !c.settled)
-    until = std::max(until, c.ends + dur(0.5 + 0.02 * c.duration));
+  // F32: the end counts from when the device confirmed the command, as the node counts it (an
+  // LD58A08 run's job ends later, after its read back: c.ends; model change 33).
+  if (c.known && c.timed && !c.settled) {
+    const TP end = c.ends_earliest != TP{} ? c.ends_earliest : c.ends;
+    until = std::max(until, end + dur(0.5 + 0.02 * c.duration));
+  }
   // docs:105 "also when another write whose answer was lost came between": a timed command
   // that earlier lost write may have started (or left running) still decides (model change 14).
   if (c.adopt) until = std::max(until, c.adopt_not_before);
@@ -1168,7 +1172,7 @@ void World::onAttempt(const LineEvent& e) {
                      e.request.function == FunctionCode::kWriteMultipleCoils;
   if (!coils || node_->currentTag() != 0) return;
   m.pwm_read_at_write = m.pwm_read_running;
-  // Its read back follows (a poll of the device: coils, then one channel's PWM registers).
+  // Its read back follows (a poll of the device: one channel's PWM registers, then the coils).
   if (e.answered) {
     m.readback_pending = true;
     for (size_t i = 0; i < e.request.values.size(); ++i)

@@ -60,6 +60,10 @@ class LaunchFilesTest(unittest.TestCase):
             answers = [up.check_device_answers(namespace, name, device, config_dir, launch)
                        for name, device in devices.items()]
             rospy.loginfo("%s: %s", tag, "; ".join(answers))
+        except AssertionError as e:
+            # What the node said is what tells why (a CI run once timed out here, unseen since).
+            raise AssertionError("%s\nroslaunch's output, last lines:\n%s"
+                                 % (e, launch.tail())) from None
         finally:
             launch.stop()
             if sim:

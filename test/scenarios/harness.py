@@ -206,6 +206,17 @@ class Harness:
         except rospy.ROSException:
             return False
 
+    def node_tail(self, chars=4000):
+        """The running node's output so far, its end (for a failure message)."""
+        log = getattr(self, "log", None)
+        if self.node is None or log is None:
+            return getattr(self, "output", "")[-chars:]
+        # pread: the node writes through the same open file, so its offset must not move.
+        fd = log.fileno()
+        size = os.fstat(fd).st_size
+        start = max(0, size - chars)
+        return os.pread(fd, size - start, start).decode(errors="replace")
+
     def stop_node(self, sig=signal.SIGINT, before=None):
         """Stops the node; returns its exit code. `before` runs just before the signal."""
         if self.node is None:

@@ -112,6 +112,10 @@ class ScenarioTest(unittest.TestCase):
         except Exception as e:  # the invariant that failed, reported with the seed below
             failure = e
         finally:
+            if failure is not None:
+                # What the node logged tells why an awaited event did not come (a CI run under
+                # load once waited 30 s for a restart event that a replay then saw in 3 s).
+                reported.append("the node's output, last lines:\n" + machine.Run.harness.node_tail())
             if machine.Run.harness.node is not None:
                 machine.Run.harness.stop_node()
             machine.Run.harness.stop_simulator()

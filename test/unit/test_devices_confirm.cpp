@@ -167,15 +167,15 @@ TEST(ConfirmByReadBack, AnUnconfirmedPwmWritesChannelIsReadByTheNextPollFirst) {
   EXPECT_EQ(board.setPwm(until_silent, burst()).error, ErrorKind::kTimeout);
   EXPECT_TRUE(until_silent.refused());  // its read back was not sent
   // The next poll reads channel 2 (not channel 0, the round's next) ...
-  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x04));
   bus.expect(frame(Request::readHoldingRegisters(1, 0x0020, 3)),
              registersReply(1, 0x0020, {10, 5, 4}));
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x04));
   ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
   EXPECT_TRUE(board.selfTimedReadByLastPoll(2));
   EXPECT_TRUE(board.pwm()[2].running);
   // ... and the one after goes on with the round at channel 0.
-  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x04));
   bus.expect(frame(Request::readHoldingRegisters(1, 0x0000, 3)), registersReply(1, 0x0000, idle));
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x04));
   ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
   EXPECT_TRUE(board.selfTimedReadByLastPoll(0));
   EXPECT_EQ(bus.mismatches(), "");
@@ -194,14 +194,14 @@ TEST(ConfirmByReadBack, AChannelTheFailsafeWaitsForIsReadByTheNextPollFirst) {
   expectFirstLd58a08Poll(bus);
   ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
   board.readSelfTimedFirst({5});
-  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
   bus.expect(frame(Request::readHoldingRegisters(1, 0x0050, 3)), registersReply(1, 0x0050, idle));
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
   ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
   EXPECT_TRUE(board.selfTimedReadByLastPoll(5));
   // Then the round goes on at channel 0; a channel out of range is ignored.
   board.readSelfTimedFirst({8});
-  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
   bus.expect(frame(Request::readHoldingRegisters(1, 0x0000, 3)), registersReply(1, 0x0000, idle));
+  bus.expect(frame(Request::readCoils(1, 0, 8)), coilsReply(1, 0x00));
   ASSERT_TRUE(board.poll(bus).ok()) << bus.mismatches();
   EXPECT_EQ(bus.mismatches(), "");
   EXPECT_TRUE(bus.usedUp());
