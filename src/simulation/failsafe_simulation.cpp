@@ -244,7 +244,7 @@ Config drawConfig(uint64_t seed) {
     c.devices.push_back(dc);
   }
   c.ld_save = r.chance(30);
-  // The LD58A08's own heartbeat (docs:17, 32: that device only) in half the seeds; drawn last,
+  // The LD58A08's own heartbeat (F7: that device only) in half the seeds; drawn last,
   // so the draws above stay what they were.
   if (r.chance(50)) {
     c.devices[kLd].failsafe.heartbeat_topic = "pwm_alive";
@@ -260,18 +260,18 @@ Config drawConfig(uint64_t seed) {
 // ---------------------------------------------------------------------------------------------
 // The model of docs/failsafe.md, per output channel.
 struct Chan {
-  bool known = false;    // the intent is known (docs:59-65); unknown after an unconfirmed write
+  bool known = false;    // the intent is known (F21, F22, F26); unknown after an unconfirmed write
   bool command = false;  // the intent is a confirmed command (not found, restore or safe)
-  bool level = false;    // the steady level; a timed command's final level (docs:66-70)
+  bool level = false;    // the steady level; a timed command's final level (F28, F32)
   bool timed = false;
   std::optional<bool> during;  // a timed command's level until its end (none: any)
   TP ends{};
   double duration = 0;
-  // docs:73: a poll after the end (within its slack: one showing the final level) ended the
+  // F33: a poll after the end (within its slack: one showing the final level) ended the
   // timed command there; a write whose answer is lost after that waits for no end (model
   // change 26: the model followed which poll that was only for restores before).
   bool settled = false;
-  bool continuous = false;  // a PWM run with no end: the device's (docs:68, 88)
+  bool continuous = false;  // a PWM run with no end: the device's (F28, F37)
   // docs "What restore writes": a continuous run this node started (set_pwm, a client's FC16 of
   // the channel's three registers), its registers; a restore starts it again when the read just
   // before shows it stopped. Empty otherwise.
@@ -280,7 +280,7 @@ struct Chan {
   // channel per poll) reports a restart for it (docs "Restart detection needs polls").
   bool run_stop_unseen = false;
   TP run_stopped_at{};
-  // A run power-down save restarted (docs:176-186): the device's once a poll reads it running;
+  // A run power-down save restarted (F77): the device's once a poll reads it running;
   // until then its start and its end may each show as a change (a restart report naming the
   // channel is justified), the end up to the report after a poll read it stopped.
   bool saved_run_unseen = false;
@@ -295,13 +295,13 @@ struct Chan {
   // timed command, a write whose outcome is unknown): the list lags it by kept_latency.
   TP kept_changed_at{};
   bool kept_lagging = false;  // carried from a list that had not caught up (model change 28)
-  bool held = false;          // docs:76-80
+  bool held = false;          // F16-F20
   TP held_since{};
   size_t queued_at_hold = 0;  // jobs queued on the bus when the hold began
-  bool owed = false;          // docs:81-84
+  bool owed = false;          // F40-F43
   bool triggered = false;     // a trigger covered it (start, shutdown, heartbeat, command timeout)
   TP trigger_at{};
-  std::optional<TP> deadline;  // the dead man (docs:33)
+  std::optional<TP> deadline;  // the dead man (F9)
   bool adopt = false;          // take the level of a poll started after `adopt_after_poll`
   bool adopt_is_command = false;
   uint64_t adopt_after_poll = 0;
@@ -334,26 +334,26 @@ struct DevModel {
   uint64_t poll_running = 0;  // the sequence number of the poll running now
   bool in_poll = false;       // between a poll's start and its end
   // ... and a write to the device was noted since that start: its reads may predate the write,
-  // so it is no "good poll" for found states (docs:65).
+  // so it is no "good poll" for found states (F23).
   bool written_in_poll = false;
-  // A fail-safe write went out: its read back (docs:90, a read of the device's state) is next.
+  // A fail-safe write went out: its read back (F37, F79, a read of the device's state) is next.
   bool readback_pending = false;
   std::vector<bool> fs_written = std::vector<bool>(8, false);  // ... the channels it wrote
   bool unanswered = false;  // an attempt went unanswered since its last good poll
   bool found = false;
-  // LD58A08: whether a channel's PWM ran when the node last read its registers (docs:88: a
+  // LD58A08: whether a channel's PWM ran when the node last read its registers (F37: a
   // restore leaves a run the device reports; the node knows only what it read)
   std::vector<bool> pwm_read_running = std::vector<bool>(8, false);
-  // ... as it was when the fail-safe's newest write went out (docs:88: read just before it)
+  // ... as it was when the fail-safe's newest write went out (F37: read just before it)
   std::vector<bool> pwm_read_at_write = std::vector<bool>(8, false);
-  // ... and the poll that read each channel's registers (docs:92: a lost answer's channel is
+  // ... and the poll that read each channel's registers (F46: a lost answer's channel is
   // taken at the first poll after its time that also reads them)
   std::vector<uint64_t> pwm_read_in_poll = std::vector<uint64_t>(8, 0);
   // A channel's PWM registers as a fail-safe operation's own read (not a poll's, not a read back)
   // last showed them since the last poll: what the read just before a restore found (F37).
   std::vector<bool> run_read_in_op = std::vector<bool>(8, false);
   // ... and when the device last answered a PWM write (FC16 of a channel's three registers):
-  // the node counts a set_pwm's end from there (docs:68), the model's op from its later callback
+  // the node counts a set_pwm's end from there (F32), the model's op from its later callback
   // Jobs queued on the bus when it became reachable (checkHeld notes it once per spell).
   size_t queued_at_reachable = 0;
   bool queued_noted = false;
@@ -370,7 +370,7 @@ struct DevModel {
   bool gen_unanswered = false;  // an attempt to it went unanswered since its last report
   bool gen_prev_silent = true;  // ... before its previous report
   // Addresses whose write the device refused with an exception since its last report (a
-  // refused safe value is reported, not on the device: docs:166-174).
+  // refused safe value is reported, not on the device: F70, F71).
   std::set<uint16_t> gen_refused;
   TP gen_report_at{};  // its previous report
   // per signal: its newest set the device confirmed, and the newest report that wrote it
@@ -491,7 +491,7 @@ class World {
                       const std::vector<uint16_t>& run = {});
   void unconfirmed(int d, int ch, double not_before_s, bool as_command);
   void hold(int d, int ch);
-  // docs:94: a command whose answer was lost (any source) leaves its channel unknown until the
+  // F45, F46: a command whose answer was lost (any source) leaves its channel unknown until the
   // next poll, whose level is taken as found: for a timed command of `seconds`, or a write on a
   // channel where a timed command still runs, the first poll after that end plus the slack.
   void lostAnswer(int d, int ch, double seconds);
@@ -562,7 +562,7 @@ class World {
   // node died, or when it began to stop (its shutdown keeps nothing more), which the next node
   // resumes.
   std::vector<std::optional<Chan>> carried_[kDevices];
-  // The controller and its heartbeat (docs:32).
+  // The controller and its heartbeat (F6-F8).
   bool alive_ = true;
   TP last_feed_{};
   bool lost_ = false;
@@ -648,7 +648,7 @@ void World::runUntil(TP end, const std::function<bool()>& done) {
 void World::tick() {
   const TP now = clock_.now();
   if (!lost_ && now - last_feed_ >= dur(config_.heartbeat)) {
-    lost_ = true;  // docs:32: no message within timeout; every device obeys the bus heartbeat
+    lost_ = true;  // F6, F7: no message within timeout; every device obeys the bus heartbeat
     for (int d = 0; d < kGen; ++d)
       for (int ch = 0; ch < kChannels; ++ch)
         if (hasSafe(d, ch)) hold(d, ch);
@@ -656,14 +656,14 @@ void World::tick() {
   const FailsafeConfig& ld = config_.devices[kLd].failsafe;
   if (!ld.heartbeat_topic.empty() && !dev_lost_ &&
       now - dev_last_feed_ >= dur(ld.heartbeat_timeout)) {
-    dev_lost_ = true;  // docs:32: that device's own heartbeat: its channels only
+    dev_lost_ = true;  // F7: that device's own heartbeat: its channels only
     for (int ch = 0; ch < kChannels; ++ch)
       if (hasSafe(kLd, ch)) hold(kLd, ch);
   }
   for (int d = 0; d < kGen; ++d)
     for (int ch = 0; ch < kChannels; ++ch) {
       Chan& c = model_[d].ch[ch];
-      if (c.deadline && now >= *c.deadline) {  // docs:33
+      if (c.deadline && now >= *c.deadline) {  // F9
         c.deadline.reset();
         hold(d, ch);
       }
@@ -674,7 +674,7 @@ void World::tick() {
 void World::hold(int d, int ch) {
   Chan& c = model_[d].ch[ch];
   const TP now = clock_.now();
-  // docs:188-201: one transaction for each output write queued before the trigger.
+  // F87: one transaction for each output write queued before the trigger.
   if (!c.held) {
     c.held_since = now;
     c.queued_at_hold = node_ ? node_->queuedJobs() : 0;
@@ -692,10 +692,10 @@ void World::resetModelForNewNode() {
     DevModel& m = model_[d];
     // A new node has read no PWM registers yet.
     std::fill(m.pwm_read_running.begin(), m.pwm_read_running.end(), false);
-    // docs:169-170: a flash the killed node started cannot be told from a restart. A device
+    // F80: a flash the killed node started cannot be told from a restart. A device
     // whose state the old node did not know may change by itself too.
-    // Each of its flashes changes the outputs at its own end (docs:171-172): every report up to
-    // the last end (+ the slack of docs line 70) is justified, not only the first.
+    // Each of its flashes changes the outputs at its own end (F86): every report up to
+    // the last end (+ the slack of F32) is justified, not only the first.
     bool running_unknown = false;
     for (size_t ch = 0; ch < m.ch.size(); ++ch) {
       Chan& c = m.ch[ch];
@@ -762,7 +762,7 @@ void World::keepRunningTimed() {
         if (k.channel < kChannels && k.ends > now_s) stored[k.channel] = k;
     for (int ch = 0; ch < kChannels; ++ch) {
       const Chan& c = model_[d].ch[ch];
-      // Model change 23 (failsafe.md line 198): only a timed command with an end; a run with
+      // Model change 23 (failsafe.md F80): only a timed command with an end; a run with
       // none is found by the next node.
       const bool runs = c.known && !c.adopt && !c.continuous && c.timed && c.ends > now;
       // Not landed yet: changed after the list that landed was kept, and within two writes
@@ -841,7 +841,7 @@ void World::startNode() {
   // BusNode::start waits shutdown_timeout + 5 s for them.
   runUntil(started + dur(config_.shutdown_timeout + 5.0),
            [this] { return node_->startWritesDone(); });
-  // I9 (docs:36): before any command is taken, the safe states are on every device that
+  // I9 (F10): before any command is taken, the safe states are on every device that
   // answered throughout.
   for (int d = 0; d < kGen; ++d) {
     if (!config_.devices[d].failsafe.on_start_safe || model_[d].reachable_since > started ||
@@ -878,7 +878,7 @@ void World::stopNode() {
   // one the safe writes left, written after the bus thread ended (the stop flushes it).
   kept_timed_.flush();
   keepRunningTimed();
-  // I10 (docs:31): a device that answered throughout shows its safe states.
+  // I10 (F5): a device that answered throughout shows its safe states.
   if (node_->stopWritesDone() && !port_lost_)
     for (int d = 0; d < kGen; ++d) {
       // F90: a read of the stop's that took another's frame may hide a PWM run there.
@@ -911,7 +911,7 @@ void World::killNode() {
 bool World::expected(const Chan& c, TP t, bool* level) const {
   if (!c.known || c.adopt || c.continuous) return false;
   if (c.timed) {
-    const double slack = 0.5 + 0.02 * c.duration;  // docs:69-70
+    const double slack = 0.5 + 0.02 * c.duration;  // F32
     if (std::abs(secs(t - c.ends)) <= slack) return false;
     if (t < c.ends) {
       if (!c.during) return false;
@@ -926,14 +926,14 @@ bool World::expected(const Chan& c, TP t, bool* level) const {
 void World::commanded(int d, int ch, bool level) {
   if (model_[d].in_poll) model_[d].written_in_poll = true;
   Chan& c = model_[d].ch[ch];
-  const auto deadline = c.deadline;  // only C/command moves the dead man (docs:33)
+  const auto deadline = c.deadline;  // only C/command moves the dead man (F9)
   c = Chan{};
   c.deadline = deadline;
   c.known = c.command = true;
   c.level = level;
   c.at = clock_.now();
   c.kept_changed_at = c.at;
-  // docs:77-78: a confirmed command ends the hold and cancels what was owed; a trigger before
+  // F18: a confirmed command ends the hold and cancels what was owed; a trigger before
   // it no longer covers it.
 }
 
@@ -944,7 +944,7 @@ void World::commandedTimed(int d, int ch, std::optional<bool> during, bool after
   if (seconds < 0) {
     c.continuous = true;
     c.node_run = run;
-    // docs:71: a continuous run the device confirmed counts as read running until a read.
+    // F31: a continuous run the device confirmed counts as read running until a read.
     if (d == kLd) model_[d].pwm_read_running[ch] = true;
     return;
   }
@@ -961,7 +961,7 @@ void World::unconfirmed(int d, int ch, double not_before_s, bool as_command) {
   // checked on the channel until a poll shows it again.
   Chan& c = model_[d].ch[ch];
   c.adopt_prev_known = expected(c, clock_.now(), &c.adopt_prev_level);
-  // docs:67: on a held channel a poll showed otherwise, the level before is what it showed.
+  // F27: on a held channel a poll showed otherwise, the level before is what it showed.
   if (as_command && c.held && c.shown_otherwise) {
     c.adopt_prev_known = true;
     c.adopt_prev_level = !safeLevel(d, ch);
@@ -991,7 +991,7 @@ void World::lostAnswer(int d, int ch, double seconds) {
     const TP end = c.ends_earliest != TP{} ? c.ends_earliest : c.ends;
     until = std::max(until, end + dur(0.5 + 0.02 * c.duration));
   }
-  // docs:105 "also when another write whose answer was lost came between": a timed command
+  // F46 "also when another write whose answer was lost came between": a timed command
   // that earlier lost write may have started (or left running) still decides (model change 14).
   if (c.adopt) until = std::max(until, c.adopt_not_before);
   unconfirmed(d, ch, secs(until - now), false);
@@ -1002,7 +1002,7 @@ void World::deviceDisturbed(int d, bool justified, double extra) {
   m.cause_at = clock_.now();
   m.cause_pending = true;
   // A device that stopped answering is probed again with backoff, up to backoff_max (5 s,
-  // bus_scheduler.h); an owed write goes when it answers a poll again (docs:37).
+  // bus_scheduler.h); an owed write goes when it answers a poll again (F41).
   m.reachable_since = std::max(m.reachable_since, clock_.now() + dur(5.0 + extra));
   m.queued_noted = false;
   if (justified) {
@@ -1063,7 +1063,7 @@ void World::onAttempt(const LineEvent& e) {
     const int ch = e.request.address / 0x10;
     const bool runs = e.values.size() == 3 && e.values[2] != 0;  // as the node read it
     m.pwm_read_running[ch] = runs;
-    // Read by a poll: running, the node's (or the device's, docs:176-186) from now on; a saved
+    // Read by a poll: running, the node's (or the device's, F77) from now on; a saved
     // run read stopped, its end is seen by this poll.
     if (m.in_poll && node_ && node_->currentTag() == 0) {
       Chan& read = m.ch[ch];
@@ -1072,12 +1072,12 @@ void World::onAttempt(const LineEvent& e) {
         read.saved_stop_read_at = e.at;
     }
     m.pwm_read_in_poll[ch] = m.poll_running;
-    // docs:88-90 and "Restart detection needs polls": a run a poll reads that is no timed
+    // F37 and "Restart detection needs polls": a run a poll reads that is no timed
     // command of the node's still running makes the channel the device's until a plain write,
     // also after the run ended: not compared, not restored.
     Chan& c = m.ch[ch];
     const bool node_runs = c.timed && e.at <= c.ends + dur(0.5 + 0.02 * c.duration);
-    // Only a poll's read or a fail-safe write's read back on a channel it left (docs:90):
+    // Only a poll's read or a fail-safe write's read back on a channel it left (F37, F79):
     // not a command's read back, and not the reads before the fail-safe's own write (the read
     // just before a restore counts at its report, below).
     const bool fs_op = node_ && node_->currentTag() == 0;
@@ -1103,7 +1103,7 @@ void World::onAttempt(const LineEvent& e) {
       e.request.count == 2 && e.request.address % 5 == 3 && e.request.address / 5 < kChannels)
     m.flash_heard[e.request.address / 5] = e.at;
   // When the LC board confirmed a flash (its mode and delay registers, 3 + 5 n): when its answer
-  // has come (docs:71-75), now, not when the request went out (e.at; model change 18).
+  // has come (F32), now, not when the request went out (e.at; model change 18).
   if (d == kLc && e.answered && e.request.function == FunctionCode::kWriteMultipleRegisters &&
       e.request.count == 2 && e.request.address % 5 == 3 && e.request.address / 5 < kChannels)
     m.flash_answered[e.request.address / 5] = clock_.now();
@@ -1133,7 +1133,7 @@ void World::onAttempt(const LineEvent& e) {
     m.pwm_write_answered[e.request.address / 0x10] = clock_.now();
     m.pwm_confirm_pending[e.request.address / 0x10] = false;
   }
-  // docs:68: a stop the device confirmed (an enable register written 0: the node's own before
+  // F29, F31: a stop the device confirmed (an enable register written 0: the node's own before
   // a plain write, or a client's it carried) ends what the node read of that channel's run.
   if (d == kLd && e.answered && write &&
       (e.request.function == FunctionCode::kWriteSingleRegister ||
@@ -1147,14 +1147,14 @@ void World::onAttempt(const LineEvent& e) {
     }
   if (!e.answered) {
     m.unanswered = true;
-    // A device that does not answer may be taken offline: its return is a restart (docs:34).
+    // A device that does not answer may be taken offline: its return is a restart (F11).
     // A write it heard but whose answer was lost changed outputs the node did not confirm.
     deviceDisturbed(d, write && e.heard);
-    // A flash or PWM run it started changes the outputs again at its end (docs:171-172).
+    // A flash or PWM run it started changes the outputs again at its end (F86).
     if (write && e.heard && sim(d)->startsSomething(e.request))
       m.justified_until = std::max(m.justified_until, e.at + dur(8.0));
     // It may also have replaced a running timed command (a coil write over a flash): the change
-    // then shows at that command's end, after the first report (docs:69-70's slack, a late poll).
+    // then shows at that command's end, after the first report (F32's slack, a late poll).
     if (write && e.heard)
       for (const Chan& c : m.ch)
         if (c.timed && !c.continuous)
@@ -1197,11 +1197,11 @@ void World::onAttempt(const LineEvent& e) {
     checked("I4");  // a write on a channel whose intent is known
     if (level == v) continue;
     if (hasSafe(d, ch) && v == safeLevel(d, ch) && c.triggered && c.trigger_at >= c.at) continue;
-    // docs:31, 99-100: the stop's safe writes run after what was queued before them, and they
+    // F5, F61: the stop's safe writes run after what was queued before them, and they
     // are what the outputs are left with.
     if (stopping_ && hasSafe(d, ch) && v == safeLevel(d, ch)) continue;
-    // The node sees a restart at a poll (docs:34): a command confirmed before the poll that saw
-    // it is not newer than the restart; one confirmed after it is (docs:90-92).
+    // The node sees a restart at a poll (F11): a command confirmed before the poll that saw
+    // it is not newer than the restart; one confirmed after it is (F44).
     // A change the device made by itself that I6 accepts (a power cycle, a lost answer's write,
     // a flash or saved PWM run ending) may be seen at any poll of its window: what that poll
     // saw is a restart for the commands confirmed before it.
@@ -1248,7 +1248,7 @@ void World::onPolled(const std::string& device, const Result& r) {
   if (outputs.size() < kChannels) return;
   for (int ch = 0; ch < kChannels; ++ch) {
     Chan& c = m.ch[ch];
-    // docs:68-73: the poll that ends a timed command, as the node counts its end (from the
+    // F32, F33: the poll that ends a timed command, as the node counts its end (from the
     // device's answer) and its slack: after the window any poll, within it one showing the
     // final level (for a run the device toggles, only from the end on). A poll during which a
     // write ran is not compared.
@@ -1262,9 +1262,9 @@ void World::onPolled(const std::string& device, const Result& r) {
     }
     c.shown_otherwise = c.held && outputs[ch] != safeLevel(d, ch);
     if (!m.found && !c.known && !c.adopt && !m.written_in_poll) {
-      // docs:62-63: where the node has commanded nothing, the intent is the state found at its
-      // first good poll. A running PWM is the device's (docs:73).
-      // A run as the node last read it (docs:66): an LD58A08 channel's registers, read before
+      // F22: where the node has commanded nothing, the intent is the state found at its
+      // first good poll. A running PWM is the device's (F35).
+      // A run as the node last read it (F24): an LD58A08 channel's registers, read before
       // the start's safe write, may be older than this poll.
       c.known = true;
       c.level = outputs[ch];
@@ -1275,17 +1275,17 @@ void World::onPolled(const std::string& device, const Result& r) {
     const bool registers_read = d != kLd || m.pwm_read_in_poll[ch] == m.poll_running;
     if (c.adopt && m.poll_running > c.adopt_after_poll && clock_.now() >= c.adopt_not_before &&
         registers_read && !m.written_in_poll) {
-      // docs:35, 64-65: what an undecoded write changed is taken as commanded at the next
+      // F49, F50, F26: what an undecoded write changed is taken as commanded at the next
       // poll; it ends a hold on the channels it changed.
       const bool level = outputs[ch];
-      // docs:35, 64-65: what the write changed is taken as commanded; a level that did not
+      // F49, F50, F26: what the write changed is taken as commanded; a level that did not
       // change (or was not known) is not. Only a client's write is a command (it ends holds
-      // and owed writes), and only those that fired before it was confirmed (docs:75-78); a
-      // user's write whose answer was lost is not (docs:81-83: commanded after the stamp).
+      // and owed writes), and only those that fired before it was confirmed (F16, F18); a
+      // user's write whose answer was lost is not (F40, F42: commanded after the stamp).
       const bool changed = c.adopt_prev_known && level != c.adopt_prev_level;
       const bool ends = c.adopt_is_command && changed && !(c.held && c.held_since > c.adopt_at);
       // The level before the write unknown (a client's write whose answer was lost came before
-      // it): not known to have changed, so taken as found, and a hold stays (docs:67, stop 41).
+      // it): not known to have changed, so taken as found, and a hold stays (F27, stop 41).
       const bool unknown = c.adopt_is_command && !c.adopt_prev_known;
       Chan kept = c;
       c = Chan{};
@@ -1293,7 +1293,7 @@ void World::onPolled(const std::string& device, const Result& r) {
       c.known = true;
       c.command = kept.adopt_is_command && !unknown;
       c.level = level;
-      // docs:66: "found running" is as the node read it (this poll read the channel's PWM
+      // F24: "found running" is as the node read it (this poll read the channel's PWM
       // registers), not the simulator's register when the poll ended (a run may end between).
       c.continuous = d == kLd && m.pwm_read_running[ch];
       c.at = clock_.now();
@@ -1317,11 +1317,11 @@ void World::onPolled(const std::string& device, const Result& r) {
         c.disturbed_poll_at = clock_.now();
     }
   if (!m.written_in_poll) m.found = true;
-  // docs:34: a device that answers again after being offline has restarted: on_restart's
+  // F11, F12: a device that answers again after being offline has restarted: on_restart's
   // writes computed from here on have that reason (found states included).
   if (m.unanswered) m.cause_at = clock_.now();
   m.unanswered = false;
-  // Only a good poll shows the node what changed (docs:65): one with a write in it is not
+  // Only a good poll shows the node what changed (F23): one with a write in it is not
   // compared.
   if (m.written_in_poll) return;
   m.prev_poll_at = m.last_poll_at;
@@ -1349,7 +1349,7 @@ void World::checkCoils(int d, const std::vector<uint8_t>& chs, const std::vector
 }
 
 void World::takeFoundAfterRestart(int d, const FailsafeReport& r) {
-  // docs:36, 65 (model change 19): after a restart, a changed channel that on_restart does not
+  // F13, F25 (model change 19): after a restart, a changed channel that on_restart does not
   // write back (leave; safe on a channel whose safe state is hold) and that owes no safe write
   // has the level the poll that saw the restart showed as its intent, as found: a later poll or
   // a client's stop is compared with that level, not with the one the power cycle dropped.
@@ -1402,11 +1402,11 @@ void World::onReport(const FailsafeReport& r) {
   chs.reserve(r.channels.size());
   for (const std::string& name : r.channels) chs.push_back(name[3] - '0');  // out0..out7
   if (r.trigger == "restart") {
-    // I6 (docs:34-35, 66-74): the outputs changed only if something changed them. A change in
-    // the window of a justified one (a flash's end) may be seen by any later poll: only a good
-    // poll after the window that showed nothing closes it (the port may be lost meanwhile).
-    // A continuous run of the node's that a power cycle stopped shows at the poll that reads
-    // its registers, up to 8 polls later (docs "Restart detection needs polls").
+    // I6 (F11, F49, F28, F32, F34, F35): the outputs changed only if something changed them. A
+    // change in the window of a justified one (a flash's end) may be seen by any later poll: only a
+    // good poll after the window that showed nothing closes it (the port may be lost meanwhile). A
+    // continuous run of the node's that a power cycle stopped shows at the poll that reads its
+    // registers, up to 8 polls later (docs "Restart detection needs polls").
     bool run_stopped = false;
     const auto names_at = r.reason.find("outputs ");
     const auto names_end = r.reason.find(" changed with no command");
@@ -1424,7 +1424,7 @@ void World::onReport(const FailsafeReport& r) {
         !m.justified && m.prev_poll_at >= m.justified_until && !run_stopped && !staleReadShows(d))
       fail("I6", std::string(kNames[d]) + ": restart reported (" + r.reason +
                      ") though nothing changed its outputs without a confirmed command");
-    // docs:34, 90-92: the restart is what the poll that saw it showed; on_restart's writes may
+    // F11, F44: the restart is what the poll that saw it showed; on_restart's writes may
     // change what was commanded before that poll (an I6-justified report: a PWM run that a
     // power-down save restarted shows as a change polls later).
     if (r.reason.find("changed with no command") != std::string::npos)
@@ -1443,7 +1443,7 @@ void World::onReport(const FailsafeReport& r) {
     takeFoundAfterRestart(d, r);
   }
   if (r.action == "safe") {
-    // I11 (docs:4-5): "Nothing changes unless it is configured: the default safe state is hold".
+    // I11 (F1): "Nothing changes unless it is configured: the default safe state is hold".
     for (size_t i = 0; i < chs.size(); ++i)
       if (checked("I11") && !hasSafe(d, chs[i]))
         fail("I11", std::string(kNames[d]) + " out" + std::to_string(chs[i]) +
@@ -1455,7 +1455,7 @@ void World::onReport(const FailsafeReport& r) {
   bool plain = false;
   for (size_t i = 0; i < chs.size(); ++i) plain = plain || !isRun(i);
   if (r.action == "restore") {
-    // I5 (docs:85-89): what a restore writes, channel by channel.
+    // I5 (F36-F39): what a restore writes, channel by channel.
     std::vector<bool> written(kChannels, false);
     for (const int ch : chs) written[ch] = true;
     // F37: a run the read just before the restore found, on a channel it leaves, is the
@@ -1510,10 +1510,10 @@ void World::onReport(const FailsafeReport& r) {
     }
     for (int ch = 0; ch < kChannels; ++ch) {
       const Chan& c = m.ch[ch];
-      // docs:88: a channel the device runs a PWM on that is no timed command of the node's is
+      // F37: a channel the device runs a PWM on that is no timed command of the node's is
       // the device's: the restore leaves it (as the node read it just before the restore).
       const bool node_runs = c.timed && now <= c.ends + dur(0.5 + 0.02 * c.duration);
-      // docs:68-72: a poll after the end showing the final level ended the node's command, and
+      // F33: a poll after the end showing the final level ended the node's command, and
       // a run read after it is the device's; the model does not follow which poll that was.
       const bool maybe_ended = node_runs && now > c.ends_earliest;
       const bool devices_run = d == kLd && (!node_runs || maybe_ended) &&
@@ -1537,7 +1537,7 @@ void World::onReport(const FailsafeReport& r) {
         fail("I5", std::string(kNames[d]) + " out" + std::to_string(ch) +
                        ": the restore leaves out the continuous PWM run the node started, "
                        "though the read just before showed it stopped");
-      // docs:90: a run the read before the restore found stays the device's afterwards.
+      // F37: a run the read before the restore found stays the device's afterwards.
       if (!written[ch] && devices_run && m.ch[ch].known && !m.ch[ch].adopt)
         m.ch[ch].continuous = true;
     }
@@ -1562,7 +1562,7 @@ void World::onReport(const FailsafeReport& r) {
     m.ch[ch].command = false;
   }
   if (r.levels_confirmed) {
-    // docs:62: a restore or a safe write is a command like any other (not a hold's end).
+    // F21: a restore or a safe write is a command like any other (not a hold's end).
     for (size_t i = 0; i < chs.size(); ++i) {
       if (isRun(i)) continue;
       Chan& c = m.ch[chs[i]];
@@ -1589,7 +1589,7 @@ void World::onReport(const FailsafeReport& r) {
       m.justified = true;
       m.justified_at = now;
     }
-    // docs:37, 81-82: owed on the channels it carried; the stop's too (its "safe write that
+    // F40, F41: owed on the channels it carried; the stop's too (its "safe write that
     // fails" row names no trigger: the stop reads such a device after the others' safe writes
     // and writes it again when it answers; model change 29).
     for (int ch : chs) m.ch[ch].owed = true;
@@ -1600,12 +1600,12 @@ void World::onGenericReport(const FailsafeReport& r) {
   DevModel& m = model_[kGen];
   // A port that is not open refuses the write unsent: the device was not asked.
   if (!link_.connected()) m.gen_unanswered = true;
-  // I8 (docs:144-146): a value refused is reported, not retried: a "restart" write comes only
+  // I8 (F71): a value refused is reported, not retried: a "restart" write comes only
   // when the device did not answer the write before.
   if (r.trigger == "restart" && checked("I8") && !m.gen_prev_silent)
     fail("I8", std::string("drive: safe values written again (") + r.reason +
                    ") though the device answered the previous safe write");
-  // docs:172-174: a signal set since the trigger is not written. An owed write's trigger fired
+  // F72: a signal set since the trigger is not written. An owed write's trigger fired
   // before the previous report, so a signal it writes was not set since that report. A
   // trigger's own write leaves out only a signal set since it was last written safe (an owed
   // write carries only what the device did not get).
@@ -1647,7 +1647,7 @@ void World::onGenericReport(const FailsafeReport& r) {
   m.gen_refused.clear();
 }
 
-// I2 (docs:32-33, 76, 173-175): a held channel of a device that answers shows its safe state
+// I2 (F6-F9, F16, F87): a held channel of a device that answers shows its safe state
 // within the deadline timer's period, one transaction in progress (a silent device's, with its
 // retries) and a few transactions per device (a write and its read back, an LD58A08's PWM
 // reads): the docs' "timeout plus that tenth plus one bus transaction for each output write".
@@ -1655,7 +1655,7 @@ void World::checkHeld() {
   if (!node_ || !node_->started() || port_lost_) return;
   const TP now = clock_.now();
   // The timer's period, the transaction in progress (a silent device's, with its retries), one
-  // transaction for each output write queued ahead (docs:188-201; a silent device's is one
+  // transaction for each output write queued ahead (F87-F89; a silent device's is one
   // with its retries, an answering LD58A08's a few: its PWM reads, the write, its read back),
   // and the safe writes of each device.
   // The node's own stated bound (BusRuntime::safeAfterTrigger, docs/failsafe.md "How long until
@@ -1672,7 +1672,7 @@ void World::checkHeld() {
       m.queued_at_reachable = node_->queuedJobs();
       m.queued_noted = true;
     }
-    // docs:37 "as soon as the device answers a poll again": that poll's own transactions come
+    // F41 "as soon as the device answers a poll again": that poll's own transactions come
     // first (an LD58A08's first poll after it answers reads every channel's PWM registers, then
     // the coils: 9; model change 27).
     const double poll_transactions = d == kLd ? 9 : 2;
@@ -1784,7 +1784,7 @@ bool World::step(const SimStep& s, size_t index) {
     deviceDisturbed(d, true);
     for (int ch = 0; ch < kChannels; ++ch) {
       Chan& c = model_[d].ch[ch];
-      // A run power-down save restarted (docs:176-186) shows as the device's only at a poll that
+      // A run power-down save restarted (F77) shows as the device's only at a poll that
       // reads its registers while it runs; until then its end may show as a change (a report
       // naming the channel is justified); and a run of the node's it stopped likewise.
       const bool saved_run =
@@ -1906,7 +1906,7 @@ void World::doCommandStep(const SimStep& s) {
     }));
   } else if (k == "command") {
     const bool st = arg(2) != 0;
-    // docs:33: a channel turned on through C/command arms its dead man; any command re-arms.
+    // F9: a channel turned on through C/command arms its dead man; any command re-arms.
     Chan& c = model_[outd].ch[ch];
     const double timeout = config_.devices[outd].failsafe.commandTimeoutOf(ch);
     if (st && timeout > 0)
@@ -1915,7 +1915,7 @@ void World::doCommandStep(const SimStep& s) {
       c.deadline.reset();
     pending_.push_back(command(op("command").id, dn, ch, st, [this, outd, ch](const Result& r) {
       // The merged write's channels come through onWritten; a lost answer leaves the channel
-      // unknown until the next poll (docs:92-94: a service's or topic's command alike).
+      // unknown until the next poll (F45: a service's or topic's command alike).
       if (outcomeUnknown(r.error)) lostAnswer(outd, ch, 0);
     }));
   } else if (k == "pulse") {
@@ -1930,7 +1930,7 @@ void World::doCommandStep(const SimStep& s) {
                                  if (took == TP{} || took + dur(seconds) > clock_.now())
                                    checkCoils(kLc, {ch}, {st}, "a pulse");
                                  commandedTimed(kLc, ch, st, !st, seconds);
-                                 // docs:71-75: its end counts from the board's answer,
+                                 // F32: its end counts from the board's answer,
                                  // not from the read back after it (model change 16).
                                  Chan& c = model_[kLc].ch[ch];
                                  const TP answered = model_[kLc].flash_answered[ch];
@@ -1969,7 +1969,7 @@ void World::doCommandStep(const SimStep& s) {
                              ": set_pwm was confirmed but the channel "
                              "does not run");
             // (A burst shorter than a lost answer's timeouts and read back may have ended.)
-            // docs:66-68: a burst or timed run is the device's until its end, then off. A
+            // F28: a burst or timed run is the device's until its end, then off. A
             // continuous one is the node's to start again (docs "What restore writes"): its
             // registers as the manual encodes them.
             const std::vector<uint16_t> regs =
@@ -1992,11 +1992,11 @@ void World::doCommandStep(const SimStep& s) {
       if (r.ok()) {
         if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0)
           fail("I1", "pwm out" + std::to_string(ch) + ": stop_pwm was confirmed but it runs");
-        // A PWM command (docs:77) ends the hold; the level shows at the next poll.
+        // A PWM command (F18) ends the hold; the level shows at the next poll.
         commanded(kLd, ch, false);
         unconfirmed(kLd, ch, 0, true);
-        // Precedence counts from when the device confirmed the stop (docs:77, "a command
-        // confirmed after that"), not from when the step saw its result (model change 15).
+        // Precedence counts from when the device confirmed the stop (F18, "a command
+        // confirmed after the trigger"), not from when the step saw its result (model change 15).
         Chan& stopped = model_[kLd].ch[ch];
         const TP answered = model_[kLd].stop_answered[ch];
         if (answered != TP{} && answered <= clock_.now()) stopped.adopt_at = answered;
@@ -2033,10 +2033,10 @@ void World::doCommandStep(const SimStep& s) {
           // coil write and goes on running (its manual), and the model does not follow every
           // run (a killed node's, one a power cycle restarted): no I1 there.
           if (outd != kLd) checkCoils(outd, {chs[i]}, {sts[i]}, k);
-          // docs:35: the coils a write names are taken as commanded at once; docs:68: on an
+          // F49: the coils a write names are taken as commanded at once; F30: on an
           // LD58A08 channel the node last read as running a PWM the run goes on: the device's.
           const Chan& was = model_[outd].ch[chs[i]];
-          // (docs:71: as the node last read it, a continuous run the device confirmed counting
+          // (F30, F31: as the node last read it, a continuous run the device confirmed counting
           // as read running; or a timed run of the node's before its end.)
           const bool runs = outd == kLd && (model_[kLd].pwm_read_running[chs[i]] ||
                                             (was.timed && clock_.now() < was.ends_earliest));
@@ -2045,7 +2045,7 @@ void World::doCommandStep(const SimStep& s) {
           const bool may_run = outd == kLd && !runs && was.timed && clock_.now() < was.ends;
           commanded(outd, chs[i], sts[i]);
           if (runs) {
-            // docs:71: the run goes on, and counts as read running until a read.
+            // F30, F31: the run goes on, and counts as read running until a read.
             model_[kLd].ch[chs[i]].continuous = true;
             model_[kLd].pwm_read_running[chs[i]] = true;
           }
@@ -2091,7 +2091,7 @@ void World::doCommandStep(const SimStep& s) {
       fail("I12", "a raw " + req.describe() + " was " +
                       (refused ? "refused but something went on the line" : "not refused at once"));
   } else if (k == "share16_flash" || k == "raw16_flash") {
-    // An LC flash through its registers (docs:60-61): mode 4 close, 2 open; delay in 0.1 s.
+    // An LC flash through its registers (F21): mode 4 close, 2 open; delay in 0.1 s.
     const bool close = arg(2) % 2 == 0;
     const auto tenths = static_cast<uint16_t>(1 + arg(3) % 40);
     const Request req = Request::writeMultipleRegisters(
@@ -2122,13 +2122,13 @@ void World::doCommandStep(const SimStep& s) {
       }
     }));
   } else if (k == "share06_stop") {
-    // The enable register to 0: a write the type does not decode as a run (docs:64-65).
+    // The enable register to 0: a write the type does not decode as a run (F26).
     const Request req =
         Request::writeSingleRegister(kAddr[kLd], static_cast<uint16_t>(ch * 0x10 + 2), 0);
     pending_.push_back(share(op(k).id, req, [this, ch](const Result& r) {
       if (r.ok()) {
         unconfirmed(kLd, ch, 0, true);
-        // The run is stopped (docs:68: no longer one the node knows not yet ended).
+        // The run is stopped (F30: no longer one the node knows not yet ended).
         model_[kLd].ch[ch].continuous = model_[kLd].ch[ch].timed = false;
       }
       if (outcomeUnknown(r.error)) lostAnswer(kLd, ch, 0);
