@@ -1990,7 +1990,9 @@ void World::doCommandStep(const SimStep& s) {
   } else if (k == "pwm_stop") {
     pending_.push_back(stopPwm(op("pwm_stop").id, kNames[kLd], ch, [this, ch](const Result& r) {
       if (r.ok()) {
-        if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0)
+        // F90 (model change 31): a read back that took another request's late reply (beyond
+        // the guard, or with the guard at 0) may confirm a stop the device did not do.
+        if (simRegister(kLd, static_cast<uint16_t>(ch * 0x10 + 2)) != 0 && !staleReadShows(kLd))
           fail("I1", "pwm out" + std::to_string(ch) + ": stop_pwm was confirmed but it runs");
         // A PWM command (F18) ends the hold; the level shows at the next poll.
         commanded(kLd, ch, false);
