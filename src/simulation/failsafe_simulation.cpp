@@ -1031,6 +1031,11 @@ void World::onAttempt(const LineEvent& e) {
     DevModel& m = model_[d];
     m.polls_since_stale = 0;
     m.stale_read_at = clock_.now();
+    // A safe write that read its channels from that frame (an LD58A08's PWM registers) may fail
+    // its read back and be owed (F40): written when the device answers a poll again, behind
+    // what is queued then (F41), as after a refusal (model change 34, I2).
+    m.reachable_since = std::max(m.reachable_since, clock_.now());
+    m.queued_noted = false;
     // What it took as found may also hide a timed command's end: until it ends (and its slack).
     for (const Chan& c : m.ch)
       if (c.timed && !c.continuous)
