@@ -142,6 +142,19 @@ void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double
   newCommand(channel, source);
 }
 
+void ChannelIntents::adoptRunNextPoll(uint8_t channel, CommandSource source, double seconds_run,
+                                      double not_before_s) {
+  adoptNextPoll(channel, source, not_before_s);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (channel >= channels_ || !intent_[channel]) return;
+  Intent& in = *intent_[channel];
+  const auto now = clock_.now();
+  if (seconds_run < 0)
+    in.run_driven = true;
+  else
+    in.run_ends = std::max(in.run_ends.value_or(now), now + seconds(seconds_run));
+}
+
 void ChannelIntents::stoppedNextPoll(uint8_t channel, CommandSource source) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (channel >= channels_) return;

@@ -402,7 +402,8 @@ void DeviceFailsafe::adoptAfterLost(const TimedIntent& intent) {
                            ? 0.0
                            : intent.seconds * (1.0 + ChannelIntents::kEndSlackFraction) +
                                  ChannelIntents::kEndSlackSeconds;
-  intents_.adoptNextPoll(intent.channel, CommandSource::kFound, until);
+  // The run it may have started goes on meanwhile (F31: a coil write over it keeps it).
+  intents_.adoptRunNextPoll(intent.channel, CommandSource::kFound, intent.seconds, until);
 }
 
 void DeviceFailsafe::externalWrite(const Request& request, const Result& result,

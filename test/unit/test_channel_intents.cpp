@@ -461,6 +461,23 @@ TEST(ChannelIntents, ARunFoundBeforeARestoreStaysTheDevicesAfterItEnds) {
   EXPECT_EQ(poll(t, {false, false, false, false}), Verdict::kNormal);  // it ended off
 }
 
+// docs/failsafe.md F31: a PWM write whose answer was lost may have started its run: a client's
+// coil write over it before the run's end plus the slack finds it running (runsUnderAdoption),
+// and a read cannot confirm a plain write there (timedMayRun). Stop 57's I5 case.
+TEST(ChannelIntents, APwmWriteWhoseAnswerWasLostCountsAsARunUntilItsEnd) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, false, false});
+  t.adoptRunNextPoll(3, CommandSource::kFound, 0.4, 0.9);  // a 0.4 s burst, answer lost
+  EXPECT_EQ(t.runsUnderAdoption(false), (std::vector<bool>{false, false, false, true}));
+  EXPECT_TRUE(t.timedMayRun()[3]);
+  clock.advance(500ms);
+  EXPECT_FALSE(t.runsUnderAdoption(false)[3]);
+  t.adoptRunNextPoll(2, CommandSource::kFound, -1.0, 0.0);  // a continuous run, answer lost
+  EXPECT_FALSE(t.runsUnderAdoption(false)[2]);
+  EXPECT_TRUE(t.runsUnderAdoption(true)[2]) << "driven: while no read of its registers is known";
+}
+
 // docs/failsafe.md line 92: a plain write whose answer was lost on a channel where a flash
 // still runs (heard or not: either level may show until the flash ends) is decided by the
 // first poll after the flash's end plus the slack, not by a poll during the flash.

@@ -151,6 +151,10 @@ class ChannelIntents {
   // end. A coil write does not stop such a run on a device that keeps runs (the LD58A08), so it
   // still goes on whatever the write did (DeviceFailsafe::runsKeptOverCoilWrites).
   std::vector<bool> runsUnderAdoption(bool driven_too) const;
+  // A timed command whose answer was lost: its channel is adopted at the first poll after its
+  // end plus the slack (`not_before_s`), and the run it may have started counts as a run under
+  // adoption until then (a continuous one, `seconds` < 0, as driven): docs/failsafe.md F31, F46.
+  void adoptRunNextPoll(uint8_t channel, CommandSource source, double seconds, double not_before_s);
   // Resumes a previous node's timed commands (before the first poll): compared like its own.
   void resumeTimed(const std::vector<TimedIntent>& running);
 
