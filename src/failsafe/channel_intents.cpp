@@ -112,7 +112,12 @@ ChannelIntents::Intent ChannelIntents::adoptingIntent(uint8_t channel, CommandSo
 
 void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double not_before_s) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (channel >= channels_) return;
+  adoptNextPollLocked(channel, source, not_before_s);
+}
+
+ChannelIntents::Intent* ChannelIntents::adoptNextPollLocked(uint8_t channel, CommandSource source,
+                                                            double not_before_s) {
+  if (channel >= channels_) return nullptr;
   const auto now = clock_.now();
   Intent in = adoptingIntent(channel, source, now);
   if (not_before_s > 0) in.adopt_from = now + seconds(not_before_s);
@@ -134,25 +139,31 @@ void ChannelIntents::adoptNextPoll(uint8_t channel, CommandSource source, double
   if (was && was->adopt) {
     in.run_ends = was->run_ends;
     in.run_driven = was->run_driven;
+    in.lost_run_ends = was->lost_run_ends;
+    in.lost_run_driven = was->lost_run_driven;
   } else if (was && (was->driven || (was->ends && *was->ends > now))) {
     in.run_ends = was->ends;
     in.run_driven = was->driven;
   }
   intent_[channel] = in;
   newCommand(channel, source);
+  return &*intent_[channel];
 }
 
 void ChannelIntents::adoptRunNextPoll(uint8_t channel, CommandSource source, double seconds_run,
                                       double not_before_s) {
-  adoptNextPoll(channel, source, not_before_s);
   std::lock_guard<std::mutex> lock(mutex_);
-  if (channel >= channels_ || !intent_[channel]) return;
-  Intent& in = *intent_[channel];
+  Intent* in = adoptNextPollLocked(channel, source, not_before_s);
+  if (in == nullptr) return;
+  if (seconds_run < 0) {
+    in->lost_run_driven = true;
+    return;
+  }
+  // Until its end plus the slack (F31, F32), counted from now: the device, if it heard the
+  // write, started it before the node learned that its answer was lost.
   const auto now = clock_.now();
-  if (seconds_run < 0)
-    in.run_driven = true;
-  else
-    in.run_ends = std::max(in.run_ends.value_or(now), now + seconds(seconds_run));
+  const auto end = now + seconds(seconds_run);
+  in->lost_run_ends = std::max(in->lost_run_ends.value_or(now), end + endSlack(now, end));
 }
 
 void ChannelIntents::stoppedNextPoll(uint8_t channel, CommandSource source) {
@@ -306,6 +317,7 @@ std::vector<bool> ChannelIntents::timedMayRun() const {
     if (in.ends && !in.driven && now <= *in.ends + endSlack(in.at, *in.ends)) may_run[ch] = true;
     if (in.adopt && in.run_ends && now <= *in.run_ends + endSlack(in.at, *in.run_ends))
       may_run[ch] = true;
+    if (in.adopt && in.lost_run_ends && now <= *in.lost_run_ends) may_run[ch] = true;
   }
   return may_run;
 }
@@ -577,6 +589,18 @@ std::vector<bool> ChannelIntents::runsUnderAdoption(bool driven_too) const {
     const auto& in = intent_[ch];
     if (!in || !in->adopt) continue;
     runs[ch] = (in->run_ends && *in->run_ends > now) || (driven_too && in->run_driven);
+  }
+  return runs;
+}
+
+std::vector<bool> ChannelIntents::lostRunsUnderAdoption() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<bool> runs(channels_, false);
+  const auto now = clock_.now();
+  for (size_t ch = 0; ch < channels_; ++ch) {
+    const auto& in = intent_[ch];
+    if (!in || !in->adopt) continue;
+    runs[ch] = (in->lost_run_ends && *in->lost_run_ends > now) || in->lost_run_driven;
   }
   return runs;
 }

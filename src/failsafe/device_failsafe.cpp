@@ -75,7 +75,9 @@ std::future<Result> DeviceFailsafe::applySafe(const std::string& trigger, const 
                                             since](Transport& t) {
     const OutputTargets now = lasting ? intents_.heldTargets(only) : targets;
     if (now.empty()) return Result::success();  // commanded again before the bus got to it
-    if (!lasting) return writeAndReport(t, now, trigger, reason, "safe", since);
+    // A write of every safe channel (a node stop, on_start): it carries the channels commanded
+    // since the trigger too, so what it owes is stamped when it went out (docs/failsafe.md F40).
+    if (!lasting) return writeAndReport(t, now, trigger, reason, "safe", intents_.clock().now());
     // A device silent since its last answer costs the other devices' safe writes (queued
     // behind this one) its write alone: the read that tells whether the write got through
     // anyway goes after them (docs/failsafe.md, "Timing").
@@ -402,8 +404,10 @@ void DeviceFailsafe::adoptAfterLost(const TimedIntent& intent) {
                            ? 0.0
                            : intent.seconds * (1.0 + ChannelIntents::kEndSlackFraction) +
                                  ChannelIntents::kEndSlackSeconds;
-  // The run it may have started goes on meanwhile (F31: a coil write over it keeps it).
+  // The run it may have started goes on meanwhile (F31: a coil write over it keeps it), and the
+  // device's snapshot says it runs until a read of the channel says otherwise.
   intents_.adoptRunNextPoll(intent.channel, CommandSource::kFound, intent.seconds, until);
+  device_.noteRunKept(intent.channel);
 }
 
 void DeviceFailsafe::externalWrite(const Request& request, const Result& result,
@@ -431,8 +435,11 @@ std::vector<bool> DeviceFailsafe::runsKeptOverCoilWrites() const {
   // A run a write whose outcome is unknown went over: the channel waits for the poll that tells
   // its level, but the run goes on (a coil write does not stop it).
   const std::vector<bool> adopted = intents_.runsUnderAdoption(!read);
+  // A run a PWM write whose answer was lost may have started, unless a read since showed the
+  // channel not running (F31).
+  const std::vector<bool> lost = intents_.lostRunsUnderAdoption();
   for (size_t ch = 0; ch < runs.size() && ch < adopted.size(); ++ch)
-    runs[ch] = runs[ch] || adopted[ch];
+    runs[ch] = runs[ch] || adopted[ch] || (lost[ch] && device_.outputSelfTimed(ch));
   return runs;
 }
 

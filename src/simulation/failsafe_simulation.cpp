@@ -344,6 +344,11 @@ struct DevModel {
   // LD58A08: whether a channel's PWM ran when the node last read its registers (F37: a
   // restore leaves a run the device reports; the node knows only what it read)
   std::vector<bool> pwm_read_running = std::vector<bool>(8, false);
+  // F31: a PWM write whose answer was lost counts as a run until its end plus the slack
+  // (counted from when the loss was learned, as the node counts it), or for good for a
+  // continuous one, until a confirmed stop or a read that shows the channel not running.
+  std::vector<TP> lost_run_until = std::vector<TP>(8, TP{});
+  std::vector<bool> lost_run_for_good = std::vector<bool>(8, false);
   // ... as it was when the fail-safe's newest write went out (F37: read just before it)
   std::vector<bool> pwm_read_at_write = std::vector<bool>(8, false);
   // ... and the poll that read each channel's registers (F46: a lost answer's channel is
@@ -495,6 +500,7 @@ class World {
   // next poll, whose level is taken as found: for a timed command of `seconds`, or a write on a
   // channel where a timed command still runs, the first poll after that end plus the slack.
   void lostAnswer(int d, int ch, double seconds);
+  void lostPwmRun(int ch, double seconds);  // seconds < 0: a continuous run
   void deviceDisturbed(int d, bool justified, double extra = 0);
   bool expected(const Chan& c, TP t, bool* level) const;
   // Invariants checked after each step.
@@ -692,6 +698,8 @@ void World::resetModelForNewNode() {
     DevModel& m = model_[d];
     // A new node has read no PWM registers yet.
     std::fill(m.pwm_read_running.begin(), m.pwm_read_running.end(), false);
+    std::fill(m.lost_run_until.begin(), m.lost_run_until.end(), TP{});
+    std::fill(m.lost_run_for_good.begin(), m.lost_run_for_good.end(), false);
     // F80: a flash the killed node started cannot be told from a restart. A device
     // whose state the old node did not know may change by itself too.
     // Each of its flashes changes the outputs at its own end (F86): every report up to
@@ -710,7 +718,18 @@ void World::resetModelForNewNode() {
       c = Chan{};
       // Resumed as the previous node left it, not as a command of this node's (found).
       const std::optional<Chan>* carried = ch < carried_[d].size() ? &carried_[d][ch] : nullptr;
-      if (carried && *carried && (*carried)->ends > now) {
+      // Its end as the node counts it (F32: from the device's answer, ends_earliest) may have
+      // passed while the model's later one has not: the new node may or may not have resumed
+      // it, so the channel is unknown until its first good poll (nothing checked until then).
+      const bool maybe_carried = carried && *carried && (*carried)->ends > now;
+      if (maybe_carried && (*carried)->ends_earliest != TP{} &&
+          (*carried)->ends_earliest <= now + dur(0.05)) {
+        cover("fault kept timed command ends as the node starts");
+        running_unknown = true;
+        m.justified_until =
+            std::max(m.justified_until,
+                     (*carried)->ends + dur(0.5 + 0.02 * (*carried)->duration) + dur(2.0));
+      } else if (maybe_carried) {
         const Chan& k = **carried;
         c.known = true;
         c.level = k.level;
@@ -997,6 +1016,17 @@ void World::lostAnswer(int d, int ch, double seconds) {
   unconfirmed(d, ch, secs(until - now), false);
 }
 
+void World::lostPwmRun(int ch, double seconds) {
+  lostAnswer(kLd, ch, std::max(seconds, 0.0));
+  // F31: the device may have started it; a client's coil write over it keeps it going.
+  DevModel& m = model_[kLd];
+  if (seconds < 0)
+    m.lost_run_for_good[ch] = true;
+  else
+    m.lost_run_until[ch] =
+        std::max(m.lost_run_until[ch], clock_.now() + dur(seconds + 0.5 + 0.02 * seconds));
+}
+
 void World::deviceDisturbed(int d, bool justified, double extra) {
   DevModel& m = model_[d];
   m.cause_at = clock_.now();
@@ -1068,6 +1098,10 @@ void World::onAttempt(const LineEvent& e) {
     const int ch = e.request.address / 0x10;
     const bool runs = e.values.size() == 3 && e.values[2] != 0;  // as the node read it
     m.pwm_read_running[ch] = runs;
+    if (!runs) {  // F31: a read that shows the run ended ends what a lost PWM write left
+      m.lost_run_until[ch] = TP{};
+      m.lost_run_for_good[ch] = false;
+    }
     // Read by a poll: running, the node's (or the device's, F77) from now on; a saved
     // run read stopped, its end is seen by this poll.
     if (m.in_poll && node_ && node_->currentTag() == 0) {
@@ -1147,6 +1181,8 @@ void World::onAttempt(const LineEvent& e) {
       const auto reg = static_cast<uint16_t>(e.request.address + i);
       if (reg % 0x10 == 2 && reg / 0x10 < kChannels && e.request.values[i] == 0) {
         m.pwm_read_running[reg / 0x10] = false;
+        m.lost_run_until[reg / 0x10] = TP{};
+        m.lost_run_for_good[reg / 0x10] = false;
         m.stop_answered[reg / 0x10] = clock_.now();
       }
     }
@@ -1989,7 +2025,7 @@ void World::doCommandStep(const SimStep& s) {
             if (c.timed && model_[kLd].pwm_write_answered[ch] != TP{})
               c.ends_earliest = std::min(c.ends, model_[kLd].pwm_write_answered[ch] + dur(seconds));
           } else if (outcomeUnknown(r.error)) {
-            lostAnswer(kLd, ch, seconds);
+            lostPwmRun(ch, seconds);
           }
         }));
   } else if (k == "pwm_stop") {
@@ -2045,11 +2081,21 @@ void World::doCommandStep(const SimStep& s) {
           const Chan& was = model_[outd].ch[chs[i]];
           // (F30, F31: as the node last read it, a continuous run the device confirmed counting
           // as read running; or a timed run of the node's before its end.)
-          const bool runs = outd == kLd && (model_[kLd].pwm_read_running[chs[i]] ||
-                                            (was.timed && clock_.now() < was.ends_earliest));
+          // (F31: and a PWM write whose answer was lost, until its end plus the slack.)
+          const DevModel& ld = model_[kLd];
+          const TP now = clock_.now();
+          const bool runs =
+              outd == kLd &&
+              (ld.pwm_read_running[chs[i]] || (was.timed && now < was.ends_earliest) ||
+               ld.lost_run_for_good[chs[i]] || now < ld.lost_run_until[chs[i]]);
           // The node's run ends its duration after the device answered the write; the model's
-          // op learns it later (after the read back): in between, either may be right.
-          const bool may_run = outd == kLd && !runs && was.timed && clock_.now() < was.ends;
+          // op learns it later (after the read back): in between, either may be right. So
+          // may a lost run's window near its end (the node's clock and the model's differ by
+          // the step's callback).
+          const bool may_run =
+              outd == kLd && !runs &&
+              ((was.timed && now < was.ends) ||
+               (ld.lost_run_until[chs[i]] != TP{} && now < ld.lost_run_until[chs[i]] + dur(0.05)));
           commanded(outd, chs[i], sts[i]);
           if (runs) {
             // F30, F31: the run goes on, and counts as read running until a read.
@@ -2125,7 +2171,7 @@ void World::doCommandStep(const SimStep& s) {
             kLd, c6, std::nullopt, false, pulses == 0xFFFF ? -1.0 : pulses * period / 10.0,
             pulses == 0xFFFF ? std::vector<uint16_t>{period, 1, pulses} : std::vector<uint16_t>{});
       } else if (outcomeUnknown(r.error)) {
-        lostAnswer(kLd, c6, pulses == 0xFFFF ? 0.0 : pulses * period / 10.0);
+        lostPwmRun(c6, pulses == 0xFFFF ? -1.0 : pulses * period / 10.0);
       }
     }));
   } else if (k == "share06_stop") {

@@ -469,13 +469,16 @@ TEST(ChannelIntents, APwmWriteWhoseAnswerWasLostCountsAsARunUntilItsEnd) {
   ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
   poll(t, {false, false, false, false});
   t.adoptRunNextPoll(3, CommandSource::kFound, 0.4, 0.9);  // a 0.4 s burst, answer lost
-  EXPECT_EQ(t.runsUnderAdoption(false), (std::vector<bool>{false, false, false, true}));
+  EXPECT_EQ(t.lostRunsUnderAdoption(), (std::vector<bool>{false, false, false, true}));
+  EXPECT_FALSE(t.runsUnderAdoption(true)[3]) << "no run the node knows";
   EXPECT_TRUE(t.timedMayRun()[3]);
   clock.advance(500ms);
-  EXPECT_FALSE(t.runsUnderAdoption(false)[3]);
+  EXPECT_TRUE(t.lostRunsUnderAdoption()[3]) << "its end passed, not its slack (0.5 s + 2 %)";
+  clock.advance(410ms);
+  EXPECT_FALSE(t.lostRunsUnderAdoption()[3]);
   t.adoptRunNextPoll(2, CommandSource::kFound, -1.0, 0.0);  // a continuous run, answer lost
-  EXPECT_FALSE(t.runsUnderAdoption(false)[2]);
-  EXPECT_TRUE(t.runsUnderAdoption(true)[2]) << "driven: while no read of its registers is known";
+  clock.advance(1h);
+  EXPECT_TRUE(t.lostRunsUnderAdoption()[2]) << "a continuous one for good (until a read)";
 }
 
 // docs/failsafe.md line 92: a plain write whose answer was lost on a channel where a flash

@@ -152,9 +152,13 @@ class ChannelIntents {
   // still goes on whatever the write did (DeviceFailsafe::runsKeptOverCoilWrites).
   std::vector<bool> runsUnderAdoption(bool driven_too) const;
   // A timed command whose answer was lost: its channel is adopted at the first poll after its
-  // end plus the slack (`not_before_s`), and the run it may have started counts as a run under
-  // adoption until then (a continuous one, `seconds` < 0, as driven): docs/failsafe.md F31, F46.
+  // end plus the slack (`not_before_s`), and the run it may have started counts until its end
+  // plus the slack (a continuous one, `seconds` < 0, for good): docs/failsafe.md F31, F46.
   void adoptRunNextPoll(uint8_t channel, CommandSource source, double seconds, double not_before_s);
+  // The channels where such a run may go on (adoptRunNextPoll): a read of the channel that shows
+  // no run ends it too (F31), which only the device's snapshot knows
+  // (DeviceFailsafe::runsKeptOverCoilWrites).
+  std::vector<bool> lostRunsUnderAdoption() const;
   // Resumes a previous node's timed commands (before the first poll): compared like its own.
   void resumeTimed(const std::vector<TimedIntent>& running);
 
@@ -180,6 +184,10 @@ class ChannelIntents {
     // adopt: the run that went on when the write went out (runsUnderAdoption).
     std::optional<Clock::time_point> run_ends;
     bool run_driven = false;
+    // adopt: a run a PWM write whose answer was lost may have started (adoptRunNextPoll), until
+    // then (its end plus the slack), or with no end.
+    std::optional<Clock::time_point> lost_run_ends;
+    bool lost_run_driven = false;
   };
   struct Owed {
     bool level = false;
@@ -189,6 +197,8 @@ class ChannelIntents {
   bool userSource(CommandSource source) const;
   void newCommand(uint8_t channel, CommandSource source);
   Intent adoptingIntent(uint8_t channel, CommandSource source, Clock::time_point now) const;
+  // adoptNextPoll under the lock held: the new intent (nullptr for a channel out of range).
+  Intent* adoptNextPollLocked(uint8_t channel, CommandSource source, double not_before_s);
   Expectation expectedLocked(uint8_t channel, Clock::time_point t) const;
   // How near the end of a timed command given at `at` and ending at `ends` either level may show
   // (docs/failsafe.md).
