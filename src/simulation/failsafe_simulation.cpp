@@ -323,6 +323,9 @@ struct DevModel {
   // on an LD58A08 the poll that reads that channel's PWM registers again, up to 8 polls on.
   int polls_since_stale = 1000;
   TP stale_read_at{};
+  // LD58A08: a channel whose PWM registers a read took from another request's frame, not read
+  // again by a poll since (F90: what follows may be wrong until the poll that reads them again).
+  std::vector<bool> stale_pwm_unread = std::vector<bool>(8, false);
   TP justified_at{};           // ... at this time
   TP justified_until{};        // ... and goes on changing them until then (a timed command)
   std::optional<TP> cause_at;  // I4: the newest thing that may make the node see a restart
@@ -468,7 +471,12 @@ class World {
   // F90: the node took a repeated or late frame as a read of device `d`, and no poll has read
   // the same again since (on an LD58A08, the one that reads that channel's PWM registers: up
   // to 8 polls on).
-  bool staleReadShows(int d) const { return model_[d].polls_since_stale <= (d == kLd ? 10 : 2); }
+  bool staleReadShows(int d) const {
+    const DevModel& m = model_[d];
+    return m.polls_since_stale <= (d == kLd ? 10 : 2) ||
+           std::find(m.stale_pwm_unread.begin(), m.stale_pwm_unread.end(), true) !=
+               m.stale_pwm_unread.end();
+  }
   // An invariant is about to be compared in a state where it could fail: counted; true.
   bool checked(const char* invariant) {
     cover(std::string("check ") + invariant);
@@ -1061,6 +1069,10 @@ void World::onAttempt(const LineEvent& e) {
     DevModel& m = model_[d];
     m.polls_since_stale = 0;
     m.stale_read_at = clock_.now();
+    if (d == kLd && e.request.function == FunctionCode::kReadHoldingRegisters &&
+        e.request.address % 0x10 == 0 && e.request.address / 0x10 < kChannels &&
+        e.request.count == 3)
+      m.stale_pwm_unread[e.request.address / 0x10] = true;
     // A safe write that read its channels from that frame (an LD58A08's PWM registers) may fail
     // its read back and be owed (F40): written when the device answers a poll again, behind
     // what is queued then (F41), as after a refusal (model change 34, I2).
@@ -1098,6 +1110,7 @@ void World::onAttempt(const LineEvent& e) {
     const int ch = e.request.address / 0x10;
     const bool runs = e.values.size() == 3 && e.values[2] != 0;  // as the node read it
     m.pwm_read_running[ch] = runs;
+    if (m.in_poll && !e.stale) m.stale_pwm_unread[ch] = false;  // read again (F90)
     if (!runs) {  // F31: a read that shows the run ended ends what a lost PWM write left
       m.lost_run_until[ch] = TP{};
       m.lost_run_for_good[ch] = false;
