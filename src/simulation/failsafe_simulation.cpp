@@ -291,6 +291,12 @@ struct Chan {
   TP ends_earliest{};
   bool from_old_node = false;  // a timed command the previous node kept, resumed by this one
   TP at{};
+  // The node's timed command may still run at `t`: before its end plus the slack (F32).
+  bool nodeRuns(TP t) const { return timed && t <= ends + dur(0.5 + 0.02 * duration); }
+  // F37, F33: a run read at `t` may be the device's: no timed command of the node's runs then,
+  // or a poll after the end that showed the final level may have ended it (the model does not
+  // follow which poll that was: past the end the node counts from the device's answer).
+  bool runMayBeDevices(TP t) const { return !nodeRuns(t) || t > ends_earliest; }
   // When what the node keeps for this channel for the next node last changed (a command, a
   // timed command, a write whose outcome is unknown): the list lags it by kept_latency.
   TP kept_changed_at{};
@@ -1128,7 +1134,6 @@ void World::onAttempt(const LineEvent& e) {
     // command of the node's still running makes the channel the device's until a plain write,
     // also after the run ended: not compared, not restored.
     Chan& c = m.ch[ch];
-    const bool node_runs = c.timed && e.at <= c.ends + dur(0.5 + 0.02 * c.duration);
     // Only a poll's read or a fail-safe write's read back on a channel it left (F37, F79):
     // not a command's read back, and not the reads before the fail-safe's own write (the read
     // just before a restore counts at its report, below).
@@ -1140,7 +1145,7 @@ void World::onAttempt(const LineEvent& e) {
     }
     if (fs_op && !m.in_poll && !readback) m.run_read_in_op[ch] = runs;
     if (runs && c.known && !c.adopt && ((m.in_poll && fs_op) || readback)) {
-      if (!node_runs)
+      if (!c.nodeRuns(e.at))
         c.continuous = true;
       else if (e.at + dur(1.0) >= c.ends)
         // Near its end the node may count it ended: its end runs from when the write went out,
@@ -1519,10 +1524,7 @@ void World::onReport(const FailsafeReport& r) {
     if (d == kLd && (r.confirmed || !chs.empty()))
       for (int ch = 0; ch < kChannels; ++ch) {
         Chan& c = m.ch[ch];
-        const bool node_runs = c.timed && now <= c.ends + dur(0.5 + 0.02 * c.duration);
-        const bool maybe_ended = node_runs && now > c.ends_earliest;
-        if (!written[ch] && m.run_read_in_op[ch] && (!node_runs || maybe_ended) && c.known &&
-            !c.adopt)
+        if (!written[ch] && m.run_read_in_op[ch] && c.runMayBeDevices(now) && c.known && !c.adopt)
           c.continuous = true;
       }
     for (size_t i = 0; i < chs.size(); ++i) {
@@ -1566,11 +1568,7 @@ void World::onReport(const FailsafeReport& r) {
       const Chan& c = m.ch[ch];
       // F37: a channel the device runs a PWM on that is no timed command of the node's is
       // the device's: the restore leaves it (as the node read it just before the restore).
-      const bool node_runs = c.timed && now <= c.ends + dur(0.5 + 0.02 * c.duration);
-      // F33: a poll after the end showing the final level ended the node's command, and
-      // a run read after it is the device's; the model does not follow which poll that was.
-      const bool maybe_ended = node_runs && now > c.ends_earliest;
-      const bool devices_run = d == kLd && (!node_runs || maybe_ended) &&
+      const bool devices_run = d == kLd && c.runMayBeDevices(now) &&
                                (chs.empty() ? m.pwm_read_running[ch] : m.pwm_read_at_write[ch]);
       // A restore that wrote nothing and failed (its read before failed) is done again later.
       if (!r.confirmed && chs.empty()) break;
