@@ -233,12 +233,13 @@ Result Ld58a08::readPwmChannel(Transport& link, uint8_t ch, PwmState* out) {
 }
 
 Result Ld58a08::readPwm(Transport& link) {
-  std::array<PwmState, kChannels> states{};
+  // Each channel read is what the node knows of it from now on, also when a later channel's
+  // read fails (docs/failsafe.md F31: a read that shows a run ended ends it); the snapshot is
+  // known once every channel was read.
   for (uint8_t ch = 0; ch < kChannels; ++ch) {
-    Result r = readPwmChannel(link, ch, &states[ch]);
+    Result r = readPwmChannel(link, ch, &pwm_[ch]);
     if (!r.ok()) return r;
   }
-  pwm_ = states;
   pwm_known_ = true;
   return Result::success();
 }

@@ -506,6 +506,16 @@ void ChannelIntents::observeRuns(const std::vector<bool>& runs) {
     if (runs[ch]) deviceRunsLocked(static_cast<uint8_t>(ch), now);
 }
 
+void ChannelIntents::observeRunsOfFailedPoll(const std::vector<bool>& runs) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto now = clock_.now();
+  for (size_t ch = 0; ch < channels_ && ch < runs.size(); ++ch) {
+    const auto& in = intent_[ch];
+    if (runs[ch] && in && !in->adopt && in->at <= poll_started_at_)
+      deviceRunsLocked(static_cast<uint8_t>(ch), now);
+  }
+}
+
 bool ChannelIntents::tookAdoptedWrite() {
   std::lock_guard<std::mutex> lock(mutex_);
   const bool took = took_adopted_;

@@ -208,6 +208,18 @@ Result DeviceFailsafe::settle(const OutputTargets& targets, Result w, FailsafeRe
   return w;
 }
 
+void DeviceFailsafe::afterFailedPoll() {
+  std::vector<bool> runs(device_.outputCount(), false);
+  bool any = false;
+  for (size_t ch = 0; ch < runs.size(); ++ch) {
+    runs[ch] = device_.selfTimedReadByLastPoll(ch) && device_.outputSelfTimed(ch);
+    any = any || runs[ch];
+  }
+  if (!any) return;
+  intents_.observeRunsOfFailedPoll(runs);
+  timedMaybeChanged();
+}
+
 void DeviceFailsafe::afterPoll() {
   // The scheduler records this poll after this callback: health still says how it was before.
   const bool was_offline = !scheduler_.health(device_.name()).online;

@@ -101,7 +101,10 @@ void DeviceUnit::addPolls() {
         return device_->poll(t);
       },
       [this](const Result& r) {
-        if (r.ok()) failsafe_.afterPoll();
+        if (r.ok())
+          failsafe_.afterPoll();
+        else
+          failsafe_.afterFailedPoll();
         if (observers_.polled) observers_.polled(0, r);
       });
 }

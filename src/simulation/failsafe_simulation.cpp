@@ -301,7 +301,11 @@ struct Chan {
   // timed command, a write whose outcome is unknown): the list lags it by kept_latency.
   TP kept_changed_at{};
   bool kept_lagging = false;  // carried from a list that had not caught up (model change 28)
-  bool held = false;          // F16-F20
+  // A kept timed command that ended about when this node started (model change 36): the node
+  // may have resumed it (its final level the intent) or found the channel at its first good poll;
+  // the model cannot tell which, so the channel is not checked until it is commanded again.
+  bool kept_uncertain = false;
+  bool held = false;  // F16-F20
   TP held_since{};
   size_t queued_at_hold = 0;  // jobs queued on the bus when the hold began
   bool owed = false;          // F40-F43
@@ -732,13 +736,14 @@ void World::resetModelForNewNode() {
       c = Chan{};
       // Resumed as the previous node left it, not as a command of this node's (found).
       const std::optional<Chan>* carried = ch < carried_[d].size() ? &carried_[d][ch] : nullptr;
-      // Its end as the node counts it (F32: from the device's answer, ends_earliest) may have
-      // passed while the model's later one has not: the new node may or may not have resumed
-      // it, so the channel is unknown until its first good poll (nothing checked until then).
+      // Its end as the node counts it (F32: from the device's answer) is up to a callback's
+      // delay before the model's (ends_earliest, from the model's view of that answer, or from
+      // the callback): near it the new node may or may not have resumed it (model change 36).
       const bool maybe_carried = carried && *carried && (*carried)->ends > now;
       if (maybe_carried && (*carried)->ends_earliest != TP{} &&
-          (*carried)->ends_earliest <= now + dur(0.05)) {
+          (*carried)->ends_earliest <= now + dur(0.5)) {
         cover("fault kept timed command ends as the node starts");
+        c.kept_uncertain = true;
         running_unknown = true;
         m.justified_until =
             std::max(m.justified_until,
@@ -1145,7 +1150,11 @@ void World::onAttempt(const LineEvent& e) {
     }
     if (fs_op && !m.in_poll && !readback) m.run_read_in_op[ch] = runs;
     if (runs && c.known && !c.adopt && ((m.in_poll && fs_op) || readback)) {
-      if (!c.nodeRuns(e.at))
+      if (e.stale)
+        // F90: read from another request's frame: the node may take the run as the device's,
+        // or, if the poll failed there, not at all (the next poll that reads it decides).
+        c.maybe_devices = true;
+      else if (!c.nodeRuns(e.at))
         c.continuous = true;
       else if (e.at + dur(1.0) >= c.ends)
         // Near its end the node may count it ended: its end runs from when the write went out,
@@ -1320,7 +1329,7 @@ void World::onPolled(const std::string& device, const Result& r) {
         c.settled = true;
     }
     c.shown_otherwise = c.held && outputs[ch] != safeLevel(d, ch);
-    if (!m.found && !c.known && !c.adopt && !m.written_in_poll) {
+    if (!m.found && !c.known && !c.adopt && !c.kept_uncertain && !m.written_in_poll) {
       // F22: where the node has commanded nothing, the intent is the state found at its
       // first good poll. A running PWM is the device's (F35).
       // A run as the node last read it (F24): an LD58A08 channel's registers, read before

@@ -711,3 +711,27 @@ TEST(ChannelIntents, UnderLeaveAStoppedContinuousRunCountsOnceAndAKeptRunsEndIsN
   EXPECT_EQ(t.observePoll(none, none, false, &changed, all), Verdict::kNormal)
       << "taken as it is: the next poll does not count it again";
 }
+
+// docs/failsafe.md F37: a run read at a poll is the device's until a plain write, also after it
+// ended, and also when a later read of that poll failed (stop 58's case
+// run_read_by_a_poll_whose_outputs_read_failed): a restore leaves the channel.
+TEST(ChannelIntents, ARunReadByAPollWhoseLaterReadFailedIsTheDevices) {
+  ManualClock clock;
+  ChannelIntents t(relays(OnRestart::kRestore), 4, clock);
+  poll(t, {false, false, false, false});  // found, nothing runs
+  t.pollStarting();
+  t.observeRunsOfFailedPoll({false, true, false, false});  // channel 1 read running, then a failure
+  const OutputTargets w = t.afterPollTargets(poll(t, {true, false, false, false}));  // a restart
+  EXPECT_EQ(std::count(w.channels.begin(), w.channels.end(), 1), 0)
+      << "the restore writes the channel the device ran a PWM on";
+  EXPECT_EQ(std::count(w.channels.begin(), w.channels.end(), 0), 1);
+  // A channel commanded after the failed poll started is the caller's, not the run's.
+  ChannelIntents u(relays(OnRestart::kRestore), 4, clock);
+  poll(u, {false, false, false, false});
+  u.pollStarting();
+  clock.advance(10ms);
+  u.commanded({1}, {true}, CommandSource::kUser);
+  u.observeRunsOfFailedPoll({false, true, false, false});
+  const OutputTargets v = u.afterPollTargets(poll(u, {true, true, false, false}));
+  EXPECT_EQ(std::count(v.channels.begin(), v.channels.end(), 1), 1);
+}

@@ -117,6 +117,28 @@ TEST(Ld58a08, PollDecodesOutputsAndPwm) {
   EXPECT_SCRIPT_DONE(bus);
 }
 
+// docs/failsafe.md F31: a read that shows a run ended ends it. A read of every channel that
+// fails part way keeps what the channels before the failure showed (stop 58's case
+// a_pwm_read_before_a_failed_read_counts).
+TEST(Ld58a08, ChannelsReadBeforeAFailedReadAreKept) {
+  Ld58a08 board(config("ld58a08", 1));
+  ScriptedTransport bus;
+  expectFirstLd58a08Poll(bus, 0x00, [](uint16_t ch) {
+    return ch == 2 ? std::vector<uint16_t>{5, 1, 0xFFFF} : std::vector<uint16_t>{0, 0, 0};
+  });
+  ASSERT_TRUE(board.poll(bus).ok());
+  ASSERT_TRUE(board.outputSelfTimed(2));
+  for (uint16_t ch = 0; ch < 3; ++ch) {  // channels 0-2 answer (2 stopped), 3 stays silent
+    const Request read = Request::readHoldingRegisters(1, static_cast<uint16_t>(ch * 0x10), 3);
+    bus.expect(toHex(encodeRequest(read)), toHex(encodeReply(read, {0, 0, 0})));
+  }
+  const Request ch3 = Request::readHoldingRegisters(1, 0x30, 3);
+  bus.expect(toHex(encodeRequest(ch3)), "");
+  EXPECT_FALSE(board.refreshSelfTimed(bus).ok());
+  EXPECT_FALSE(board.outputSelfTimed(2)) << "channel 2 was read stopped before channel 3 failed";
+  EXPECT_SCRIPT_DONE(bus);
+}
+
 TEST(Ld58a08, ReadBackSaysContinuousAndWhatIsLeftExplicitly) {
   Ld58a08 board(config("ld58a08", 1));
   ScriptedTransport bus;

@@ -121,6 +121,9 @@ class ChannelIntents {
   // each that is no timed command of the node's still running makes its channel the device's,
   // as a poll that reads it does.
   void observeRuns(const std::vector<bool>& runs);
+  // The runs a poll read before a later read of it failed (F37: read at a poll): the same, on
+  // the channels not commanded since that poll started.
+  void observeRunsOfFailedPoll(const std::vector<bool>& runs);
   // Whether the last poll adopted a write the node carried for someone else (asked once).
   bool tookAdoptedWrite();
 

@@ -118,6 +118,9 @@ class DeviceFailsafe {
   void pollStarting() { device_.readSelfTimedFirst(intents_.pollStarting()); }
   // After a good poll: restart detection, then on_restart's write and the owed safe writes.
   void afterPoll();
+  // A poll failed: a PWM run it read before the read that failed is still the device's report
+  // (docs/failsafe.md F37).
+  void afterFailedPoll();
   // A user's output write is about to be sent / was confirmed / was not confirmed.
   void userWriteSending() { intents_.writeRan(); }
   // The channels a timed command may still drive (ChannelIntents::timedMayRun), for a write's
