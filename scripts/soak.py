@@ -223,6 +223,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--minutes", type=float, default=2.0)
     ap.add_argument("--period", type=float, default=20.0, help="s between faults")
+    ap.add_argument("--junit", help="also write the verdicts as JUnit cases to this file")
     ap.add_argument("--timeout", type=float, default=0.0,
                     help="the client's timeout in s (default: the node's stated answer bound; "
                          "1.0 as mbpoll, for builds before the bound)")
@@ -306,24 +307,31 @@ def main():
         len(lat), ", ".join("%s %d" % kv for kv in sorted(client.kinds.items())), expired,
         1e3 * percentile(lat, 50), 1e3 * percentile(lat, 99), 1e3 * max(lat or [float("nan")]),
         1e3 * bound, client.late, client.out_of_step))
-    problems = []
-    if not alive:
-        problems.append("the node died (%s)" % os.path.join(work, "node.log"))
-    if client.late or client.out_of_step:
-        problems.append("%d answers later than the bound, %d out of step"
-                        % (client.late, client.out_of_step))
+    verdicts = {"the node runs to the end": "" if alive else
+                "the node died (%s)" % os.path.join(work, "node.log")}
+    verdicts["every share answer within the bound and in step"] = (
+        "%d answers later than the bound, %d out of step" % (client.late, client.out_of_step)
+        if client.late or client.out_of_step else "")
+    leaks = []
     after_minute = [s for s in samples if s[0] >= 60.0]
     if len(after_minute) >= 2:
         growth = after_minute[-1][1] - after_minute[0][1]
         if growth > 0.5:
-            problems.append("RSS grew %.2f MB after the first minute" % growth)
+            leaks.append("RSS grew %.2f MB after the first minute" % growth)
     # From 30 s on: the clients' connections and roscpp's threads are there by then. roscpp
     # opens and closes a connection now and then (one fd more for a while): a leak grows on.
     settled = [s for s in samples if s[0] >= 30.0]
     if len(settled) >= 2 and (settled[-1][2] > settled[0][2] + FD_SLACK or
                               settled[-1][3] > settled[0][3]):
-        problems.append("fds or threads grew (%d -> %d fds, %d -> %d threads)"
-                        % (settled[0][2], settled[-1][2], settled[0][3], settled[-1][3]))
+        leaks.append("fds or threads grew (%d -> %d fds, %d -> %d threads)"
+                     % (settled[0][2], settled[-1][2], settled[0][3], settled[-1][3]))
+    verdicts["no growth of RSS, fds or threads"] = "; ".join(leaks)
+    problems = [v for v in verdicts.values() if v]
+    if args.junit:
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        from junit import write_suite  # noqa: E402  (scripts/junit.py)
+        write_suite(args.junit, "soak", [(name, failure, None) for name, failure in
+                                         verdicts.items()])
     print("\n" + ("soak: " + "; ".join(problems) if problems else "soak: passed"))
     return 1 if problems else 0
 

@@ -104,6 +104,13 @@ phase_done "fail-safe simulation and sanitized tests, side by side"
 # for a long one).
 "$REPO/scripts/fuzz.sh" --prebuilt 22 "$WS/build/test_results/fuzz" || true
 phase_done "fuzz"
+# A 2-minute soak of the node under a cycle of faults, with a SetBool caller and a share client
+# that checks every answer against the node's stated bound (docs/share.md; scripts/soak.sh
+# --minutes N for long ones). It mostly waits on the line, so the light checks below run beside it.
+mkdir -p "$WS/build/test_results/soak"
+"$REPO/scripts/soak.sh" --minutes 2 --period 10 --junit "$WS/build/test_results/soak/soak.xml" \
+  >"$WS/soak.log" 2>&1 &
+soak=$!
 # catkin_lint (strict) and clang-format applied to every C++ file.
 "$REPO/scripts/check_conventions.sh" "$WS/build/test_results/conventions" || true
 # One catalog of invariant ids for the simulation and the scenario model (docs/invariants.md).
@@ -112,6 +119,9 @@ phase_done "conventions"
 # catkin_make install gives an install space that works on its own.
 "$REPO/scripts/check_install.sh" "$WS/build/test_results/install" || true
 phase_done "install space"
+wait $soak || true
+cat "$WS/soak.log"
+phase_done "soak (the conventions and install-space checks beside it)"
 phase_done_total() {
   printf '%5d s  %5d s  %s\n' $SECONDS $((($(cpu_ticks) - START_CPU) / TICKS)) "in all"
 }
@@ -120,4 +130,5 @@ phase_done_total
 # Each step above writes its results into a folder of its own; one that wrote nothing failed.
 exec /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$WS/build/test_results" \
   --expect modbus_rtu_driver --expect dependencies --expect rosdep --expect sanitizers \
-  --expect fuzz --expect conventions --expect install --expect tidy --expect simulation --expect bench_smoke
+  --expect fuzz --expect conventions --expect install --expect tidy --expect simulation --expect bench_smoke \
+  --expect soak
