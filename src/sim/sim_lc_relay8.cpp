@@ -108,6 +108,7 @@ uint8_t SimLcRelay8::write(Table table, uint16_t a, const std::vector<uint16_t>&
   if (a == kBaudWrite && values.size() == 1) {
     if (values[0] < 2 || values[0] > 4) return kIllegalDataValue;  // 4800, 9600, 19200
     baud_code_ = values[0];
+    baud_code_written_ = true;
     return 0;
   }
   // A flash: mode and delay together at 0x0003 + 5*n.
@@ -135,7 +136,12 @@ uint8_t SimLcRelay8::setDirect(Table table, uint16_t a, uint16_t v, SimClock::ti
 }
 
 void SimLcRelay8::powerCycle(SimClock::time_point) {
-  line_.baud = baudOfCode(baud_code_);
+  // The board takes its stored baud code at power-on. One the simulator was told to put on a line
+  // its codes cannot express (they are 4800, 9600 and 19200: a real board would never answer
+  // there) keeps that line until a code is written to it, rather than falling silent for good at
+  // its first power cycle (docs/simulator.md).
+  const bool coded_line = line_.baud == 4800 || line_.baud == 9600 || line_.baud == 19200;
+  if (coded_line || baud_code_written_) line_.baud = baudOfCode(baud_code_);
   relays_ = 0;
   flash_ = {};
 }

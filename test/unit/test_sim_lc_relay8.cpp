@@ -138,6 +138,20 @@ TEST(SimLcRelay8, BaudCodeIsStoredAndTakenAtPowerOn) {
   EXPECT_EQ(d.line().baud, 4800);
 }
 
+// docs/simulator.md: a board on a line its baud codes cannot express (115200 in the soak) keeps
+// that line across power cycles until a code is written; it fell silent for good at its first
+// power cycle (issue 52's soak: every SetBool after it refused).
+TEST(SimLcRelay8, ABoardOnALineItsCodesCannotSayKeepsItAcrossAPowerCycle) {
+  SimLineSettings fast;
+  fast.baud = 115200;
+  SimLcRelay8 d(8, fast);
+  d.powerCycle(SimClock::now());
+  EXPECT_EQ(d.line().baud, 115200);
+  ASSERT_EQ(d.write(Table::kHoldingRegister, 0x03E9, {4}, SimClock::now()), 0);
+  d.powerCycle(SimClock::now());
+  EXPECT_EQ(d.line().baud, 19200) << "a written code applies at the next power-on";
+}
+
 TEST(SimLcRelay8, StateKeepsAddressAndBaud) {
   SimLcRelay8 d(255, {});
   ASSERT_FALSE(ask(d, Request::writeMultipleRegisters(0, 0, {42})).empty());

@@ -48,7 +48,8 @@ class SimLcRelay8 : public SimDevice {
 
   uint8_t relays_ = 0, inputs_ = 0;
   std::array<Flash, 8> flash_{};
-  uint16_t baud_code_ = 3;  // stored; the line takes it at power-on
+  uint16_t baud_code_ = 3;          // stored; the line takes it at power-on
+  bool baud_code_written_ = false;  // since the simulator started (powerCycle)
 };
 
 }  // namespace modbus_rtu_driver
