@@ -12,7 +12,7 @@ share answers by kind with p50/p99/max latency and the bound; answers later than
 answers out of step. Exits 1 when an answer came late or out of step, the node's RSS grew more
 than 0.5 MB after the first minute, or its threads or (by more than 2) its fds grew.
 
-    scripts/soak.sh --minutes N [--period S] [--timeout S]
+    scripts/soak.sh --minutes N [--period S] [--timeout S] [--junit FILE] [--node EXE]
 """
 import argparse
 import contextlib
@@ -224,6 +224,8 @@ def main():
     ap.add_argument("--minutes", type=float, default=2.0)
     ap.add_argument("--period", type=float, default=20.0, help="s between faults")
     ap.add_argument("--junit", help="also write the verdicts as JUnit cases to this file")
+    ap.add_argument("--node", help="another build's modbus_rtu_bus (its libraries beside it), "
+                    "to compare builds under the same simulator and faults")
     ap.add_argument("--timeout", type=float, default=0.0,
                     help="the client's timeout in s (default: the node's stated answer bound; "
                          "1.0 as mbpoll, for builds before the bound)")
@@ -247,8 +249,11 @@ def main():
         subprocess.check_call(["rosparam", "load", os.path.join(work, "bus.yaml"), "/soak_bus"])
         subprocess.check_call(["rosparam", "set", "/soak_bus/port", link])
         log = open(os.path.join(work, "node.log"), "w")
-        node = subprocess.Popen([executable("modbus_rtu_bus"), "__name:=soak_bus"], stdout=log,
-                                stderr=subprocess.STDOUT)
+        node_env = dict(os.environ)
+        if args.node:
+            node_env["LD_LIBRARY_PATH"] = os.path.dirname(os.path.abspath(args.node))
+        node = subprocess.Popen([args.node or executable("modbus_rtu_bus"), "__name:=soak_bus"],
+                                stdout=log, stderr=subprocess.STDOUT, env=node_env)
         clients = []
         try:
             rospy.wait_for_service("/soak_bus/relays/out0/set", 30)

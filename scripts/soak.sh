@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The node under a cycle of faults for N minutes, with a SetBool caller and a Modbus TCP client on
-# the share (scripts/soak.py says what it does and checks). Not part of the test command yet.
-#   scripts/soak.sh --minutes 8 [--period 20] [--timeout 1.0]   (--timeout: the client's, for
-#   builds before the share's answer bound; default the bound the node states)
+# the share (scripts/soak.py says what it does and checks). The test command runs 2 minutes.
+#   scripts/soak.sh --minutes 8 [--period 20] [--timeout 1.0] [--junit FILE] [--node EXE]
+#   --timeout: the client's, for builds before the share's answer bound (default: the bound the
+#   node states); --node: another build's node (its libraries beside it), under this simulator.
 # Ends non-zero when a share answer came later than the node's stated bound or out of step, or
 # the node's RSS, fds or threads grew. Needs the workspace built (scripts/build.sh).
 set -euo pipefail

@@ -1150,16 +1150,15 @@ void World::onAttempt(const LineEvent& e) {
     }
     if (fs_op && !m.in_poll && !readback) m.run_read_in_op[ch] = runs;
     if (runs && c.known && !c.adopt && ((m.in_poll && fs_op) || readback)) {
-      if (e.stale)
-        // F90: read from another request's frame: the node may take the run as the device's,
-        // or, if the poll failed there, not at all (the next poll that reads it decides).
+      // Either may be right: read from another request's frame (F90: the node may take the run
+      // as the device's, or, if the poll failed there, not at all; the next poll that reads it
+      // decides), or near the end of the node's own run (the node may count it ended: its end
+      // runs from when the write went out, the model's from the confirmation, up to a
+      // transaction and a read back later).
+      if (e.stale || (c.nodeRuns(e.at) && e.at + dur(1.0) >= c.ends))
         c.maybe_devices = true;
       else if (!c.nodeRuns(e.at))
         c.continuous = true;
-      else if (e.at + dur(1.0) >= c.ends)
-        // Near its end the node may count it ended: its end runs from when the write went out,
-        // the model's from the confirmation, up to a transaction and a read back later.
-        c.maybe_devices = true;
     }
   }
   if (d == kLd && e.heard && e.request.function == FunctionCode::kWriteMultipleRegisters &&
