@@ -5,14 +5,20 @@ every answer's transaction id and its latency against the bound the node states 
 /diagnostics, and a fault every `--period` s from the simulator's control socket, in a cycle:
 10 % of the LC board's replies dropped; the LD58A08's next 20 replies corrupted; the PDU
 silenced; the PDU back and 5 of the LC board's replies 200 ms late; a power cycle of every
-board. Starts its own rosmaster, the simulator and the node (free ports, a temporary folder).
+board. At each fault, `--burst` more clients (default 4) each send one read at the same moment to
+an address no device answers (every such request costs the link's timeout with every retry), so
+that requests queue up behind each other: without the answer bound (docs/share.md) the last ones
+are answered after a client has given up. Starts its own rosmaster, the simulator and the node
+(free ports, a temporary folder).
 
 Prints a table: RSS, fds and threads of the node over time; SetBool calls ok, refused and failed;
 share answers by kind with p50/p99/max latency and the bound; answers later than the bound and
-answers out of step. Exits 1 when an answer came late or out of step, the node's RSS grew more
-than 0.5 MB after the first minute, or its threads or (by more than 2) its fds grew.
+answers out of step; and per fault, the share answers and SetBool calls while it was the
+latest one (to see where two builds differ). Exits 1 when an answer came late or out of step, the
+node's RSS grew more than 0.5 MB after the first minute, or its threads or (by more than 2) its
+fds grew.
 
-    scripts/soak.sh --minutes N [--period S] [--timeout S] [--junit FILE] [--node EXE]
+    scripts/soak.sh --minutes N [--period S] [--timeout S] [--burst K] [--junit FILE] [--node EXE]
 """
 import argparse
 import contextlib
@@ -34,6 +40,9 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
 
 RELAYS, PWM, PDU = "8", "1", "2"
+ABSENT = 9  # an address with no device on the line
+PHASES = ["before the first fault", "LC replies dropped", "LD58A08 replies corrupted",
+          "PDU silent", "PDU back, LC replies late", "power cycle"]
 FD_SLACK = 2  # fds a node may hold more for a while (roscpp's connections come and go)
 SIM_YAML = """baud: 115200
 parity: none
@@ -45,7 +54,7 @@ devices:
 BUS_YAML = """baud: 115200
 parity: none
 diagnostic_period: 0.5
-share: {listen: "127.0.0.1:%(share)d"}
+share: {listen: "127.0.0.1:%(share)d", max_clients: 8}
 devices:
   relays: {type: lc_relay8, address: 8, poll_rate: 50}
   pwm_board: {type: ld58a08, address: 1, poll_rate: 50}
@@ -99,11 +108,13 @@ class ShareClient(threading.Thread):
     -c 5), one at a time, as libmodbus does: wait up to the bound, then the next request. Every answer's transaction id is checked:
     one that answers an earlier request is out of step."""
 
-    def __init__(self, port, bound):
+    def __init__(self, port, bound, phase, unit=int(PDU), requests=None):
         super().__init__(daemon=True)
-        self.port, self.bound = port, bound
+        self.port, self.bound, self.phase, self.unit = port, bound, phase, unit
+        self.requests = requests  # None: until stopped
         self.kinds = {}  # "ok", "exception 0B", ... -> count
         self.latencies = []
+        self.by_phase = {}  # phase -> [answers, sum of latencies]
         self.late = 0  # no answer within the bound
         self.out_of_step = 0
         self.stop = threading.Event()
@@ -113,10 +124,12 @@ class ShareClient(threading.Thread):
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         transaction = 0
         buffer = b""
-        while not self.stop.is_set():
+        while not self.stop.is_set() and self.requests != 0:
+            if self.requests:
+                self.requests -= 1
             transaction = (transaction + 1) & 0xFFFF
             sent = time.monotonic()
-            sock.sendall(struct.pack(">HHHBBHH", transaction, 0, 6, int(PDU), 4, 0, 5))
+            sock.sendall(struct.pack(">HHHBBHH", transaction, 0, 6, self.unit, 4, 0, 5))
             deadline = sent + self.bound
             answered = False
             while not answered:
@@ -142,17 +155,23 @@ class ShareClient(threading.Thread):
                     continue
                 answered = True
                 self.latencies.append(time.monotonic() - sent)
+                row = self.by_phase.setdefault(self.phase[0], [0, 0.0])
+                row[0] += 1
+                row[1] += self.latencies[-1]
                 kind = "ok" if frame[7] == 4 else "exception %02X" % frame[8]
                 self.kinds[kind] = self.kinds.get(kind, 0) + 1
-            time.sleep(0.02)
+            if self.requests is None:
+                time.sleep(0.02)
         sock.close()
 
 
 class SetBoolCaller(threading.Thread):
-    def __init__(self):
+    def __init__(self, phase):
         super().__init__(daemon=True)
+        self.phase = phase
         self.ok = self.refused = self.failed = 0
         self.reasons = {}
+        self.by_phase = {}  # phase -> [ok, refused or failed]
         self.stop = threading.Event()
 
     def run(self):
@@ -162,6 +181,8 @@ class SetBoolCaller(threading.Thread):
             state = not state
             try:
                 res = call(state)
+                row = self.by_phase.setdefault(self.phase[0], [0, 0])
+                row[0 if res.success else 1] += 1
                 if res.success:
                     self.ok += 1
                 else:
@@ -223,6 +244,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--minutes", type=float, default=2.0)
     ap.add_argument("--period", type=float, default=20.0, help="s between faults")
+    ap.add_argument("--burst", type=int, default=4,
+                    help="clients that each read an absent address at once at each fault")
     ap.add_argument("--junit", help="also write the verdicts as JUnit cases to this file")
     ap.add_argument("--node", help="another build's modbus_rtu_bus (its libraries beside it), "
                     "to compare builds under the same simulator and faults")
@@ -254,11 +277,13 @@ def main():
             node_env["LD_LIBRARY_PATH"] = os.path.dirname(os.path.abspath(args.node))
         node = subprocess.Popen([args.node or executable("modbus_rtu_bus"), "__name:=soak_bus"],
                                 stdout=log, stderr=subprocess.STDOUT, env=node_env)
-        clients = []
+        clients, bursts = [], []
         try:
             rospy.wait_for_service("/soak_bus/relays/out0/set", 30)
             bound = args.timeout or float(share_value("answer bound [s]"))
-            clients = [ShareClient(share, bound), SetBoolCaller()]
+            phase = [0]  # PHASES' index of the latest fault, shared with the clients
+            clients = [ShareClient(share, bound, phase), SetBoolCaller(phase)]
+            bursts = []
             for c in clients:
                 c.start()
             sim = SimControl(control)
@@ -266,12 +291,17 @@ def main():
             end = start + 60.0 * args.minutes
             samples = [(0.0,) + process_figures(node.pid)]
             faults, step = [], 0
-            next_fault, next_sample = start + args.period, start + 10.0
+            # Samples fall between faults (5 s after a round 10), not when a burst's connections are open.
+            next_fault, next_sample = start + args.period, start + 5.0
             while time.monotonic() < end and node.poll() is None:
                 now = time.monotonic()
                 if now >= next_fault:
                     faults.append(fault(sim, step))
+                    phase[0] = 1 + step % 5
                     step += 1
+                    for _ in range(args.burst):
+                        bursts.append(ShareClient(share, bound, phase, ABSENT, requests=1))
+                        bursts[-1].start()
                     next_fault += args.period
                 if now >= next_sample:
                     samples.append((now - start,) + process_figures(node.pid))
@@ -284,9 +314,9 @@ def main():
             if alive and not args.timeout:
                 expired = share_value("answered 0B at the bound (unsent)")
         finally:
-            for c in clients:
+            for c in clients + bursts:
                 c.stop.set()
-            for c in clients:
+            for c in clients + bursts:
                 c.join(15)
             node.send_signal(2)
             try:
@@ -304,6 +334,13 @@ def main():
     print("\n| SetBool ok | refused | failed | refusals by reason |\n|---|---|---|---|")
     print("| %d | %d | %d | %s |" % (caller.ok, caller.refused, caller.failed,
                                      "; ".join("%s: %d" % kv for kv in sorted(caller.reasons.items()))))
+    burst_late = sum(b.late for b in bursts)
+    burst_oos = sum(b.out_of_step for b in bursts)
+    burst_kinds = {}
+    for b in bursts:
+        for k, n in b.kinds.items():
+            burst_kinds[k] = burst_kinds.get(k, 0) + n
+    burst_lat = [x for b in bursts for x in b.latencies]
     lat = client.latencies
     print("\n| share answers | by kind | 0B at the bound | p50 [ms] | p99 [ms] | max [ms] | bound [ms] "
           "| late | out of step |")
@@ -312,11 +349,25 @@ def main():
         len(lat), ", ".join("%s %d" % kv for kv in sorted(client.kinds.items())), expired,
         1e3 * percentile(lat, 50), 1e3 * percentile(lat, 99), 1e3 * max(lat or [float("nan")]),
         1e3 * bound, client.late, client.out_of_step))
+    print("\n| burst reads of address %d (%d a fault) | by kind | max [ms] | late | out of step |"
+          % (ABSENT, args.burst))
+    print("|---|---|---|---|---|")
+    print("| %d | %s | %.1f | %d | %d |" % (
+        len(burst_lat), ", ".join("%s %d" % kv for kv in sorted(burst_kinds.items())),
+        1e3 * max(burst_lat or [float("nan")]), burst_late, burst_oos))
+    print("\n| latest fault | share answers | mean latency [ms] | SetBool ok | SetBool not ok |")
+    print("|---|---|---|---|---|")
+    for i, name in enumerate(PHASES):
+        answers, total = client.by_phase.get(i, [0, 0.0])
+        ok, not_ok = caller.by_phase.get(i, [0, 0])
+        print("| %s | %d | %.1f | %d | %d |" % (name, answers, 1e3 * total / answers if answers
+                                               else float("nan"), ok, not_ok))
+    late, out_of_step = client.late + burst_late, client.out_of_step + burst_oos
     verdicts = {"the node runs to the end": "" if alive else
                 "the node died (%s)" % os.path.join(work, "node.log")}
     verdicts["every share answer within the bound and in step"] = (
-        "%d answers later than the bound, %d out of step" % (client.late, client.out_of_step)
-        if client.late or client.out_of_step else "")
+        "%d answers later than the client's timeout, %d out of step" % (late, out_of_step)
+        if late or out_of_step else "")
     leaks = []
     after_minute = [s for s in samples if s[0] >= 60.0]
     if len(after_minute) >= 2:
