@@ -188,6 +188,23 @@ def device_status(diagnostics, device):
         "diagnostics of " + device)
 
 
+def bus_status(diagnostics, predicate, timeout, what):
+    """The /diagnostics status of the bus (named "bus PORT") in a message published after this
+    call for which predicate(status) holds (diagnostics: a Latest of /diagnostics)."""
+    diagnostics.msg = None
+    return wait_until(
+        lambda: next((s for s in (diagnostics.msg.status if diagnostics.msg else [])
+                      if s.name.split(": ", 1)[-1].startswith("bus ") and predicate(s)), None),
+        timeout, what)
+
+
+def port_open(diagnostics, timeout=30):
+    """Waits for the bus's port to be open: a node's services come before its port, and a
+    request before then is refused ("port not open")."""
+    return bus_status(diagnostics, lambda s: not s.message.startswith("port not open"), timeout,
+                      "the bus's port open (its status in /diagnostics)")
+
+
 def device_value(diagnostics, device, key):
     """One key's value in device_status."""
     return next(kv.value for kv in device_status(diagnostics, device).values if kv.key == key)

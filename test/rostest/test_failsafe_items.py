@@ -66,6 +66,9 @@ class FailsafeItemsTest(unittest.TestCase):
         threading.Thread(target=cls.publishers, daemon=True).start()
         cls.diag = helpers.Latest("/diagnostics", DiagnosticArray)
         cls.node = None
+        cls.executable = subprocess.check_output(
+            ["catkin_find", "--first-only", "--libexec", "modbus_rtu_driver", "modbus_rtu_bus"],
+            text=True).strip()
 
     @classmethod
     def publishers(cls):
@@ -101,21 +104,32 @@ class FailsafeItemsTest(unittest.TestCase):
             rospy.delete_param(KEPT)  # and the timed commands its node kept for the next one
         rosparam.upload_params("/" + NODE, self.config)
         self.log = tempfile.TemporaryFile(mode="w+")
-        type(self).node = subprocess.Popen(
-            ["rosrun", "modbus_rtu_driver", "modbus_rtu_bus", "__name:=" + NODE],
-            stdout=self.log, stderr=subprocess.STDOUT)
+        # The executable itself, not rosrun: a SIGINT that came while rosrun's shell was still
+        # looking for it would be lost, and the node then holds the port through the next tests.
+        type(self).node = subprocess.Popen([self.executable, "__name:=" + NODE],
+                                           stdout=self.log, stderr=subprocess.STDOUT)
         if wait_service:
             helpers.service(NS + "relays/pump/set", SetBool, timeout=30)
+            # Services come before the port (on a loaded machine, a node reopening a port the
+            # previous one had just released is later still): the items' first calls need it.
+            helpers.port_open(self.diag)
 
     def stop_node(self):
         if type(self).node is None:
             return
-        type(self).node.send_signal(signal.SIGINT)
-        type(self).node.wait(30)
-        type(self).node = None
-        self.log.seek(0)
-        self.output = self.log.read()
-        print(self.output)
+        node, type(self).node = type(self).node, None
+        node.send_signal(signal.SIGINT)
+        try:
+            node.wait(30)
+        except subprocess.TimeoutExpired:
+            # Never left running: it would hold the port, and every later item would fail.
+            node.kill()
+            node.wait(10)
+            self.fail("the node did not stop within 30 s of SIGINT (killed)")
+        finally:
+            self.log.seek(0)
+            self.output = self.log.read()
+            print(self.output)
 
     # --- what the simulator and the node show ---
     def coils(self, dev, n=8):
