@@ -92,22 +92,30 @@ class Simulator:
 
 
 class Node:
-    def __init__(self, workdir, port, rate, baud=115200, extra_yaml=""):
+    def __init__(self, workdir, port, rate, baud=115200, extra_yaml="", prefix=(), exe=None,
+                 env=None, only=None):
+        """prefix: a command the node runs under (valgrind); exe: another build's node; only: the
+        one device of BUS_YAML to configure (relays, pwm_board, pdu), the others left out."""
         config = os.path.join(workdir, "bus.yaml")
         with open(config, "w") as f:
-            f.write(BUS_YAML % {"rate": rate, "baud": baud} + extra_yaml)
+            text = BUS_YAML % {"rate": rate, "baud": baud}
+            if only:
+                text = "\n".join(l for l in text.splitlines()
+                                 if not l.startswith("  ") or l.startswith("  %s:" % only)) + "\n"
+            f.write(text + extra_yaml)
         subprocess.check_call(["rosparam", "delete", "/bench_bus"], stderr=subprocess.DEVNULL) \
             if self._has_params() else None
         subprocess.check_call(["rosparam", "load", config, "/bench_bus"])
         subprocess.check_call(["rosparam", "set", "/bench_bus/port", port])
         self.log = os.path.join(workdir, "node.log")
         with open(self.log, "w") as log:
-            self.proc = subprocess.Popen([executable("modbus_rtu_bus"), "__name:=bench_bus"],
-                                         stdout=log, stderr=subprocess.STDOUT)
+            self.proc = subprocess.Popen(list(prefix) + [exe or executable("modbus_rtu_bus"),
+                                                         "__name:=bench_bus"],
+                                         stdout=log, stderr=subprocess.STDOUT, env=env)
 
-    def wait_ready(self):
+    def wait_ready(self, timeout=30, service="relays/out0/set"):
         try:
-            rospy.wait_for_service("/bench_bus/relays/out0/set", 30)
+            rospy.wait_for_service("/bench_bus/" + service, timeout)
         except rospy.ROSException:
             with open(self.log) as f:
                 sys.stderr.write(f.read())
