@@ -52,7 +52,7 @@ TEST(ShareShutdown, ARequestAfterTheShareStoppedIsRefusedUnsent) {
   f.bus_thread.submitShared(
       "memory",
       [&](Transport& t) {
-        const Result r = t.execute(Request::writeSingleCoil(1, 0, true));
+        Result r = t.execute(Request::writeSingleCoil(1, 0, true));
         ran_on_bus = r.ok();
         return r;
       },
