@@ -5,6 +5,15 @@
 # The includer sets MODBUS_RTU_DIR, the repository's root, which every cmake/ file builds its
 # paths on: the catkin build ${PROJECT_SOURCE_DIR} (which catkin_lint resolves, where it reads
 # ${CMAKE_CURRENT_LIST_DIR} as a relative path), the instrumented builds ../.. of theirs.
+# 32-bit targets (armhf): 64-bit file offsets and inode numbers. Without, stat() and readdir()
+# fail with EOVERFLOW where a value needs more than 32 bits: an inode number on XFS, btrfs or NFS
+# (the simulator's stat() of its pty link and control socket), an ext4 directory offset under
+# qemu-user (issue 49: scripts/cross_check.sh armhf found test_failsafe_simulation reading no case
+# file). Debian builds armhf with it from Debian 13 on. Only there: 64-bit targets have it anyway
+# (and keep their flags, so no rebuild).
+if(CMAKE_SIZEOF_VOID_P EQUAL 4)
+  add_compile_definitions(_FILE_OFFSET_BITS=64)
+endif()
 find_package(PkgConfig REQUIRED)
 # libmodbus opens the serial port and sends (core/link).
 pkg_check_modules(LIBMODBUS REQUIRED libmodbus)
