@@ -145,9 +145,8 @@ ChannelIntents::Intent* ChannelIntents::adoptNextPollLocked(uint8_t channel, Com
     in.run_ends = was->ends;
     in.run_driven = was->driven;
   }
-  intent_[channel] = in;
-  newCommand(channel, source);
-  return &*intent_[channel];
+  newCommand(channel, source);  // it leaves intent_ alone
+  return &intent_[channel].emplace(in);
 }
 
 void ChannelIntents::adoptRunNextPoll(uint8_t channel, CommandSource source, double seconds_run,
