@@ -25,6 +25,7 @@ TEST(GenericConfig, TheExampleParsesWithItsTemplates) {
   EXPECT_EQ(c.devices[2].generic.signals[0].address, 0x2000);
   EXPECT_EQ(c.devices[2].generic.signals[0].writeFunction(), 16);  // write_function: 16
   EXPECT_EQ(c.devices[2].generic.signals[1].writeFunction(), 5);   // a coil's default
+  ASSERT_TRUE(c.devices[2].generic.signals[3].poll_rate.has_value());
   EXPECT_EQ(*c.devices[2].generic.signals[3].poll_rate, 20.0);
 }
 

@@ -4,8 +4,10 @@
 #include <stdlib.h>
 #include <sys/stat.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -102,6 +104,7 @@ signals:
   EXPECT_EQ(e.scale, 2.0);
   EXPECT_EQ(e.offset, -1.0);
   EXPECT_TRUE(e.writable);
+  ASSERT_TRUE(e.min.has_value() && e.max.has_value() && e.poll_rate.has_value());
   EXPECT_EQ(*e.min, -5.0);
   EXPECT_EQ(*e.max, 5.0);
   EXPECT_EQ(*e.poll_rate, 20.0);
@@ -214,7 +217,9 @@ signals:
 
 TEST(SignalYaml, TemplatesRelativeAndByFindAndTheirErrors) {
   char dir_template[] = "/tmp/test_signal_XXXXXX";
-  const std::string dir = mkdtemp(dir_template);
+  const char* made = mkdtemp(dir_template);
+  ASSERT_NE(made, nullptr) << "mkdtemp: " << std::strerror(errno);
+  const std::string dir = made;
   mkdir((dir + "/pkg").c_str(), 0755);
   std::ofstream(dir + "/pkg/package.xml") << "<package><name>pkg</name></package>\n";
   std::ofstream(dir + "/pkg/t.yaml")
