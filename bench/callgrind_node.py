@@ -21,6 +21,7 @@ import argparse
 import glob
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -105,6 +106,9 @@ def main():
                         help="another build's modbus_rtu_bus, measured too")
     parser.add_argument("--keep", help="leave each build's callgrind files in a folder here")
     args = parser.parse_args()
+    if not shutil.which("valgrind") or not shutil.which("callgrind_annotate"):
+        print("callgrind_node.py: needs valgrind (apt-get install valgrind)", file=sys.stderr)
+        return 2
     builds = [("this build", None)] + [(exe, exe) for exe in args.node]
     rows = []
     with node_bench.own_master("modbus_rtu_callgrind_node"):
