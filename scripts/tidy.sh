@@ -21,9 +21,12 @@ if [ "${1:-}" = --ros-free ]; then
   cd "$REPO"
   mapfile -t files < <(find "${ROS_FREE[@]}" -name '*.cpp' | sort)
   [ ${#files[@]} -gt 20 ] || { echo "tidy: only ${#files[@]} files in ${ROS_FREE[*]}" >&2; exit 2; }
-  # Two at a time: each clang-tidy is one process on one core.
+  # Two at a time: each clang-tidy is one process on one core. A clang-tidy that could not check
+  # the file (no compile command, a parse error, none installed) fails its case too.
   printf '%s\n' "${files[@]}" | xargs -P2 -I{} sh -c '
-    out=$(clang-tidy -p "$1/build" --quiet "$2" 2>/dev/null | grep -A3 "warning:" || true)
+    all=$(clang-tidy -p "$1/build" --quiet "$2" 2>&1); rc=$?
+    out=$(printf "%s\n" "$all" | grep -A3 "warning:")
+    [ -n "$out" ] || [ $rc = 0 ] || out="clang-tidy exited $rc: $(printf "%s\n" "$all" | tail -n 3)"
     [ -z "$out" ] || printf "%s\n" "$out" >"$3/$(basename "$2").txt"' _ "$WS" {} "$results"
   cases=()
   for f in "${files[@]}"; do
@@ -43,7 +46,8 @@ build_workspace -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >/dev/null
 cd "$REPO"
 out=$(find src bench test/unit -name '*.cpp' | sort |
   xargs -P"$(nproc)" -n4 clang-tidy -p "$WS/build" --quiet 2>/dev/null || true)
-count=$(grep -c "warning:" <<<"$out" || true)
+# An error (a file clang-tidy could not parse) counts as a finding too.
+count=$(grep -cE "(warning|error):" <<<"$out" || true)
 [ "$count" = 0 ] || echo "$out"
 echo "clang-tidy: $count warnings"
 [ "$count" = 0 ]
