@@ -73,6 +73,9 @@ const std::vector<SimInvariant>& simInvariants() {
       {"I21", "docs/failsafe.md F90; troubleshooting.md (late replies)",
        "a device's reply that comes within late_reply_guard after its request timed out is "
        "never taken as the reply to a different request"},
+      {"I22", "docs/share.md (shared requests in a late-reply guard); docs/failsafe.md F90",
+       "a shared request run while another device's late-reply guard holds the line ends "
+       "before that guard does: the guarded request starts no later than without it"},
       {"L1", "docs/failsafe.md F8, F16, F17, F41, F58 (safe until commanded again, owed writes)",
        "liveness: once every fault heals (the devices answer, the port is back, a node runs), "
        "every channel held safe (the heartbeat lost, for good in half the seeds, or a command "
@@ -113,6 +116,8 @@ const std::vector<std::string>& simRequiredCoverage() {
     r.emplace_back("fault kill before a kept list landed");
     r.emplace_back("fault resumed from a list behind the killed node");
     r.emplace_back("fault kill with a frame on the line");
+    // docs/share.md: a shared request to another device within a device's late-reply guard.
+    r.emplace_back("path shared request in another device's guard");
     // The fail-safe's events, by trigger, device type and action (docs/failsafe.md, "What
     // happens when"): written and confirmed, or owed ("(unconfirmed)": the device was silent).
     for (const char* t : {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"}) {
@@ -577,6 +582,7 @@ class World {
   // The node's bus runtime, the node's own (runtime/bus_runtime.h), stepped on the manual clock.
   std::unique_ptr<BusRuntime> node_;  // after kept_timed_: it writes there
   std::map<std::string, uint64_t> coverage_;
+  uint64_t ran_in_guards_ = 0;  // the node's scheduler's count, as last seen
   bool dying_ = false;
   bool stopping_ = false;
   bool killed_frame_out_ = false;  // kill_sent: the frame it waits for went out
@@ -662,7 +668,13 @@ void World::runUntil(TP end, const std::function<bool()>& done) {
     }
     if (now >= end) return;
     TP next = TP::max();
-    if (node_ && node_->scheduler().step(&next)) continue;
+    if (node_ && node_->scheduler().step(&next)) {
+      // A shared request ran while another device's late-reply guard held the line.
+      const uint64_t in_guards = node_->scheduler().ranInGuards();
+      if (in_guards > ran_in_guards_) cover("path shared request in another device's guard");
+      ran_in_guards_ = in_guards;  // a new node counts from 0
+      continue;
+    }
     const TP t = std::min({next, next_tick_, next_feed_, next_dev_feed_, end});
     if (t > now) clock_.advanceTo(t);
   }
@@ -852,6 +864,15 @@ void World::startNode() {
   o.kept_timed = &kept_timed_;  // the parameter server's: a new node resumes what runs
   o.link = &link_;              // its timing (the safe time); the transport counts on top of it
   node_ = std::make_unique<BusRuntime>(std::move(bus), transport_, std::move(o));
+  // I22 (docs/share.md): a shared request run in another device's late-reply guard ends
+  // before that guard does.
+  node_->scheduler().setGuardTimeObserver([this](uint8_t slave, double before, double after) {
+    if (checked("I22") && after <= 0)
+      fail("I22",
+           "a shared request run within slave " + std::to_string(slave) + "'s late-reply guard (" +
+               std::to_string(before) +
+               " s left) ended after it: that slave's request went later than it would have");
+  });
   for (const auto& u : node_->units()) {
     const std::string name = u->name();
     DeviceUnit::Observers seen;

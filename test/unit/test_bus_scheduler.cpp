@@ -846,3 +846,152 @@ TEST(BusSchedulerStepMode, AnOverduePollSendsItsFirstRequestBeforeTheNextQueuedJ
   for (auto& w : writes) EXPECT_TRUE(w.get().ok());
   scheduler.stop();
 }
+
+// docs/share.md: while a device's late-reply guard holds its next request, queued shared
+// requests to other devices that end before the guard does use the line; nothing else moves.
+namespace {
+
+// A line whose slaves may be under a late-reply guard until a time of the manual clock; every
+// request takes 5 ms and may take up to `line_seconds` (its longest transaction).
+struct GuardedLine : Transport {
+  explicit GuardedLine(ManualClock& c) : clock(c) {}
+  Result execute(const Request& r) override {
+    log.push_back(std::to_string(r.slave) + (isReadFunction(r.function) ? "r" : "w"));
+    clock.advance(5ms);
+    return Result::success({0});
+  }
+  double guardLeft(uint8_t slave) const override {
+    const auto g = guard_until.find(slave);
+    if (g == guard_until.end() || g->second <= clock.now()) return 0;
+    return std::chrono::duration<double>(g->second - clock.now()).count();
+  }
+  double lineSeconds(const Request& /*request*/) const override { return line_seconds; }
+  ManualClock& clock;
+  std::map<uint8_t, Clock::time_point> guard_until;
+  double line_seconds = 0.03;
+  std::vector<std::string> log;
+};
+
+struct GuardFill {
+  GuardFill() : line(clock), scheduler(line, {}, clock) { scheduler.startStepping(); }
+  void guard(uint8_t slave, std::chrono::milliseconds left) {
+    line.guard_until[slave] = clock.now() + left;
+  }
+  std::future<Result> write(const std::string& device, uint8_t slave) {
+    return scheduler.submit(device, [slave](Transport& t) {
+      return t.execute(Request::writeSingleCoil(slave, 0, true));
+    });
+  }
+  void share(const std::string& device, const Request& r) {
+    scheduler.submitShared(
+        device, [r](Transport& t) { return t.execute(r); }, [this](const Result&) { ++answered; },
+        0, r);
+  }
+  void runAll() {
+    Clock::time_point next{};
+    while (scheduler.step(&next)) {
+    }
+  }
+  ManualClock clock;
+  GuardedLine line;
+  BusScheduler scheduler;
+  int answered = 0;
+};
+
+}  // namespace
+
+TEST(BusSchedulerGuardTime, ASharedReadOfAnotherDeviceGoesWithinTheGuard) {
+  GuardFill f;
+  f.guard(1, 100ms);
+  auto w = f.write("a", 1);
+  f.share("b", Request::readHoldingRegisters(2, 0, 1));
+  f.share("b", Request::readHoldingRegisters(2, 1, 1));
+  f.runAll();
+  EXPECT_TRUE(w.get().ok());
+  EXPECT_EQ(f.answered, 2);
+  EXPECT_EQ(f.line.log, (std::vector<std::string>{"2r", "2r", "1w"}));
+  EXPECT_EQ(f.scheduler.ranInGuards(), 2u);
+}
+
+// Each only while it still ends before the guard does: the guarded request starts no later.
+TEST(BusSchedulerGuardTime, OnlyWhatEndsBeforeTheGuardGoesFirst) {
+  GuardFill f;
+  f.guard(1, 40ms);  // 30 ms fits once: after it (5 ms), 35 ms are left, then 30 after another
+  auto w = f.write("a", 1);
+  for (int i = 0; i < 4; ++i) f.share("b", Request::readHoldingRegisters(2, 0, 1));
+  f.runAll();
+  EXPECT_EQ(f.line.log, (std::vector<std::string>{"2r", "2r", "2r", "1w", "2r"}));
+  EXPECT_EQ(f.scheduler.ranInGuards(), 3u);
+}
+
+TEST(BusSchedulerGuardTime, ATransactionLongerThanTheGuardWaits) {
+  GuardFill f;
+  f.guard(1, 100ms);
+  f.line.line_seconds = 0.15;
+  auto w = f.write("a", 1);
+  f.share("b", Request::readHoldingRegisters(2, 0, 1));
+  f.runAll();
+  EXPECT_EQ(f.line.log, (std::vector<std::string>{"1w", "2r"}));
+  EXPECT_EQ(f.scheduler.ranInGuards(), 0u);
+}
+
+// The guarded device's own requests, a broadcast, a guarded device's, or one whose device has a
+// ROS write queued: none goes ahead.
+TEST(BusSchedulerGuardTime, NothingElseGoesAhead) {
+  GuardFill f;
+  f.guard(1, 100ms);
+  f.guard(3, 100ms);
+  auto w1 = f.write("a", 1);
+  auto w4 = f.write("d", 4);
+  f.share("a", Request::readHoldingRegisters(1, 0, 1));  // the guarded device itself
+  f.share("", Request::writeSingleCoil(0, 0, true));     // a broadcast
+  f.share("c", Request::readHoldingRegisters(3, 0, 1));  // guarded too
+  f.share("d", Request::readHoldingRegisters(4, 0, 1));  // its device has a write queued
+  f.line.line_seconds = 0.03;
+  f.runAll();
+  // Once device d's write has gone, its read may use slave 1's guard.
+  EXPECT_EQ(f.line.log, (std::vector<std::string>{"1w", "4w", "4r", "1r", "0w", "3r"}));
+  EXPECT_EQ(f.scheduler.ranInGuards(), 1u);
+}
+
+// A shared request of a device keeps its place behind that device's earlier one, which did not
+// fit; another device's that fits goes.
+TEST(BusSchedulerGuardTime, ADevicesSharedRequestsKeepTheirOrder) {
+  struct Line : GuardedLine {
+    using GuardedLine::GuardedLine;
+    double lineSeconds(const Request& r) const override { return r.slave == 2 ? 0.5 : 0.03; }
+  };
+  ManualClock clock;
+  Line line(clock);
+  BusScheduler s(line, {}, clock);
+  s.startStepping();
+  line.guard_until[1] = clock.now() + 100ms;
+  auto w =
+      s.submit("a", [](Transport& t) { return t.execute(Request::writeSingleCoil(1, 0, true)); });
+  for (const Request& r : {Request::readHoldingRegisters(2, 0, 1), Request::readCoils(2, 0, 1),
+                           Request::readHoldingRegisters(5, 0, 1)})
+    s.submitShared(
+        "", [r](Transport& t) { return t.execute(r); }, nullptr, 0, r);
+  Clock::time_point next{};
+  while (s.step(&next)) {
+  }
+  EXPECT_EQ(line.log, (std::vector<std::string>{"5r", "1w", "2r", "2r"}));
+  EXPECT_EQ(s.ranInGuards(), 1u);
+}
+
+// A poll's request waits on the guard too: the shared read goes inside the poll, before it.
+TEST(BusSchedulerGuardTime, APollsGuardedRequestLetsASharedReadGoFirst) {
+  GuardFill f;
+  f.scheduler.addPoll(
+      "a", 10.0,
+      [&f](Transport& t) {
+        f.share("b", Request::readHoldingRegisters(2, 0, 1));  // comes while the poll runs
+        f.guard(1, 100ms);
+        return t.execute(Request::readCoils(1, 0, 1));
+      },
+      nullptr);
+  Clock::time_point next{};
+  EXPECT_TRUE(f.scheduler.step(&next));
+  EXPECT_EQ(f.line.log, (std::vector<std::string>{"2r", "1r"}));
+  EXPECT_EQ(f.answered, 1);
+}

@@ -147,3 +147,30 @@ TEST(LateReplyGuard, ANewRequestWithTheSameFrameDoesNotTakeTheOldReply) {
         << "the new read took the old one's reply, " << late_by << " s late";
   }
 }
+
+// What the scheduler asks before a request (docs/share.md: shared requests to other devices
+// use a guard's time): how long a request to a slave would still wait, which is what the next
+// different request to it then waits, and nothing for another slave; and how long a request
+// can keep the line, every retry included but not the guard after it.
+TEST(LateReplyGuard, TheGuardLeftIsWhatTheNextRequestWaits) {
+  Line l(1);
+  EXPECT_EQ(l.link.guardLeft(2), 0.0);
+  l.link.faults(2).silent = true;
+  const auto sent = l.clock.now();
+  EXPECT_EQ(l.channel1().error, ErrorKind::kTimeout);
+  const double took = std::chrono::duration<double>(l.clock.now() - sent).count();
+  const double line = l.link.lineSeconds(Request::readHoldingRegisters(2, 0x10, 3));
+  EXPECT_LE(took, line) << "the failed read took longer than its longest line time";
+  EXPECT_NEAR(line + kGuard,
+              l.link.worstTransactionSeconds(Request::readHoldingRegisters(2, 0x10, 3)), 1e-9);
+  const double left = l.link.guardLeft(2);
+  EXPECT_GT(left, kGuard * 0.9);
+  EXPECT_LE(left, kGuard + 0.2);  // counted from its own reply's time-out, at most 0.2 s on
+  EXPECT_EQ(l.link.guardLeft(1), 0.0) << "the LC board has no guard";
+  l.link.faults(2).silent = false;
+  const auto before = l.clock.now();
+  ASSERT_TRUE(l.channel0().ok());
+  const double waited = std::chrono::duration<double>(l.clock.now() - before).count();
+  EXPECT_GE(waited, left - 1e-6) << "the next request waited less than guardLeft said";
+  EXPECT_EQ(l.link.guardLeft(2), 0.0) << "settled by that wait";
+}

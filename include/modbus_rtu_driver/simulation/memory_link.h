@@ -177,6 +177,8 @@ class CountingTransport : public Transport {
   bool connect(std::string* error) override { return link_.connect(error); }
   bool connected() const override { return link_.connected(); }
   void disconnect() override { link_.disconnect(); }
+  double guardLeft(uint8_t slave) const override { return link_.guardLeft(slave); }
+  double lineSeconds(const Request& request) const override { return link_.lineSeconds(request); }
 
  private:
   MemoryLink& link_;

@@ -66,6 +66,7 @@ bool BusScheduler::stopBy(std::chrono::steady_clock::time_point deadline) {
 }
 
 Result BusScheduler::NotingTransport::execute(const Request& request) {
+  owner.useGuardTime(request.slave);
   Result r = inner.execute(request);
   sent = true;
   last_unanswered = r.error == ErrorKind::kTimeout;
@@ -154,7 +155,7 @@ std::future<Result> BusScheduler::submit(const std::string& device, Job job, uin
 }
 
 void BusScheduler::submitShared(const std::string& device, Job job, ResultCallback done,
-                                uint64_t tag) {
+                                uint64_t tag, std::optional<Request> request) {
   Result refused = Result::failure(ErrorKind::kIo, "bus stopped");
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -165,6 +166,7 @@ void BusScheduler::submitShared(const std::string& device, Job job, ResultCallba
       p.job = tagged(std::move(job), tag);
       p.done = std::move(done);
       p.shared = true;
+      p.request = std::move(request);
       shared_.push_back(std::move(p));
       done = nullptr;
     }
@@ -209,6 +211,11 @@ DeviceHealth BusScheduler::health(const std::string& device) const {
 size_t BusScheduler::queuedJobs() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return writes_.size() + shared_.size();
+}
+
+uint64_t BusScheduler::ranInGuards() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return ran_in_guards_;
 }
 
 bool BusScheduler::connected() const {
@@ -310,9 +317,14 @@ bool BusScheduler::runOneQueued(std::unique_lock<std::mutex>& lock) {
   if (queue.empty()) return false;
   Pending p = std::move(queue.front());
   queue.pop_front();
+  runPending(lock, std::move(p));
+  return true;
+}
+
+void BusScheduler::runPending(std::unique_lock<std::mutex>& lock, Pending p) {
   const bool was_unanswered = unanswered_.count(p.device) > 0;
   lock.unlock();
-  NotingTransport noted(transport_);
+  NotingTransport noted(transport_, *this);
   UntilSilentTransport until_silent(noted);
   Result r = p.job(was_unanswered ? static_cast<Transport&>(until_silent) : noted);
   lock.lock();
@@ -327,7 +339,50 @@ bool BusScheduler::runOneQueued(std::unique_lock<std::mutex>& lock) {
   lock.unlock();  // `done` may take its caller's locks
   p.finish(std::move(r));
   lock.lock();
-  return true;
+}
+
+// A guard holds only its own slave's next request (another slave's reply has another address:
+// it cannot be taken for it), so the line is free for others meanwhile. Only shared requests
+// use it, one transaction each with a known longest time, and only those that end before the
+// guard does: the guarded request starts no later than it would have, and the writes and polls
+// keep their order. Without this, a device whose replies are dropped held every client's read
+// of another device for its guards (about 145 ms after each retry: issue 52).
+void BusScheduler::useGuardTime(uint8_t slave) {
+  if (in_guard_) return;
+  while (transport_.connected()) {
+    const double left = transport_.guardLeft(slave);
+    if (left <= 0) return;
+    std::unique_lock<std::mutex> lock(mutex_);
+    const auto it = fitsInGuard(slave, left);
+    if (it == shared_.end()) return;
+    Pending p = std::move(*it);
+    shared_.erase(it);
+    ++ran_in_guards_;
+    in_guard_ = true;
+    runPending(lock, std::move(p));
+    in_guard_ = false;
+    lock.unlock();
+    if (guard_observer_) guard_observer_(slave, left, transport_.guardLeft(slave));
+  }
+}
+
+std::deque<BusScheduler::Pending>::iterator BusScheduler::fitsInGuard(uint8_t guarded,
+                                                                      double left) {
+  std::set<uint8_t> passed;  // slaves with an earlier shared request: theirs go in order
+  for (auto it = shared_.begin(); it != shared_.end(); ++it) {
+    if (!it->request) continue;
+    const uint8_t slave = it->request->slave;
+    if (!passed.insert(slave).second || slave == guarded || slave == kBroadcastAddress) continue;
+    // A ROS write queued for that device goes before it, as it would have.
+    const std::string owner = "slave " + std::to_string(slave);
+    const bool write_queued = std::any_of(writes_.begin(), writes_.end(), [&](const Pending& w) {
+      return w.device == owner || (!it->device.empty() && w.device == it->device);
+    });
+    if (write_queued || transport_.guardLeft(slave) > 0) continue;
+    const double line = transport_.lineSeconds(*it->request);
+    if (line >= 0 && line <= left) return it;
+  }
+  return shared_.end();
 }
 
 // A poll of several transactions lets queued writes and shared requests go first before each of
@@ -347,6 +402,7 @@ Result BusScheduler::PollTransport::execute(const Request& request) {
       }
     }
   }
+  owner.useGuardTime(request.slave);
   return owner.transport_.execute(request);
 }
 

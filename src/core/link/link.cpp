@@ -158,6 +158,19 @@ double Link::worstTransactionSeconds(const Request& asked) const {
   return attempts * attempt + config_.late_reply_guard;
 }
 
+double Link::lineSeconds(const Request& request) const {
+  if (!EncodedRequest::encode(request)) return -1;
+  return worstTransactionSeconds(request) - config_.late_reply_guard;
+}
+
+double Link::guardLeft(uint8_t slave) const {
+  if (!guardsLateReplies()) return 0;
+  const auto mine = unsettled_.find(slave);
+  if (mine == unsettled_.end()) return 0;
+  const auto left = mine->second.failed_at + seconds(config_.late_reply_guard) - lineNow();
+  return std::max(0.0, std::chrono::duration<double>(left).count());
+}
+
 double Link::responseTimeout(const EncodedRequest& request) const {
   return effectiveResponseTimeout(config_, request.adu().size()) +
          reply_delay_[request.request().slave];

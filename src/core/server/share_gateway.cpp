@@ -198,7 +198,7 @@ void ShareGateway::forward(const Request& request, Answer answer,
           w->answer(shareReplyFor(w->request, r));
         --in_flight_;
       },
-      tag);
+      tag, sent);
 }
 
 }  // namespace modbus_rtu_driver

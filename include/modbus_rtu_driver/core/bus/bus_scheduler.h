@@ -114,8 +114,11 @@ class BusScheduler {
   // request from a Modbus TCP client), with submit's guarantees: it runs exactly once, against
   // the refusing transport while the port is not open or once the bus stops. `done` gets the
   // outcome exactly once: on the bus thread, or on the caller's when the bus is not running.
-  // An empty `device` (a slave address no configured device has) keeps no health.
-  void submitShared(const std::string& device, Job job, ResultCallback done, uint64_t tag = 0);
+  // An empty `device` (a slave address no configured device has) keeps no health. `request`:
+  // the job's one request, when it has one; such a job may go while another slave's late-reply
+  // guard holds the line, if it ends before that guard does (docs/share.md).
+  void submitShared(const std::string& device, Job job, ResultCallback done, uint64_t tag = 0,
+                    std::optional<Request> request = std::nullopt);
   // Bus thread: the tag of the submitted job running now (0: a poll, or a job given none), for
   // a trace of whose request is on the line (the fail-safe's simulation tells its callers'
   // writes from the fail-safe's own by it).
@@ -129,6 +132,12 @@ class BusScheduler {
   DeviceHealth health(const std::string& device) const;
   // Jobs queued and not yet running (writes and shared requests).
   size_t queuedJobs() const;
+  // Shared requests run while another slave's late-reply guard held the line (docs/share.md).
+  uint64_t ranInGuards() const;
+  // Called on the bus thread after each: the guarded slave, and the seconds its guard had left
+  // before and after (the simulation checks that it ended first: after > 0). Set before start.
+  using GuardTimeObserver = std::function<void(uint8_t slave, double before, double after)>;
+  void setGuardTimeObserver(GuardTimeObserver observer) { guard_observer_ = std::move(observer); }
   bool connected() const;
   std::string connectionError() const;
   PortReopens portReopens() const;
@@ -148,6 +157,7 @@ class BusScheduler {
     std::promise<Result> promise;
     ResultCallback done;  // set instead of the promise for shared requests
     bool shared = false;
+    std::optional<Request> request;  // a shared job's one request (submitShared)
     void finish(Result r);
   };
 
@@ -164,11 +174,12 @@ class BusScheduler {
   // What a queued job sees: the link, noting whether the job's last request got no reply at
   // all (every retry timed out).
   struct NotingTransport : Transport {
-    explicit NotingTransport(Transport& link) : inner(link) {}
+    NotingTransport(Transport& link, BusScheduler& scheduler) : inner(link), owner(scheduler) {}
     Result execute(const Request& request) override;
     bool connected() const override { return inner.connected(); }
     void awaitLineFree() override { inner.awaitLineFree(); }
     Transport& inner;
+    BusScheduler& owner;
     bool sent = false;
     bool last_unanswered = false;
   };
@@ -188,6 +199,15 @@ class BusScheduler {
   bool stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_point* wait);
   // Runs the oldest write, else the oldest shared request; `lock` held on entry and on return.
   bool runOneQueued(std::unique_lock<std::mutex>& lock);
+  // Runs `p` (taken off its queue); `lock` held on entry and on return.
+  void runPending(std::unique_lock<std::mutex>& lock, Pending p);
+  // Before a request to `slave` (lock free): while that slave's late-reply guard holds the
+  // line, runs the queued shared requests to other slaves that end before the guard does.
+  void useGuardTime(uint8_t slave);
+  // The first shared request that can go within `left` seconds of `guarded`'s guard (a request
+  // to another slave, not guarded itself, with no earlier request of its slave or write of its
+  // device queued); shared_.end() if none. `lock` held.
+  std::deque<Pending>::iterator fitsInGuard(uint8_t guarded, double left);
   // The poll overdue by a whole period the longest (none while the last thing run was such a
   // poll, or nothing is queued): it goes before the queued jobs. `lock` held.
   Poll* starvingPoll(Clock::time_point now);
@@ -237,6 +257,9 @@ class BusScheduler {
   // then its read back, each with every retry).
   std::set<std::string> unanswered_;
   std::atomic<uint64_t> current_tag_{0};
+  bool in_guard_ = false;  // bus thread: a job useGuardTime runs (its requests fill nothing)
+  uint64_t ran_in_guards_ = 0;
+  GuardTimeObserver guard_observer_;
   std::thread thread_;
 };
 

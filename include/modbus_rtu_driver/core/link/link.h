@@ -93,6 +93,9 @@ class Link : public Transport {
   // that sends its reply byte by byte just inside the byte timeout could take longer. Any
   // thread, once the reply delays are set (before the bus starts).
   double worstTransactionSeconds(const Request& request) const;
+  // Bus thread.
+  double guardLeft(uint8_t slave) const override;
+  double lineSeconds(const Request& request) const override;
   LinkStats stats() const;
   // What the port names: its kind (LinkType: name, traits) and address.
   const LinkTarget& target() const { return target_; }
@@ -108,6 +111,8 @@ class Link : public Transport {
   virtual Result attempt(const EncodedRequest& request) = 0;
   // Sends a request nobody answers; success once it is out.
   virtual Result sendBroadcast(const EncodedRequest& request) = 0;
+  // False for a medium whose replies carry their request's id (Modbus TCP): no guard waits.
+  virtual bool guardsLateReplies() const { return true; }
   // Silence kept between frames on the (far) serial line.
   virtual double minGap() const { return effectiveMinGap(config_); }
   // Seconds to wait for the first byte of the reply (sized by the frame's length).

@@ -13,7 +13,8 @@ class ModbusTcpLink : public TcpLink {
  protected:
   Result attempt(const EncodedRequest& request) override;
   Result sendBroadcast(const EncodedRequest& request) override;
-  double minGap() const override { return 0; }  // the gateway paces its own line
+  double minGap() const override { return 0; }               // the gateway paces its own line
+  bool guardsLateReplies() const override { return false; }  // MBAP ids tell replies apart
 
  private:
   uint16_t next_transaction_ = 0;

@@ -89,6 +89,8 @@ class ShareGateway {
   double longestTransaction() const;
   // Requests answered 0B at their latest start, never sent.
   uint64_t expired() const { return expired_.load(); }
+  // Requests run while another device's late-reply guard held the line (docs/share.md).
+  uint64_t ranInGuards() const { return scheduler_.ranInGuards(); }
 
  private:
   // A request between its arrival and its answer: queued, on the bus, or answered 0B unsent.
