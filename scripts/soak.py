@@ -252,6 +252,8 @@ def main():
     ap.add_argument("--timeout", type=float, default=0.0,
                     help="the client's timeout in s (default: the node's stated answer bound; "
                          "1.0 as mbpoll, for builds before the bound)")
+    ap.add_argument("--wire-log", help="the node's wire_log (every frame, timed: for "
+                    "bench/line_attribution.py or a comparison of two builds' lines)")
     args = ap.parse_args()
     work = tempfile.mkdtemp(prefix="modbus_rtu_soak_")
     with open(os.path.join(work, "sim.yaml"), "w") as f:
@@ -271,6 +273,9 @@ def main():
         threading.Thread(target=lambda: sim_proc.stdout.read(), daemon=True).start()
         subprocess.check_call(["rosparam", "load", os.path.join(work, "bus.yaml"), "/soak_bus"])
         subprocess.check_call(["rosparam", "set", "/soak_bus/port", link])
+        if args.wire_log:
+            subprocess.check_call(["rosparam", "set", "/soak_bus/wire_log",
+                                   os.path.abspath(args.wire_log)])
         log = open(os.path.join(work, "node.log"), "w")
         node_env = dict(os.environ)
         if args.node:

@@ -995,3 +995,46 @@ TEST(BusSchedulerGuardTime, APollsGuardedRequestLetsASharedReadGoFirst) {
   EXPECT_EQ(f.line.log, (std::vector<std::string>{"2r", "1r"}));
   EXPECT_EQ(f.answered, 1);
 }
+
+// docs/share.md: on a bus the polls alone fill (every poll a period late), the polls are not
+// starved by a queued request: it goes first, before the next overdue poll (issue 52: an
+// overdue poll before each client's read made the share's reads later, the polls no more
+// frequent). Once the queued jobs have held the line a whole period, an overdue poll goes first.
+TEST(BusSchedulerStepMode, OnABusThePollsFillAQueuedRequestGoesBeforeTheOverduePolls) {
+  struct SlowLine : Transport {
+    explicit SlowLine(ManualClock& c) : clock(c) {}
+    Result execute(const Request& r) override {
+      log.push_back(std::to_string(r.slave) + (isReadFunction(r.function) ? "r" : "w"));
+      clock.advance(20ms);  // each transaction takes two periods of the polls below
+      return Result::success({0});
+    }
+    ManualClock& clock;
+    std::vector<std::string> log;
+  };
+  ManualClock clock;
+  SlowLine line(clock);
+  BusScheduler scheduler(line, {}, clock);
+  scheduler.startStepping();
+  for (uint8_t a : {1, 2})
+    scheduler.addPoll(
+        "d" + std::to_string(a), 100.0,
+        [a](Transport& t) { return t.execute(Request::readCoils(a, 0, 1)); }, nullptr);
+  Clock::time_point next{};
+  for (int i = 0; i < 6; ++i) ASSERT_TRUE(scheduler.step(&next));  // polls, each overdue
+  line.log.clear();
+  auto write = scheduler.submit(
+      "c", [](Transport& t) { return t.execute(Request::writeSingleCoil(3, 0, true)); });
+  ASSERT_TRUE(scheduler.step(&next));
+  EXPECT_EQ(line.log, std::vector<std::string>{"3w"}) << "an overdue poll went first";
+  EXPECT_TRUE(write.get().ok());
+  // That write held the line for two periods of the polls: with a backlog queued now, an
+  // overdue poll goes before each queued write.
+  line.log.clear();
+  std::vector<std::future<Result>> writes;
+  for (int i = 0; i < 3; ++i)
+    writes.push_back(scheduler.submit(
+        "c", [](Transport& t) { return t.execute(Request::writeSingleCoil(3, 0, true)); }));
+  for (int i = 0; i < 4; ++i) ASSERT_TRUE(scheduler.step(&next));
+  EXPECT_EQ(line.log, (std::vector<std::string>{"1r", "3w", "2r", "3w"}));
+  scheduler.stop();
+}

@@ -2,8 +2,9 @@
 // Three priorities: writes (submit) first, then shared requests (submitShared: Modbus TCP
 // clients of the node's share), then polls; polls run at their device's rate, earliest due
 // first, and a device that stops answering is polled with backoff so it cannot stall the others.
-// Writes cannot stop the polls: a poll overdue by a whole period goes before the next queued job
-// (unless its device has one queued), one such poll between two jobs (state topics, restart
+// Writes cannot stop the polls: a poll overdue by a whole period, when no poll has ended for that
+// period, goes before the next queued job (unless its device has one queued), one such poll
+// between two jobs (state topics, restart
 // detection and owed safe writes all wait for polls; a queued write waits at most that one poll).
 // Time comes from a Clock (the real steady clock unless one is given; tests use a ManualClock).
 #pragma once
@@ -208,8 +209,9 @@ class BusScheduler {
   // to another slave, not guarded itself, with no earlier request of its slave or write of its
   // device queued); shared_.end() if none. `lock` held.
   std::deque<Pending>::iterator fitsInGuard(uint8_t guarded, double left);
-  // The poll overdue by a whole period the longest (none while the last thing run was such a
-  // poll, or nothing is queued): it goes before the queued jobs. `lock` held.
+  // The poll overdue by a whole period the longest, while no poll has ended for that period
+  // (none while the last thing run was such a poll, or nothing is queued): it goes before the
+  // queued jobs. `lock` held.
   Poll* starvingPoll(Clock::time_point now);
   // An offline device's poll waits out its backoff: not before then (else the epoch). `lock` held.
   Clock::time_point probeNotBefore(const Poll& poll);
@@ -239,6 +241,7 @@ class BusScheduler {
   bool starving_poll_running_ = false;  // a poll that went before queued jobs: runs them 1:1
   bool starving_poll_sent_ = false;     // its first request went: queued jobs may go between
   bool last_ran_starving_poll_ = false;
+  Clock::time_point last_poll_end_{};  // when the last poll ended (starvingPoll)
   bool running_ = false;
   bool finished_ = false;                // run() has returned
   std::condition_variable finished_cv_;  // real time, not clock_: stopBy's bound is wall time
