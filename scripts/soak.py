@@ -254,6 +254,9 @@ def main():
                          "1.0 as mbpoll, for builds before the bound)")
     ap.add_argument("--wire-log", help="the node's wire_log (every frame, timed: for "
                     "bench/line_attribution.py or a comparison of two builds' lines)")
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                    help="a bus parameter over the soak's configuration (rosparam syntax), "
+                         "e.g. late_reply_guard=0 to measure what the guard costs")
     args = ap.parse_args()
     work = tempfile.mkdtemp(prefix="modbus_rtu_soak_")
     with open(os.path.join(work, "sim.yaml"), "w") as f:
@@ -273,6 +276,9 @@ def main():
         threading.Thread(target=lambda: sim_proc.stdout.read(), daemon=True).start()
         subprocess.check_call(["rosparam", "load", os.path.join(work, "bus.yaml"), "/soak_bus"])
         subprocess.check_call(["rosparam", "set", "/soak_bus/port", link])
+        for param in args.param:
+            key, _, value = param.partition("=")
+            subprocess.check_call(["rosparam", "set", "/soak_bus/" + key, value])
         if args.wire_log:
             subprocess.check_call(["rosparam", "set", "/soak_bus/wire_log",
                                    os.path.abspath(args.wire_log)])

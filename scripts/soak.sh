@@ -2,7 +2,7 @@
 # The node under a cycle of faults for N minutes, with a SetBool caller and a Modbus TCP client on
 # the share (scripts/soak.py says what it does and checks). The test command runs 2 minutes.
 #   scripts/soak.sh --minutes 8 [--period 20] [--timeout 1.0] [--burst 4] [--junit FILE] [--node EXE]
-#     [--wire-log FILE]
+#     [--wire-log FILE] [--param KEY=VALUE ...]
 #   --timeout: the client's, for builds before the share's answer bound (default: the bound the
 #   node states); --node: another build's node (its libraries beside it), under this simulator;
 #   --burst: clients that each read an absent address at once at each fault (0: none).
