@@ -8,7 +8,11 @@
 #         the same root, scripts/tidy.sh: the whole clang-tidy pass with that release's
 #         clang-tidy (11, 14, 19), which passes with 0 warnings (about 25 minutes more;
 #         FRESH_TIDY=0 leaves it out, and the summary says so).
-# Usage: scripts/fresh_check.sh [demo|test|both] [bookworm|trixie|bullseye] (defaults: both,
+#   cross: scripts/cross_check.sh arm64, armhf and s390x, one after the other in one new root
+#         (the cross toolchains and the targets' packages installed by the script itself);
+#         passes when each printed "gtests: N passed, 0 failed" and "simulation digests: K/K
+#         equal to amd64" and exited 0 (about an hour on 2 cores; not part of "both").
+# Usage: scripts/fresh_check.sh [demo|test|both|cross] [bookworm|trixie|bullseye] (defaults: both,
 # bookworm). bullseye (Debian 11: ros_comm 1.15.9, Noetic's) stands for Ubuntu 20.04 + Noetic,
 # whose archive is out of reach here: it builds with CXX=g++-9 (9.3.0, focal's compiler). Needs
 # root (or sudo). Logs and the summary go to $FRESH_OUT (default /tmp/modbus_rtu_fresh). Only
@@ -23,6 +27,10 @@ case $SUITE in
   bookworm | trixie) COMPILER="" ;;
   bullseye) COMPILER="CC=gcc-9 CXX=g++-9" ;;
   *) echo "fresh_check.sh: release '$SUITE' is not bookworm, trixie or bullseye" >&2; exit 2 ;;
+esac
+case $WHAT in
+  demo | test | both | cross) ;;
+  *) echo "fresh_check.sh: '$WHAT' is not demo, test, both or cross" >&2; exit 2 ;;
 esac
 MIRROR=${FRESH_MIRROR:-http://deb.debian.org/debian}
 SUDO=""
@@ -121,6 +129,26 @@ if [ "$WHAT" = test ] || [ "$WHAT" = both ]; then
       grep -B1 -A3 'warning:' "$OUT/tidy.log" | head -40 || true
     fi
   fi
+fi
+if [ "$WHAT" = cross ]; then
+  new_root
+  for arch in arm64 armhf s390x; do
+    start=$(date +%s)
+    rc=0
+    in_root "scripts/cross_check.sh $arch" >"$OUT/cross_$arch.log" 2>&1 || rc=$?
+    secs=$(($(date +%s) - start))
+    gtests=$(grep -E '^gtests: ' "$OUT/cross_$arch.log" | tail -1 || true)
+    digests=$(grep -E '^simulation digests: ' "$OUT/cross_$arch.log" | tail -1 || true)
+    if [ "$rc" = 0 ] && [[ "$gtests" =~ ^gtests:\ [1-9][0-9]*\ passed,\ 0\ failed ]] &&
+      [[ "$digests" =~ ^simulation\ digests:\ ([0-9]+)/([0-9]+)\ equal ]] &&
+      [ "${BASH_REMATCH[1]}" = "${BASH_REMATCH[2]}" ]; then
+      summary+=("cross $arch: passed: $gtests; $digests (${secs} s including installs)")
+    else
+      summary+=("cross $arch: FAILED (exit $rc): ${gtests:-no gtests line}; ${digests:-no digests line} (see $OUT/cross_$arch.log)")
+      status=1
+      tail -30 "$OUT/cross_$arch.log"
+    fi
+  done
 fi
 # What was checked: the release, its compiler, ROS and the libraries that differ most.
 versions=$(in_root "dpkg-query -W -f='\${Package} \${Version}\n' ros-core-dev libcli11-dev \
