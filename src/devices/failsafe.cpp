@@ -30,7 +30,7 @@ const char* onRestartName(OnRestart policy) {
 
 bool FailsafeConfig::hasSafeStates() const {
   for (SafeState s : safe_state)
-    if (s != SafeState::kHold) return true;
+    if (s != SafeState::kLeave) return true;
   return false;
 }
 
@@ -38,7 +38,7 @@ OutputTargets FailsafeConfig::safeTargets(size_t channels) const {
   OutputTargets t;
   for (size_t i = 0; i < channels; ++i) {
     const SafeState s = safeStateOf(i);
-    if (s == SafeState::kHold) continue;
+    if (s == SafeState::kLeave) continue;
     t.channels.push_back(static_cast<uint8_t>(i));
     t.states.push_back(s == SafeState::kOn);
   }

@@ -203,7 +203,7 @@ void ChannelIntents::hold(const std::vector<uint8_t>& channels, HoldTrigger trig
   std::lock_guard<std::mutex> lock(mutex_);
   const auto now = clock_.now();
   const auto holdOne = [&](size_t ch) {
-    if (ch >= channels_ || config_.safeStateOf(ch) == SafeState::kHold) return;
+    if (ch >= channels_ || config_.safeStateOf(ch) == SafeState::kLeave) return;
     if (held_[ch] == 0) {
       held_since_[ch] = now;
       held_written_[ch] = false;
@@ -478,7 +478,7 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
     // count the same restart again.
     const bool rewritten =
         config_.on_restart == OnRestart::kRestore ||
-        (config_.on_restart == OnRestart::kSafe && config_.safeStateOf(ch) != SafeState::kHold);
+        (config_.on_restart == OnRestart::kSafe && config_.safeStateOf(ch) != SafeState::kLeave);
     if (!rewritten && !owed_[ch]) {
       Intent found;
       found.at = now;

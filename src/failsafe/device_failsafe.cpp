@@ -571,7 +571,7 @@ FailsafeStatus DeviceFailsafe::status() const {
   const auto names = device_.outputNames();
   std::vector<std::string> states, held;
   for (size_t i = 0; i < names.size(); ++i) {
-    if (fs.safeStateOf(i) != SafeState::kHold)
+    if (fs.safeStateOf(i) != SafeState::kLeave)
       states.push_back(names[i] + " " + safeStateName(fs.safeStateOf(i)));
     if (intents_.heldBy(static_cast<uint8_t>(i)) != 0) held.push_back(names[i]);
   }

@@ -82,7 +82,7 @@ void parseFailsafe(const YAML::Node& n, const std::string& where,
                    const std::vector<std::string>& names, FailsafeConfig* out) {
   if (n["safe_state"]) {
     out->safe_state = perChannel<SafeState>(
-        n["safe_state"], where + "safe_state", names, SafeState::kHold,
+        n["safe_state"], where + "safe_state", names, SafeState::kLeave,
         [](const YAML::Node& v, const std::string& key) {
           SafeState s;
           const std::string text = get<std::string>(v, key, safeStateWords().c_str());
@@ -101,7 +101,7 @@ void parseFailsafe(const YAML::Node& n, const std::string& where,
                              return s;
                            });
     for (size_t i = 0; i < names.size(); ++i) {
-      if (out->command_timeout[i] > 0 && out->safeStateOf(i) == SafeState::kHold)
+      if (out->command_timeout[i] > 0 && out->safeStateOf(i) == SafeState::kLeave)
         fail(where + "command_timeout/" + names[i],
              "needs a safe_state of off or on for that channel (it is hold)");
     }

@@ -27,8 +27,8 @@ Config drawConfig(uint64_t seed) {
       fs.command_timeout.assign(kChannels, 0.0);
       for (int ch = 0; ch < kChannels; ++ch) {
         const int k = r.below(10);
-        fs.safe_state[ch] = k < 4 ? SafeState::kHold : k < 8 ? SafeState::kOff : SafeState::kOn;
-        if (fs.safe_state[ch] != SafeState::kHold && r.chance(30))
+        fs.safe_state[ch] = k < 4 ? SafeState::kLeave : k < 8 ? SafeState::kOff : SafeState::kOn;
+        if (fs.safe_state[ch] != SafeState::kLeave && r.chance(30))
           fs.command_timeout[ch] = r.pick({0.3, 1.0, 2.0});
       }
     } else {

@@ -302,7 +302,7 @@ class World {
   }
   SafeState safeOf(int d, int ch) const { return config_.devices[d].failsafe.safeStateOf(ch); }
   bool safeLevel(int d, int ch) const { return safeOf(d, ch) == SafeState::kOn; }
-  bool hasSafe(int d, int ch) const { return safeOf(d, ch) != SafeState::kHold; }
+  bool hasSafe(int d, int ch) const { return safeOf(d, ch) != SafeState::kLeave; }
   OnRestart onRestart(int d) const { return config_.devices[d].failsafe.on_restart; }
   int devOf(uint8_t address) const {
     for (int d = 0; d < kDevices; ++d)

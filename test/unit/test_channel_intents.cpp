@@ -19,7 +19,7 @@ namespace {
 
 FailsafeConfig relays(OnRestart policy) {
   FailsafeConfig c;  // pump, valve, lamp, fan
-  c.safe_state = {SafeState::kOff, SafeState::kOff, SafeState::kOn, SafeState::kHold};
+  c.safe_state = {SafeState::kOff, SafeState::kOff, SafeState::kOn, SafeState::kLeave};
   c.on_restart = policy;
   return c;
 }
@@ -629,7 +629,7 @@ TEST(ChannelIntents, ARunReadByAPollAWriteRanDuringStillMakesTheChannelTheDevice
 TEST(ChannelIntents, TheNodesContinuousRunReadStoppedIsARestartAndARestoreStartsItAgain) {
   ManualClock clock;
   FailsafeConfig config;
-  config.safe_state = std::vector<SafeState>(8, SafeState::kHold);
+  config.safe_state = std::vector<SafeState>(8, SafeState::kLeave);
   config.safe_state[6] = SafeState::kOff;
   config.on_restart = OnRestart::kRestore;
   ChannelIntents t(config, 8, clock);

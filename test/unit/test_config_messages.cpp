@@ -34,7 +34,7 @@ TEST(ConfigMessages, OneSetOfOnOffWords) {
     EXPECT_EQ(c.devices[0].failsafe.safeStateOf(0), SafeState::kOff) << off;
   }
   EXPECT_EQ(parsed(relays(", safe_state: hold")).devices[0].failsafe.safeStateOf(0),
-            SafeState::kHold);
+            SafeState::kLeave);
   EXPECT_EQ(parseError(relays(", safe_state: {out0: 2}")),
             "devices/r/safe_state/out0: '2' is not one of on, off, hold (on/off also as "
             "true/false, yes/no, 1/0)");

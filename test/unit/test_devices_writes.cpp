@@ -94,8 +94,8 @@ TEST(LcRelay8Writes, AFailedRunStopsTheWriteAndSaysWhatWasWritten) {
 
 TEST(LcRelay8Writes, ASafeStateMapWithHoldBetweenWritesOnlyTheSafeChannels) {
   FailsafeConfig fs;
-  fs.safe_state = {SafeState::kOff, SafeState::kHold, SafeState::kOff,  SafeState::kHold,
-                   SafeState::kOn,  SafeState::kOn,   SafeState::kHold, SafeState::kHold};
+  fs.safe_state = {SafeState::kOff, SafeState::kLeave, SafeState::kOff,   SafeState::kLeave,
+                   SafeState::kOn,  SafeState::kOn,    SafeState::kLeave, SafeState::kLeave};
   const OutputTargets safe = fs.safeTargets(LcRelay8::kChannels);
   LcRelay8 board(config("lc_relay8", 3));
   ScriptedTransport bus;

@@ -53,7 +53,7 @@ TEST(FailsafeConfig, ParsesPerChannelAndForAll) {
   EXPECT_EQ(r.safeStateOf(0), SafeState::kOff);
   EXPECT_EQ(r.safeStateOf(1), SafeState::kOff);
   EXPECT_EQ(r.safeStateOf(2), SafeState::kOn);
-  EXPECT_EQ(r.safeStateOf(3), SafeState::kHold);
+  EXPECT_EQ(r.safeStateOf(3), SafeState::kLeave);
   EXPECT_DOUBLE_EQ(r.commandTimeoutOf(0), 2.0);
   EXPECT_DOUBLE_EQ(r.commandTimeoutOf(1), 0.0);
   EXPECT_EQ(r.on_restart, OnRestart::kRestore);
@@ -108,7 +108,7 @@ TEST(FailsafeConfig, BadValuesAreRefusedWithTheKeyNamed) {
 
 TEST(ChannelIntents, SafeTargetsLeaveHoldChannelsAlone) {
   FailsafeConfig c;
-  c.safe_state = {SafeState::kOff, SafeState::kHold, SafeState::kOn};
+  c.safe_state = {SafeState::kOff, SafeState::kLeave, SafeState::kOn};
   ChannelIntents t(c, 3);
   const OutputTargets s = t.safeTargets();
   EXPECT_EQ(s.channels, (std::vector<uint8_t>{0, 2}));

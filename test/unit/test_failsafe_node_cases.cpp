@@ -107,7 +107,7 @@ DeviceConfig relayBoard(const std::string& name, int address) {
   d.address = address;
   d.poll_rate = 5.0;
   d.failsafe.on_restart = OnRestart::kRestore;
-  d.failsafe.safe_state.assign(8, SafeState::kHold);
+  d.failsafe.safe_state.assign(8, SafeState::kLeave);
   d.failsafe.safe_state[kPump] = d.failsafe.safe_state[kValve] = SafeState::kOff;
   d.failsafe.safe_state[kFan] = SafeState::kOff;
   d.failsafe.command_timeout.assign(8, 0.0);

@@ -13,11 +13,13 @@
 
 namespace modbus_rtu_driver {
 
-enum class SafeState { kHold, kOff, kOn };
+// kLeave: no safe state, the fail-safe leaves the output alone (YAML `hold`, its word since
+// the first release); not ChannelIntents::hold, which keeps a channel in its safe state.
+enum class SafeState { kLeave, kOff, kOn };
 enum class OnRestart { kLeave, kRestore, kSafe };
 
 inline constexpr NameTable<SafeState, 3> kSafeStateNames{
-    {{SafeState::kOff, "off"}, {SafeState::kOn, "on"}, {SafeState::kHold, "hold"}}};
+    {{SafeState::kOff, "off"}, {SafeState::kOn, "on"}, {SafeState::kLeave, "hold"}}};
 inline constexpr NameTable<OnRestart, 3> kOnRestartNames{
     {{OnRestart::kRestore, "restore"}, {OnRestart::kSafe, "safe"}, {OnRestart::kLeave, "leave"}}};
 // "hold", or on / off in any of the switch words (kSwitchWords: on/off, true/false, yes/no, 1/0).
@@ -43,7 +45,7 @@ struct FailsafeConfig {
   double heartbeat_timeout = 0.0;  // s
 
   SafeState safeStateOf(size_t channel) const {
-    return channel < safe_state.size() ? safe_state[channel] : SafeState::kHold;
+    return channel < safe_state.size() ? safe_state[channel] : SafeState::kLeave;
   }
   double commandTimeoutOf(size_t channel) const {
     return channel < command_timeout.size() ? command_timeout[channel] : 0.0;
