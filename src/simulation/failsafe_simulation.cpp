@@ -79,6 +79,8 @@ const std::vector<std::string>& simRequiredCoverage() {
     r.emplace_back("fault kill with a frame on the line");
     // docs/share.md: a shared request to another device within a device's late-reply guard.
     r.emplace_back("path shared request in another device's guard");
+    // failsafe.md F90: a new read with a failed read's frame takes its late reply, no guard.
+    r.emplace_back("path a new read took its frame's late reply within the guard");
     // The fail-safe's events, by trigger, device type and action (docs/failsafe.md, "What
     // happens when"): written and confirmed, or owed ("(unconfirmed)": the device was silent).
     for (const char* t : {"lc_relay8", "ld58a08", "yespeed_pdu", "generic"}) {

@@ -137,8 +137,13 @@ Result MemoryLink::readReply(const EncodedRequest& request, LineEvent& event,
   if (event.stale) {
     ++stale_read_;
     event.refused = false;  // the node read another frame, not the device's refusal
-    event.taken_within_guard = r.ok() && a.late_by > 0 && a.late_by <= config_.late_reply_guard &&
-                               a.request != request.adu();
+    // F90: within the guard, only a retry of that request or a new read with its frame may
+    // take it (a new write with its frame would be confirmed by an echo of the old one).
+    const bool within_guard = r.ok() && a.late_by > 0 && a.late_by <= config_.late_reply_guard;
+    const bool same_frame = a.request == request.adu();
+    const bool new_read = !retrying() && isReadFunction(request.request().function);
+    event.taken_within_guard = within_guard && !(same_frame && (retrying() || new_read));
+    event.taken_by_same_read = within_guard && same_frame && new_read;
   }
   // Taken as the reply (a foreign or stale frame too, if it passes the reply checks) it counts
   // as an answer with its values.

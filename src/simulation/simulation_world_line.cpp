@@ -131,6 +131,7 @@ void World::onAttempt(const LineEvent& e) {
   // Incorrect sequence, repetition: the node read a frame that was not this request's reply
   // (a late or repeated one, or a foreign frame), and took it or rejected it.
   if (e.stale) cover(e.answered ? "line another's reply taken" : "line another's reply rejected");
+  if (e.taken_by_same_read) cover("path a new read took its frame's late reply within the guard");
   const int d = devOf(e.request.slave);
   if (d < 0) return;
   // A repeated or late reply of the same shape, taken as this read's (Modbus RTU has no

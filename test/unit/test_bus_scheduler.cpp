@@ -860,8 +860,8 @@ struct GuardedLine : Transport {
     clock.advance(5ms);
     return Result::success({0});
   }
-  double guardLeft(uint8_t slave) const override {
-    const auto g = guard_until.find(slave);
+  double guardLeft(const Request& next) const override {
+    const auto g = guard_until.find(next.slave);
     if (g == guard_until.end() || g->second <= clock.now()) return 0;
     return std::chrono::duration<double>(g->second - clock.now()).count();
   }

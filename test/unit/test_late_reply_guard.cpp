@@ -132,19 +132,43 @@ TEST(LateReplyGuard, ARetryTakesItsRequestsLateReply) {
   EXPECT_EQ(l.link.staleRead(), 1u) << "the retry read the first attempt's reply";
 }
 
-// A new transaction with the same frame is no retry: the old reply would confirm a write the
-// device may never have heard (a share client's FC05 confirmed by an earlier command's echo,
-// stop 56). It waits for the guard like any other request.
-TEST(LateReplyGuard, ANewRequestWithTheSameFrameDoesNotTakeTheOldReply) {
+// A new write with the same frame is no retry: the old echo would confirm a write the device
+// may never have heard (a share client's FC05 confirmed by an earlier command's echo, stop 56).
+// It waits for the guard like any other request (docs/failsafe.md F90).
+TEST(LateReplyGuard, ANewWriteWithTheSameFrameDoesNotTakeTheOldEcho) {
+  for (const double late_by : latenessesWithinTheGuard()) {
+    Line l(0);
+    const Request write = Request::writeMultipleRegisters(2, 0x20, {7, 2, 0xFFFF});
+    l.link.faults(2).late = 1;
+    l.link.faults(2).late_by = late_by;
+    EXPECT_EQ(l.link.execute(write).error, ErrorKind::kTimeout);
+    const Result again = l.link.execute(write);
+    ASSERT_TRUE(again.ok()) << again.message;
+    EXPECT_EQ(l.link.staleRead(), 0u)
+        << "the new write took the old one's echo, " << late_by << " s late";
+  }
+}
+
+// A new read with the failed read's frame may take its late reply, as a retry would (the same
+// question, answered a little earlier; F90): it goes without waiting for the guard, so a
+// client reading a silent device again and again pays its time-outs only (issue 52). Its own
+// reply may then come late in turn: the next different request still waits for it.
+TEST(LateReplyGuard, ANewReadWithTheSameFrameGoesWithoutTheGuard) {
   for (const double late_by : latenessesWithinTheGuard()) {
     Line l(0);
     l.link.faults(2).late = 1;
     l.link.faults(2).late_by = late_by;
     EXPECT_EQ(l.channel1().error, ErrorKind::kTimeout);
+    const auto before = l.clock.now();
     const Result again = l.channel1();
+    const double took = std::chrono::duration<double>(l.clock.now() - before).count();
     ASSERT_TRUE(again.ok()) << again.message;
-    EXPECT_EQ(l.link.staleRead(), 0u)
-        << "the new read took the old one's reply, " << late_by << " s late";
+    EXPECT_EQ(again.values, (std::vector<uint16_t>{5, 1, 0xFFFF}));
+    EXPECT_LT(took, kGuard) << "the new read waited for the guard, " << late_by << " s late";
+    const Result other = l.channel0();
+    ASSERT_TRUE(other.ok()) << other.message;
+    EXPECT_EQ(other.values, kChannel0)
+        << "a different request took a reply to channel 1's reads, " << late_by << " s late";
   }
 }
 
@@ -154,23 +178,27 @@ TEST(LateReplyGuard, ANewRequestWithTheSameFrameDoesNotTakeTheOldReply) {
 // can keep the line, every retry included but not the guard after it.
 TEST(LateReplyGuard, TheGuardLeftIsWhatTheNextRequestWaits) {
   Line l(1);
-  EXPECT_EQ(l.link.guardLeft(2), 0.0);
+  const Request failed = Request::readHoldingRegisters(2, 0x10, 3);
+  const Request next = Request::readHoldingRegisters(2, 0x00, 3);
+  EXPECT_EQ(l.link.guardLeft(next), 0.0);
   l.link.faults(2).silent = true;
   const auto sent = l.clock.now();
   EXPECT_EQ(l.channel1().error, ErrorKind::kTimeout);
   const double took = std::chrono::duration<double>(l.clock.now() - sent).count();
-  const double line = l.link.lineSeconds(Request::readHoldingRegisters(2, 0x10, 3));
+  const double line = l.link.lineSeconds(failed);
   EXPECT_LE(took, line) << "the failed read took longer than its longest line time";
-  EXPECT_NEAR(line + kGuard,
-              l.link.worstTransactionSeconds(Request::readHoldingRegisters(2, 0x10, 3)), 1e-9);
-  const double left = l.link.guardLeft(2);
+  EXPECT_NEAR(line + kGuard, l.link.worstTransactionSeconds(failed), 1e-9);
+  const double left = l.link.guardLeft(next);
   EXPECT_GT(left, kGuard * 0.9);
   EXPECT_LE(left, kGuard + 0.2);  // counted from its own reply's time-out, at most 0.2 s on
-  EXPECT_EQ(l.link.guardLeft(1), 0.0) << "the LC board has no guard";
+  EXPECT_EQ(l.link.guardLeft(failed), 0.0) << "a new read with its frame goes at once (F90)";
+  EXPECT_EQ(l.link.guardLeft(Request::writeMultipleRegisters(2, 0x10, {5, 1, 0xFFFF})), left)
+      << "a write waits, whatever its frame";
+  EXPECT_EQ(l.link.guardLeft(Request::readCoils(1, 0, 8)), 0.0) << "the LC board has no guard";
   l.link.faults(2).silent = false;
   const auto before = l.clock.now();
   ASSERT_TRUE(l.channel0().ok());
   const double waited = std::chrono::duration<double>(l.clock.now() - before).count();
   EXPECT_GE(waited, left - 1e-6) << "the next request waited less than guardLeft said";
-  EXPECT_EQ(l.link.guardLeft(2), 0.0) << "settled by that wait";
+  EXPECT_EQ(l.link.guardLeft(next), 0.0) << "settled by that wait";
 }

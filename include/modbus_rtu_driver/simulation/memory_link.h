@@ -67,6 +67,9 @@ struct LineEvent {
   // A late reply taken as another request's reply though it came within late_reply_guard of
   // its own request's time-out (the guard's promise broken: I21).
   bool taken_within_guard = false;
+  // A late reply within late_reply_guard taken by a new read with its request's frame, as a
+  // retry would take it (F90 lets it: the same question, answered a little earlier).
+  bool taken_by_same_read = false;
   std::vector<uint16_t> values;  // a read's answer as the node got it (the device's state
                                  // at the request, not at the observer's later clock)
   uint64_t execute_id = 0;
@@ -177,7 +180,7 @@ class CountingTransport : public Transport {
   bool connect(std::string* error) override { return link_.connect(error); }
   bool connected() const override { return link_.connected(); }
   void disconnect() override { link_.disconnect(); }
-  double guardLeft(uint8_t slave) const override { return link_.guardLeft(slave); }
+  double guardLeft(const Request& next) const override { return link_.guardLeft(next); }
   double lineSeconds(const Request& request) const override { return link_.lineSeconds(request); }
 
  private:

@@ -66,7 +66,7 @@ bool BusScheduler::stopBy(std::chrono::steady_clock::time_point deadline) {
 }
 
 Result BusScheduler::NotingTransport::execute(const Request& request) {
-  owner.useGuardTime(request.slave);
+  owner.useGuardTime(request);
   Result r = inner.execute(request);
   sent = true;
   last_unanswered = r.error == ErrorKind::kTimeout;
@@ -353,13 +353,13 @@ void BusScheduler::runPending(std::unique_lock<std::mutex>& lock, Pending p) {
 // guard does: the guarded request starts no later than it would have, and the writes and polls
 // keep their order. Without this, a device whose replies are dropped held every client's read
 // of another device for its guards (about 145 ms after each retry: issue 52).
-void BusScheduler::useGuardTime(uint8_t slave) {
+void BusScheduler::useGuardTime(const Request& next) {
   if (in_guard_) return;
   while (transport_.connected()) {
-    const double left = transport_.guardLeft(slave);
+    const double left = transport_.guardLeft(next);
     if (left <= 0) return;
     std::unique_lock<std::mutex> lock(mutex_);
-    const auto it = fitsInGuard(slave, left);
+    const auto it = fitsInGuard(next.slave, left);
     if (it == shared_.end()) return;
     Pending p = std::move(*it);
     shared_.erase(it);
@@ -368,7 +368,7 @@ void BusScheduler::useGuardTime(uint8_t slave) {
     runPending(lock, std::move(p));
     in_guard_ = false;
     lock.unlock();
-    if (guard_observer_) guard_observer_(slave, left, transport_.guardLeft(slave));
+    if (guard_observer_) guard_observer_(next.slave, left, transport_.guardLeft(next));
   }
 }
 
@@ -384,7 +384,7 @@ std::deque<BusScheduler::Pending>::iterator BusScheduler::fitsInGuard(uint8_t gu
     const bool write_queued = std::any_of(writes_.begin(), writes_.end(), [&](const Pending& w) {
       return w.device == owner || (!it->device.empty() && w.device == it->device);
     });
-    if (write_queued || transport_.guardLeft(slave) > 0) continue;
+    if (write_queued || transport_.guardLeft(*it->request) > 0) continue;
     const double line = transport_.lineSeconds(*it->request);
     if (line >= 0 && line <= left) return it;
   }
@@ -408,7 +408,7 @@ Result BusScheduler::PollTransport::execute(const Request& request) {
       }
     }
   }
-  owner.useGuardTime(request.slave);
+  owner.useGuardTime(request);
   return owner.transport_.execute(request);
 }
 

@@ -147,27 +147,33 @@ Result Link::runBroadcast(const EncodedRequest& request) {
 
 double Link::worstTransactionSeconds(const Request& asked) const {
   const std::optional<EncodedRequest> encoded = EncodedRequest::encode(asked);
-  if (!encoded) return 0.0;
+  return encoded ? worstSeconds(*encoded) : 0.0;
+}
+
+double Link::worstSeconds(const EncodedRequest& encoded) const {
+  const Request& asked = encoded.request();
   const double character = characterTime(config_);
-  const double send = minGap() + static_cast<double>(encoded->adu().size()) * character;
+  const double send = minGap() + static_cast<double>(encoded.adu().size()) * character;
   if (!asked.expectsReply()) return send;
-  const size_t reply = std::max<size_t>(encoded->replyLength(), kShortestReply);
-  const double attempt = send + responseTimeout(*encoded) + static_cast<double>(reply) * character +
+  const size_t reply = std::max<size_t>(encoded.replyLength(), kShortestReply);
+  const double attempt = send + responseTimeout(encoded) + static_cast<double>(reply) * character +
                          effectiveByteTimeout(config_);
   const int attempts = asked.repeatable ? 1 + std::max(0, config_.retries) : 1;
   return attempts * attempt + config_.late_reply_guard;
 }
 
 double Link::lineSeconds(const Request& request) const {
-  if (!EncodedRequest::encode(request)) return -1;
-  return worstTransactionSeconds(request) - config_.late_reply_guard;
+  const std::optional<EncodedRequest> encoded = EncodedRequest::encode(request);
+  return encoded ? worstSeconds(*encoded) - config_.late_reply_guard : -1;
 }
 
-double Link::guardLeft(uint8_t slave) const {
-  if (!guardsLateReplies()) return 0;
-  const auto mine = unsettled_.find(slave);
-  if (mine == unsettled_.end()) return 0;
-  const auto left = mine->second.failed_at + seconds(config_.late_reply_guard) - lineNow();
+double Link::guardLeft(const Request& next) const {
+  // Most requests find no failed transaction of their slave: no encoding for them.
+  if (!guardsLateReplies() || unsettled_.count(next.slave) == 0) return 0;
+  const std::optional<EncodedRequest> encoded = EncodedRequest::encode(next);
+  const Unsettled* guard = encoded ? holding(*encoded) : nullptr;
+  if (!guard) return 0;
+  const auto left = guard->failed_at + seconds(config_.late_reply_guard) - lineNow();
   return std::max(0.0, std::chrono::duration<double>(left).count());
 }
 
@@ -311,10 +317,14 @@ Steady::duration Link::gapSpinMargin() const {
 // Before a request: if a transaction with this slave failed less than late_reply_guard ago,
 // its reply may still come, and a request of the same shape would take it: wait until the line
 // has been quiet that long. A retry of that transaction need not wait: a late answer to it is
-// the right answer. A new transaction waits even with the same frame: the old reply would
-// confirm a write the device may never have heard (the simulation found a share client's FC05
-// confirmed by the echo of an earlier command's, stop 56). Another slave's request cannot take
-// it (the address differs), so a dead device costs the others nothing.
+// the right answer. Nor need a new read with its frame: the late reply answers the same
+// question, a little earlier, and nothing went to that slave in between (anything else waits
+// here and settles the line); a silent device that a client reads again and again then costs
+// each read its time-outs, not a guard more (issue 52). A new write waits even with the same
+// frame: the old echo would confirm a write the device may never have heard (the simulation
+// found a share client's FC05 confirmed by the echo of an earlier command's, stop 56). Another
+// slave's request cannot take it (the address differs), so a dead device costs the others
+// nothing.
 void Link::settleLine(int fd, const EncodedRequest& request) {
   if (const auto until = guardUntil(request)) {
     awaitQuietLine(fd, *until);
@@ -326,12 +336,20 @@ std::optional<std::chrono::steady_clock::time_point> Link::guardUntil(
     const EncodedRequest& request) {
   const auto now = lineNow();
   forgetSettled(now);
-  const auto mine = unsettled_.find(request.request().slave);
-  if (mine == unsettled_.end() || (retrying_ && mine->second.frame == request.adu())) {
+  const Unsettled* guard = holding(request);
+  if (!guard) {
     settled_at_ = now;
     return std::nullopt;
   }
-  return mine->second.failed_at + seconds(config_.late_reply_guard);
+  return guard->failed_at + seconds(config_.late_reply_guard);
+}
+
+const Link::Unsettled* Link::holding(const EncodedRequest& request) const {
+  const auto mine = unsettled_.find(request.request().slave);
+  if (mine == unsettled_.end()) return nullptr;
+  const bool takes_it = mine->second.frame == request.adu() &&
+                        (retrying_ || isReadFunction(request.request().function));
+  return takes_it ? nullptr : &mine->second;
 }
 
 void Link::forgetSettled(std::chrono::steady_clock::time_point now) {

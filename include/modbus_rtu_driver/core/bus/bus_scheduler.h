@@ -202,9 +202,9 @@ class BusScheduler {
   bool runOneQueued(std::unique_lock<std::mutex>& lock);
   // Runs `p` (taken off its queue); `lock` held on entry and on return.
   void runPending(std::unique_lock<std::mutex>& lock, Pending p);
-  // Before a request to `slave` (lock free): while that slave's late-reply guard holds the
-  // line, runs the queued shared requests to other slaves that end before the guard does.
-  void useGuardTime(uint8_t slave);
+  // Before `next` (lock free): while its slave's late-reply guard holds it, runs the queued shared
+  // requests to other slaves that end before the guard does.
+  void useGuardTime(const Request& next);
   // The first shared request that can go within `left` seconds of `guarded`'s guard (a request
   // to another slave, not guarded itself, with no earlier request of its slave or write of its
   // device queued); shared_.end() if none. `lock` held.

@@ -94,7 +94,7 @@ class Link : public Transport {
   // thread, once the reply delays are set (before the bus starts).
   double worstTransactionSeconds(const Request& request) const;
   // Bus thread.
-  double guardLeft(uint8_t slave) const override;
+  double guardLeft(const Request& next) const override;
   double lineSeconds(const Request& request) const override;
   LinkStats stats() const;
   // What the port names: its kind (LinkType: name, traits) and address.
@@ -137,6 +137,7 @@ class Link : public Transport {
     return std::chrono::steady_clock::now();
   }
   void addStaleBytes(uint64_t n);
+  bool retrying() const { return retrying_; }  // the attempt running is a retry
   // The failure a reader status means ("gateway" or the port in `medium` messages).
   Result readFailure(const Request& request, ReadStatus status, const Bytes& partial, int error,
                      const std::string& medium) const;
@@ -167,6 +168,7 @@ class Link : public Transport {
   void awaitQuietLine(int fd, std::chrono::steady_clock::time_point until);
   // Drops the failed transactions whose late reply can no longer come (their guard ran out).
   void forgetSettled(std::chrono::steady_clock::time_point now);
+  double worstSeconds(const EncodedRequest& request) const;  // worstTransactionSeconds, encoded
   // How much of a gap a real-time thread spins: 1.5 x the sleeps' lateness + 10 us, at most
   // kMaxGapSpin.
   std::chrono::steady_clock::duration gapSpinMargin() const;
@@ -182,7 +184,10 @@ class Link : public Transport {
     Bytes frame;
   };
   std::map<uint8_t, Unsettled> unsettled_;  // by slave
-  bool retrying_ = false;                   // the attempt running is a retry (guardUntil)
+  // The failed transaction whose late reply holds `request` (F90), or nullptr: none with its
+  // slave, or `request` may take that reply (a retry of it, or a new read with its frame).
+  const Unsettled* holding(const EncodedRequest& request) const;
+  bool retrying_ = false;  // the attempt running is a retry (guardUntil)
   // When the attempt running was through the guard (its request goes after the gap from here):
   // its own reply is due by then plus the gap, the frame and the response timeout.
   std::chrono::steady_clock::time_point settled_at_{};

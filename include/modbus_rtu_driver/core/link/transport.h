@@ -25,10 +25,10 @@ class Transport {
   // Waits until the line may carry the next frame (the silence after the last one), so the
   // scheduler can pick what goes next as late as possible.
   virtual void awaitLineFree() {}
-  // The late-reply guard (docs/failsafe.md F90): how long a request to `slave` would still wait
-  // for a quiet line before it goes (0: it would go now).
-  virtual double guardLeft(uint8_t slave) const {
-    (void)slave;
+  // The late-reply guard (docs/failsafe.md F90): how long `next` would still wait for a quiet
+  // line before it goes (0: it would go now).
+  virtual double guardLeft(const Request& next) const {
+    (void)next;
     return 0;
   }
   // The longest `request` can keep the line, every retry included but not the guard that may
