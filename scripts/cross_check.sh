@@ -107,13 +107,18 @@ install_deps() {
     if [ "$kind" = host ]; then missing+=("$p"); else targets+=("$p"); fi
   done < <(list_packages)
   if ((${#missing[@]} + ${#targets[@]})) && ((!updated)); then apt_get update -qq; fi
+  # The host's packages first: whether a target's co-installs is asked beside them (a target
+  # installed first could keep the host's from installing: libyaml-cpp-dev is not Multi-Arch).
+  if ((${#missing[@]})); then
+    echo "installing: ${missing[*]}"
+    apt_get install -y -qq --no-install-recommends "${missing[@]}"
+  fi
   for p in ${targets[@]+"${targets[@]}"}; do
     if coinstalls "$p"; then apt+=("$p"); else extract+=("$p"); fi
   done
-  if ((${#missing[@]} + ${#apt[@]})); then
-    echo "installing: ${missing[*]} ${apt[*]}"
-    apt_get install -y -qq --no-install-recommends ${missing[@]+"${missing[@]}"} \
-      ${apt[@]+"${apt[@]}"}
+  if ((${#apt[@]})); then
+    echo "installing: ${apt[*]}"
+    apt_get install -y -qq --no-install-recommends "${apt[@]}"
   fi
   rm -rf "$SYSROOT"
   if ((${#extract[@]})); then unpack "${extract[@]}"; fi
