@@ -199,7 +199,13 @@ void ChannelIntents::writeRan() {
   write_during_poll_ = true;
 }
 
-void ChannelIntents::hold(const std::vector<uint8_t>& channels, HoldTrigger trigger) {
+namespace {
+uint8_t bitOf(Trigger trigger) {
+  return static_cast<uint8_t>(1u << static_cast<unsigned>(trigger));
+}
+}  // namespace
+
+void ChannelIntents::hold(const std::vector<uint8_t>& channels, Trigger trigger) {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto now = clock_.now();
   const auto holdOne = [&](size_t ch) {
@@ -208,7 +214,7 @@ void ChannelIntents::hold(const std::vector<uint8_t>& channels, HoldTrigger trig
       held_since_[ch] = now;
       held_written_[ch] = false;
     }
-    held_[ch] |= static_cast<uint8_t>(trigger);
+    held_[ch] |= bitOf(trigger);
   };
   if (channels.empty()) {
     for (size_t ch = 0; ch < channels_; ++ch) holdOne(ch);
@@ -244,13 +250,17 @@ std::vector<uint8_t> ChannelIntents::heldNotSafe() const {
   return chs;
 }
 
-uint8_t ChannelIntents::heldBy(uint8_t channel) const {
+bool ChannelIntents::held(uint8_t channel) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return channel < channels_ ? held_[channel] : 0;
+  return channel < channels_ && held_[channel] != 0;
 }
 
-void ChannelIntents::owe(const OutputTargets& targets, Clock::time_point since,
-                         const std::string& trigger) {
+bool ChannelIntents::heldBy(uint8_t channel, Trigger trigger) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return channel < channels_ && (held_[channel] & bitOf(trigger)) != 0;
+}
+
+void ChannelIntents::owe(const OutputTargets& targets, Clock::time_point since) {
   std::lock_guard<std::mutex> lock(mutex_);
   for (size_t i = 0; i < targets.channels.size() && i < targets.states.size(); ++i) {
     const uint8_t ch = targets.channels[i];
@@ -258,7 +268,7 @@ void ChannelIntents::owe(const OutputTargets& targets, Clock::time_point since,
     // A command confirmed after the trigger is newer: the trigger no longer speaks for it.
     const auto& in = intent_[ch];
     if (in && userSource(in->source) && in->at > since) continue;
-    owed_[ch] = Owed{targets.states[i], since, trigger};
+    owed_[ch] = Owed{targets.states[i], since};
   }
 }
 
@@ -272,14 +282,6 @@ OutputTargets ChannelIntents::owed() const {
     t.states.push_back(o->level);
   }
   return t;
-}
-
-std::string ChannelIntents::owedTrigger() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  const Owed* oldest = nullptr;
-  for (const auto& o : owed_)
-    if (o && (!oldest || o->since < oldest->since)) oldest = &*o;
-  return oldest ? oldest->trigger : std::string();
 }
 
 Clock::duration ChannelIntents::endSlack(Clock::time_point at, Clock::time_point ends) {

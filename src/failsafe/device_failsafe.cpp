@@ -18,14 +18,14 @@ std::string FailsafeReport::runsStartedText() const {
 }
 
 std::string FailsafeReport::text() const {
-  std::string t = trigger + " (" + reason + "): ";
+  std::string t = std::string(triggerName(trigger)) + " (" + reason + "): ";
   std::vector<std::string> changes;
   for (size_t i = 0; i < channels.size() && i < states.size(); ++i)
     changes.push_back(channels[i] + (i < runs.size() && runs[i] ? " PWM run started again"
                                      : states[i]                ? " on"
                                                                 : " off"));
   t += join(changes);
-  if (channels.empty()) t += action;
+  if (channels.empty()) t += actionName(action);
   if (!confirmed) t += "; NOT confirmed: " + message;
   return t;
 }
@@ -49,17 +49,16 @@ std::string DeviceFailsafe::channelNames(const std::vector<uint8_t>& channels) c
   return join(channels, ", ", [&names](uint8_t c) { return names[c]; });
 }
 
-std::future<Result> DeviceFailsafe::applySafe(const std::string& trigger, const std::string& reason,
+std::future<Result> DeviceFailsafe::applySafe(Trigger trigger, const std::string& reason,
                                               const std::vector<uint8_t>& only) {
   // A trigger that lasts holds its channels safe on every restore until they are commanded
   // again, even if this write does not get through; what the write sets is read from the holds
   // when the bus gets to it, so a channel commanded in between is left as commanded.
-  const bool lasting = trigger == "heartbeat" || trigger == "command_timeout";
+  const bool lasting = holdsChannels(trigger);
   const auto since = intents_.clock().now();
   OutputTargets targets;
   if (lasting) {
-    intents_.hold(only,
-                  trigger == "heartbeat" ? HoldTrigger::kHeartbeat : HoldTrigger::kCommandTimeout);
+    intents_.hold(only, trigger);
     targets = intents_.heldTargets(only);
   } else {
     const OutputTargets all = intents_.safeTargets();
@@ -71,24 +70,26 @@ std::future<Result> DeviceFailsafe::applySafe(const std::string& trigger, const 
     }
   }
   if (targets.empty()) return readyResult(Result::success());
-  return scheduler_.submit(device_.name(), [this, lasting, only, targets, trigger, reason,
-                                            since](Transport& t) {
-    const OutputTargets now = lasting ? intents_.heldTargets(only) : targets;
-    if (now.empty()) return Result::success();  // commanded again before the bus got to it
-    // A write of every safe channel (a node stop, on_start): it carries the channels commanded
-    // since the trigger too, so what it owes is stamped when it went out (docs/failsafe.md F40).
-    if (!lasting) return writeAndReport(t, now, trigger, reason, "safe", intents_.clock().now());
-    // A device silent since its last answer costs the other devices' safe writes (queued
-    // behind this one) its write alone: the read that tells whether the write got through
-    // anyway goes after them (docs/failsafe.md, "Timing").
-    UntilSilentTransport until_silent(t);
-    return writeAndReport(until_silent, now, trigger, reason, "safe", since, &until_silent, only);
-  });
+  return scheduler_.submit(
+      device_.name(), [this, lasting, only, targets, trigger, reason, since](Transport& t) {
+        const OutputTargets now = lasting ? intents_.heldTargets(only) : targets;
+        if (now.empty()) return Result::success();  // commanded again before the bus got to it
+        // A write of every safe channel (a node stop, on_start): it carries the channels commanded
+        // since the trigger too, so what it owes is stamped when it went out (docs/failsafe.md
+        // F40).
+        if (!lasting)
+          return writeAndReport(t, now, trigger, reason, Action::kSafe, intents_.clock().now());
+        // A device silent since its last answer costs the other devices' safe writes (queued
+        // behind this one) its write alone: the read that tells whether the write got through
+        // anyway goes after them (docs/failsafe.md, "Timing").
+        UntilSilentTransport until_silent(t);
+        return writeAndReport(until_silent, now, trigger, reason, Action::kSafe, since,
+                              &until_silent, only);
+      });
 }
 
-Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets,
-                                      const std::string& trigger, const std::string& reason,
-                                      const std::string& action,
+Result DeviceFailsafe::writeAndReport(Transport& t, const OutputTargets& targets, Trigger trigger,
+                                      const std::string& reason, Action action,
                                       std::optional<Clock::time_point> owe_since,
                                       const UntilSilentTransport* until_silent,
                                       const std::vector<uint8_t>& held_only,
@@ -186,15 +187,16 @@ Result DeviceFailsafe::settle(const OutputTargets& targets, Result w, FailsafeRe
                               const std::string& confirmed_text) {
   if (w.ok()) {
     // A safe write is a command like any other: a restore writes it again.
-    intents_.commanded(targets.channels, targets.states,
-                       r.action == "restore" ? CommandSource::kRestore : CommandSource::kSafe);
+    intents_.commanded(
+        targets.channels, targets.states,
+        r.action == Action::kRestore ? CommandSource::kRestore : CommandSource::kSafe);
     if (outputs_written_) outputs_written_();
     // A restore with no channel held safe put back what users had: no longer in a safe state.
-    if (r.action == "restore" && !intents_.anyHeld()) endSafeState();
+    if (r.action == Action::kRestore && !intents_.anyHeld()) endSafeState();
     timedMaybeChanged();
   } else if (owe_since) {
     // Owed per channel: written when the device answers again, unless commanded before that.
-    intents_.owe(targets, *owe_since, r.trigger);
+    intents_.owe(targets, *owe_since);
   }
   // A restore's runs started again count too (FailsafeReport::runs).
   r.levels_confirmed = w.ok();
@@ -238,15 +240,14 @@ void DeviceFailsafe::afterPoll() {
   const bool owed = !intents_.owed().empty();
   const std::vector<uint8_t> held_not_safe = intents_.heldNotSafe();
   if (verdict == ChannelIntents::Verdict::kNormal && !owed && held_not_safe.empty()) return;
-  std::string trigger = "restart";
+  Trigger trigger = Trigger::kRestart;
   std::string reason = "the device answers again; its safe state was not reached before";
-  std::string action = "safe";
+  Action action = Action::kSafe;
   if (!owed && !held_not_safe.empty()) {
     // A hold puts its channels back (whatever on_restart says), named for its trigger.
-    trigger =
-        (intents_.heldBy(held_not_safe.front()) & static_cast<uint8_t>(HoldTrigger::kHeartbeat))
-            ? "heartbeat"
-            : "command_timeout";
+    trigger = intents_.heldBy(held_not_safe.front(), Trigger::kHeartbeat)
+                  ? Trigger::kHeartbeat
+                  : Trigger::kCommandTimeout;
     reason = "held safe, but a poll shows " + channelNames(held_not_safe) + " otherwise";
   }
   if (verdict != ChannelIntents::Verdict::kNormal) {
@@ -261,9 +262,9 @@ void DeviceFailsafe::afterPoll() {
     const OnRestart policy = config().on_restart;
     // With on_restart: leave, only the owed and held safe states are written: say so.
     action = (owed || !held_not_safe.empty()) && policy == OnRestart::kLeave
-                 ? "safe"
-                 : onRestartName(policy);
-    trigger = "restart";
+                 ? Action::kSafe
+                 : restartAction(policy);
+    trigger = Trigger::kRestart;
   }
   // What to write is read when the write runs: a command confirmed before then is not undone.
   scheduler_.submit(device_.name(), [this, verdict, trigger, reason, action](Transport& t) {
@@ -276,7 +277,7 @@ void DeviceFailsafe::afterPoll() {
       r.action = action;
       r.confirmed = r.levels_confirmed = confirmed;
       r.message = message;
-      r.note_only = confirmed && action == "leave" && !hasSafeStates();
+      r.note_only = confirmed && action == Action::kLeave && !hasSafeStates();
       report(r);
     };
     std::vector<bool> runs(device_.outputCount(), false);
@@ -316,7 +317,7 @@ void DeviceFailsafe::afterPoll() {
       return runs_result;
     }
     if (verdict == ChannelIntents::Verdict::kNormal) return Result::success();
-    nothingWritten(true, "outputs left as they are");  // trigger is "restart" here
+    nothingWritten(true, "outputs left as they are");  // trigger is kRestart here
     return Result::success();
   });
 }
@@ -352,12 +353,12 @@ std::vector<DeviceFailsafe::Fired> DeviceFailsafe::firedTriggers() {
   std::vector<Fired> fired;
   const auto expired = intents_.expiredCommands();
   if (!expired.empty())
-    fired.push_back({"command_timeout",
+    fired.push_back({Trigger::kCommandTimeout,
                      "no command on " + channelNames(expired) + " within its command_timeout",
                      expired});
   if (heartbeat_ && heartbeat_->expired()) {
     const FailsafeConfig& fs = config();
-    fired.push_back({"heartbeat",
+    fired.push_back({Trigger::kHeartbeat,
                      "no message on " + fs.heartbeat_topic + " within " +
                          numberText(fs.heartbeat_timeout) + " s",
                      {}});
@@ -546,7 +547,7 @@ void DeviceFailsafe::report(const FailsafeReport& r) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++events_;
     last_event_ = text;
-    if (!r.channels.empty() && r.action == "safe") {
+    if (!r.channels.empty() && r.action == Action::kSafe) {
       active_ = text;
       active_trigger_ = r.trigger;
     }
@@ -573,7 +574,7 @@ FailsafeStatus DeviceFailsafe::status() const {
   for (size_t i = 0; i < names.size(); ++i) {
     if (fs.safeStateOf(i) != SafeState::kLeave)
       states.push_back(names[i] + " " + safeStateName(fs.safeStateOf(i)));
-    if (intents_.heldBy(static_cast<uint8_t>(i)) != 0) held.push_back(names[i]);
+    if (intents_.held(static_cast<uint8_t>(i))) held.push_back(names[i]);
   }
   s.safe_states = states.empty() ? "none (every output holds)" : join(states);
   s.on_restart = onRestartName(fs.on_restart);
@@ -592,7 +593,7 @@ FailsafeStatus DeviceFailsafe::status() const {
   if (!s.lost_heartbeat.empty()) {
     s.warn =
         "heartbeat lost (no message on " + s.lost_heartbeat + "): outputs held in their safe state";
-  } else if (!active_.empty() && active_trigger_ != "heartbeat") {
+  } else if (!active_.empty() && active_trigger_ != Trigger::kHeartbeat) {
     s.warn = "outputs in their safe state after " + active_;
   }
   return s;

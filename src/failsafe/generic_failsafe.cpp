@@ -13,8 +13,7 @@ GenericFailsafe::GenericFailsafe(GenericDevice& device, BusScheduler& scheduler)
       set_at_(device.signals().size(), 0),
       owed_since_(device.signals().size(), 0) {}
 
-std::future<Result> GenericFailsafe::applySafe(const std::string& trigger,
-                                               const std::string& reason) {
+std::future<Result> GenericFailsafe::applySafe(Trigger trigger, const std::string& reason) {
   if (!hasSafeValues()) return readyResult(Result::success());
   const uint64_t fired = ++sequence_;
   return scheduler_.submit(device_.name(), [this, trigger, reason, fired](Transport& t) {
@@ -48,7 +47,7 @@ void GenericFailsafe::afterPoll(const Result& poll) {
     for (size_t k = 0; k < owed.size(); ++k)
       if (set_at_[owed[k]] < since[k]) still.push_back(owed[k]);
     const uint64_t fired = *std::max_element(since.begin(), since.end());
-    return writeSafe(t, "restart",
+    return writeSafe(t, Trigger::kRestart,
                      "the device answers again; its safe values were not reached before", fired,
                      still);
   });
@@ -63,9 +62,8 @@ Result GenericFailsafe::write(Transport& t, size_t signal, double value) {
   return r;
 }
 
-Result GenericFailsafe::writeSafe(Transport& t, const std::string& trigger,
-                                  const std::string& reason, uint64_t fired,
-                                  const std::vector<size_t>& signals) {
+Result GenericFailsafe::writeSafe(Transport& t, Trigger trigger, const std::string& reason,
+                                  uint64_t fired, const std::vector<size_t>& signals) {
   // A signal the user set since the trigger fired keeps its newer value (also one set between
   // the trigger and this job).
   std::vector<size_t> due;
@@ -76,7 +74,7 @@ Result GenericFailsafe::writeSafe(Transport& t, const std::string& trigger,
   r.device = device_.name();
   r.trigger = trigger;
   r.reason = reason;
-  r.action = "safe";
+  r.action = Action::kSafe;
   for (size_t i : due) {
     const double v = device_.signals()[i].safe_value.value_or(0.0);  // set: a safe signal
     r.channels.push_back(device_.signals()[i].name);
@@ -113,14 +111,14 @@ std::string GenericFailsafe::describeSafeValue(size_t i) const {
 
 std::string GenericFailsafe::text(const FailsafeReport& r) const {
   const auto& signals = device_.signals();
-  std::string t =
-      r.trigger + " (" + r.reason + "): " + join(r.channels, ", ", [&](const std::string& name) {
-        const auto i = static_cast<size_t>(
-            std::find_if(signals.begin(), signals.end(),
-                         [&](const SignalConfig& s) { return s.name == name; }) -
-            signals.begin());
-        return i < signals.size() ? describeSafeValue(i) : name;
-      });
+  std::string t = std::string(triggerName(r.trigger)) + " (" + r.reason +
+                  "): " + join(r.channels, ", ", [&](const std::string& name) {
+                    const auto i = static_cast<size_t>(
+                        std::find_if(signals.begin(), signals.end(),
+                                     [&](const SignalConfig& s) { return s.name == name; }) -
+                        signals.begin());
+                    return i < signals.size() ? describeSafeValue(i) : name;
+                  });
   if (!r.confirmed) t += "; NOT confirmed: " + r.message;
   return t;
 }

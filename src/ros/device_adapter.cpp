@@ -195,9 +195,9 @@ void DeviceAdapter::publishReport(const FailsafeReport& r, const std::string& te
   FailsafeEvent e;
   e.header.stamp = ros::Time::now();
   e.device = r.device;
-  e.trigger = r.trigger;
+  e.trigger = triggerName(r.trigger);
   e.reason = r.reason;
-  e.action = r.action;
+  e.action = actionName(r.action);
   e.channels = r.channels;
   e.states.assign(r.states.begin(), r.states.end());
   e.values = r.values;

@@ -119,7 +119,7 @@ void BusRuntime::checkDeadlines() {
   if (bus_heartbeat_ && bus_heartbeat_->expired()) {
     const std::string reason = "no message on " + config_.heartbeat_topic + " within " +
                                numberText(config_.heartbeat_timeout) + " s";
-    for (DeviceUnit* u : order) u->applySafe("heartbeat", reason);
+    for (DeviceUnit* u : order) u->applySafe(Trigger::kHeartbeat, reason);
   }
   for (DeviceUnit* u : order) u->checkDeadlines();
 }
@@ -178,8 +178,8 @@ SafeTime BusRuntime::busSafeTime() const {
 
 // ---- start and stop ---------------------------------------------------------------------------
 
-BusRuntime::Pending BusRuntime::applySafeEverywhere(const std::string& trigger,
-                                                    const std::string& reason, bool only_on_start) {
+BusRuntime::Pending BusRuntime::applySafeEverywhere(Trigger trigger, const std::string& reason,
+                                                    bool only_on_start) {
   Pending pending;
   for (DeviceUnit* u : answeringFirst())
     if (only_on_start ? u->safeOnStart() : u->hasSafeStates())
@@ -194,7 +194,7 @@ void BusRuntime::beginStart() {
     scheduler_->startStepping();
   else
     scheduler_->start();
-  start_writes_ = applySafeEverywhere("start", "on_start: safe", true);
+  start_writes_ = applySafeEverywhere(Trigger::kStart, "on_start: safe", true);
 }
 
 bool BusRuntime::startWritesDone() const {
@@ -217,7 +217,7 @@ void BusRuntime::finishStart() {
 void BusRuntime::beginStop() {
   started_ = false;
   if (share_) share_->stop();
-  stop_writes_ = applySafeEverywhere("shutdown", "node stops", false);
+  stop_writes_ = applySafeEverywhere(Trigger::kShutdown, "node stops", false);
 }
 
 bool BusRuntime::stopWritesDone() const {

@@ -40,7 +40,7 @@ std::future<Result> DeviceUnit::refuse(const std::string& problem) const {
 
 // ---- fail-safe --------------------------------------------------------------------------------
 
-std::future<Result> DeviceUnit::applySafe(const std::string& trigger, const std::string& reason,
+std::future<Result> DeviceUnit::applySafe(Trigger trigger, const std::string& reason,
                                           const std::vector<uint8_t>& only) {
   // A generic device's safe values stand for the outputs' safe states (it has no outputs).
   if (generic_safe_) return generic_safe_->applySafe(trigger, reason);

@@ -166,8 +166,8 @@ void World::takeFoundAfterRestart(int d, const FailsafeReport& r) {
 void World::onReport(const FailsafeReport& r) {
   for (int d = 0; d < kDevices; ++d)
     if (r.device == kNames[d])
-      cover("report " + r.trigger + " " + kTypes[d] + " " + r.action +
-            (r.confirmed ? "" : " (unconfirmed)"));
+      cover(std::string("report ") + triggerName(r.trigger) + " " + kTypes[d] + " " +
+            actionName(r.action) + (r.confirmed ? "" : " (unconfirmed)"));
   if (trace_) std::fprintf(trace_, "report %s: %s\n", r.device.c_str(), r.text().c_str());
   const int d = devOf(r.device);
   if (d == kGen) return onGenericReport(r);
@@ -176,7 +176,7 @@ void World::onReport(const FailsafeReport& r) {
   std::vector<int> chs;
   chs.reserve(r.channels.size());
   for (const std::string& name : r.channels) chs.push_back(name[3] - '0');  // out0..out7
-  if (r.trigger == "restart") {
+  if (r.trigger == Trigger::kRestart) {
     // I6 (F11, F49, F28, F32, F34, F35): the outputs changed only if something changed them. A
     // change in the window of a justified one (a flash's end) may be seen by any later poll: only a
     // good poll after the window that showed nothing closes it (the port may be lost meanwhile). A
@@ -217,19 +217,20 @@ void World::onReport(const FailsafeReport& r) {
     m.cause_pending = false;
     takeFoundAfterRestart(d, r);
   }
-  if (r.action == "safe") {
+  if (r.action == Action::kSafe) {
     // I11 (F1): "Nothing changes unless it is configured: the default safe state is hold".
     for (size_t i = 0; i < chs.size(); ++i)
       if (checked("I11") && !hasSafe(d, chs[i]))
         fail("I11", std::string(kNames[d]) + " out" + std::to_string(chs[i]) +
-                        " (safe state hold) is written by a safe write (" + r.trigger + ")");
+                        " (safe state hold) is written by a safe write (" + triggerName(r.trigger) +
+                        ")");
   }
   // A restore's entries that started a continuous PWM run again (FailsafeReport::runs), and
   // whether it wrote plain levels too.
   auto isRun = [&r](size_t i) { return i < r.runs.size() && r.runs[i]; };
   bool plain = false;
   for (size_t i = 0; i < chs.size(); ++i) plain = plain || !isRun(i);
-  if (r.action == "restore") {
+  if (r.action == Action::kRestore) {
     // I5 (F36-F39): what a restore writes, channel by channel.
     std::vector<bool> written(kChannels, false);
     for (const int ch : chs) written[ch] = true;
@@ -349,8 +350,7 @@ void World::onReport(const FailsafeReport& r) {
       c.trigger_at = trigger_at;
       c.deadline = deadline;
     }
-  } else if (r.trigger == "heartbeat" || r.trigger == "command_timeout" || r.trigger == "start" ||
-             r.trigger == "shutdown") {
+  } else if (r.trigger != Trigger::kRestart) {  // heartbeat, command_timeout, start, shutdown
     // Not confirmed (its answer or its read back lost, or garbled): it may have been done, a
     // change the node did not confirm (I6's "a write whose reply was lost"; model change 30).
     if (!chs.empty()) {
@@ -370,7 +370,7 @@ void World::onGenericReport(const FailsafeReport& r) {
   if (!link_.connected()) m.gen_unanswered = true;
   // I8 (F71): a value refused is reported, not retried: a "restart" write comes only
   // when the device did not answer the write before.
-  if (r.trigger == "restart" && checked("I8") && !m.gen_prev_silent)
+  if (r.trigger == Trigger::kRestart && checked("I8") && !m.gen_prev_silent)
     fail("I8", std::string("drive: safe values written again (") + r.reason +
                    ") though the device answered the previous safe write");
   // F72: a signal set since the trigger is not written. An owed write's trigger fired
@@ -383,12 +383,12 @@ void World::onGenericReport(const FailsafeReport& r) {
     listed[i] =
         std::find(r.channels.begin(), r.channels.end(), signals[i].name) != r.channels.end();
     if (!signals[i].safe_value || i >= m.gen_set_at.size()) continue;
-    if (listed[i] && r.trigger == "restart" && m.gen_set_at[i] > m.gen_report_at)
+    if (listed[i] && r.trigger == Trigger::kRestart && m.gen_set_at[i] > m.gen_report_at)
       fail("I8", "drive: the owed safe write (restart) wrote " + signals[i].name +
                      ", set since its trigger fired");
-    if (!listed[i] && r.trigger != "restart" && m.gen_set_at[i] <= m.gen_written_at[i])
-      fail("I8", "drive: the safe write (" + r.trigger + ") left " + signals[i].name +
-                     " out, not set since it was last written safe");
+    if (!listed[i] && r.trigger != Trigger::kRestart && m.gen_set_at[i] <= m.gen_written_at[i])
+      fail("I8", std::string("drive: the safe write (") + triggerName(r.trigger) + ") left " +
+                     signals[i].name + " out, not set since it was last written safe");
     if (listed[i]) m.gen_written_at[i] = clock_.now();
   }
   m.gen_report_at = clock_.now();
@@ -406,7 +406,7 @@ void World::onGenericReport(const FailsafeReport& r) {
       writeValueProblem(s, *s.safe_value, &words);
       if (words.empty() || raw != words[0])
         fail("I8", "drive: " + s.name + " is " + std::to_string(raw) + " (raw) after the safe " +
-                       "write (" + r.trigger + "), not its safe value " +
+                       "write (" + triggerName(r.trigger) + "), not its safe value " +
                        std::to_string(*s.safe_value));
     }
   }

@@ -76,7 +76,7 @@ struct GenericSafe : ::testing::Test {
 TEST_F(GenericSafe, AReportNamesEachSafeValueAndTheStatusKeepsItUntilAUsersWrite) {
   ASSERT_TRUE(safe.hasSafeValues());
   expectSafeWrites(true);
-  safe.applySafe("heartbeat", "no message on /alive within 0.5 s");
+  safe.applySafe(Trigger::kHeartbeat, "no message on /alive within 0.5 s");
   runBus();
   EXPECT_SCRIPT_DONE(bus);
   ASSERT_EQ(reports.size(), 1u);
@@ -99,7 +99,7 @@ TEST_F(GenericSafe, AReportNamesEachSafeValueAndTheStatusKeepsItUntilAUsersWrite
 
 TEST_F(GenericSafe, SafeValuesASilentDeviceNeverGotAreWrittenOnceItAnswers) {
   expectSafeWrites(false);
-  safe.applySafe("shutdown", "node stops");
+  safe.applySafe(Trigger::kShutdown, "node stops");
   runBus();
   EXPECT_SCRIPT_DONE(bus);
   ASSERT_EQ(reports.size(), 1u);
@@ -115,7 +115,7 @@ TEST_F(GenericSafe, SafeValuesASilentDeviceNeverGotAreWrittenOnceItAnswers) {
   runBus();
   EXPECT_SCRIPT_DONE(bus);
   ASSERT_EQ(reports.size(), 2u);
-  EXPECT_EQ(reports[1].trigger, "restart");
+  EXPECT_EQ(reports[1].trigger, Trigger::kRestart);
   EXPECT_TRUE(reports[1].confirmed);
   safe.afterPoll(Result::success());
   EXPECT_EQ(scheduler.queuedJobs(), 0u);
@@ -127,7 +127,7 @@ TEST_F(GenericSafe, AValueTheDeviceRefusedIsReportedNotWrittenAgainOnEveryPoll) 
   bus.expectEcho(devtest::frame(Request::writeSingleCoil(5, 3, false)));
   const Request read_run = Request::readCoils(5, 3, 1);
   bus.expect(devtest::frame(read_run), toHex(encodeReply(read_run, {0})));
-  safe.applySafe("heartbeat", "lost");
+  safe.applySafe(Trigger::kHeartbeat, "lost");
   runBus();
   EXPECT_SCRIPT_DONE(bus);
   ASSERT_EQ(reports.size(), 1u);
@@ -140,7 +140,7 @@ TEST_F(GenericSafe, AValueTheDeviceRefusedIsReportedNotWrittenAgainOnEveryPoll) 
 // by the owed write once the silent device answers nor by a safe write queued before the set.
 TEST_F(GenericSafe, AnOwedSafeValueIsNotWrittenOverASetConfirmedSinceItsTrigger) {
   expectSafeWrites(false);
-  safe.applySafe("heartbeat", "lost");
+  safe.applySafe(Trigger::kHeartbeat, "lost");
   runBus();
   EXPECT_SCRIPT_DONE(bus);
   // It answers again; the user sets the speed (confirmed) before the next poll.
@@ -162,7 +162,7 @@ TEST_F(GenericSafe, AnOwedSafeValueIsNotWrittenOverASetConfirmedSinceItsTrigger)
 }
 
 TEST_F(GenericSafe, ASetConfirmedBetweenTheTriggerAndItsSafeWriteKeepsItsValue) {
-  safe.applySafe("heartbeat", "lost");  // queued, not run yet
+  safe.applySafe(Trigger::kHeartbeat, "lost");  // queued, not run yet
   bus.expectEcho(devtest::frame(Request::writeSingleCoil(5, 3, true)));
   ASSERT_TRUE(safe.write(bus, 1, 1.0).ok());  // the user's set reaches the bus first
   const Request speed = Request::writeSingleRegister(5, 10, 0xFFE7);  // speed only
@@ -174,7 +174,7 @@ TEST_F(GenericSafe, ASetConfirmedBetweenTheTriggerAndItsSafeWriteKeepsItsValue) 
   ASSERT_EQ(reports.size(), 1u);
   EXPECT_EQ(reports[0].channels, (std::vector<std::string>{"speed"}));
   // A later trigger writes both again.
-  safe.applySafe("heartbeat", "lost again");
+  safe.applySafe(Trigger::kHeartbeat, "lost again");
   expectSafeWrites(true);
   runBus();
   EXPECT_SCRIPT_DONE(bus);

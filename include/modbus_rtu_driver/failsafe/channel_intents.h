@@ -17,6 +17,7 @@
 
 #include "modbus_rtu_driver/core/bus/clock.h"
 #include "modbus_rtu_driver/devices/failsafe.h"
+#include "modbus_rtu_driver/failsafe/failsafe_event.h"
 
 namespace modbus_rtu_driver {
 
@@ -33,7 +34,6 @@ enum class CommandSource {
 const char* commandSourceName(CommandSource source);
 
 // Triggers that hold channels in their safe state until they are commanded again.
-enum class HoldTrigger : uint8_t { kHeartbeat = 1, kCommandTimeout = 2 };
 
 // What a poll at time t may show on a channel.
 struct Expectation {
@@ -88,12 +88,14 @@ class ChannelIntents {
   // --- triggers (any thread) ---
   // A lasting trigger (heartbeat lost, command timeout) fired at `at`: the channels (all with a
   // safe state when `channels` is empty) are held safe until commanded again.
-  void hold(const std::vector<uint8_t>& channels, HoldTrigger trigger);
+  // `trigger`: one that holds (holdsChannels).
+  void hold(const std::vector<uint8_t>& channels, Trigger trigger);
   // Channels held safe now, and their states: what a heartbeat's or dead man's write writes
   // when the bus gets to it (a channel commanded since the trigger is no longer held).
   OutputTargets heldTargets(const std::vector<uint8_t>& only) const;
   bool anyHeld() const;
-  uint8_t heldBy(uint8_t channel) const;  // HoldTrigger bits
+  bool held(uint8_t channel) const;
+  bool heldBy(uint8_t channel, Trigger trigger) const;
   // Held channels whose safe write was confirmed that the last compared poll showed not in
   // their safe state (a power cycle, a command whose answer was lost, a PWM someone started):
   // the hold puts them back, whatever on_restart says.
@@ -101,9 +103,8 @@ class ChannelIntents {
 
   // A safe write (trigger time `since`) that did not get through: owed per channel, written when
   // the device answers again, unless the channel is commanded after `since`.
-  void owe(const OutputTargets& targets, Clock::time_point since, const std::string& trigger);
+  void owe(const OutputTargets& targets, Clock::time_point since);
   OutputTargets owed() const;
-  std::string owedTrigger() const;  // the trigger of the oldest owed write, or ""
 
   // --- polls (bus thread) ---
   enum class Verdict { kNormal, kCameBack, kOutputsChanged };
@@ -195,7 +196,6 @@ class ChannelIntents {
   struct Owed {
     bool level = false;
     Clock::time_point since{};
-    std::string trigger;
   };
   bool userSource(CommandSource source) const;
   void newCommand(uint8_t channel, CommandSource source);
@@ -215,7 +215,7 @@ class ChannelIntents {
   Clock& clock_;
   mutable std::mutex mutex_;
   std::vector<std::optional<Intent>> intent_;
-  std::vector<uint8_t> held_;  // HoldTrigger bits
+  std::vector<uint8_t> held_;  // bits: 1 << Trigger, for each trigger holding it
   std::vector<Clock::time_point> held_since_;
   std::vector<bool> held_written_;   // a safe write confirmed since the hold began
   std::vector<bool> held_not_safe_;  // the last compared poll showed it otherwise

@@ -22,13 +22,17 @@
 #include "modbus_rtu_driver/core/link/until_silent_transport.h"
 #include "modbus_rtu_driver/devices/device.h"
 #include "modbus_rtu_driver/failsafe/channel_intents.h"
+#include "modbus_rtu_driver/failsafe/failsafe_event.h"
 #include "modbus_rtu_driver/failsafe/kept_timed_commands.h"
 
 namespace modbus_rtu_driver {
 
 // What the fail-safe did, as ~failsafe publishes it (ROS-free).
 struct FailsafeReport {
-  std::string device, trigger, reason, action, message;
+  std::string device;
+  Trigger trigger = Trigger::kRestart;
+  Action action = Action::kSafe;
+  std::string reason, message;
   std::vector<std::string> channels;
   std::vector<bool> states;
   // Per channel: a continuous PWM run a restore started again (its state then says on); and
@@ -99,11 +103,12 @@ class DeviceFailsafe {
   // reading back, and reports it. `trigger`: heartbeat and command_timeout hold the channels
   // safe until commanded again; start and shutdown do not. The future holds the outcome (a
   // ready success when there is nothing to write).
-  std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
+  std::future<Result> applySafe(Trigger trigger, const std::string& reason,
                                 const std::vector<uint8_t>& only = {});
   // A trigger that fired: what applySafe takes.
   struct Fired {
-    std::string trigger, reason;
+    Trigger trigger;
+    std::string reason;
     std::vector<uint8_t> only;
   };
   // Command deadlines that passed, and this device's own heartbeat (each returned once).
@@ -162,8 +167,8 @@ class DeviceFailsafe {
   // refused the read back (no reply to the write), the read and the report come from a job
   // queued behind the other writes, for the channels still held then. `runs_started`: a
   // restore's runs started again just before (startRunsAgain), named in the same report.
-  Result writeAndReport(Transport& t, const OutputTargets& targets, const std::string& trigger,
-                        const std::string& reason, const std::string& action,
+  Result writeAndReport(Transport& t, const OutputTargets& targets, Trigger trigger,
+                        const std::string& reason, Action action,
                         std::optional<Clock::time_point> owe_since,
                         const UntilSilentTransport* until_silent = nullptr,
                         const std::vector<uint8_t>& held_only = {},
@@ -204,8 +209,8 @@ class DeviceFailsafe {
   mutable std::mutex mutex_;  // the counters and texts below
   uint64_t restarts_detected_ = 0, events_ = 0;
   std::string last_event_;
-  std::string active_;          // set by a safe write, cleared by a user's confirmed command
-  std::string active_trigger_;  // the trigger of that safe write
+  std::string active_;  // set by a safe write, cleared by a user's confirmed command
+  Trigger active_trigger_ = Trigger::kRestart;  // the trigger of that safe write
 };
 
 }  // namespace modbus_rtu_driver

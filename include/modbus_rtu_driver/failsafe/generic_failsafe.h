@@ -40,7 +40,7 @@ class GenericFailsafe {
   // Any thread: the trigger fires now. Writes every safe value of a signal not set since, and
   // reads each back (a bus job), then reports. The future holds the outcome (a ready success
   // with no safe value).
-  std::future<Result> applySafe(const std::string& trigger, const std::string& reason);
+  std::future<Result> applySafe(Trigger trigger, const std::string& reason);
   // Bus thread, after each poll: safe values not reached because the device did not answer
   // are written once it answers (one try per answer; a refusal is an answer and not retried),
   // except on a signal set since their trigger fired.
@@ -64,8 +64,8 @@ class GenericFailsafe {
  private:
   // Bus thread: the safe values of the safe signals not set since `fired` written and read
   // back, the report made (none when every one was set since).
-  Result writeSafe(Transport& t, const std::string& trigger, const std::string& reason,
-                   uint64_t fired, const std::vector<size_t>& signals);
+  Result writeSafe(Transport& t, Trigger trigger, const std::string& reason, uint64_t fired,
+                   const std::vector<size_t>& signals);
 
   GenericDevice& device_;
   BusScheduler& scheduler_;

@@ -143,8 +143,7 @@ class BusRuntime {
  private:
   std::vector<DeviceUnit*> answeringFirst() const;
   SafeTime busSafeTime() const;
-  Pending applySafeEverywhere(const std::string& trigger, const std::string& reason,
-                              bool only_on_start);
+  Pending applySafeEverywhere(Trigger trigger, const std::string& reason, bool only_on_start);
 
   BusConfig config_;
   Options options_;

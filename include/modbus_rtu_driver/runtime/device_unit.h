@@ -71,7 +71,7 @@ class DeviceUnit {
   // ---- fail-safe (the runtime's trigger clock calls these) ----
   // Puts the channels with a safe state there (only those in `only`, when given), or a generic
   // device's signals at their safe values; the future holds the outcome.
-  std::future<Result> applySafe(const std::string& trigger, const std::string& reason,
+  std::future<Result> applySafe(Trigger trigger, const std::string& reason,
                                 const std::vector<uint8_t>& only = {});
   bool hasSafeStates() const;
   bool safeOnStart() const { return failsafe_.config().on_start_safe && hasSafeStates(); }
