@@ -4,7 +4,9 @@ machine's load as CPU % does: the node runs under `valgrind --tool=callgrind` wh
 devices at 50 Hz each (node_bench.py's simulator and bus, 115200, the simulator answering at
 once); after a warm-up, callgrind counts the instructions of a window, and the simulator counts
 the requests in it. Prints, per build: the transactions, the instructions per transaction of the
-bus thread and of the whole node, and the bus thread's top 10 functions (self cost). Valgrind
+bus thread and of the whole node, the bus thread's allocations per transaction (calls to malloc,
+calloc and realloc, from callgrind's call counts), its top 10 functions (self cost) and the
+package's functions that allocate most (each allocation put on the first of them above it). Valgrind
 runs the node about 50 times slower, so it polls less often than asked: the figure is per
 transaction, not per second. Starts its own rosmaster, simulator and node.
 
@@ -56,6 +58,57 @@ def thread_costs(path):
     return total, functions
 
 
+ALLOCATORS = ("malloc", "calloc", "realloc")
+NEW = ("operator new(unsigned long)", "operator new[](unsigned long)")
+
+
+def allocations(path):
+    """(calls to malloc, calloc and realloc; {function: allocations}) of one callgrind output
+    file, from its call records (`cfn=` then `calls=N`). Each allocation is put on the first
+    function of this package (modbus_rtu_driver::) above it: a library function's (std::string,
+    std::vector, operator new) go to its callers in proportion to their calls."""
+    names, fn, callee, total = {}, None, None, 0
+    own, incoming = {}, {}  # allocations made by each function; {callee: {caller: calls}}
+
+    def name_of(ref):
+        m = re.match(r"\((\d+)\)(?: (.*))?$", ref)
+        if not m:
+            return ref
+        if m.group(2) is not None:
+            names[m.group(1)] = m.group(2)
+        return names.get(m.group(1), ref)
+
+    with open(path, errors="replace") as f:
+        for line in f:
+            if line.startswith("fn="):
+                fn = name_of(line[3:].strip())
+            elif line.startswith("cfn="):
+                callee = name_of(line[4:].strip())
+            elif line.startswith("calls=") and callee is not None:
+                n = int(line[6:].split()[0])
+                if callee in ALLOCATORS:
+                    total += n
+                    own[fn] = own.get(fn, 0) + n
+                else:
+                    incoming.setdefault(callee, {})
+                    incoming[callee][fn] = incoming[callee].get(fn, 0) + n
+                callee = None
+    for _ in range(30):  # up the call graph until each count sits on one of ours (or a root)
+        moved = {}
+        for f, n in own.items():
+            callers = incoming.get(f, {})
+            if "modbus_rtu_driver::" in f or not callers:
+                moved[f] = moved.get(f, 0) + n
+                continue
+            calls = sum(callers.values())
+            for caller, k in callers.items():
+                moved[caller] = moved.get(caller, 0) + n * k / calls
+        if moved == own:
+            break
+        own = moved
+    return total, own
+
+
 def measure(workdir, exe, seconds, warmup, only=None):
     sim = node_bench.Simulator(workdir, pace=False)
     out = os.path.join(workdir, "callgrind.out")
@@ -88,14 +141,15 @@ def measure(workdir, exe, seconds, warmup, only=None):
     files = [f for f in glob.glob(out + ".*") if re.search(r"\.\d+-\d+$", f)]
     dumped = sorted({re.search(r"\.(\d+)-\d+$", f).group(1) for f in files}, key=int)
     files = [f for f in files if re.search(r"\.%s-\d+$" % dumped[0], f)] if dumped else []
-    everything, bus, bus_functions = 0, 0, {}
+    everything, bus, bus_functions, bus_file = 0, 0, {}, None
     for f in files:
         total, functions = thread_costs(f)
         everything += total
         marked = sum(v for k, v in functions.items() if any(m in k for m in BUS_MARKERS))
         if marked and total > bus:
-            bus, bus_functions = total, functions
-    return transactions, everything, bus, bus_functions
+            bus, bus_functions, bus_file = total, functions, f
+    allocated = allocations(bus_file) if bus_file else (0, {})
+    return transactions, everything, bus, bus_functions, allocated
 
 
 def main():
@@ -122,16 +176,21 @@ def main():
     print("## Instructions per transaction (callgrind, %.0f s window, each device polled at "
           "50 Hz, 115200)\n" % args.seconds)
     print("| build | devices polled | transactions | bus thread [instructions/transaction] | "
-          "whole node [instructions/transaction] |")
-    print("|---|---|---|---|---|")
-    for name, what, n, everything, bus, _ in rows:
-        print("| %s | %s | %d | %.0f | %.0f |" % (name, what, n, bus / max(n, 1),
-                                                 everything / max(n, 1)))
-    for name, what, n, _, bus, functions in rows:
+          "whole node [instructions/transaction] | bus thread [allocations/transaction] |")
+    print("|---|---|---|---|---|---|")
+    for name, what, n, everything, bus, _, (allocs, _) in rows:
+        print("| %s | %s | %d | %.0f | %.0f | %.1f |" % (name, what, n, bus / max(n, 1),
+                                                        everything / max(n, 1), allocs / max(n, 1)))
+    for name, what, n, _, bus, functions, (allocs, callers) in rows:
         print("\n| %s, %s: the bus thread's top 10 functions (self) | instructions/transaction | "
               "of the thread [%%] |\n|---|---|---|" % (name, what))
         for fn, ir in sorted(functions.items(), key=lambda kv: -kv[1])[:10]:
             print("| `%s` | %.0f | %.1f |" % (fn[:90], ir / max(n, 1), 100.0 * ir / max(bus, 1)))
+        print("\n| %s, %s: who allocates on the bus thread (the package's functions above "
+              "each allocation) | "
+              "allocations/transaction |\n|---|---|" % (name, what))
+        for fn, calls in sorted(callers.items(), key=lambda kv: -kv[1])[:15]:
+            print("| `%s` | %.2f |" % (fn[:110], calls / max(n, 1)))
     return 0
 
 

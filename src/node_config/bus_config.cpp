@@ -79,7 +79,8 @@ void parseHeartbeat(const YAML::Node& n, const std::string& key, std::string* to
 }
 
 void parseFailsafe(const YAML::Node& n, const std::string& where,
-                   const std::vector<std::string>& names, FailsafeConfig* out) {
+                   const std::vector<std::string>& names, FailsafeConfig* out,
+                   std::vector<std::string>* deprecated) {
   if (n["safe_state"]) {
     out->safe_state = perChannel<SafeState>(
         n["safe_state"], where + "safe_state", names, SafeState::kLeave,
@@ -110,9 +111,11 @@ void parseFailsafe(const YAML::Node& n, const std::string& where,
     out->on_restart = getNamed(n["on_restart"], where + "on_restart", kOnRestartNames);
   }
   if (n["on_start"]) {
-    const std::string text = get<std::string>(n["on_start"], where + "on_start", "safe or keep");
-    if (text != "safe" && text != "keep")
-      fail(where + "on_start", "'" + text + "' is not safe or keep");
+    const std::string text = get<std::string>(n["on_start"], where + "on_start", "safe or leave");
+    if (text != "safe" && text != "leave" && text != "keep")
+      fail(where + "on_start", "'" + text + "' is not safe or leave");
+    if (text == "keep")  // the word before `leave` (on_restart's): deprecated, still taken
+      deprecated->push_back(where + "on_start: 'keep' is deprecated, use 'leave' (the same)");
     out->on_start_safe = text == "safe";
   }
   if (n["heartbeat"])
@@ -210,7 +213,7 @@ void checkDeviceKeys(const YAML::Node& n, const std::string& where) {
 }
 
 DeviceConfig parseDevice(const std::string& name, const YAML::Node& n,
-                         const std::string& config_dir) {
+                         const std::string& config_dir, std::vector<std::string>* deprecated) {
   const std::string where = "devices/" + name + "/";
   if (!isValidRosName(name))
     fail("devices/" + name,
@@ -237,7 +240,7 @@ DeviceConfig parseDevice(const std::string& name, const YAML::Node& n,
   const std::string problem = validateDeviceConfig(d);
   if (!problem.empty()) throw ConfigError{problem};
   if (d.type == "generic") checkGenericFailsafe(n, where, d.generic);
-  parseFailsafe(n, where, outputNamesOf(d), &d.failsafe);
+  parseFailsafe(n, where, outputNamesOf(d), &d.failsafe, deprecated);
   return d;
 }
 
@@ -322,7 +325,7 @@ void parse(const YAML::Node& root, BusConfig* out) {
   std::map<int, std::string> by_address;
   for (const auto& kv : devices) {
     const std::string name = kv.first.as<std::string>();
-    DeviceConfig d = parseDevice(name, kv.second, config_dir);
+    DeviceConfig d = parseDevice(name, kv.second, config_dir, &out->deprecated);
     auto [it, fresh] = by_address.emplace(d.address, name);
     if (!fresh)
       fail("devices/" + name + "/address",

@@ -117,6 +117,8 @@ bool BusNode::start() {
     ROS_FATAL("invalid configuration in %s: %s", nh_.getNamespace().c_str(), error.c_str());
     return false;
   }
+  for (const std::string& word : config_.deprecated)
+    ROS_WARN("%s: %s; removed in the next release", nh_.getNamespace().c_str(), word.c_str());
   link_ = makeLink(config_.link, config_.link_target);
   // Only what needs it starts the publishing thread (see rosPublishing()).
   if (!config_.wire_log.empty() || config_.realtime_priority > 0)

@@ -94,7 +94,7 @@ class GenericAdapter : public DeviceAdapter {
     status.add("safe values", join(generic().safeSignals(), ", ",
                                    [&safe](size_t i) { return safe.describeSafeValue(i); }));
     const FailsafeConfig& fs = unit_.failsafe().config();
-    status.add("on_start", fs.on_start_safe ? "safe" : "keep");
+    status.add("on_start", fs.on_start_safe ? "safe" : "leave");
     if (!fs.heartbeat_topic.empty())
       status.add("device heartbeat",
                  fs.heartbeat_topic + " within " + numberText(fs.heartbeat_timeout) + " s");

@@ -165,7 +165,7 @@ std::string FailsafeSimulation::describe() const {
           o << "none";
       }
       o << (c.generic_refuses ? " (mode refused)" : "") << ", on_start "
-        << (d.failsafe.on_start_safe ? "safe" : "keep") << "\n";
+        << (d.failsafe.on_start_safe ? "safe" : "leave") << "\n";
       continue;
     }
     o << "safe";
@@ -174,7 +174,7 @@ std::string FailsafeSimulation::describe() const {
       if (d.failsafe.commandTimeoutOf(ch) > 0) o << "/" << d.failsafe.commandTimeoutOf(ch) << "s";
     }
     o << ", on_restart " << onRestartName(d.failsafe.on_restart) << ", on_start "
-      << (d.failsafe.on_start_safe ? "safe" : "keep");
+      << (d.failsafe.on_start_safe ? "safe" : "leave");
     if (!d.failsafe.heartbeat_topic.empty())
       o << ", own heartbeat " << d.failsafe.heartbeat_timeout << " s";
     o << "\n";

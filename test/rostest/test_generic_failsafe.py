@@ -207,11 +207,11 @@ class GenericFailsafeTest(unittest.TestCase):
         config = copy.deepcopy(self.base_config)
         config["heartbeat"] = {"topic": "/robot/alive", "timeout": 1.0}
         del config["devices"]["drive"]["heartbeat"]
-        config["devices"]["drive"]["on_start"] = "keep"
+        config["devices"]["drive"]["on_start"] = "leave"
         type(self).config = config
         self.sim.set(DRIVE, "holding_register", 0, 50)
         self.start_node()
-        self.assertEqual(self.board()[0], 50, "on_start: keep leaves it")
+        self.assertEqual(self.board()[0], 50, "on_start: leave leaves it")
         self.speed(2.0)
         self.run_on(True)
         since = len(self.events)

@@ -64,6 +64,22 @@ TEST(FailsafeConfig, ParsesPerChannelAndForAll) {
   EXPECT_FALSE(p.on_start_safe);
 }
 
+// on_start: leave is on_restart's word for "as the node finds them"; keep, the word before it,
+// is still taken in this release, with a deprecation the node logs (docs/releases.md).
+TEST(FailsafeConfig, OnStartLeaveAndTheDeprecatedKeep) {
+  BusConfig leave;
+  std::string error;
+  ASSERT_TRUE(parseBusConfig(YAML::Load(device("on_start: leave")), &leave, &error)) << error;
+  EXPECT_FALSE(leave.devices[0].failsafe.on_start_safe);
+  EXPECT_TRUE(leave.deprecated.empty());
+  BusConfig keep;
+  ASSERT_TRUE(parseBusConfig(YAML::Load(device("on_start: keep")), &keep, &error)) << error;
+  EXPECT_FALSE(keep.devices[0].failsafe.on_start_safe);
+  EXPECT_EQ(keep.deprecated,
+            std::vector<std::string>{"devices/relays/on_start: 'keep' is deprecated, use 'leave' "
+                                     "(the same)"});
+}
+
 // rosparam turns a bare off/on into booleans; both spellings mean the same.
 TEST(FailsafeConfig, BooleansFromRosparamAreOffAndOn) {
   BusConfig c;
@@ -92,7 +108,8 @@ TEST(FailsafeConfig, BadValuesAreRefusedWithTheKeyNamed) {
             std::string::npos);
   EXPECT_EQ(errorOf(device("on_restart: reboot")),
             "devices/relays/on_restart: 'reboot' is not one of restore, safe, leave");
-  EXPECT_EQ(errorOf(device("on_start: off")), "devices/relays/on_start: 'off' is not safe or keep");
+  EXPECT_EQ(errorOf(device("on_start: off")),
+            "devices/relays/on_start: 'off' is not safe or leave");
   EXPECT_EQ(
       errorOf(device("heartbeat: {topic: x}")),
       "devices/relays/heartbeat/timeout: missing (s without a message before the safe state)");

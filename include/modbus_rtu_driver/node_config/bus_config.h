@@ -50,6 +50,9 @@ struct BusConfig {
   // `share`: Modbus TCP clients reach the bus through the node (docs/share.md); off unless set.
   ShareConfig share;
   std::vector<DeviceConfig> devices;
+  // Words of an older release the YAML used, each "KEY: 'OLD' is deprecated, use 'NEW'": still
+  // taken; the node warns of each at start (docs/releases.md).
+  std::vector<std::string> deprecated;
 };
 
 // False with one message naming the key, the value and what is allowed; `out` is then undefined.
