@@ -172,6 +172,19 @@ TEST(LateReplyGuard, ANewReadWithTheSameFrameGoesWithoutTheGuard) {
   }
 }
 
+// The scheduler asks about a new transaction, also right after a retry: a new write with the
+// frame of the one whose retry took the first attempt's late echo still waits (its own echo may
+// come), and guardLeft says so.
+TEST(LateReplyGuard, AfterARetryTheGuardLeftIsANewWritesWait) {
+  Line l(1);
+  const Request write = Request::writeMultipleRegisters(2, 0x20, {7, 2, 0xFFFF});
+  l.link.faults(2).late = 1;
+  l.link.faults(2).late_by = 0.001;
+  ASSERT_TRUE(l.link.execute(write).ok());
+  ASSERT_EQ(l.link.staleRead(), 1u) << "the retry took the first attempt's echo";
+  EXPECT_GT(l.link.guardLeft(write), 0.0) << "a new write with its frame would wait";
+}
+
 // What the scheduler asks before a request (docs/share.md: shared requests to other devices
 // use a guard's time): how long a request to a slave would still wait, which is what the next
 // different request to it then waits, and nothing for another slave; and how long a request

@@ -171,7 +171,8 @@ double Link::guardLeft(const Request& next) const {
   // Most requests find no failed transaction of their slave: no encoding for them.
   if (!guardsLateReplies() || unsettled_.count(next.slave) == 0) return 0;
   const std::optional<EncodedRequest> encoded = EncodedRequest::encode(next);
-  const Unsettled* guard = encoded ? holding(*encoded) : nullptr;
+  // `next` is a new transaction (the scheduler's), whatever the last attempt was.
+  const Unsettled* guard = encoded ? holding(*encoded, false) : nullptr;
   if (!guard) return 0;
   const auto left = guard->failed_at + seconds(config_.late_reply_guard) - lineNow();
   return std::max(0.0, std::chrono::duration<double>(left).count());
@@ -336,7 +337,7 @@ std::optional<std::chrono::steady_clock::time_point> Link::guardUntil(
     const EncodedRequest& request) {
   const auto now = lineNow();
   forgetSettled(now);
-  const Unsettled* guard = holding(request);
+  const Unsettled* guard = holding(request, retrying_);
   if (!guard) {
     settled_at_ = now;
     return std::nullopt;
@@ -344,11 +345,11 @@ std::optional<std::chrono::steady_clock::time_point> Link::guardUntil(
   return guard->failed_at + seconds(config_.late_reply_guard);
 }
 
-const Link::Unsettled* Link::holding(const EncodedRequest& request) const {
+const Link::Unsettled* Link::holding(const EncodedRequest& request, bool retry) const {
   const auto mine = unsettled_.find(request.request().slave);
   if (mine == unsettled_.end()) return nullptr;
-  const bool takes_it = mine->second.frame == request.adu() &&
-                        (retrying_ || isReadFunction(request.request().function));
+  const bool takes_it =
+      mine->second.frame == request.adu() && (retry || isReadFunction(request.request().function));
   return takes_it ? nullptr : &mine->second;
 }
 

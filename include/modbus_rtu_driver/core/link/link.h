@@ -185,8 +185,8 @@ class Link : public Transport {
   };
   std::map<uint8_t, Unsettled> unsettled_;  // by slave
   // The failed transaction whose late reply holds `request` (F90), or nullptr: none with its
-  // slave, or `request` may take that reply (a retry of it, or a new read with its frame).
-  const Unsettled* holding(const EncodedRequest& request) const;
+  // slave, or `request` may take that reply (a `retry` of it, or a new read with its frame).
+  const Unsettled* holding(const EncodedRequest& request, bool retry) const;
   bool retrying_ = false;  // the attempt running is a retry (guardUntil)
   // When the attempt running was through the guard (its request goes after the gap from here):
   // its own reply is due by then plus the gap, the frame and the response timeout.
