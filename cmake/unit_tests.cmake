@@ -36,6 +36,8 @@ unit_test(test_text modbus_rtu_core)
 unit_test(test_request_framer modbus_rtu_core)
 # Issue 26 item 4: a request is checked and encoded once, every attempt sends that frame.
 unit_test(test_encode_once modbus_rtu_core)
+# Issue 50: the poll path's allocations (encode a read, decode its reply, read it), counted.
+unit_test(test_poll_allocations modbus_rtu_core)
 unit_test(test_rtu_link_golden modbus_rtu_core)
 unit_test(test_rtu_link_faults modbus_rtu_core)
 unit_test(test_rtu_tcp_link modbus_rtu_core)

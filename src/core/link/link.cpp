@@ -217,7 +217,10 @@ ReadStatus Link::readObserved(int fd, double first, double between,
 
 Result Link::readRtuReply(int fd, const EncodedRequest& request, double byte_timeout,
                           const std::string& medium) {
-  Bytes reply;
+  // The bus thread's one buffer for replies: its capacity stays, so a reply costs no allocation
+  // (issue 50).
+  Bytes& reply = reply_buffer_;
+  reply.reserve(kMaxAduLength);
   int error = 0;
   const ReadStatus status = readObserved(
       fd, responseTimeout(request), byte_timeout,

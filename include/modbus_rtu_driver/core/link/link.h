@@ -184,6 +184,7 @@ class Link : public Transport {
     Bytes frame;
   };
   std::map<uint8_t, Unsettled> unsettled_;  // by slave
+  Bytes reply_buffer_;                      // readRtuReply's, reused (bus thread)
   // The failed transaction whose late reply holds `request` (F90), or nullptr: none with its
   // slave, or `request` may take that reply (a `retry` of it, or a new read with its frame).
   const Unsettled* holding(const EncodedRequest& request, bool retry) const;
