@@ -224,8 +224,12 @@ void DeviceFailsafe::afterFailedPoll() {
 
 void DeviceFailsafe::afterPoll() {
   // The scheduler records this poll after this callback: health still says how it was before.
-  const bool was_offline = !scheduler_.health(device_.name()).online;
-  std::vector<bool> timed(device_.outputCount()), read_now(device_.outputCount());
+  const bool was_offline = !scheduler_.online(device_.name());
+  // Kept between polls (bus thread): no allocation a poll (issue 50).
+  std::vector<bool>& timed = poll_timed_;
+  std::vector<bool>& read_now = poll_read_now_;
+  timed.assign(device_.outputCount(), false);
+  read_now.assign(device_.outputCount(), false);
   for (size_t i = 0; i < timed.size(); ++i) {
     timed[i] = device_.outputSelfTimed(i);
     read_now[i] = device_.selfTimedReadByLastPoll(i);

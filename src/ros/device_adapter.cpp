@@ -52,7 +52,9 @@ void DeviceAdapter::start() {
 void DeviceAdapter::onPoll(size_t /*group*/, const Result& result) {
   if (result.ok()) {
     publishOutputs();
-    if (inputs_)
+    if (inputs_ && !publish_queue_)  // published here, from the device's own states
+      inputs_->publish(device_->inputs(), ros::Time::now());
+    else if (inputs_)
       publishLater([this, states = device_->inputs(), stamp = ros::Time::now()] {
         inputs_->publish(states, stamp);
       });
@@ -74,6 +76,9 @@ Result DeviceAdapter::runOnBus(BusScheduler::Job job) {
 
 void DeviceAdapter::publishOutputs() {
   if (!outputs_) return;  // before start(): the start-up safe states
+  // Without a publishing thread (the default) the states are published here, from the device's
+  // own: no copy and no task a poll (issue 50). With one, a copy goes to it.
+  if (!publish_queue_) return outputs_->publish(device_->outputs(), ros::Time::now());
   publishLater([this, states = device_->outputs(), stamp = ros::Time::now()] {
     outputs_->publish(states, stamp);
   });
@@ -82,7 +87,7 @@ void DeviceAdapter::publishOutputs() {
 std::string DeviceAdapter::answer(const Result& result, const std::string& what) const {
   if (result.ok()) return result.message.empty() ? what : what + " (" + result.message + ")";
   std::string msg = device_->name() + ": " + result.message;
-  if (result.error != ErrorKind::kInvalidArgument && !scheduler_.health(device_->name()).online)
+  if (result.error != ErrorKind::kInvalidArgument && !scheduler_.online(device_->name()))
     msg += " (device is offline)";
   return msg;
 }

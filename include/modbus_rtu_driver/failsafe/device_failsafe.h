@@ -205,6 +205,8 @@ class DeviceFailsafe {
   // The last list told, its ends in the clock's seconds (bus thread): told again only when it
   // changed, as it is looked at after every poll.
   std::vector<KeptTimedCommand> timed_told_;
+  // afterPoll's per-channel scratch (bus thread), kept so that a poll allocates none.
+  std::vector<bool> poll_timed_, poll_read_now_;
 
   mutable std::mutex mutex_;  // the counters and texts below
   uint64_t restarts_detected_ = 0, events_ = 0;

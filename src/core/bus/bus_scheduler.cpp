@@ -208,6 +208,12 @@ DeviceHealth BusScheduler::health(const std::string& device) const {
   return it == health_.end() ? DeviceHealth{} : it->second;
 }
 
+bool BusScheduler::online(const std::string& device) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = health_.find(device);
+  return it == health_.end() || it->second.online;
+}
+
 size_t BusScheduler::queuedJobs() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return writes_.size() + shared_.size();

@@ -131,6 +131,8 @@ class BusScheduler {
   void openShared();
 
   DeviceHealth health(const std::string& device) const;
+  // health(device).online without copying the rest (its last error's text): after every poll.
+  bool online(const std::string& device) const;
   // Jobs queued and not yet running (writes and shared requests).
   size_t queuedJobs() const;
   // Shared requests run while another slave's late-reply guard held the line (docs/share.md).
