@@ -367,7 +367,30 @@ class World {
   void checkCoils(int d, const std::vector<uint8_t>& chs, const std::vector<bool>& sts,
                   const std::string& what);
   // Steps.
+  // A command step's arguments as every kind reads them: an output device (LC, LD58A08, PDU),
+  // its name, a channel, and the step's numbers (0 past the last).
+  struct CommandArgs {
+    const SimStep& step;
+    int outd = 0;
+    std::string dn;
+    uint8_t ch = 0;
+    int arg(size_t i) const { return i < step.args.size() ? step.args[i] : 0; }
+  };
+  // Runs a command step by its kind's function below.
   void doCommandStep(const SimStep& s);
+  void stepSet(const CommandArgs& a);
+  void stepCommand(const CommandArgs& a);
+  void stepPulse(const CommandArgs& a);
+  void stepPwm(const CommandArgs& a);
+  void stepPwmStop(const CommandArgs& a);
+  void stepCoilWrite(const CommandArgs& a);
+  void stepShare15Broadcast(const CommandArgs& a);
+  void stepShare05Broadcast(const CommandArgs& a);
+  void stepRawBroadcast(const CommandArgs& a);
+  void stepFlashRegisters(const CommandArgs& a);
+  void stepShare16Pwm(const CommandArgs& a);
+  void stepShare06Stop(const CommandArgs& a);
+  void stepSignal(const CommandArgs& a);
   // The node's calls as its services, topics, share and raw write services make them, tagged
   // with the step's operation; `done` (the model) runs on the bus thread at the job's end.
   using Done = DeviceUnit::Done;
