@@ -186,8 +186,16 @@ class RobotBagTest(unittest.TestCase):
                                  "a line runs across the outage: %.1f-%.1f" % (a - t0, b - t0))
         stopped = [line.get_xdata()[0] + t0 for line in artists(power, "node-stopped")]
         restarted = [line.get_xdata()[0] + t0 for line in artists(power, "node-restarted")]
-        self.assertTrue(any(killed - 2.0 <= t <= killed + 2.0 for t in stopped),
-                        "stop not marked near %.1f: %s" % (killed - t0, [t - t0 for t in stopped]))
+        # The mark is at the node's last message: the stop's own (its safe writes' events, its
+        # last polls) may come up to shutdown_timeout after the kill (docs/ros_api.md; 3.0 s by
+        # default, this bus's), and the kill itself goes through rosnode. On a loaded machine
+        # the mark came 2.05 s after the kill command (a clean clone's test run beside two fresh
+        # checks, 2026-12-07).
+        stop_may_take = 3.0 + 2.0
+        self.assertTrue(any(killed - 2.0 <= t <= killed + stop_may_take for t in stopped),
+                        "stop not marked within %.1f-%.1f: %s" % (
+                            killed - 2.0 - t0, killed + stop_may_take - t0,
+                            [t - t0 for t in stopped]))
         self.assertTrue(any(killed + 5.0 <= t <= killed + 30.0 for t in restarted),
                         "restart not marked: %s" % [t - t0 for t in restarted])
         pwm = artists(panel["pwm_board"], "pwm:0")
