@@ -52,12 +52,7 @@ void DeviceAdapter::start() {
 void DeviceAdapter::onPoll(size_t /*group*/, const Result& result) {
   if (result.ok()) {
     publishOutputs();
-    if (inputs_ && !publish_queue_)  // published here, from the device's own states
-      inputs_->publish(device_->inputs(), ros::Time::now());
-    else if (inputs_)
-      publishLater([this, states = device_->inputs(), stamp = ros::Time::now()] {
-        inputs_->publish(states, stamp);
-      });
+    if (inputs_) publishStates(*inputs_, device_->inputs());
   } else if (offline()) {
     publishLater([this] {
       if (outputs_) outputs_->markStale();
@@ -76,12 +71,16 @@ Result DeviceAdapter::runOnBus(BusScheduler::Job job) {
 
 void DeviceAdapter::publishOutputs() {
   if (!outputs_) return;  // before start(): the start-up safe states
+  publishStates(*outputs_, device_->outputs());
+}
+
+void DeviceAdapter::publishStates(DigitalStatesPublisher& publisher,
+                                  const std::vector<bool>& states) {
   // Without a publishing thread (the default) the states are published here, from the device's
   // own: no copy and no task a poll (issue 50). With one, a copy goes to it.
-  if (!publish_queue_) return outputs_->publish(device_->outputs(), ros::Time::now());
-  publishLater([this, states = device_->outputs(), stamp = ros::Time::now()] {
-    outputs_->publish(states, stamp);
-  });
+  if (!publish_queue_) return publisher.publish(states, ros::Time::now());
+  publishLater(
+      [&publisher, states, stamp = ros::Time::now()] { publisher.publish(states, stamp); });
 }
 
 std::string DeviceAdapter::answer(const Result& result, const std::string& what) const {

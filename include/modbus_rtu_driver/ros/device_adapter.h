@@ -75,6 +75,8 @@ class DeviceAdapter {
   Result runOnBus(BusScheduler::Job job);
   // Bus thread only: publish the outputs message and the per-channel states that changed.
   void publishOutputs();
+  // A poll's states on `publisher` (outputs_ or inputs_), now or on the publishing thread.
+  void publishStates(DigitalStatesPublisher& publisher, const std::vector<bool>& states);
   // Bus thread: runs `task` (publishing) on the publishing thread, in the order posted. The
   // message is built from the device's state here; only ROS's part runs there.
   void publishLater(std::function<void()> task);
