@@ -1,4 +1,7 @@
 // The configuration a seed draws (docs/simulation.md, "What it runs").
+#include <yaml-cpp/yaml.h>
+
+#include "modbus_rtu_driver/core/config/signal.h"
 #include "simulation_world.h"
 
 namespace modbus_rtu_driver {
@@ -32,32 +35,24 @@ Config drawConfig(uint64_t seed) {
           fs.command_timeout[ch] = r.pick({0.3, 1.0, 2.0});
       }
     } else {
-      SignalConfig run;
-      run.name = "run";
-      run.table = Table::kCoil;
-      run.address = 0;
-      run.type = SignalType::kBool;
-      run.writable = true;
-      run.safe_value = r.chance(70) ? 0.0 : 1.0;
-      SignalConfig speed;
-      speed.name = "speed";
-      speed.table = Table::kHoldingRegister;
-      speed.address = 0x10;
-      speed.type = SignalType::kInt16;
-      speed.scale = 0.1;
-      speed.unit = "Hz";
-      speed.writable = true;
-      speed.min = 0.0;
-      speed.max = 50.0;
-      speed.safe_value = r.pick({0.0, 10.0, 25.0});
-      SignalConfig mode;
-      mode.name = "mode";
-      mode.table = Table::kHoldingRegister;
-      mode.address = 0x20;
-      mode.type = SignalType::kUint16;
-      mode.writable = true;
-      mode.safe_value = 3.0;
-      dc.generic.signals = {run, speed, mode};
+      // The drive as a user writes it (docs/ros_api.md, generic devices), through the node's
+      // own parser; only the safe values are drawn.
+      const int run_safe = r.chance(70) ? 0 : 1;
+      const int speed_safe = r.pick({0, 10, 25});
+      dc.generic = parseSignalMap(
+          YAML::Load("signals:\n"
+                     "  - {name: run, table: coil, address: 0, type: bool, writable: true,\n"
+                     "     safe_value: " +
+                     std::to_string(run_safe) +
+                     "}\n"
+                     "  - {name: speed, table: holding_register, address: 0x10, type: int16,\n"
+                     "     scale: 0.1, unit: Hz, writable: true, min: 0, max: 50,\n"
+                     "     safe_value: " +
+                     std::to_string(speed_safe) +
+                     "}\n"
+                     "  - {name: mode, table: holding_register, address: 0x20, type: uint16,\n"
+                     "     writable: true, safe_value: 3}\n"),
+          "devices/drive/", "");
       c.generic_refuses = r.chance(50);
     }
     c.devices.push_back(dc);

@@ -6,12 +6,14 @@
 //   docs/failsafe.md, "What happens when": a broadcast (unit 0) confirms nothing;
 //   docs/failsafe.md, "Generic devices": a signal set since the trigger is not written.
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include <future>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "modbus_rtu_driver/core/config/signal.h"
 #include "modbus_rtu_driver/runtime/bus_runtime.h"
 #include "modbus_rtu_driver/sim/sim_generic.h"
 #include "modbus_rtu_driver/sim/sim_lc_relay8.h"
@@ -162,30 +164,18 @@ TEST_F(NodeOnMemoryLine, AShareBroadcastConfirmsNothingOnABoardThatNeverHeardIt)
 // answers again, and the user sets run on and speed 30 Hz, confirmed, before its next poll.
 TEST_F(NodeOnMemoryLine, AGenericDevicesOwedSafeValuesDoNotOverwriteANewerSet) {
   makeLine();
-  SignalConfig run_signal;
-  run_signal.name = "run";
-  run_signal.table = Table::kCoil;
-  run_signal.address = 0;
-  run_signal.type = SignalType::kBool;
-  run_signal.writable = true;
-  run_signal.safe_value = 0.0;
-  SignalConfig speed;
-  speed.name = "speed";
-  speed.table = Table::kHoldingRegister;
-  speed.address = 0x10;
-  speed.type = SignalType::kInt16;
-  speed.scale = 0.1;
-  speed.unit = "Hz";
-  speed.writable = true;
-  speed.min = 0.0;
-  speed.max = 50.0;
-  speed.safe_value = 0.0;
   DeviceConfig drive;
   drive.name = "drive";
   drive.type = "generic";
   drive.address = 4;
   drive.poll_rate = 0.2;  // a poll every 5 s: the user's set comes before it
-  drive.generic.signals = {run_signal, speed};
+  drive.generic = parseSignalMap(
+      YAML::Load("signals:\n"
+                 "  - {name: run, table: coil, address: 0, type: bool, writable: true,\n"
+                 "     safe_value: 0}\n"
+                 "  - {name: speed, table: holding_register, address: 0x10, type: int16,\n"
+                 "     scale: 0.1, unit: Hz, writable: true, min: 0, max: 50, safe_value: 0}\n"),
+      "devices/drive/", "");
   SimLineSettings line;
   line.baud = 19200;
   SimGenericConfig gc;

@@ -3,9 +3,11 @@
 // status naming the values, and a write the silent device never got made again once it
 // answers, but not one it refused.
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include "device_fixtures.h"
 #include "modbus_rtu_driver/core/bus/clock.h"
+#include "modbus_rtu_driver/core/config/signal.h"
 #include "modbus_rtu_driver/failsafe/generic_failsafe.h"
 
 using namespace modbus_rtu_driver;
@@ -13,25 +15,16 @@ using namespace modbus_rtu_driver;
 namespace {
 
 DeviceConfig drive() {
-  SignalConfig speed;
-  speed.name = "speed";
-  speed.table = Table::kHoldingRegister;
-  speed.address = 10;
-  speed.type = SignalType::kInt16;
-  speed.scale = 0.1;
-  speed.unit = "rpm";
-  speed.writable = true;
-  speed.safe_value = -2.5;
-  SignalConfig run;
-  run.name = "run";
-  run.table = Table::kCoil;
-  run.address = 3;
-  run.type = SignalType::kBool;
-  run.writable = true;
-  run.safe_value = 0;
   DeviceConfig c = devtest::config("generic", 5);
   c.name = "drive";
-  c.generic.signals = {speed, run};
+  c.generic = parseSignalMap(
+      YAML::Load(
+          "signals:\n"
+          "  - {name: speed, table: holding_register, address: 10, type: int16, scale: 0.1,\n"
+          "     unit: rpm, writable: true, safe_value: -2.5}\n"
+          "  - {name: run, table: coil, address: 3, type: bool, writable: true,\n"
+          "     safe_value: 0}\n"),
+      "devices/drive/", "");
   return c;
 }
 
