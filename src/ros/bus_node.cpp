@@ -19,6 +19,16 @@
 
 namespace modbus_rtu_driver {
 
+namespace {
+
+// The node's wait for the start's and the stop's safe writes: the bus thread does them.
+void awaitFutures(const BusRuntime::Pending& writes, Clock::time_point deadline) {
+  for (const auto& write : writes)
+    if (write.second.valid()) write.second.wait_until(deadline);
+}
+
+}  // namespace
+
 BusNode::BusNode(const ros::NodeHandle& private_nh) : nh_(private_nh) {}
 
 BusNode::~BusNode() {
@@ -61,24 +71,18 @@ void BusNode::shutdown() {
   // kMaxShutdownTimeout, and the bus thread, which first finishes the transaction it is in,
   // gets kBusStopGrace more.
   const auto start = std::chrono::steady_clock::now();
-  const auto deadline = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                    std::chrono::duration<double>(config_.shutdown_timeout));
-  runtime_->beginStop();
-  for (auto& [name, done] : runtime_->takeStopWrites()) {
+  for (const auto& [name, result] : runtime_->stop(awaitFutures)) {
     // rosconsole has shut down with ROS: stderr is what the user sees now.
-    if (done.wait_until(deadline) != std::future_status::ready) {
+    if (!result)
       std::fprintf(stderr,
                    "[ERROR] %s: safe states not confirmed within shutdown_timeout (%.1f s); "
                    "exiting anyway\n",
                    name.c_str(), config_.shutdown_timeout);
-      continue;
-    }
-    const Result r = done.get();
-    if (!r.ok())
+    else if (!result->ok())
       std::fprintf(stderr, "[ERROR] %s: safe states not reached before exit: %s\n", name.c_str(),
-                   r.message.c_str());
+                   result->message.c_str());
   }
-  if (!runtime_->stopBus(deadline + kBusStopGrace)) {
+  if (!runtime_->stopBus(kBusStopGrace)) {
     // Still in one transaction (a silent device with long timeouts): waiting on would run into
     // roslaunch's SIGKILL. The port is closed by the kernel as the process ends.
     std::fprintf(stderr,
@@ -165,20 +169,18 @@ bool BusNode::start() {
 
   startFailsafe();
   // on_start: safe puts those outputs there before any command is taken (and before the first
-  // poll, so a restart is never seen in them). All are queued at once; none has answered yet.
-  runtime_->beginStart();
-  for (auto& [name, done] : runtime_->takeStartWrites())
-    if (done.wait_for(std::chrono::duration<double>(config_.shutdown_timeout + 5.0)) !=
-        std::future_status::ready)
-      ROS_ERROR("%s: start-up safe states not confirmed in time", name.c_str());
-  for (auto& a : adapters_) {
-    a->setPublishPolicy({config_.publish_on_change, config_.keep_alive});
-    a->setPublishQueue(rosPublishing());
-    a->start();
-  }
-  // The heartbeats count from here (no message could arrive while start() blocked on those
-  // writes: the spinner runs after it), then the polls, which publish on the topics above.
-  runtime_->finishStart();
+  // poll, so a restart is never seen in them). The topics' publishers are ready before the polls
+  // start; the heartbeats count from the end of start() (no message could arrive while it
+  // blocked on those writes: the spinner runs after it).
+  const auto outcomes = runtime_->start(awaitFutures, [this] {
+    for (auto& a : adapters_) {
+      a->setPublishPolicy({config_.publish_on_change, config_.keep_alive});
+      a->setPublishQueue(rosPublishing());
+      a->start();
+    }
+  });
+  for (const auto& [name, result] : outcomes)
+    if (!result) ROS_ERROR("%s: start-up safe states not confirmed in time", name.c_str());
   if (ShareGateway* gateway = runtime_->share()) {
     share_ = std::make_unique<ShareBridge>(*gateway, config_.share);
     if (!share_->start(&error)) {

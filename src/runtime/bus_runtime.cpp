@@ -13,6 +13,10 @@ bool isReady(const std::future<Result>& f) {
   return !f.valid() || f.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
 }
 
+Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+
 bool allReady(const BusRuntime::Pending& pending) {
   return std::all_of(pending.begin(), pending.end(),
                      [](const auto& p) { return isReady(p.second); });
@@ -187,22 +191,39 @@ BusRuntime::Pending BusRuntime::applySafeEverywhere(Trigger trigger, const std::
   return pending;
 }
 
+bool BusRuntime::allDone(const Pending& writes) {
+  return allReady(writes);
+}
+
+bool BusRuntime::allDone(const Outcomes& outcomes) {
+  return std::all_of(outcomes.begin(), outcomes.end(),
+                     [](const WriteOutcome& o) { return o.result.has_value(); });
+}
+
+BusRuntime::Outcomes BusRuntime::outcomesOf(Pending& writes) {
+  Outcomes out;
+  out.reserve(writes.size());
+  for (auto& [device, done] : writes) {
+    WriteOutcome o{device, std::nullopt};
+    if (done.valid() && isReady(done)) o.result = done.get();
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
 // on_start: safe puts those outputs there before any command is taken, and before the first
-// poll, so that a restart is never seen in them. All are queued at once.
-void BusRuntime::beginStart() {
+// poll, so that a restart is never seen in them. All are queued at once and awaited together.
+BusRuntime::Outcomes BusRuntime::start(const AwaitWrites& await,
+                                       const std::function<void()>& before_commands) {
+  const Clock::time_point began = clock_.now();
   if (options_.stepped)
     scheduler_->startStepping();
   else
     scheduler_->start();
-  start_writes_ = applySafeEverywhere(Trigger::kStart, "on_start: safe", true);
-}
-
-bool BusRuntime::startWritesDone() const {
-  return allReady(start_writes_);
-}
-
-void BusRuntime::finishStart() {
-  start_writes_.clear();
+  Pending writes = applySafeEverywhere(Trigger::kStart, "on_start: safe", true);
+  await(writes, began + seconds(config_.shutdown_timeout + kStartWriteGrace));
+  Outcomes outcomes = outcomesOf(writes);
+  if (before_commands) before_commands();
   // The heartbeats count from here: no message could be taken while the start writes ran, so a
   // live controller is not taken as lost at start.
   feedHeartbeat();
@@ -210,22 +231,22 @@ void BusRuntime::finishStart() {
     if (Watchdog* w = u->failsafe().heartbeat()) w->feed();
   for (auto& u : units_) u->addPolls();
   started_ = true;
+  return outcomes;
 }
 
 // No client's request after the safe states (a client's write run after them would undo
 // them), then the safe writes.
-void BusRuntime::beginStop() {
+BusRuntime::Outcomes BusRuntime::stop(const AwaitWrites& await) {
+  stop_deadline_ = clock_.now() + seconds(config_.shutdown_timeout);
   started_ = false;
   if (share_) share_->stop();
-  stop_writes_ = applySafeEverywhere(Trigger::kShutdown, "node stops", false);
+  Pending writes = applySafeEverywhere(Trigger::kShutdown, "node stops", false);
+  await(writes, stop_deadline_);
+  return outcomesOf(writes);
 }
 
-bool BusRuntime::stopWritesDone() const {
-  return allReady(stop_writes_);
-}
-
-bool BusRuntime::stopBus(std::chrono::steady_clock::time_point deadline) {
-  return scheduler_->stopBy(deadline);
+bool BusRuntime::stopBus(Clock::duration grace) {
+  return scheduler_->stopBy(stop_deadline_ + grace);
 }
 
 // ---- what the node carries for others --------------------------------------------------------

@@ -335,6 +335,9 @@ class World {
   }
   void runFor(double seconds);
   void runUntil(TP end, const std::function<bool()>& done = {});
+  // The node's wait for its start's and stop's safe writes (BusRuntime::AwaitWrites): the bus
+  // runs on the manual clock until they are done or the deadline has come.
+  BusRuntime::AwaitWrites awaitOnClock();
   void tick();
   void startNode();
   void stopNode();

@@ -28,6 +28,12 @@ void World::runFor(double seconds) {
   runUntil(clock_.now() + dur(seconds));
 }
 
+BusRuntime::AwaitWrites World::awaitOnClock() {
+  return [this](const BusRuntime::Pending& writes, TP deadline) {
+    runUntil(deadline, [&writes] { return BusRuntime::allDone(writes); });
+  };
+}
+
 // Runs the bus, the deadline timer and the heartbeat's sender on one thread until `end` (or
 // until `done`): whatever is due first runs first; time jumps to the next thing due.
 void World::runUntil(TP end, const std::function<bool()>& done) {
@@ -286,22 +292,21 @@ void World::startNode() {
           model_[d].ch[ch].triggered = true;
           model_[d].ch[ch].trigger_at = started;
         }
-  node_->beginStart();
-  // BusNode::start waits shutdown_timeout + 5 s for them.
-  runUntil(started + dur(config_.shutdown_timeout + 5.0),
-           [this] { return node_->startWritesDone(); });
-  // I9 (F10): before any command is taken, the safe states are on every device that
-  // answered throughout.
-  for (int d = 0; d < kGen; ++d) {
-    if (!config_.devices[d].failsafe.on_start_safe || model_[d].reachable_since > started ||
-        port_lost_ || staleReadShows(d))  // F90: its read before the write took another's frame
-      continue;
-    for (int ch = 0; ch < kChannels; ++ch)
-      if (hasSafe(d, ch) && checked("I9") && simCoil(d, ch) != safeLevel(d, ch))
-        fail("I9", std::string(kNames[d]) + " out" + std::to_string(ch) + " is " +
-                       (simCoil(d, ch) ? "on" : "off") + " after on_start: safe");
-  }
-  node_->finishStart();
+  // The node's own start (BusRuntime::start), its wait run on the manual clock; I9 is checked
+  // where the node readies its topics, before the heartbeats count and the polls start.
+  node_->start(awaitOnClock(), [this, started] {
+    // I9 (F10): before any command is taken, the safe states are on every device that
+    // answered throughout.
+    for (int d = 0; d < kGen; ++d) {
+      if (!config_.devices[d].failsafe.on_start_safe || model_[d].reachable_since > started ||
+          port_lost_ || staleReadShows(d))  // F90: its read before the write took another's frame
+        continue;
+      for (int ch = 0; ch < kChannels; ++ch)
+        if (hasSafe(d, ch) && checked("I9") && simCoil(d, ch) != safeLevel(d, ch))
+          fail("I9", std::string(kNames[d]) + " out" + std::to_string(ch) + " is " +
+                         (simCoil(d, ch) ? "on" : "off") + " after on_start: safe");
+    }
+  });
   last_feed_ = dev_last_feed_ = clock_.now();
   lost_ = dev_lost_ = false;
   next_feed_ = clock_.now() + dur(config_.heartbeat / 4);
@@ -320,15 +325,15 @@ void World::stopNode() {
         model_[d].ch[ch].trigger_at = began;
       }
   next_tick_ = next_feed_ = next_dev_feed_ = TP::max();
-  node_->beginStop();
   stopping_ = true;
-  runUntil(began + dur(config_.shutdown_timeout), [this] { return node_->stopWritesDone(); });
+  // The node's own stop (BusRuntime::stop), its wait run on the manual clock.
+  const bool confirmed = BusRuntime::allDone(node_->stop(awaitOnClock()));
   // Model change 22 (failsafe.md, the stop's step 5): the list kept for the next node is the
   // one the safe writes left, written after the bus thread ended (the stop flushes it).
   kept_timed_.flush();
   keepRunningTimed();
   // I10 (F5): a device that answered throughout shows its safe states.
-  if (node_->stopWritesDone() && !port_lost_)
+  if (confirmed && !port_lost_)
     for (int d = 0; d < kGen; ++d) {
       // F90: a read of the stop's that took another's frame may hide a PWM run there.
       if (model_[d].reachable_since > began || staleReadShows(d)) continue;

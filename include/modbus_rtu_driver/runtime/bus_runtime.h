@@ -108,23 +108,36 @@ class BusRuntime {
   // The same from the trigger's deadline on, any device (trigger_timeout 0).
   SafeTime safeAfterTrigger(size_t writes_ahead) const;
 
-  // ---- start and stop, each in two halves (the bus runs in between) ----
-  // The bus starts (its thread, or stepping), the on_start safe writes are queued.
-  void beginStart();
-  bool startWritesDone() const;
-  // The on_start writes, by device, for the caller to wait on (once).
-  Pending takeStartWrites() { return std::move(start_writes_); }
-  // The heartbeats count from here; the polls start (commands are taken from now on).
-  void finishStart();
+  // ---- start and stop: the one sequence the node and the simulation run ----
+  // How the caller lets the bus work until every write of `writes` is done (allDone) or
+  // `deadline` on the runtime's clock has passed: the node waits on the futures while the bus
+  // thread runs; the simulation steps its bus on its manual clock. Returning earlier than both
+  // is the caller's loss: what is not done then is reported as not confirmed in time.
+  using AwaitWrites = std::function<void(const Pending& writes, Clock::time_point deadline)>;
+  // One device's safe writes at the end of the wait: their result, or none (not done in time).
+  struct WriteOutcome {
+    std::string device;
+    std::optional<Result> result;
+  };
+  using Outcomes = std::vector<WriteOutcome>;
+  static bool allDone(const Pending& writes);
+  static bool allDone(const Outcomes& outcomes);
+  // s the start waits for its on_start safe writes beyond shutdown_timeout.
+  static constexpr double kStartWriteGrace = 5.0;
+
+  // The start (docs/failsafe.md F10): the bus starts (its thread, or stepping); the on_start safe
+  // writes are queued, all at once, and awaited (all of them together: shutdown_timeout +
+  // kStartWriteGrace); `before_commands` runs (no command or heartbeat was taken yet); then the
+  // heartbeats count from now and the polls start.
+  Outcomes start(const AwaitWrites& await, const std::function<void()>& before_commands = {});
   bool started() const { return started_; }
-  // The share stops (queued requests refused unsent), then the safe writes are queued, devices
-  // that answered first (a silent device's would hold the others back).
-  void beginStop();
-  bool stopWritesDone() const;
-  Pending takeStopWrites() { return std::move(stop_writes_); }
-  // Ends the bus thread, waiting for its transaction until `deadline`: false when it is still
-  // in it (BusScheduler::stopBy).
-  bool stopBus(std::chrono::steady_clock::time_point deadline);
+  // The stop (docs/failsafe.md F5): the share stops (queued requests refused unsent), then the
+  // safe writes are queued, devices that answered first (a silent device's would hold the others
+  // back), and awaited until shutdown_timeout from the stop's call.
+  Outcomes stop(const AwaitWrites& await);
+  // Ends the bus thread after stop(), waiting for its transaction until `grace` after the stop's
+  // deadline: false when it is still in it (BusScheduler::stopBy).
+  bool stopBus(Clock::duration grace);
 
   // ---- what the node carries for others ----
   // A raw write (write_registers, write_coils): refused unless allow_raw_writes, never a
@@ -144,6 +157,7 @@ class BusRuntime {
   std::vector<DeviceUnit*> answeringFirst() const;
   SafeTime busSafeTime() const;
   Pending applySafeEverywhere(Trigger trigger, const std::string& reason, bool only_on_start);
+  static Outcomes outcomesOf(Pending& writes);
 
   BusConfig config_;
   Options options_;
@@ -156,7 +170,7 @@ class BusRuntime {
   double check_period_ = 0;
   SafeTime bus_safe_time_;  // safeAfterTrigger's parts from the configuration
   bool started_ = false;
-  Pending start_writes_, stop_writes_;
+  Clock::time_point stop_deadline_{};
 };
 
 }  // namespace modbus_rtu_driver
