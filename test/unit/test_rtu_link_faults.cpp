@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <fstream>
 #include <future>
 #include <thread>
 
@@ -238,6 +239,14 @@ TEST_F(RtuLinkFaults, OneOwnerPerPort) {
   std::string error;
   EXPECT_FALSE(second.connect(&error));
   EXPECT_NE(error.find("in use by another process"), std::string::npos) << error;
+  // The holder is named: here this very process (its pid and name, /proc/locks).
+  std::ifstream comm_file("/proc/self/comm");
+  std::string comm;
+  std::getline(comm_file, comm);
+  EXPECT_NE(
+      error.find("(pid " + std::to_string(getpid()) + ", " + comm + ", holds the port's lock)"),
+      std::string::npos)
+      << error;
   link_->disconnect();
   EXPECT_TRUE(second.connect(&error)) << error;
 }

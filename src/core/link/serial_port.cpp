@@ -4,11 +4,17 @@
 #include <poll.h>
 #include <sys/file.h>
 #include <sys/ioctl.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <termios.h>
 
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
 
 namespace modbus_rtu_driver {
 
@@ -39,9 +45,43 @@ void closeSerialPort(modbus_t* ctx) {
   modbus_free(ctx);
 }
 
+std::string lockHolder(int fd) {
+  struct stat st {};
+  if (fstat(fd, &st) != 0) return {};
+  // fs/locks.c writes the file as "MAJOR:MINOR:INODE", the device numbers in hex (two digits at
+  // least), the inode in decimal.
+  char file[64];
+  std::snprintf(file, sizeof file, "%02x:%02x:%lu", major(st.st_dev), minor(st.st_dev),
+                static_cast<unsigned long>(st.st_ino));
+  std::ifstream locks("/proc/locks");
+  std::string line;
+  while (std::getline(locks, line)) {
+    // "1: FLOCK  ADVISORY  WRITE 2463 00:19:4 0 EOF"; a waiter's line has "->" after the number.
+    std::istringstream words(line);
+    std::string number, kind, mode, access, pid, where;
+    if (!(words >> number >> kind >> mode >> access >> pid >> where) || kind != "FLOCK" ||
+        where != file)
+      continue;
+    std::ifstream comm_file("/proc/" + pid + "/comm");
+    std::string comm;
+    std::getline(comm_file, comm);
+    return "pid " + pid + (comm.empty() ? "" : ", " + comm);
+  }
+  return {};
+}
+
 bool claimPort(int fd, const std::string& port, std::string* error) {
   if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
-    if (error) *error = port + " is in use by another process (it holds the port's lock)";
+    const int err = errno;
+    if (!error) return false;
+    if (err != EWOULDBLOCK) {
+      *error = "cannot lock " + port + ": " + std::strerror(err);
+      return false;
+    }
+    // Who it is tells the user what to stop (another node, the commissioning tool, a simulator).
+    const std::string holder = lockHolder(fd);
+    *error = port + " is in use by another process (" + (holder.empty() ? "it" : holder + ",") +
+             " holds the port's lock)";
     return false;
   }
   // Not every descriptor is a tty (a socket in tests): exclusivity is then simply not offered.

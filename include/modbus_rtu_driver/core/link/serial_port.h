@@ -23,8 +23,12 @@ void closeSerialPort(modbus_t* ctx);
 //    ignores locks (mbpoll, a terminal, `cat`) cannot take bytes meant for us. Root can still
 //    open it (the kernel lets CAP_SYS_ADMIN through), and programs that opened it before us keep
 //    their descriptors.
-// False with a message when another process holds the lock.
+// False with a message when another process holds the lock: it names that process when Linux
+// tells (lockHolder).
 bool claimPort(int fd, const std::string& port, std::string* error);
+// The process that holds the flock of `fd`'s file, from /proc/locks: "pid N, NAME", or empty
+// when none is listed (no lock, or /proc unreadable).
+std::string lockHolder(int fd);
 // Gives the port back before it is closed: others may open it again even if another descriptor
 // (a simulator's, a pty's other holder) keeps the tty alive. The lock goes with the close.
 void releasePort(int fd);
