@@ -9,32 +9,19 @@ rows to --csv.
 """
 import argparse
 import os
-import socket
-import struct
 import sys
 import tempfile
 import time
 
 import node_bench
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "test"))
+from mbap_client import MbapClient, read_pdu  # noqa: E402  (test/mbap_client.py)
+
 
 # The LC board of node_bench's bus (its address there, not its factory 255: the share answers
 # exception 0B for a unit no device of the bus has).
 RELAYS_UNIT = 8
-
-
-def request(sock, transaction):
-    """One FC01 read of 8 coils at RELAYS_UNIT; returns the reply's PDU (raises on a bad one)."""
-    sock.sendall(struct.pack(">HHHBBHH", transaction, 0, 6, RELAYS_UNIT, 1, 0, 8))
-    reply = b""
-    while len(reply) < 6 or len(reply) < 6 + struct.unpack(">H", reply[4:6])[0]:
-        chunk = sock.recv(260)
-        if not chunk:
-            raise RuntimeError("the share closed the connection")
-        reply += chunk
-    if struct.unpack(">H", reply[:2])[0] != transaction or reply[7] != 1:
-        raise RuntimeError("unexpected reply %s" % reply.hex())
-    return reply[7:]
 
 
 def latency(workdir, requests, csv, baud):
@@ -46,11 +33,10 @@ def latency(workdir, requests, csv, baud):
     try:
         node.wait_ready()
         time.sleep(2.0)  # polling under way
-        with socket.create_connection(("127.0.0.1", share_port), timeout=10) as sock:
-            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        with MbapClient(share_port, RELAYS_UNIT, timeout=10) as client:
             for i in range(requests):
                 t0 = time.monotonic()
-                request(sock, i & 0xFFFF)
+                client.transact(read_pdu(0, 8))  # FC01, 8 coils; raises on a wrong answer
                 times.append(time.monotonic() - t0)
                 time.sleep(0.01 + (i % 7) * 0.003)  # land at different points of the poll cycle
     finally:

@@ -25,7 +25,6 @@ import contextlib
 import logging
 import os
 import socket
-import struct
 import subprocess
 import sys
 import tempfile
@@ -38,6 +37,7 @@ from std_srvs.srv import SetBool
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "test"))
 from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
+from mbap_client import MbapClient, ModbusError, read_pdu  # noqa: E402  (test/mbap_client.py)
 
 RELAYS, PWM, PDU = "8", "1", "2"
 ABSENT = 9  # an address with no device on the line
@@ -120,49 +120,34 @@ class ShareClient(threading.Thread):
         self.stop = threading.Event()
 
     def run(self):
-        sock = socket.create_connection(("127.0.0.1", self.port), timeout=10)
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        transaction = 0
-        buffer = b""
-        while not self.stop.is_set() and self.requests != 0:
-            if self.requests:
-                self.requests -= 1
-            transaction = (transaction + 1) & 0xFFFF
-            sent = time.monotonic()
-            sock.sendall(struct.pack(">HHHBBHH", transaction, 0, 6, self.unit, 4, 0, 5))
-            deadline = sent + self.bound
-            answered = False
-            while not answered:
-                while len(buffer) < 6 or len(buffer) < 6 + struct.unpack(">H", buffer[4:6])[0]:
-                    left = deadline - time.monotonic()
-                    if left <= 0:
-                        break
-                    sock.settimeout(left)
+        with MbapClient(self.port, self.unit, timeout=10) as client:
+            while not self.stop.is_set() and self.requests != 0:
+                if self.requests:
+                    self.requests -= 1
+                sent = time.monotonic()
+                transaction = client.send(read_pdu(0, 5, function=4))
+                deadline = sent + self.bound
+                while True:
                     try:
-                        chunk = sock.recv(260)
-                    except socket.timeout:
+                        # The client gives up at the bound; a late answer is caught below.
+                        got, _, answer = client.receive(max(0.0, deadline - time.monotonic()))
+                    except ModbusError as e:
+                        if e.closed:
+                            raise RuntimeError("the share closed the connection") from None
+                        self.late += 1
                         break
-                    if not chunk:
-                        raise RuntimeError("the share closed the connection")
-                    buffer += chunk
-                if len(buffer) < 6 or len(buffer) < 6 + struct.unpack(">H", buffer[4:6])[0]:
-                    self.late += 1  # the client gives up; a late answer is caught below
+                    if got != transaction:
+                        self.out_of_step += 1  # an earlier request's answer
+                        continue
+                    self.latencies.append(time.monotonic() - sent)
+                    row = self.by_phase.setdefault(self.phase[0], [0, 0.0])
+                    row[0] += 1
+                    row[1] += self.latencies[-1]
+                    kind = "ok" if answer[0] == 4 else "exception %02X" % answer[1]
+                    self.kinds[kind] = self.kinds.get(kind, 0) + 1
                     break
-                length = 6 + struct.unpack(">H", buffer[4:6])[0]
-                frame, buffer = buffer[:length], buffer[length:]
-                if struct.unpack(">H", frame[:2])[0] != transaction:
-                    self.out_of_step += 1  # an earlier request's answer
-                    continue
-                answered = True
-                self.latencies.append(time.monotonic() - sent)
-                row = self.by_phase.setdefault(self.phase[0], [0, 0.0])
-                row[0] += 1
-                row[1] += self.latencies[-1]
-                kind = "ok" if frame[7] == 4 else "exception %02X" % frame[8]
-                self.kinds[kind] = self.kinds.get(kind, 0) + 1
-            if self.requests is None:
-                time.sleep(0.02)
-        sock.close()
+                if self.requests is None:
+                    time.sleep(0.02)
 
 
 class SetBoolCaller(threading.Thread):

@@ -3,7 +3,6 @@ import os
 import random
 import signal
 import socket
-import struct
 import subprocess
 import sys
 import tempfile
@@ -18,6 +17,7 @@ from std_msgs.msg import String
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from sim_control import SimControl  # noqa: E402  (test/sim_control.py)
+from mbap_client import write_coil_pdu, write_outcome, write_registers_pdu  # noqa: E402
 
 
 def sim():
@@ -210,33 +210,12 @@ def device_value(diagnostics, device, key):
     return next(kv.value for kv in device_status(diagnostics, device).values if kv.key == key)
 
 
-def modbus_tcp_write(port, unit, pdu, echoed):
-    """A write through a Modbus TCP server (the share): "ok" when the reply echoes the unit and
-    the request PDU's first `echoed` bytes, "exception N" on an exception, else "unexpected"."""
-    request = struct.pack(">HHHB", 9, 0, len(pdu) + 1, unit) + pdu
-    with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
-        s.sendall(request)
-        reply = b""
-        while len(reply) < 9:
-            chunk = s.recv(64)
-            if not chunk:
-                break
-            reply += chunk
-    if reply[7:8] == bytes([pdu[0] | 0x80]):
-        return "exception %d" % reply[8]
-    # A whole echo (FC05, FC06) is the reply, byte for byte; FC15/16 echo the address and count.
-    same = (reply[6:] == request[6:] if echoed == len(pdu) else
-            reply[6:7 + echoed] == request[6:7 + echoed])
-    return "ok" if same else "unexpected %r" % reply
-
-
 def modbus_tcp_write_coil(port, unit, coil, state):
-    """FC05: the whole request is echoed."""
-    return modbus_tcp_write(port, unit, struct.pack(">BHH", 5, coil, 0xFF00 if state else 0), 5)
+    """FC05 through a Modbus TCP server (the share): "ok" when the whole request is echoed,
+    "exception N" on an exception (mbap_client.write_outcome)."""
+    return write_outcome(port, unit, write_coil_pdu(coil, state), 5)
 
 
 def modbus_tcp_write_registers(port, unit, address, values):
-    """FC16: the reply echoes the address and the count."""
-    pdu = struct.pack(">BHHB", 16, address, len(values), 2 * len(values))
-    pdu += b"".join(struct.pack(">H", v) for v in values)
-    return modbus_tcp_write(port, unit, pdu, 5)
+    """FC16: "ok" when the answer echoes the address and the count."""
+    return write_outcome(port, unit, write_registers_pdu(address, values), 5)

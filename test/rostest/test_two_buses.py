@@ -7,8 +7,6 @@ figure. Every simulator has its own pty link in a temporary folder; every port i
 import glob
 import os
 import shutil
-import socket
-import struct
 import subprocess
 import unittest
 
@@ -21,6 +19,7 @@ from modbus_rtu_driver.msg import PduTelemetry, SignalValues
 
 import user_paths as up
 from helpers import wait_until
+from mbap_client import MbapClient, read_pdu  # test/mbap_client.py: helpers puts test/ on the path
 
 RECORDED_LEAVES = ("telemetry", "limits", "outputs", "inputs", "pwm", "signals", "failsafe")
 
@@ -34,26 +33,6 @@ def subscriptions(node):
     """The topics `node` subscribes to, as the master knows them."""
     state = rosgraph.Master("/test_two_buses").getSystemState()[1]
     return {topic for topic, nodes in state if node in nodes}
-
-
-def modbus_tcp(port, unit, function, address, count):
-    """One Modbus TCP request; the reply's PDU (function code first)."""
-    with socket.create_connection(("127.0.0.1", port), timeout=15) as s:
-        s.sendall(struct.pack(">HHHBBHH", 7, 0, 6, unit, function, address, count))
-        header = b""
-        while len(header) < 7:
-            chunk = s.recv(7 - len(header))
-            if not chunk:
-                raise AssertionError("the share on port %d closed the connection" % port)
-            header += chunk
-        length = struct.unpack(">H", header[4:6])[0]
-        pdu = b""
-        while len(pdu) < length - 1:
-            chunk = s.recv(length - 1 - len(pdu))
-            if not chunk:
-                raise AssertionError("the share on port %d closed the connection" % port)
-            pdu += chunk
-        return pdu
 
 
 class TwoBusesTest(unittest.TestCase):
@@ -149,9 +128,11 @@ class TwoBusesTest(unittest.TestCase):
                     up.check_device_answers(node, name, device, os.path.dirname(config), launch)
             # io_bus's share reaches its relay board (unit 8: FC01 answered); sensor_bus's share
             # is another bus: no unit 8 there (exception 0B, the device did not answer).
-            pdu = modbus_tcp(ports["io"], 8, 1, 0, 8)
+            with MbapClient(ports["io"], 8, timeout=15) as client:
+                pdu = client.request(read_pdu(0, 8))
             self.assertEqual(pdu[0], 1, pdu.hex())
-            pdu = modbus_tcp(ports["sensor"], 8, 1, 0, 8)
+            with MbapClient(ports["sensor"], 8, timeout=15) as client:
+                pdu = client.request(read_pdu(0, 8))
             self.assertEqual(pdu[:2], b"\x81\x0b", pdu.hex())
             for node in buses:
                 wait_until(lambda: any(t.startswith(node + "/")

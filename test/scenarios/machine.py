@@ -19,7 +19,7 @@ from modbus_rtu_driver.srv import Pulse, SetOutputs, SetPwm, StopPwm
 import harness
 from harness import DEV, LD_BOARD, LD_DEV, NS, PDU_BOARD, PDU_DEV, Timeout, wait_until
 from model import BOTH, DEAD_MAN, LD_NAMES, NAMES, PDU_NAMES, PDU_SAFE, LdModel, Model
-from share_client import ShareClient, ShareError
+from mbap_client import MbapClient, ModbusError, write_coil_pdu  # test/mbap_client.py
 
 CHANNELS = st.integers(0, 7)
 NOT_DEAD_MAN = st.sampled_from([i for i in range(8) if i != DEAD_MAN])
@@ -60,8 +60,12 @@ class Scenario(RuleBasedStateMachine):
         # (device, board address, model, names) of every device the board checks compare
         self.devices = [(DEV, harness.BOARD, self.m, NAMES), (LD_DEV, LD_BOARD, self.ld, LD_NAMES),
                         (PDU_DEV, PDU_BOARD, self.pdu, PDU_NAMES)]
-        self.share = ShareClient(self.h.share_port, int(harness.BOARD))
         self.started = False
+
+    def share(self):
+        """A connection of its own for each request to the LC board through the node's share
+        (as a client that reconnects: the node stops and starts under it)."""
+        return MbapClient(self.h.share_port, int(harness.BOARD))
 
     def note(self, text):
         Run.log("  [%6.1f] %s" % (time.time() % 1000, text))
@@ -326,8 +330,9 @@ class Scenario(RuleBasedStateMachine):
     @rule()
     def share_read(self):
         try:
-            coils = self.share.read_coils(0, 8)
-        except ShareError as e:
+            with self.share() as client:
+                coils = client.read_coils(0, 8)
+        except ModbusError as e:
             self.note("share FC01 -> %s" % e)
             if not self.m.unreachable():
                 fail("I20", "share FC01 of an answering board failed: %s" % e)
@@ -352,9 +357,10 @@ class Scenario(RuleBasedStateMachine):
     @rule(ch=CHANNELS, state=st.integers(0, 1))
     def share_write(self, ch, state):
         try:
-            self.share.write_coil(ch, state)
+            with self.share() as client:
+                client.write_coil(ch, state)
             ok, text = True, "ok"
-        except ShareError as e:
+        except ModbusError as e:
             ok, text = False, str(e)
         self.note("share FC05 %s %d -> %s" % (NAMES[ch], state, text))
         self.refused_while_port_gone("share FC05 %s %d" % (NAMES[ch], state), ok)
@@ -428,11 +434,13 @@ class Scenario(RuleBasedStateMachine):
     @precondition(lambda self: self.m.node_running and not self.m.unreachable())
     @rule(burst=st.booleans())
     def restart_node(self, burst):
-        sockets = []
+        sockets = []  # the burst's clients, each with its FC05 sent and its answer not read
         before = None
         if burst and "share_after_stop" not in self.m.known:
             def before():
-                sockets.extend(self.share.burst_write_coil(0, 1, 5))
+                for _ in range(5):
+                    sockets.append(self.share())
+                    sockets[-1].send(write_coil_pdu(0, True))
         code = self.h.stop_node(signal.SIGINT, before)
         for s in sockets:
             s.close()
