@@ -29,16 +29,7 @@ const char* commandSourceName(CommandSource source) {
 }
 
 ChannelIntents::ChannelIntents(FailsafeConfig config, size_t channels, Clock& clock)
-    : config_(std::move(config)),
-      channels_(channels),
-      clock_(clock),
-      intent_(channels),
-      held_(channels, 0),
-      held_since_(channels),
-      held_written_(channels, false),
-      held_not_safe_(channels, false),
-      owed_(channels),
-      command_deadline_(channels) {}
+    : config_(std::move(config)), channels_(channels), clock_(clock), ch_(channels) {}
 
 OutputTargets ChannelIntents::safeTargets() const {
   return config_.safeTargets(channels_);
@@ -55,8 +46,8 @@ bool ChannelIntents::userSource(CommandSource source) const {
 void ChannelIntents::newCommand(uint8_t channel, CommandSource source) {
   write_during_poll_ = true;
   if (source == CommandSource::kFound) return;  // an outcome unknown: nothing paid or ended
-  owed_[channel].reset();
-  if (userSource(source)) held_[channel] = 0;
+  ch_[channel].owed.reset();
+  if (userSource(source)) ch_[channel].held = 0;
 }
 
 void ChannelIntents::commanded(const std::vector<uint8_t>& channels,
@@ -70,13 +61,13 @@ void ChannelIntents::commanded(const std::vector<uint8_t>& channels,
     in.source = source;
     in.at = now;
     in.level = levels[i];
-    intent_[ch] = in;
+    ch_[ch].intent = in;
     newCommand(ch, source);
-    held_not_safe_[ch] = false;  // the device shows this level now, not what the poll showed
+    ch_[ch].held_not_safe = false;  // the device shows this level now, not what the poll showed
     const bool safe_level = config_.safeStateOf(ch) == SafeState::kOn;
-    if (held_[ch] != 0 && levels[i] == safe_level &&
+    if (ch_[ch].held != 0 && levels[i] == safe_level &&
         (source == CommandSource::kSafe || source == CommandSource::kRestore))
-      held_written_[ch] = true;
+      ch_[ch].held_written = true;
   }
 }
 
@@ -95,7 +86,7 @@ void ChannelIntents::timed(const TimedIntent& timed, CommandSource source) {
   } else {
     in.ends = now + seconds(timed.seconds);
   }
-  intent_[timed.channel] = in;
+  ch_[timed.channel].intent = in;
   newCommand(timed.channel, source);
 }
 
@@ -106,7 +97,7 @@ ChannelIntents::Intent ChannelIntents::adoptingIntent(uint8_t channel, CommandSo
   in.source = source;
   in.at = now;
   in.adopt = true;
-  if (const std::optional<Intent>& was = intent_[channel]) in.level = was->level;
+  if (const std::optional<Intent>& was = ch_[channel].intent) in.level = was->level;
   return in;
 }
 
@@ -125,7 +116,7 @@ ChannelIntents::Intent* ChannelIntents::adoptNextPollLocked(uint8_t channel, Com
   // show until its end, so the poll that decides comes after its end plus the slack. Its end
   // may have passed by now (the write's timeout and its read back outlast the flash), but not
   // its slack: polls within it may still show either level (docs/failsafe.md line 105).
-  const auto& was = intent_[channel];
+  const auto& was = ch_[channel].intent;
   if (was && was->ends) {
     const Clock::time_point settled = *was->ends + endSlack(was->at, *was->ends);
     if (settled > now) in.adopt_from = std::max(in.adopt_from.value_or(now), settled);
@@ -145,8 +136,8 @@ ChannelIntents::Intent* ChannelIntents::adoptNextPollLocked(uint8_t channel, Com
     in.run_ends = was->ends;
     in.run_driven = was->driven;
   }
-  newCommand(channel, source);  // it leaves intent_ alone
-  return &intent_[channel].emplace(in);
+  newCommand(channel, source);  // it leaves the intent alone
+  return &ch_[channel].intent.emplace(in);
 }
 
 void ChannelIntents::adoptRunNextPoll(uint8_t channel, CommandSource source, double seconds_run,
@@ -168,7 +159,7 @@ void ChannelIntents::adoptRunNextPoll(uint8_t channel, CommandSource source, dou
 void ChannelIntents::stoppedNextPoll(uint8_t channel, CommandSource source) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (channel >= channels_) return;
-  intent_[channel] = adoptingIntent(channel, source, clock_.now());
+  ch_[channel].intent = adoptingIntent(channel, source, clock_.now());
   newCommand(channel, source);
 }
 
@@ -182,9 +173,9 @@ void ChannelIntents::adoptChangeNextPoll(uint8_t channel, CommandSource source) 
   if (e.kind == Expectation::Kind::kLevel) in.adopt_prev = e.level;
   // A held channel the last poll showed otherwise, not yet written safe again: the device
   // shows the other level, so a stop that leaves it there changed nothing (docs/failsafe.md).
-  if (held_[channel] != 0 && held_not_safe_[channel])
+  if (ch_[channel].held != 0 && ch_[channel].held_not_safe)
     in.adopt_prev = config_.safeStateOf(channel) != SafeState::kOn;
-  intent_[channel] = in;
+  ch_[channel].intent = in;
   write_during_poll_ = true;  // holds and owed writes end at the poll, if it changed
 }
 
@@ -210,11 +201,11 @@ void ChannelIntents::hold(const std::vector<uint8_t>& channels, Trigger trigger)
   const auto now = clock_.now();
   const auto holdOne = [&](size_t ch) {
     if (ch >= channels_ || config_.safeStateOf(ch) == SafeState::kLeave) return;
-    if (held_[ch] == 0) {
-      held_since_[ch] = now;
-      held_written_[ch] = false;
+    if (ch_[ch].held == 0) {
+      ch_[ch].held_since = now;
+      ch_[ch].held_written = false;
     }
-    held_[ch] |= bitOf(trigger);
+    ch_[ch].held |= bitOf(trigger);
   };
   if (channels.empty()) {
     for (size_t ch = 0; ch < channels_; ++ch) holdOne(ch);
@@ -227,7 +218,7 @@ OutputTargets ChannelIntents::heldTargets(const std::vector<uint8_t>& only) cons
   std::lock_guard<std::mutex> lock(mutex_);
   OutputTargets t;
   for (size_t ch = 0; ch < channels_; ++ch) {
-    if (held_[ch] == 0) continue;
+    if (ch_[ch].held == 0) continue;
     if (!only.empty() && std::find(only.begin(), only.end(), ch) == only.end()) continue;
     t.channels.push_back(static_cast<uint8_t>(ch));
     t.states.push_back(config_.safeStateOf(ch) == SafeState::kOn);
@@ -237,8 +228,8 @@ OutputTargets ChannelIntents::heldTargets(const std::vector<uint8_t>& only) cons
 
 bool ChannelIntents::anyHeld() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  for (uint8_t h : held_)
-    if (h != 0) return true;
+  for (const Channel& c : ch_)
+    if (c.held != 0) return true;
   return false;
 }
 
@@ -246,18 +237,18 @@ std::vector<uint8_t> ChannelIntents::heldNotSafe() const {
   std::lock_guard<std::mutex> lock(mutex_);
   std::vector<uint8_t> chs;
   for (size_t ch = 0; ch < channels_; ++ch)
-    if (held_[ch] != 0 && held_not_safe_[ch]) chs.push_back(static_cast<uint8_t>(ch));
+    if (ch_[ch].held != 0 && ch_[ch].held_not_safe) chs.push_back(static_cast<uint8_t>(ch));
   return chs;
 }
 
 bool ChannelIntents::held(uint8_t channel) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return channel < channels_ && held_[channel] != 0;
+  return channel < channels_ && ch_[channel].held != 0;
 }
 
 bool ChannelIntents::heldBy(uint8_t channel, Trigger trigger) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return channel < channels_ && (held_[channel] & bitOf(trigger)) != 0;
+  return channel < channels_ && (ch_[channel].held & bitOf(trigger)) != 0;
 }
 
 void ChannelIntents::owe(const OutputTargets& targets, Clock::time_point since) {
@@ -266,9 +257,9 @@ void ChannelIntents::owe(const OutputTargets& targets, Clock::time_point since) 
     const uint8_t ch = targets.channels[i];
     if (ch >= channels_) continue;
     // A command confirmed after the trigger is newer: the trigger no longer speaks for it.
-    const auto& in = intent_[ch];
+    const auto& in = ch_[ch].intent;
     if (in && userSource(in->source) && in->at > since) continue;
-    owed_[ch] = Owed{targets.states[i], since};
+    ch_[ch].owed = Owed{targets.states[i], since};
   }
 }
 
@@ -276,7 +267,7 @@ OutputTargets ChannelIntents::owed() const {
   std::lock_guard<std::mutex> lock(mutex_);
   OutputTargets t;
   for (size_t ch = 0; ch < channels_; ++ch) {
-    const std::optional<Owed>& o = owed_[ch];
+    const std::optional<Owed>& o = ch_[ch].owed;
     if (!o) continue;
     t.channels.push_back(static_cast<uint8_t>(ch));
     t.states.push_back(o->level);
@@ -295,7 +286,7 @@ std::vector<uint8_t> ChannelIntents::pollStarting() {
   poll_started_at_ = clock_.now();
   std::vector<uint8_t> due;
   for (size_t ch = 0; ch < channels_; ++ch) {
-    const auto& in = intent_[ch];
+    const auto& in = ch_[ch].intent;
     if (in && in->adopt && (!in->adopt_from || *in->adopt_from <= poll_started_at_))
       due.push_back(static_cast<uint8_t>(ch));
   }
@@ -312,7 +303,7 @@ std::vector<bool> ChannelIntents::timedMayRun() const {
   const auto now = clock_.now();
   std::vector<bool> may_run(channels_, false);
   for (size_t ch = 0; ch < channels_; ++ch) {
-    const std::optional<Intent>& slot = intent_[ch];
+    const std::optional<Intent>& slot = ch_[ch].intent;
     if (!slot) continue;
     const Intent& in = *slot;
     if (in.ends && !in.driven && now <= *in.ends + endSlack(in.at, *in.ends)) may_run[ch] = true;
@@ -326,7 +317,7 @@ std::vector<bool> ChannelIntents::timedMayRun() const {
 Expectation ChannelIntents::expectedLocked(uint8_t channel, Clock::time_point t) const {
   Expectation e;
   if (channel >= channels_) return e;
-  const std::optional<Intent>& slot = intent_[channel];
+  const std::optional<Intent>& slot = ch_[channel].intent;
   if (!slot) return e;
   const Intent& in = *slot;
   if (in.adopt || in.driven) return e;
@@ -354,7 +345,7 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
                                                     const std::vector<bool>& read_now) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (changed) changed->clear();
-  std::fill(held_not_safe_.begin(), held_not_safe_.end(), false);
+  for (Channel& c : ch_) c.held_not_safe = false;
   const auto now = clock_.now();
   if (write_during_poll_) {
     // What it read may predate that write: neither a restart nor an intent to adopt. A run it
@@ -363,7 +354,7 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
     // missed, and its end later taken for a restart).
     write_during_poll_ = false;
     for (size_t ch = 0; ch < channels_ && ch < self_timed.size(); ++ch) {
-      const auto& in = intent_[ch];
+      const auto& in = ch_[ch].intent;
       if (self_timed[ch] && (ch >= read_now.size() || read_now[ch]) && in && !in->adopt &&
           in->at <= poll_started_at_)
         deviceRunsLocked(static_cast<uint8_t>(ch), now);
@@ -372,7 +363,7 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
   }
   bool differs = false;
   for (size_t ch = 0; ch < channels_ && ch < outputs.size(); ++ch) {
-    auto& in = intent_[ch];
+    auto& in = ch_[ch].intent;
     const bool device_runs = ch < self_timed.size() && self_timed[ch];
     if (!in) {
       // Found at the node's start (or never commanded): that is what a restore puts back. A
@@ -394,9 +385,9 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
         // What the write changed is its command; a level it did not change is not (a hold
         // that began after the write is newer than it).
         const bool differs_now = in->adopt_prev && *in->adopt_prev != level;
-        if (differs_now && !(held_[ch] != 0 && held_since_[ch] > in->at)) {
-          held_[ch] = 0;
-          owed_[ch].reset();
+        if (differs_now && !(ch_[ch].held != 0 && ch_[ch].held_since > in->at)) {
+          ch_[ch].held = 0;
+          ch_[ch].owed.reset();
           took_adopted_ = true;
         } else {
           in->source = CommandSource::kFound;
@@ -415,14 +406,14 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
       in->adopt = in->adopt_change = false;
       // A level taken as found ends no hold: a held channel shown otherwise (a command whose
       // answer was lost) is written safe again (docs/failsafe.md, precedence 1).
-      if (held_[ch] != 0 && held_written_[ch] &&
+      if (ch_[ch].held != 0 && ch_[ch].held_written &&
           (in->driven || level != (config_.safeStateOf(ch) == SafeState::kOn)))
-        held_not_safe_[ch] = true;
+        ch_[ch].held_not_safe = true;
       continue;
     }
-    if (held_[ch] != 0 && held_written_[ch] &&
+    if (ch_[ch].held != 0 && ch_[ch].held_written &&
         (device_runs || outputs[ch] != (config_.safeStateOf(ch) == SafeState::kOn)))
-      held_not_safe_[ch] = true;
+      ch_[ch].held_not_safe = true;
     if (in->restart && !device_runs && (ch >= read_now.size() || read_now[ch])) {
       // The node's continuous run, read stopped with no stop carried (that would have replaced
       // the intent): the LD58A08 does not stop one by itself, a power cycle does
@@ -469,8 +460,8 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
       adopted.at = now;
       adopted.level = outputs[ch];
       in = adopted;
-      held_[ch] = 0;
-      owed_[ch].reset();
+      ch_[ch].held = 0;
+      ch_[ch].owed.reset();
       took_adopted_ = true;
       continue;
     }
@@ -481,7 +472,7 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
     const bool rewritten =
         config_.on_restart == OnRestart::kRestore ||
         (config_.on_restart == OnRestart::kSafe && config_.safeStateOf(ch) != SafeState::kLeave);
-    if (!rewritten && !owed_[ch]) {
+    if (!rewritten && !ch_[ch].owed) {
       Intent found;
       found.at = now;
       found.level = outputs[ch];
@@ -494,7 +485,7 @@ ChannelIntents::Verdict ChannelIntents::observePoll(const std::vector<bool>& out
 }
 
 void ChannelIntents::deviceRunsLocked(uint8_t channel, Clock::time_point now) {
-  auto& in = intent_[channel];
+  auto& in = ch_[channel].intent;
   if (!in) return;
   const Expectation e = expectedLocked(channel, now);
   if (!in->ends || e.kind == Expectation::Kind::kLevel) in->driven = true;
@@ -511,7 +502,7 @@ void ChannelIntents::observeRunsOfFailedPoll(const std::vector<bool>& runs) {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto now = clock_.now();
   for (size_t ch = 0; ch < channels_ && ch < runs.size(); ++ch) {
-    const auto& in = intent_[ch];
+    const auto& in = ch_[ch].intent;
     if (runs[ch] && in && !in->adopt && in->at <= poll_started_at_)
       deviceRunsLocked(static_cast<uint8_t>(ch), now);
   }
@@ -533,12 +524,12 @@ OutputTargets ChannelIntents::afterPollTargets(Verdict verdict,
     if (verdict != Verdict::kNormal && config_.on_restart == OnRestart::kRestore) {
       for (size_t ch = 0; ch < channels_; ++ch) {
         const auto c = static_cast<uint8_t>(ch);
-        if (held_[ch] != 0) {
+        if (ch_[ch].held != 0) {
           by_channel[c] = config_.safeStateOf(ch) == SafeState::kOn;
           continue;
         }
-        if (!intent_[ch]) continue;
-        const Intent& in = *intent_[ch];
+        if (!ch_[ch].intent) continue;
+        const Intent& in = *ch_[ch].intent;
         // A timed command a restart interrupted is not started again (that would repeat
         // something that started): its final level is restored. A run the device drives with
         // no end is not restored (docs/failsafe.md, "What restore writes").
@@ -555,10 +546,11 @@ OutputTargets ChannelIntents::afterPollTargets(Verdict verdict,
       }
     }
     for (size_t ch = 0; ch < channels_; ++ch)
-      if (const std::optional<Owed>& o = owed_[ch]) by_channel[static_cast<uint8_t>(ch)] = o->level;
+      if (const std::optional<Owed>& o = ch_[ch].owed)
+        by_channel[static_cast<uint8_t>(ch)] = o->level;
     // A hold keeps its channels safe whatever on_restart says (docs/failsafe.md, precedence).
     for (size_t ch = 0; ch < channels_; ++ch)
-      if (held_[ch] != 0 && held_not_safe_[ch])
+      if (ch_[ch].held != 0 && ch_[ch].held_not_safe)
         by_channel[static_cast<uint8_t>(ch)] = config_.safeStateOf(ch) == SafeState::kOn;
   }
   if (verdict != Verdict::kNormal && config_.on_restart == OnRestart::kSafe) {
@@ -580,8 +572,8 @@ std::vector<TimedIntent> ChannelIntents::runsToStartAgain(
   if (verdict == Verdict::kNormal || config_.on_restart != OnRestart::kRestore) return again;
   std::lock_guard<std::mutex> lock(mutex_);
   for (size_t ch = 0; ch < channels_ && ch < device_runs.size(); ++ch) {
-    const auto& in = intent_[ch];
-    if (!in || !in->driven || !in->restart || device_runs[ch] || held_[ch] != 0 || owed_[ch])
+    const auto& in = ch_[ch].intent;
+    if (!in || !in->driven || !in->restart || device_runs[ch] || ch_[ch].held != 0 || ch_[ch].owed)
       continue;
     TimedIntent t;
     t.channel = static_cast<uint8_t>(ch);
@@ -597,7 +589,7 @@ std::vector<bool> ChannelIntents::runsUnderAdoption(bool driven_too) const {
   std::vector<bool> runs(channels_, false);
   const auto now = clock_.now();
   for (size_t ch = 0; ch < channels_; ++ch) {
-    const auto& in = intent_[ch];
+    const auto& in = ch_[ch].intent;
     if (!in || !in->adopt) continue;
     runs[ch] = (in->run_ends && *in->run_ends > now) || (driven_too && in->run_driven);
   }
@@ -609,7 +601,7 @@ std::vector<bool> ChannelIntents::lostRunsUnderAdoption() const {
   std::vector<bool> runs(channels_, false);
   const auto now = clock_.now();
   for (size_t ch = 0; ch < channels_; ++ch) {
-    const auto& in = intent_[ch];
+    const auto& in = ch_[ch].intent;
     if (!in || !in->adopt) continue;
     runs[ch] = (in->lost_run_ends && *in->lost_run_ends > now) || in->lost_run_driven;
   }
@@ -621,7 +613,7 @@ std::vector<TimedIntent> ChannelIntents::runningTimed() const {
   std::vector<TimedIntent> running;
   const auto now = clock_.now();
   for (size_t ch = 0; ch < channels_; ++ch) {
-    const auto& in = intent_[ch];
+    const auto& in = ch_[ch].intent;
     if (!in || (!in->driven && !in->ends) || (in->ends && *in->ends <= now)) continue;
     TimedIntent t;
     t.channel = static_cast<uint8_t>(ch);
@@ -643,9 +635,9 @@ void ChannelIntents::commandReceived(uint8_t channel, bool state) {
   if (channel >= channels_) return;
   const double timeout = config_.commandTimeoutOf(channel);
   if (state && timeout > 0) {
-    command_deadline_[channel] = clock_.now() + seconds(timeout);
+    ch_[channel].command_deadline = clock_.now() + seconds(timeout);
   } else {
-    command_deadline_[channel].reset();
+    ch_[channel].command_deadline.reset();
   }
 }
 
@@ -654,7 +646,7 @@ std::vector<uint8_t> ChannelIntents::expiredCommands() {
   std::vector<uint8_t> expired;
   const auto now = clock_.now();
   for (size_t i = 0; i < channels_; ++i) {
-    std::optional<Clock::time_point>& deadline = command_deadline_[i];
+    std::optional<Clock::time_point>& deadline = ch_[i].command_deadline;
     if (!deadline || now < *deadline) continue;
     deadline.reset();
     expired.push_back(static_cast<uint8_t>(i));

@@ -214,13 +214,17 @@ class ChannelIntents {
   size_t channels_;
   Clock& clock_;
   mutable std::mutex mutex_;
-  std::vector<std::optional<Intent>> intent_;
-  std::vector<uint8_t> held_;  // bits: 1 << Trigger, for each trigger holding it
-  std::vector<Clock::time_point> held_since_;
-  std::vector<bool> held_written_;   // a safe write confirmed since the hold began
-  std::vector<bool> held_not_safe_;  // the last compared poll showed it otherwise
-  std::vector<std::optional<Owed>> owed_;
-  std::vector<std::optional<Clock::time_point>> command_deadline_;
+  // What is known of one output channel, in one place.
+  struct Channel {
+    std::optional<Intent> intent;  // what it should show (none: not known)
+    uint8_t held = 0;              // bits: 1 << Trigger, for each trigger holding it safe
+    Clock::time_point held_since{};
+    bool held_written = false;   // a safe write confirmed since the hold began
+    bool held_not_safe = false;  // the last compared poll showed it otherwise
+    std::optional<Owed> owed;    // a safe write that did not get through, still owed
+    std::optional<Clock::time_point> command_deadline;  // command_timeout's (the dead man's)
+  };
+  std::vector<Channel> ch_;
   bool write_during_poll_ = false;
   Clock::time_point poll_started_at_{};  // the outputs a poll reads were read since then
   bool took_adopted_ = false;
