@@ -32,6 +32,7 @@ std::string FailsafeReport::text() const {
 
 DeviceFailsafe::DeviceFailsafe(Device& device, BusScheduler& scheduler, Clock& clock)
     : device_(device),
+      timed_(device.selfTimed()),
       scheduler_(scheduler),
       intents_(device.config().failsafe, device.outputCount(), clock) {
   const FailsafeConfig& fs = intents_.config();
@@ -170,7 +171,7 @@ Result DeviceFailsafe::readBack(Transport& t, const OutputTargets& targets, bool
   std::vector<bool> runs(device_.outputCount(), false);
   for (size_t ch = 0; ch < runs.size(); ++ch)
     runs[ch] =
-        device_.selfTimedReadByLastPoll(ch) && device_.outputSelfTimed(ch) &&
+        runReadByLastPoll(ch) && runsNow(ch) &&
         std::find(targets.channels.begin(), targets.channels.end(), ch) == targets.channels.end();
   intents_.observeRuns(runs);
   for (size_t i = 0; i < targets.channels.size(); ++i) {
@@ -210,11 +211,15 @@ Result DeviceFailsafe::settle(const OutputTargets& targets, Result w, FailsafeRe
   return w;
 }
 
+std::vector<uint8_t> DeviceFailsafe::timedStoppedBy(const Request& request) const {
+  return timed_ ? timed_->timedStoppedBy(request) : std::vector<uint8_t>{};
+}
+
 void DeviceFailsafe::afterFailedPoll() {
   std::vector<bool> runs(device_.outputCount(), false);
   bool any = false;
   for (size_t ch = 0; ch < runs.size(); ++ch) {
-    runs[ch] = device_.selfTimedReadByLastPoll(ch) && device_.outputSelfTimed(ch);
+    runs[ch] = runReadByLastPoll(ch) && runsNow(ch);
     any = any || runs[ch];
   }
   if (!any) return;
@@ -231,8 +236,8 @@ void DeviceFailsafe::afterPoll() {
   timed.assign(device_.outputCount(), false);
   read_now.assign(device_.outputCount(), false);
   for (size_t i = 0; i < timed.size(); ++i) {
-    timed[i] = device_.outputSelfTimed(i);
-    read_now[i] = device_.selfTimedReadByLastPoll(i);
+    timed[i] = runsNow(i);
+    read_now[i] = runReadByLastPoll(i);
   }
   std::vector<uint8_t> changed;
   const auto verdict =
@@ -290,15 +295,15 @@ void DeviceFailsafe::afterPoll() {
       // Unread, a restore could stop a run the device restarted (a power-down save) where the
       // snapshot, up to 8 polls old, says none runs: nothing is written now, and the next poll
       // that answers decides again (the change, and what is owed, are still there).
-      Result read = device_.refreshSelfTimed(t);  // not const: returned by move
+      Result read = timed_ ? timed_->refreshSelfTimed(t) : Result::success();  // returned by move
       if (!read.ok()) {
         nothingWritten(false,
                        "nothing written: reading which PWM runs before the restore failed (" +
                            read.message + "); the next poll decides again");
         return read;
       }
-      for (size_t i = 0; i < runs.size(); ++i) runs[i] = device_.outputSelfTimed(i);
-      if (device_.selfTimedRead()) intents_.observeRuns(runs);  // the device's from now on
+      for (size_t i = 0; i < runs.size(); ++i) runs[i] = runsNow(i);
+      if (runsRead()) intents_.observeRuns(runs);  // the device's from now on
     }
     // The node's continuous runs a power cycle stopped go first: the read back of the restore's
     // plain write then shows them running, as the node's.
@@ -334,7 +339,12 @@ Result DeviceFailsafe::startRunsAgain(Transport& t, const std::vector<TimedInten
   for (const TimedIntent& run : runs) {
     if (!run.restart) continue;  // runsToStartAgain gives only runs with their request
     intents_.writeRan();
-    const Result w = device_.startAgain(t, *run.restart);
+    // Only a self-timed output's run has a write to start it again (runsToStartAgain).
+    const Result w =
+        timed_ ? timed_->startAgain(t, *run.restart)
+               : Result::failure(ErrorKind::kInvalidArgument,
+                                 std::string("a ") + device_.type() +
+                                     " has no run to start again: " + run.restart->describe());
     r->channels.push_back(names[run.channel]);
     r->states.push_back(true);
     r->runs.push_back(true);
@@ -424,7 +434,7 @@ void DeviceFailsafe::adoptAfterLost(const TimedIntent& intent) {
   // The run it may have started goes on meanwhile (F31: a coil write over it keeps it), and the
   // device's snapshot says it runs until a read of the channel says otherwise.
   intents_.adoptRunNextPoll(intent.channel, CommandSource::kFound, intent.seconds, until);
-  device_.noteRunKept(intent.channel);
+  if (timed_) timed_->noteRunKept(intent.channel);
 }
 
 void DeviceFailsafe::externalWrite(const Request& request, const Result& result,
@@ -443,10 +453,10 @@ void DeviceFailsafe::externalWrite(const Request& request, const Result& result,
 
 std::vector<bool> DeviceFailsafe::runsKeptOverCoilWrites() const {
   std::vector<bool> runs(device_.outputCount(), false);
-  if (!device_.coilWriteKeepsRun()) return runs;
-  const bool read = device_.selfTimedRead();
+  if (!timed_ || !timed_->coilWriteKeepsRun()) return runs;
+  const bool read = runsRead();
   if (read)
-    for (size_t ch = 0; ch < runs.size(); ++ch) runs[ch] = device_.outputSelfTimed(ch);
+    for (size_t ch = 0; ch < runs.size(); ++ch) runs[ch] = runsNow(ch);
   for (const TimedIntent& t : intents_.runningTimed())
     if (t.channel < runs.size() && (t.seconds >= 0 || !read)) runs[t.channel] = true;
   // A run a write whose outcome is unknown went over: the channel waits for the poll that tells
@@ -456,7 +466,7 @@ std::vector<bool> DeviceFailsafe::runsKeptOverCoilWrites() const {
   // channel not running (F31).
   const std::vector<bool> lost = intents_.lostRunsUnderAdoption();
   for (size_t ch = 0; ch < runs.size() && ch < adopted.size(); ++ch)
-    runs[ch] = runs[ch] || adopted[ch] || (lost[ch] && device_.outputSelfTimed(ch));
+    runs[ch] = runs[ch] || adopted[ch] || (lost[ch] && runsNow(ch));
   return runs;
 }
 
@@ -464,8 +474,7 @@ void DeviceFailsafe::externalWriteLost(const Request& request) {
   for (uint8_t ch : device_.outputsWrittenBy(request).channels)
     intents_.adoptNextPoll(ch, CommandSource::kFound);
   for (const TimedIntent& t : device_.timedWrittenBy(request)) adoptAfterLost(t);
-  for (uint8_t ch : device_.timedStoppedBy(request))
-    intents_.adoptNextPoll(ch, CommandSource::kFound);
+  for (uint8_t ch : timedStoppedBy(request)) intents_.adoptNextPoll(ch, CommandSource::kFound);
   timedMaybeChanged();
 }
 
@@ -485,7 +494,7 @@ void DeviceFailsafe::timedCommandStopped(uint8_t channel, const Result& result) 
 }
 
 void DeviceFailsafe::externalWriteConfirmed(const Request& request, CommandSource source) {
-  device_.noteCarriedWrite(request);  // first: what follows reads the device's state now
+  if (timed_) timed_->noteCarriedWrite(request);  // first: what follows reads its state now
   const OutputTargets set = device_.outputsWrittenBy(request);
   // A coil write on a channel the device runs a PWM on does not stop the run (the LD58A08
   // keeps it): a command (it ends holds) whose channel stays the device's (docs/failsafe.md:
@@ -507,11 +516,11 @@ void DeviceFailsafe::externalWriteConfirmed(const Request& request, CommandSourc
     run.after = set.states[i];
     run.seconds = -1.0;
     intents_.timed(run, source);
-    device_.noteRunKept(ch);  // a later coil write finds it running too, until a read
+    if (timed_) timed_->noteRunKept(ch);  // a later coil write finds it running too, until a read
   }
   const std::vector<TimedIntent> timed = device_.timedWrittenBy(request);
   for (const TimedIntent& t : timed) intents_.timed(t, source);
-  const std::vector<uint8_t> stopped = device_.timedStoppedBy(request);
+  const std::vector<uint8_t> stopped = timedStoppedBy(request);
   for (uint8_t ch : stopped) intents_.adoptChangeNextPoll(ch, source);
   if (!set.empty() || !timed.empty()) endSafeState();
   // Any other write (registers the type does not decode) shows at the next poll.

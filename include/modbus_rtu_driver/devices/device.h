@@ -42,6 +42,7 @@ std::vector<std::string> withDefaults(const std::vector<std::string>& given, siz
                                       const char* prefix);
 
 class OutputBatch;
+class SelfTimedOutputs;
 
 class Device {
   // The only writer of outputs (writeOutputs): every request checked once, then merged or alone.
@@ -64,24 +65,9 @@ class Device {
   const char* type() const { return type_.name; }
   size_t outputCount() const { return type_.outputs; }
   size_t inputCount() const { return type_.inputs; }
-  // True for an output the device drives by itself right now (a running PWM), as far as the
-  // snapshot knows: a poll that shows it changed is not a restart.
-  virtual bool outputSelfTimed(size_t channel) const {
-    (void)channel;
-    return false;
-  }
-  // Whether the newest poll read what outputSelfTimed() answers for the channel (an LD58A08
-  // reads one channel's PWM registers per poll; the others are older).
-  virtual bool selfTimedReadByLastPoll(size_t channel) const {
-    (void)channel;
-    return true;
-  }
-  // Bus thread: the next polls read these channels' self-timed state first (an LD58A08 reads
-  // one channel's PWM registers per poll): the fail-safe waits for it to decide them.
-  virtual void readSelfTimedFirst(const std::vector<uint8_t>& channels) { (void)channels; }
-  // Whether outputSelfTimed() answers from what was read (false while an LD58A08's PWM registers
-  // were never read: it then answers true for every channel, "may run").
-  virtual bool selfTimedRead() const { return true; }
+  // The outputs it drives by itself for a time (self_timed_outputs.h: an LD58A08's PWM runs),
+  // or none: every output then shows its coil.
+  virtual SelfTimedOutputs* selfTimed() { return nullptr; }
 
   // Reads everything the device reports (outputs, inputs, telemetry, settings) into the
   // snapshot. On failure the snapshot keeps its previous values and the Result says why.
@@ -103,38 +89,6 @@ class Device {
     (void)request;
     return {};
   }
-  // The channels whose timed command a client's confirmed register write stopped (an LD58A08
-  // enable register written 0): each shows its coil again, taken at the next poll.
-  virtual std::vector<uint8_t> timedStoppedBy(const Request& request) const {
-    (void)request;
-    return {};
-  }
-  // Bus thread: a write the node carried for someone else (a share client, a raw write) was
-  // confirmed; what it set is the device's state now (an LD58A08's PWM snapshot, otherwise
-  // read one channel per poll, would say so only polls later).
-  virtual void noteCarriedWrite(const Request& request) { (void)request; }
-  // Whether a coil write leaves a run the device times by itself going (an LD58A08's PWM: its
-  // outputs apply only with the channel's enable register at 0).
-  virtual bool coilWriteKeepsRun() const { return false; }
-  // Bus thread: a coil write the device confirmed on `channel` kept a run going there (per
-  // coilWriteKeepsRun and what the node knew of it): the snapshot says it runs until a read says
-  // otherwise, as a read showing it would.
-  virtual void noteRunKept(uint8_t channel) { (void)channel; }
-  // Starts a continuous run again with the write that started it (TimedIntent::restart): a
-  // restore after a power cycle stopped it. Sent once; a lost answer is read back.
-  virtual Result startAgain(Transport& link, const Request& write) {
-    (void)link;
-    return Result::failure(
-        ErrorKind::kInvalidArgument,
-        std::string("a ") + type() + " has no run to start again: " + write.describe());
-  }
-  // Reads again what outputSelfTimed() answers from (an LD58A08's PWM registers, otherwise
-  // read one channel per poll), so a restore decides on the device's state now.
-  virtual Result refreshSelfTimed(Transport& link) {
-    (void)link;
-    return Result::success();
-  }
-
   // Last confirmed states (from a poll or a confirmed write); empty until known.
   const std::vector<bool>& outputs() const { return outputs_; }
   const std::vector<bool>& inputs() const { return inputs_; }

@@ -8,6 +8,7 @@
 
 #include "modbus_rtu_driver/core/config/device_types/ld58a08.h"
 #include "modbus_rtu_driver/devices/device.h"
+#include "modbus_rtu_driver/devices/self_timed_outputs.h"
 
 namespace modbus_rtu_driver {
 
@@ -55,7 +56,7 @@ struct Ld58a08Settings {
   uint16_t parity = 0;           // 0x00FF, 0 none 1 even 2 odd
 };
 
-class Ld58a08 : public Device {
+class Ld58a08 : public Device, public SelfTimedOutputs {
  public:
   static constexpr size_t kChannels = kLd58a08Type.outputs;
   static constexpr uint16_t kOutputMaskRegister = 0x0080;
@@ -68,6 +69,8 @@ class Ld58a08 : public Device {
   static uint16_t pwmRegister(uint8_t channel) { return static_cast<uint16_t>(channel * 0x10); }
 
   explicit Ld58a08(DeviceConfig config) : Device(kLd58a08Type, std::move(config)) {}
+  // Its PWM runs are outputs it times by itself.
+  SelfTimedOutputs* selfTimed() override { return this; }
 
   // Polls the outputs (FC01) and the PWM registers of one channel (all on the first poll).
   Result poll(Transport& link) override;

@@ -21,6 +21,7 @@
 #include "modbus_rtu_driver/core/bus/watchdog.h"
 #include "modbus_rtu_driver/core/link/until_silent_transport.h"
 #include "modbus_rtu_driver/devices/device.h"
+#include "modbus_rtu_driver/devices/self_timed_outputs.h"
 #include "modbus_rtu_driver/failsafe/channel_intents.h"
 #include "modbus_rtu_driver/failsafe/failsafe_event.h"
 #include "modbus_rtu_driver/failsafe/kept_timed_commands.h"
@@ -120,7 +121,10 @@ class DeviceFailsafe {
 
   // --- the bus thread ---
   // A poll of the device starts: it reads first what the fail-safe waits for.
-  void pollStarting() { device_.readSelfTimedFirst(intents_.pollStarting()); }
+  void pollStarting() {
+    const std::vector<uint8_t> first = intents_.pollStarting();  // always: it notes the start
+    if (timed_) timed_->readSelfTimedFirst(first);
+  }
   // After a good poll: restart detection, then on_restart's write and the owed safe writes.
   void afterPoll();
   // A poll failed: a PWM run it read before the read that failed is still the device's report
@@ -193,7 +197,14 @@ class DeviceFailsafe {
   std::string lostHeartbeat() const;
   std::string channelNames(const std::vector<uint8_t>& channels) const;
 
+  // What the device's self-timed outputs show (none: every output shows its coil).
+  bool runsNow(size_t ch) const { return timed_ && timed_->outputSelfTimed(ch); }
+  bool runReadByLastPoll(size_t ch) const { return !timed_ || timed_->selfTimedReadByLastPoll(ch); }
+  bool runsRead() const { return !timed_ || timed_->selfTimedRead(); }
+  std::vector<uint8_t> timedStoppedBy(const Request& request) const;
+
   Device& device_;
+  SelfTimedOutputs* const timed_;  // device_.selfTimed(): its outputs timed by itself, or none
   BusScheduler& scheduler_;
   ChannelIntents intents_;
   std::unique_ptr<Watchdog> heartbeat_;
