@@ -17,11 +17,6 @@ Clock::duration seconds(double s) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
 }
 
-bool allReady(const BusRuntime::Pending& pending) {
-  return std::all_of(pending.begin(), pending.end(),
-                     [](const auto& p) { return isReady(p.second); });
-}
-
 }  // namespace
 
 BusRuntime::BusRuntime(BusConfig config, Transport& transport, Options options)
@@ -192,7 +187,7 @@ BusRuntime::Pending BusRuntime::applySafeEverywhere(Trigger trigger, const std::
 }
 
 bool BusRuntime::allDone(const Pending& writes) {
-  return allReady(writes);
+  return std::all_of(writes.begin(), writes.end(), [](const auto& w) { return isReady(w.second); });
 }
 
 bool BusRuntime::allDone(const Outcomes& outcomes) {
