@@ -65,10 +65,6 @@ void DeviceAdapter::publishLater(std::function<void()> task) {
   postOrRun(publish_queue_, std::move(task));
 }
 
-Result DeviceAdapter::runOnBus(BusScheduler::Job job) {
-  return scheduler_.submit(device_->name(), std::move(job)).get();
-}
-
 void DeviceAdapter::publishOutputs() {
   if (!outputs_) return;  // before start(): the start-up safe states
   publishStates(*outputs_, device_->outputs());

@@ -40,6 +40,13 @@ class YespeedPduAdapter : public DeviceAdapter {
     publishLimits();
   }
 
+  // Bus thread: a write changed the device (set_limits reads the limits back): they are
+  // published as the device holds them, with its outputs.
+  void onChanged() override {
+    DeviceAdapter::onChanged();
+    publishLimits();
+  }
+
   void publishLimits() {
     if (!pdu().limitsKnown()) return;
     const PduLimitValues& l = pdu().limits();
@@ -54,41 +61,10 @@ class YespeedPduAdapter : public DeviceAdapter {
   // A field left at 0 (the default of a field not given) keeps what the device holds: the
   // node reads the limits first and checks the rules on the merged values.
   bool onSetLimits(SetPduLimits::Request& req, SetPduLimits::Response& res) {
-    const double given[3] = {req.limits.over_voltage, req.limits.under_voltage,
-                             req.limits.over_current};
-    PduLimitChange change;
-    for (size_t i = 0; i < 3; ++i) {
-      if (given[i] == 0.0) continue;
-      uint16_t reg = 0;
-      const std::string problem = YespeedPdu::limitToRegister(i, given[i], &reg);
-      if (!problem.empty()) {
-        res.success = false;
-        res.message = device_->name() + ": " + problem;
-        return true;
-      }
-      change[i] = reg;
-    }
-    if (!change[0] && !change[1] && !change[2]) {
-      res.success = false;
-      res.message = device_->name() +
-                    ": no limit given (over_voltage, under_voltage, over_current; 0 keeps one)";
-      return true;
-    }
-    if (change[0] && change[1] && change[2]) {  // all three: the rules before the bus is asked
-      // The three given registers (merged over zeros, none of which is left).
-      const std::string problem =
-          YespeedPdu::checkLimitRegisters(YespeedPdu::mergeLimits(PduLimitRegisters{}, change));
-      if (!problem.empty()) {
-        res.success = false;
-        res.message = device_->name() + ": " + problem;
-        return true;
-      }
-    }
-    const Result r = runOnBus([this, change](Transport& t) {
-      Result w = pdu().changeLimits(t, change);
-      publishLimits();  // whatever was read is what the device holds
-      return w;
-    });
+    const Result r = unit()
+                         .setPduLimits(req.limits.over_voltage, req.limits.under_voltage,
+                                       req.limits.over_current)
+                         .get();
     res.success = r.ok();
     res.message = answer(r, "limits set");
     return true;

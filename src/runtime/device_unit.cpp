@@ -3,6 +3,7 @@
 #include "modbus_rtu_driver/core/config/number_text.h"
 #include "modbus_rtu_driver/devices/generic_device.h"
 #include "modbus_rtu_driver/devices/lc_relay8.h"
+#include "modbus_rtu_driver/devices/yespeed_pdu.h"
 
 namespace modbus_rtu_driver {
 
@@ -166,6 +167,38 @@ std::future<Result> DeviceUnit::stopPwm(uint8_t channel, Call call) {
         if (board->readPwm(t).ok()) changed();
       },
       std::move(call));
+}
+
+std::future<Result> DeviceUnit::setPduLimits(double over_voltage, double under_voltage,
+                                             double over_current, Call call) {
+  auto* pdu = dynamic_cast<YespeedPdu*>(device_.get());
+  if (!pdu) return refuse("set_limits: a " + device_->config().type + " has no limits");
+  const double given[3] = {over_voltage, under_voltage, over_current};
+  PduLimitChange change;
+  for (size_t i = 0; i < 3; ++i) {
+    if (given[i] == 0.0) continue;
+    uint16_t reg = 0;
+    const std::string problem = YespeedPdu::limitToRegister(i, given[i], &reg);
+    if (!problem.empty()) return refuse(problem);
+    change[i] = reg;
+  }
+  if (!change[0] && !change[1] && !change[2])
+    return refuse("no limit given (over_voltage, under_voltage, over_current; 0 keeps one)");
+  if (change[0] && change[1] && change[2]) {  // all three: the rules before the bus is asked
+    // The three given registers (merged over zeros, none of which is left).
+    const std::string problem =
+        YespeedPdu::checkLimitRegisters(YespeedPdu::mergeLimits(PduLimitRegisters{}, change));
+    if (!problem.empty()) return refuse(problem);
+  }
+  return scheduler_.submit(
+      name(),
+      [this, pdu, change, done = std::move(call.done)](Transport& t) {
+        Result w = pdu->changeLimits(t, change);
+        changed();  // whatever was read is what the device holds
+        if (done) done(w);
+        return w;
+      },
+      call.tag);
 }
 
 std::future<Result> DeviceUnit::writeSignal(size_t signal, double value, Call call) {

@@ -70,9 +70,6 @@ class DeviceAdapter {
   // Bus thread: a command or a safe write changed the device's state; the base publishes the
   // outputs.
   virtual void onChanged() { publishOutputs(); }
-  // Runs `job` on the bus thread and waits for the real outcome. The message of a failure says
-  // whether the device is offline.
-  Result runOnBus(BusScheduler::Job job);
   // Bus thread only: publish the outputs message and the per-channel states that changed.
   void publishOutputs();
   // A poll's states on `publisher` (outputs_ or inputs_), now or on the publishing thread.

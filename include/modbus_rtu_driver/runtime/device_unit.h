@@ -102,6 +102,11 @@ class DeviceUnit {
   // LD58A08: a PWM run, and its stop.
   std::future<Result> setPwm(const PwmSettings& settings, Call call = {});
   std::future<Result> stopPwm(uint8_t channel, Call call = {});
+  // Yespeed PDU: new limits, over-voltage and under-voltage in V and over-current in A, each 0 to
+  // keep it. Each is checked against its range, and all three together against each other,
+  // before the bus is asked; the device's limits are read back after the write (`limits()`).
+  std::future<Result> setPduLimits(double over_voltage, double under_voltage, double over_current,
+                                   Call call = {});
   // Generic device: signal `signal` to `value` (in its unit).
   std::future<Result> writeSignal(size_t signal, double value, Call call = {});
 
