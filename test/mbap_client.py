@@ -72,12 +72,13 @@ class MbapClient:
     def receive(self, timeout=None):
         """The next whole answer as (transaction id, unit, PDU), within `timeout` s (the
         client's when None). ModbusError(None) when none came in time or the server closed."""
-        deadline = time.monotonic() + (self.timeout if timeout is None else timeout)
+        wait = self.timeout if timeout is None else timeout
+        deadline = time.monotonic() + wait
         while len(self.buffer) < 6 or len(self.buffer) < 6 + struct.unpack(">H",
                                                                          self.buffer[4:6])[0]:
             left = deadline - time.monotonic()
             if left <= 0:
-                raise ModbusError(None, "no answer within %.3f s" % (timeout or self.timeout))
+                raise ModbusError(None, "no answer within %.3f s" % wait)
             self.sock.settimeout(left)
             try:
                 chunk = self.sock.recv(260)
