@@ -528,8 +528,9 @@ OutputTargets ChannelIntents::afterPollTargets(Verdict verdict,
           by_channel[c] = config_.safeStateOf(ch) == SafeState::kOn;
           continue;
         }
-        if (!ch_[ch].intent) continue;
-        const Intent& in = *ch_[ch].intent;
+        const std::optional<Intent>& known = ch_[ch].intent;  // one name: clang-tidy 19
+        if (!known) continue;
+        const Intent& in = *known;
         // A timed command a restart interrupted is not started again (that would repeat
         // something that started): its final level is restored. A run the device drives with
         // no end is not restored (docs/failsafe.md, "What restore writes").
