@@ -167,15 +167,21 @@ bool PtyLink::open(const std::string& link, int baud, std::string* error, Parity
 }
 
 void PtyLink::close() {
+  // Only what this object made: the link while it still points to our pty, then the lock file
+  // (removed while still held, see lock()). The link goes before the pty: once the pty is
+  // closed and the program on the other side closes it too, the kernel gives its number to the
+  // next pty made, maybe another simulator's. A program reopening our link in between (the bus
+  // node reconnects with backoff) would open that other pty and take its lock, and the other
+  // simulator's node is refused its port. The likeliest cause of issue 49's load failures: with
+  // two rostests side by side, a launch test's node was refused its new pty for 30 s, the holder
+  // named another test's bus node.
+  if (!link_.empty() && targetOf(link_) == pts_) unlink(link_.c_str());
+  link_.clear();
+  pts_.clear();
   for (int* fd : {&slave_fd_, &master_fd_}) {
     if (*fd >= 0) ::close(*fd);
     *fd = -1;
   }
-  // Only what this object made: the link while it still points to our pty, then the lock file
-  // (removed while still held, see lock()).
-  if (!link_.empty() && targetOf(link_) == pts_) unlink(link_.c_str());
-  link_.clear();
-  pts_.clear();
   if (lock_fd_ >= 0) {
     unlink(lock_path_.c_str());
     ::close(lock_fd_);

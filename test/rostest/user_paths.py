@@ -53,10 +53,11 @@ class Process:
         except subprocess.TimeoutExpired:
             return None
 
-    def stop(self, timeout=20):
-        """SIGINT to the group (as Ctrl-C), SIGKILL if it is still there after `timeout` s."""
+    def stop(self, timeout=20, sig=signal.SIGINT):
+        """`sig` to the group (SIGINT: as Ctrl-C), SIGKILL if it is still there after `timeout`
+        s."""
         if self.running():
-            os.killpg(self.proc.pid, signal.SIGINT)
+            os.killpg(self.proc.pid, sig)
             if self.wait_exit(timeout) is None:
                 os.killpg(self.proc.pid, signal.SIGKILL)
                 self.proc.wait()
@@ -65,6 +66,26 @@ class Process:
 
     def tail(self, lines=40):
         return "\n".join(self.output().splitlines()[-lines:])
+
+
+class Simulator(Process):
+    """modbus_rtu_simulator on `link`. stop() is the USB adapter pulled: SIGTERM, which stops it
+    at once and removes its link (docs/simulator.md). Not SIGINT: that waits up to 20 s for the
+    node to let go of the port, and a kill after the same 20 s left the link behind, pointing at
+    a pty number that the next pty made (another test's simulator) gets; the node, reopening its
+    port, opened that pty and took its lock (issue 49's load failures)."""
+
+    def __init__(self, args, log_dir, name, link):
+        super().__init__(args, log_dir, name)
+        self.link = link
+
+    def stop(self, timeout=20, sig=signal.SIGTERM):
+        code = super().stop(timeout, sig)
+        if os.path.lexists(self.link):
+            raise AssertionError("the simulator on %s stopped (exit %s) and left its link behind:"
+                                 " a program reopening it may open another pty\n%s"
+                                 % (self.link, code, self.tail()))
+        return code
 
 
 def wait_for_file(path, timeout, what, process=None):
@@ -78,8 +99,8 @@ def wait_for_file(path, timeout, what, process=None):
 
 def start_simulator(config, link, log_dir, name="simulator"):
     """modbus_rtu_simulator as docs/simulator.md starts it; waits for its link."""
-    sim = Process(["rosrun", "modbus_rtu_driver", "modbus_rtu_simulator", "--config", config,
-                   "--link", link], log_dir, name)
+    sim = Simulator(["rosrun", "modbus_rtu_driver", "modbus_rtu_simulator", "--config", config,
+                     "--link", link], log_dir, name, link)
     wait_for_file(link + ".ctl", 20, "the simulator's control socket " + link + ".ctl", sim)
     return sim
 

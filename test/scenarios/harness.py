@@ -132,8 +132,8 @@ class Harness:
         if self.sim_process is not None and self.sim_process.running():
             return
         self.sim_starts += 1
-        self.sim_process = user_paths.Process(self.sim_args, self.log_dir,
-                                              "simulator%d" % self.sim_starts)
+        self.sim_process = user_paths.Simulator(self.sim_args, self.log_dir,
+                                                "simulator%d" % self.sim_starts, self.port)
         wait_until(lambda: os.path.exists(self.sim_control) and os.path.exists(self.port)
                    or not self.sim_process.running(), 20, "the simulator's control socket")
         if not self.sim_process.running():
@@ -149,7 +149,7 @@ class Harness:
             return False
 
     def stop_simulator(self):
-        """The port goes away: the simulator stops and its pty and link with it."""
+        """The port goes away: the simulator stops at once (SIGTERM), its pty and link with it."""
         if self.sim_process is not None:
             self.sim_process.stop()
         self.sim = None
