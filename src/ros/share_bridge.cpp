@@ -52,6 +52,7 @@ void ShareBridge::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) 
   status.add("answer bound [s]", gateway_.answerBound());
   status.add("answered 0B at the bound (unsent)", gateway_.expired());
   status.add("shared requests run in a guard", gateway_.ranInGuards());
+  status.add("shared reads retried after a guard", gateway_.cutInGuards());
   status.add("accepted", s.accepted);
   status.add("refused (not allowed)", s.refused_not_allowed);
   status.add("refused (too many clients)", s.refused_too_many);

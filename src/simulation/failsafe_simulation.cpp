@@ -53,8 +53,10 @@ const std::vector<SimInvariant>& simInvariants() {
        "a device's reply that comes within late_reply_guard after its request timed out is "
        "never taken as the reply to a different request"},
       {"I22", "docs/share.md (shared requests in a late-reply guard); docs/failsafe.md F90",
-       "a shared request run while another device's late-reply guard holds the line ends "
-       "before that guard does: the guarded request starts no later than without it"},
+       "every attempt of a shared request run while another device's late-reply guard holds "
+       "the line ends before that guard does: the guarded request starts no later than without "
+       "it; a read cut short there gets its remaining retries later, never more attempts in all "
+       "than retries allows"},
       {"L1", "docs/failsafe.md F8, F16, F17, F41, F58 (safe until commanded again, owed writes)",
        "liveness: once every fault heals (the devices answer, the port is back, a node runs), "
        "every channel held safe (the heartbeat lost, for good in half the seeds, or a command "
@@ -79,6 +81,8 @@ const std::vector<std::string>& simRequiredCoverage() {
     r.emplace_back("fault kill with a frame on the line");
     // docs/share.md: a shared request to another device within a device's late-reply guard.
     r.emplace_back("path shared request in another device's guard");
+    // ... a read cut short there: its remaining retries after the guarded request.
+    r.emplace_back("path a shared read's retries after the guarded request");
     // failsafe.md F90: a new read with a failed read's frame takes its late reply, no guard.
     r.emplace_back("path a new read took its frame's late reply within the guard");
     // The fail-safe's events, by trigger, device type and action (docs/failsafe.md, "What

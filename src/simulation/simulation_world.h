@@ -48,7 +48,7 @@ constexpr StepKind kStepKinds[] = {
     {"power", 2},         {"ld_save", 1},     {"port_lost", 1},      {"port_back", 3},
     {"stop", 1},          {"kill", 1},        {"start", 3},          {"share15_broadcast", 1},
     {"refuse", 2},        {"foreign", 2},     {"port_fail_sent", 1}, {"share05_broadcast", 1},
-    {"raw_broadcast", 1}, {"repeat", 2},      {"kill_sent", 1}};
+    {"raw_broadcast", 1}, {"repeat", 2},      {"kill_sent", 1},      {"share01", 3}};
 
 namespace simulation_world {
 
@@ -393,6 +393,7 @@ class World {
   void stepFlashRegisters(const CommandArgs& a);
   void stepShare16Pwm(const CommandArgs& a);
   void stepShare06Stop(const CommandArgs& a);
+  void stepShareRead(const CommandArgs& a);
   void stepSignal(const CommandArgs& a);
   // The node's calls as its services, topics, share and raw write services make them, tagged
   // with the step's operation; `done` (the model) runs on the bus thread at the job's end.
@@ -444,7 +445,9 @@ class World {
   // The node's bus runtime, the node's own (runtime/bus_runtime.h), stepped on the manual clock.
   std::unique_ptr<BusRuntime> node_;  // after kept_timed_: it writes there
   std::map<std::string, uint64_t> coverage_;
-  uint64_t ran_in_guards_ = 0;  // the node's scheduler's count, as last seen
+  uint64_t ran_in_guards_ = 0;                   // the node's scheduler's count, as last seen
+  uint64_t cut_in_guards_ = 0;                   // likewise
+  std::map<uint64_t, int> share_read_attempts_;  // each share01 read's attempts, by its op
   bool dying_ = false;
   bool stopping_ = false;
   bool killed_frame_out_ = false;  // kill_sent: the frame it waits for went out

@@ -69,6 +69,10 @@ void World::runUntil(TP end, const std::function<bool()>& done) {
       const uint64_t in_guards = node_->scheduler().ranInGuards();
       if (in_guards > ran_in_guards_) cover("path shared request in another device's guard");
       ran_in_guards_ = in_guards;  // a new node counts from 0
+      // ... a read whose answer was lost there, its retries after the guarded request.
+      const uint64_t cut = node_->scheduler().cutInGuards();
+      if (cut > cut_in_guards_) cover("path a shared read's retries after the guarded request");
+      cut_in_guards_ = cut;
       continue;
     }
     const TP t = std::min({next, next_tick_, next_feed_, next_dev_feed_, end});

@@ -132,6 +132,16 @@ void World::onAttempt(const LineEvent& e) {
   // (a late or repeated one, or a foreign frame), and took it or rejected it.
   if (e.stale) cover(e.answered ? "line another's reply taken" : "line another's reply rejected");
   if (e.taken_by_same_read) cover("path a new read took its frame's late reply within the guard");
+  // I22 (docs/share.md): a client's read, also one cut short in another device's guard and
+  // retried after the guarded request, gets 1 + retries attempts at most.
+  if (node_) {
+    const auto read = share_read_attempts_.find(node_->currentTag());
+    if (read != share_read_attempts_.end() && checked("I22") &&
+        ++read->second > 1 + config_.link.retries)
+      fail("I22", "a share client's " + e.request.describe() + " got attempt " +
+                      std::to_string(read->second) + " with retries " +
+                      std::to_string(config_.link.retries));
+  }
   const int d = devOf(e.request.slave);
   if (d < 0) return;
   // A repeated or late reply of the same shape, taken as this read's (Modbus RTU has no

@@ -195,6 +195,7 @@ void World::doCommandStep(const SimStep& s) {
       {"raw16_flash", &World::stepFlashRegisters},
       {"share16_pwm", &World::stepShare16Pwm},
       {"share06_stop", &World::stepShare06Stop},
+      {"share01", &World::stepShareRead},
       {"signal", &World::stepSignal},
   };
   const auto it = kCommandSteps.find(s.kind);
@@ -510,6 +511,15 @@ void World::stepShare06Stop(const CommandArgs& a) {
     }
     if (outcomeUnknown(r.error)) lostAnswer(kLd, ch, 0);
   }));
+}
+
+// A client's read of an output device's coils (FC01): the traffic that uses other devices'
+// late-reply guards (docs/share.md), also cut short there and retried after the guarded request.
+// Its answer is the device's, as the link decoded it (the link's tests check that).
+void World::stepShareRead(const CommandArgs& a) {
+  const uint64_t id = op(a.step.kind).id;
+  share_read_attempts_[id] = 0;  // onAttempt counts them: I22
+  pending_.push_back(share(id, Request::readCoils(kAddr[a.outd], 0, kChannels), nullptr));
 }
 
 void World::stepSignal(const CommandArgs& a) {

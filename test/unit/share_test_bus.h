@@ -11,9 +11,11 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <vector>
 
 #include "modbus_rtu_driver/core/bus/bus_scheduler.h"
@@ -30,9 +32,44 @@ class MemoryBus : public Transport {
   std::map<uint16_t, uint16_t> registers, coils;
   bool open = true;
 
+  // A late-reply guard on slave `guarded` (docs/share.md): guardLeft says `guard_left` for its
+  // requests; one attempt of any request takes at most `attempt_seconds`. Set before the bus
+  // thread starts; the bus thread's afterwards.
+  uint8_t guarded = 0;
+  double guard_left = 0, attempt_seconds = 0.04;
+  // The next `owed` reads of slave 1 run in parts (Transport::executeAttempts) lose their
+  // answer with a retry owed; `on_owed` runs then.
+  int owed = 0;
+  std::function<void()> on_owed;
+
+  double guardLeft(const Request& next) const override {
+    return next.slave == guarded ? guard_left : 0;
+  }
+  double attemptSeconds(const Request& /*request*/) const override { return attempt_seconds; }
+  Result executeAttempts(const Request& r, int first, int most) override {
+    if (most < 0 || r.slave != 1 || owed == 0) return execute(r);
+    --owed;
+    {
+      std::lock_guard<std::mutex> lock(m_);
+      ++executed_;
+      order_.push_back(r.slave);
+    }
+    if (on_owed) on_owed();
+    Result lost =
+        Result::failure(ErrorKind::kTimeout, "no reply to attempt " + std::to_string(first));
+    lost.retry_owed = true;
+    return lost;
+  }
+  // The slave of every transaction started, in order.
+  std::vector<uint8_t> order() {
+    std::lock_guard<std::mutex> lock(m_);
+    return order_;
+  }
+
   Result execute(const Request& r) override {
     std::unique_lock<std::mutex> lock(m_);
     ++executed_;
+    order_.push_back(r.slave);
     cv_.notify_all();
     cv_.wait(lock, [&] { return !held_; });
     if (r.slave == kBroadcastAddress) return Result::success();
@@ -82,6 +119,7 @@ class MemoryBus : public Transport {
   std::condition_variable cv_;
   bool held_ = false;
   int executed_ = 0;
+  std::vector<uint8_t> order_;
 };
 
 // A Modbus TCP client on a blocking socket; every wait is bounded.

@@ -979,6 +979,90 @@ TEST(BusSchedulerGuardTime, ADevicesSharedRequestsKeepTheirOrder) {
   EXPECT_EQ(s.ranInGuards(), 1u);
 }
 
+// docs/share.md: a shared read goes within the guard when one attempt of it fits, and gets as
+// many attempts as end before the guard does; a read whose answer they lost gets its remaining
+// retries after the guarded request, never more attempts in all than the retries allow.
+namespace {
+
+// Slave 2 loses the answers of its first `lost` attempts; one attempt takes 5 ms and may take
+// up to 30 ms, a transaction up to 30 ms per attempt (1 + `retries`).
+struct RetryingLine : GuardedLine {
+  using GuardedLine::GuardedLine;
+  Result execute(const Request& r) override { return executeAttempts(r, 0, -1); }
+  Result executeAttempts(const Request& r, int first, int most) override {
+    if (r.slave == 2) firsts.push_back(first);
+    for (int attempt = first;; ++attempt) {
+      GuardedLine::execute(r);
+      if (r.slave != 2 || attempt >= lost) return Result::success({0});
+      Result lost_answer = Result::failure(ErrorKind::kTimeout, "no answer");
+      if (attempt >= retries) return lost_answer;
+      lost_answer.retry_owed = most >= 0 && attempt + 1 - first >= most;
+      if (lost_answer.retry_owed) return lost_answer;
+    }
+  }
+  double attemptSeconds(const Request& /*request*/) const override { return 0.03; }
+  double lineSeconds(const Request& /*request*/) const override { return 0.03 * (1 + retries); }
+  int retries = 1, lost = 1;
+  std::vector<int> firsts;  // the first attempt of each call for slave 2
+};
+
+}  // namespace
+
+TEST(BusSchedulerGuardTime, AReadGoesWhenOneAttemptFitsAndItsRetryAfterTheGuardedRequest) {
+  ManualClock clock;
+  RetryingLine line(clock);
+  BusScheduler s(line, {}, clock);
+  s.startStepping();
+  // 34 ms: the first attempt fits (30), then 29 ms are left: the retry does not.
+  line.guard_until[1] = clock.now() + 34ms;
+  auto w =
+      s.submit("a", [](Transport& t) { return t.execute(Request::writeSingleCoil(1, 0, true)); });
+  std::vector<Result> answers;
+  const Request read = Request::readHoldingRegisters(2, 0, 1);
+  s.submitShared(
+      "b", [read](Transport& t) { return t.execute(read); },
+      [&answers](const Result& r) { answers.push_back(r); }, 0, read);
+  Clock::time_point next{};
+  while (s.step(&next)) {
+  }
+  EXPECT_TRUE(w.get().ok());
+  EXPECT_EQ(line.log, (std::vector<std::string>{"2r", "1w", "2r"}));
+  EXPECT_EQ(line.firsts, (std::vector<int>{0, 1})) << "the retry is attempt 1, not a new read";
+  ASSERT_EQ(answers.size(), 1u) << "one answer, after the retry";
+  EXPECT_TRUE(answers[0].ok()) << answers[0].message;
+  EXPECT_EQ(s.ranInGuards(), 1u);
+}
+
+// A read that no attempt gets an answer to ends with the link's retries spent, also when the
+// guard cut it short: 1 + retries attempts in all.
+TEST(BusSchedulerGuardTime, AReadCutShortNeverGetsMoreAttemptsThanItsRetries) {
+  ManualClock clock;
+  RetryingLine line(clock);
+  line.lost = 10;  // never answered
+  line.retries = 2;
+  BusScheduler s(line, {}, clock);
+  s.startStepping();
+  line.guard_until[1] = clock.now() + 64ms;  // two attempts fit (60), the third does not
+  auto w =
+      s.submit("a", [](Transport& t) { return t.execute(Request::writeSingleCoil(1, 0, true)); });
+  std::vector<Result> answers;
+  const Request read = Request::readHoldingRegisters(2, 0, 1);
+  s.submitShared(
+      "b", [read](Transport& t) { return t.execute(read); },
+      [&answers](const Result& r) { answers.push_back(r); }, 0, read);
+  Clock::time_point next{};
+  while (s.step(&next)) {
+  }
+  EXPECT_TRUE(w.get().ok());
+  // Two attempts fit the guard's 64 ms; they take 10, and the third fits the 54 left: all three
+  // go before the write, the answer lost in each, and no fourth.
+  EXPECT_EQ(line.log, (std::vector<std::string>{"2r", "2r", "2r", "1w"}));
+  EXPECT_EQ(line.firsts, (std::vector<int>{0, 2}));
+  ASSERT_EQ(answers.size(), 1u);
+  EXPECT_EQ(answers[0].error, ErrorKind::kTimeout);
+  EXPECT_FALSE(answers[0].retry_owed);
+}
+
 // A poll's request waits on the guard too: the shared read goes inside the poll, before it.
 TEST(BusSchedulerGuardTime, APollsGuardedRequestLetsASharedReadGoFirst) {
   GuardFill f;

@@ -215,3 +215,34 @@ TEST(LateReplyGuard, TheGuardLeftIsWhatTheNextRequestWaits) {
   EXPECT_GE(waited, left - 1e-6) << "the next request waited less than guardLeft said";
   EXPECT_EQ(l.link.guardLeft(next), 0.0) << "settled by that wait";
 }
+
+// A transaction run in parts (Transport::executeAttempts: a shared read cut short in another
+// device's guard, docs/share.md): the part says its retry is owed, the rest is the same
+// transaction's retry (no guard of its own, counted as a retry, not a new request), and the link
+// never runs more attempts than its retries allow.
+TEST(LateReplyGuard, ATransactionCutShortIsContinuedByItsRetry) {
+  Line l(1);
+  const LinkStats before = l.link.stats();
+  l.link.faults(2).lost = 1;
+  const Request read = Request::readHoldingRegisters(2, 0x10, 3);
+  const Result part = l.link.executeAttempts(read, 0, 1);
+  EXPECT_EQ(part.error, ErrorKind::kTimeout);
+  EXPECT_TRUE(part.retry_owed);
+  EXPECT_EQ(l.link.guardLeft(read), 0.0) << "its retry does not wait for a guard";
+  const Result rest = l.link.executeAttempts(read, 1, -1);
+  ASSERT_TRUE(rest.ok()) << rest.message;
+  EXPECT_FALSE(rest.retry_owed);
+  EXPECT_EQ(rest.values, (std::vector<uint16_t>{5, 1, 0xFFFF}));
+  const LinkStats after = l.link.stats();
+  EXPECT_EQ(after.requests - before.requests, 1u);
+  EXPECT_EQ(after.retries - before.retries, 1u);
+  EXPECT_EQ(after.attempts - before.attempts, 2u);
+
+  // Lost every time: the retries spent, nothing owed, whatever the caller allows.
+  l.link.faults(2).lost = 5;
+  EXPECT_TRUE(l.link.executeAttempts(read, 0, 1).retry_owed);
+  const Result spent = l.link.executeAttempts(read, 1, 5);
+  EXPECT_EQ(spent.error, ErrorKind::kTimeout);
+  EXPECT_FALSE(spent.retry_owed);
+  EXPECT_EQ(l.link.stats().attempts - after.attempts, 2u) << "1 + retries attempts in all";
+}

@@ -116,3 +116,73 @@ TEST(ShareAnswerBound, WithoutATransactionTimeThereIsNoBound) {
   ASSERT_TRUE(f.start());
   EXPECT_EQ(f.gateway->answerBound(), 0.0);
 }
+
+// docs/share.md: a read run in another device's late-reply guard gets the attempts that end
+// before the guard does; its answer lost in them, its remaining retries go after the guarded
+// request, and the client gets their answer, or 0B by the answer bound when they cannot start
+// in time (then they are never sent).
+namespace {
+
+// Read #1 holds the bus while a ROS write to the guarded slave 3 and read #2 queue behind it;
+// released, the write's guard lets read #2's first attempt go (one 0.04 s attempt fits the
+// 0.05 s left), and its answer is lost.
+struct CutShortRead {
+  explicit CutShortRead(ManualClock& clock) : f(shareConfig(), tenthOfASecond, clock) {
+    f.bus.guarded = 3;
+    f.bus.guard_left = 0.05;
+    f.bus.owed = 1;
+  }
+  // Returns read #2's answer.
+  Bytes run() {
+    if (!f.start()) return {};
+    client = std::make_unique<TcpClient>(f.port());
+    f.bus.hold();
+    if (!client->send(1, read) || !f.bus.awaitExecuted(1)) return {};
+    write = f.bus_thread.submit(
+        "board", [](Transport& t) { return t.execute(Request::writeSingleCoil(3, 0, true)); });
+    if (!client->send(2, read) || !waitFor([&] { return f.gateway->queued() == 2; })) return {};
+    f.bus.release();
+    Bytes answer;
+    for (int i = 0; i < 2; ++i) {  // read #1's answer and read #2's, in either order
+      const Bytes frame = client->receive();
+      if (frame.size() >= 8 && mbapTransaction(frame) == 2) answer = frame;
+    }
+    return answer;
+  }
+  ShareFixture f;
+  std::unique_ptr<TcpClient> client;
+  const Request read = Request::readHoldingRegisters(1, 0, 2);
+  std::future<Result> write;
+};
+
+}  // namespace
+
+TEST(ShareAnswerBound, AReadCutShortInAGuardIsAnsweredAfterItsRetry) {
+  ManualClock clock;
+  CutShortRead c(clock);
+  c.f.bus.on_owed = [&c] { c.f.bus.guard_left = 0.03; };  // the retry does not fit what is left
+  const Bytes answer = c.run();
+  EXPECT_EQ(TcpClient::asRtu(answer), encodeReply(c.read, {0, 0})) << toHex(answer);
+  c.write.wait();  // sent (the order below); MemoryBus answers slave 1 only
+  EXPECT_EQ(c.f.bus.order(), (std::vector<uint8_t>{1, 1, 3, 1}))
+      << "read #1, read #2's first attempt in the guard, the guarded write, read #2's retry";
+  EXPECT_EQ(c.f.gateway->expired(), 0u);
+}
+
+TEST(ShareAnswerBound, AReadCutShortWhoseRetryCannotStartInTimeIsAnswered0BAndItsRetryNeverSent) {
+  ManualClock clock;
+  CutShortRead c(clock);
+  c.f.bus.on_owed = [&c, &clock] {
+    c.f.bus.guard_left = 0.03;
+    clock.advance(seconds(0.25));  // past read #2's latest start (0.3 - 0.1 s after it came)
+  };
+  const Bytes answer = c.run();
+  EXPECT_EQ(TcpClient::asRtu(answer),
+            encodeException(1, static_cast<uint8_t>(FunctionCode::kReadHoldingRegisters),
+                            kGatewayTargetFailed))
+      << toHex(answer);
+  c.write.wait();  // sent (the order below); MemoryBus answers slave 1 only
+  ASSERT_TRUE(waitFor([&] { return c.f.gateway->queued() == 0; }));
+  EXPECT_EQ(c.f.bus.order(), (std::vector<uint8_t>{1, 1, 3})) << "the retry was sent";
+  EXPECT_EQ(c.f.gateway->expired(), 1u);
+}

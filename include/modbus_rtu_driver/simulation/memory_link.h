@@ -177,11 +177,19 @@ class CountingTransport : public Transport {
     link_.beginTransaction();
     return link_.execute(request);
   }
+  // A transaction's later part (first > 0) is the same transaction: no new number.
+  Result executeAttempts(const Request& request, int first, int most) override {
+    if (first == 0) link_.beginTransaction();
+    return link_.executeAttempts(request, first, most);
+  }
   bool connect(std::string* error) override { return link_.connect(error); }
   bool connected() const override { return link_.connected(); }
   void disconnect() override { link_.disconnect(); }
   double guardLeft(const Request& next) const override { return link_.guardLeft(next); }
   double lineSeconds(const Request& request) const override { return link_.lineSeconds(request); }
+  double attemptSeconds(const Request& request) const override {
+    return link_.attemptSeconds(request);
+  }
 
  private:
   MemoryLink& link_;

@@ -69,6 +69,10 @@ void Link::noteConnected() {
 }
 
 Result Link::execute(const Request& asked) {
+  return executeAttempts(asked, 0, -1);
+}
+
+Result Link::executeAttempts(const Request& asked, int first, int most) {
   // The one check and the one encoding of this request: every stage after this (each attempt's
   // send, its timeouts, the reply's echo check, the late-reply guard) reads this frame.
   Result refused;
@@ -78,13 +82,14 @@ Result Link::execute(const Request& asked) {
   if (!connected())
     return Result::failure(ErrorKind::kNotConnected, "port " + config_.port + " is not open");
   {
+    // A transaction's later attempts (first > 0) are its retries, not a request of their own.
     std::lock_guard<std::mutex> lock(stats_mutex_);
-    ++stats_.requests;
+    ++(first > 0 ? stats_.retries : stats_.requests);
   }
   if (!asked.expectsReply()) return runBroadcast(request);
   const auto start = Steady::now();
   Result r;
-  for (int attempt_no = 0;; ++attempt_no) {
+  for (int attempt_no = first;; ++attempt_no) {
     retrying_ = attempt_no > 0;
     r = runAttempt(request);
     // Only a lost answer is retried, and only when doing it twice does no harm; a dropped
@@ -92,6 +97,11 @@ Result Link::execute(const Request& asked) {
     if (r.ok() || !answerLost(r.error) || !asked.repeatable || attempt_no >= config_.retries ||
         !connected())
       break;
+    if (most >= 0 && attempt_no + 1 - first >= most) {
+      // The rest of the transaction comes later: its account then (the retries counted there).
+      r.retry_owed = true;
+      return r;
+    }
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.retries;
   }
@@ -150,21 +160,30 @@ double Link::worstTransactionSeconds(const Request& asked) const {
   return encoded ? worstSeconds(*encoded) : 0.0;
 }
 
-double Link::worstSeconds(const EncodedRequest& encoded) const {
-  const Request& asked = encoded.request();
+double Link::attemptWorstSeconds(const EncodedRequest& encoded) const {
   const double character = characterTime(config_);
   const double send = minGap() + static_cast<double>(encoded.adu().size()) * character;
-  if (!asked.expectsReply()) return send;
+  if (!encoded.request().expectsReply()) return send;
   const size_t reply = std::max<size_t>(encoded.replyLength(), kShortestReply);
-  const double attempt = send + responseTimeout(encoded) + static_cast<double>(reply) * character +
-                         effectiveByteTimeout(config_);
+  return send + responseTimeout(encoded) + static_cast<double>(reply) * character +
+         effectiveByteTimeout(config_);
+}
+
+double Link::worstSeconds(const EncodedRequest& encoded) const {
+  const Request& asked = encoded.request();
+  if (!asked.expectsReply()) return attemptWorstSeconds(encoded);
   const int attempts = asked.repeatable ? 1 + std::max(0, config_.retries) : 1;
-  return attempts * attempt + config_.late_reply_guard;
+  return attempts * attemptWorstSeconds(encoded) + config_.late_reply_guard;
 }
 
 double Link::lineSeconds(const Request& request) const {
   const std::optional<EncodedRequest> encoded = EncodedRequest::encode(request);
   return encoded ? worstSeconds(*encoded) - config_.late_reply_guard : -1;
+}
+
+double Link::attemptSeconds(const Request& request) const {
+  const std::optional<EncodedRequest> encoded = EncodedRequest::encode(request);
+  return encoded ? attemptWorstSeconds(*encoded) : -1;
 }
 
 double Link::guardLeft(const Request& next) const {

@@ -183,6 +183,15 @@ void ShareGateway::forward(const Request& request, Answer answer,
                                      ": not sent: it could not start within the share's "
                                      "answer bound (answered 0B)");
         Result r = t.execute(sent);
+        if (r.retry_owed) {
+          // A read cut short in another device's late-reply guard: queued again for its
+          // retries (BusScheduler::useGuardTime), which must start by the same latest start to
+          // end within the bound; else 0B now, or from the expiry thread at that start.
+          int running = Waiting::kRunning;
+          w->state.compare_exchange_strong(running, Waiting::kQueued);
+          if (bounded && clock_.now() > w->start_by) expire(*w);
+          return r;
+        }
         if (!isReadFunction(sent.function) && wrote_) wrote_(sent, r);
         if (ran) ran(r);
         // On the bus thread, on purpose: nothing else may go on the line during the delay.

@@ -137,6 +137,9 @@ class BusScheduler {
   size_t queuedJobs() const;
   // Shared requests run while another slave's late-reply guard held the line (docs/share.md).
   uint64_t ranInGuards() const;
+  // Of those, reads whose answer was lost in the attempts that fitted: their retries went after
+  // the guarded request.
+  uint64_t cutInGuards() const;
   // Called on the bus thread after each: the guarded slave, and the seconds its guard had left
   // before and after (the simulation checks that it ended first: after > 0). Set before start.
   using GuardTimeObserver = std::function<void(uint8_t slave, double before, double after)>;
@@ -161,6 +164,7 @@ class BusScheduler {
     ResultCallback done;  // set instead of the promise for shared requests
     bool shared = false;
     std::optional<Request> request;  // a shared job's one request (submitShared)
+    int attempts_done = 0;           // of that request, run in another slave's guard (useGuardTime)
     void finish(Result r);
   };
 
@@ -175,7 +179,8 @@ class BusScheduler {
   };
 
   // What a queued job sees: the link, noting whether the job's last request got no reply at
-  // all (every retry timed out).
+  // all (every retry timed out). A shared read run in another slave's guard runs attempts
+  // `first` on, at most `most` of them (< 0: all its retries).
   struct NotingTransport : Transport {
     NotingTransport(Transport& link, BusScheduler& scheduler) : inner(link), owner(scheduler) {}
     Result execute(const Request& request) override;
@@ -183,6 +188,7 @@ class BusScheduler {
     void awaitLineFree() override { inner.awaitLineFree(); }
     Transport& inner;
     BusScheduler& owner;
+    int first = 0, most = -1;
     bool sent = false;
     bool last_unanswered = false;
   };
@@ -202,14 +208,16 @@ class BusScheduler {
   bool stepLocked(std::unique_lock<std::mutex>& lock, Clock::time_point* wait);
   // Runs the oldest write, else the oldest shared request; `lock` held on entry and on return.
   bool runOneQueued(std::unique_lock<std::mutex>& lock);
-  // Runs `p` (taken off its queue); `lock` held on entry and on return.
-  void runPending(std::unique_lock<std::mutex>& lock, Pending p);
+  // Runs `p` (taken off its queue); `lock` held on entry and on return. `most`: at most that
+  // many attempts of a shared request (< 0: all); a read whose answer they lost goes back to the
+  // head of the shared queue for its remaining retries.
+  void runPending(std::unique_lock<std::mutex>& lock, Pending p, int most = -1);
   // Before `next` (lock free): while its slave's late-reply guard holds it, runs the queued shared
-  // requests to other slaves that end before the guard does.
+  // requests to other slaves, each attempt ending before the guard does.
   void useGuardTime(const Request& next);
-  // The first shared request that can go within `left` seconds of `guarded`'s guard (a request
-  // to another slave, not guarded itself, with no earlier request of its slave or write of its
-  // device queued); shared_.end() if none. `lock` held.
+  // The first shared request one attempt of which can go within `left` seconds of `guarded`'s
+  // guard (a request to another slave, not guarded itself, with no earlier request of its slave
+  // or write of its device queued); shared_.end() if none. `lock` held.
   std::deque<Pending>::iterator fitsInGuard(uint8_t guarded, double left);
   // The poll overdue by a whole period the longest, while no poll has ended for that period
   // (none while the last thing run was such a poll, or nothing is queued): it goes before the
@@ -264,6 +272,7 @@ class BusScheduler {
   std::atomic<uint64_t> current_tag_{0};
   bool in_guard_ = false;  // bus thread: a job useGuardTime runs (its requests fill nothing)
   uint64_t ran_in_guards_ = 0;
+  uint64_t cut_in_guards_ = 0;  // shared reads whose retries went after the guarded request
   GuardTimeObserver guard_observer_;
   std::thread thread_;
 };

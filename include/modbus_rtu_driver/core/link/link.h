@@ -79,6 +79,7 @@ class Link : public Transport {
   // Checks and encodes the request (once: EncodedRequest), retries lost answers of repeatable
   // requests with the same frame, keeps the statistics.
   Result execute(const Request& request) final;
+  Result executeAttempts(const Request& request, int first, int most) final;
   void awaitLineFree() override {
     if (connected()) keepGap();
   }
@@ -96,6 +97,7 @@ class Link : public Transport {
   // Bus thread.
   double guardLeft(const Request& next) const override;
   double lineSeconds(const Request& request) const override;
+  double attemptSeconds(const Request& request) const override;
   LinkStats stats() const;
   // What the port names: its kind (LinkType: name, traits) and address.
   const LinkTarget& target() const { return target_; }
@@ -169,6 +171,9 @@ class Link : public Transport {
   // Drops the failed transactions whose late reply can no longer come (their guard ran out).
   void forgetSettled(std::chrono::steady_clock::time_point now);
   double worstSeconds(const EncodedRequest& request) const;  // worstTransactionSeconds, encoded
+  // One attempt of `request` on the line: the gap, the frame, the response timeout and the
+  // longest reply ended by one byte timeout (a broadcast: the gap and the frame).
+  double attemptWorstSeconds(const EncodedRequest& request) const;
   // How much of a gap a real-time thread spins: 1.5 x the sleeps' lateness + 10 us, at most
   // kMaxGapSpin.
   std::chrono::steady_clock::duration gapSpinMargin() const;

@@ -15,6 +15,16 @@ class Transport {
   virtual ~Transport() = default;
   // Runs one request (with the link's retries). Broadcasts return success once sent.
   virtual Result execute(const Request& request) = 0;
+  // Attempts `first`, `first` + 1, ... of `request` (0: a new transaction; more: the retries of
+  // one whose answer was lost), at most `most` of them (< 0: as many as the retries allow). When
+  // the answer was lost in all of them and the retries allow more, the result says
+  // `retry_owed`: the caller asks again later with `first` moved on. A transport without
+  // retries runs the request once.
+  virtual Result executeAttempts(const Request& request, int first, int most) {
+    (void)first;
+    (void)most;
+    return execute(request);
+  }
   // (Re)opens the port. False with a message when it cannot.
   virtual bool connect(std::string* error) {
     (void)error;
@@ -37,6 +47,9 @@ class Transport {
     (void)request;
     return -1;
   }
+  // The longest one attempt of `request` can keep the line; < 0: unknown. A transport without
+  // retries: the whole request.
+  virtual double attemptSeconds(const Request& request) const { return lineSeconds(request); }
 };
 
 }  // namespace modbus_rtu_driver

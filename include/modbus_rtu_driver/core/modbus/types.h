@@ -146,6 +146,9 @@ struct Result {
   uint8_t exception_code = 0;
   std::string message;
   std::vector<uint16_t> values;
+  // The answer was lost and the retries the link would have made are left for a later call
+  // (Transport::executeAttempts: a shared read cut short in another device's late-reply guard).
+  bool retry_owed = false;
 
   bool ok() const { return error == ErrorKind::kNone; }
   static Result success(std::vector<uint16_t> values = {});

@@ -91,6 +91,8 @@ class ShareGateway {
   uint64_t expired() const { return expired_.load(); }
   // Requests run while another device's late-reply guard held the line (docs/share.md).
   uint64_t ranInGuards() const { return scheduler_.ranInGuards(); }
+  // Of those, reads whose retries went after the guarded request.
+  uint64_t cutInGuards() const { return scheduler_.cutInGuards(); }
 
  private:
   // A request between its arrival and its answer: queued, on the bus, or answered 0B unsent.
