@@ -375,8 +375,9 @@ void BusScheduler::runPending(std::unique_lock<std::mutex>& lock, Pending p, int
 // does: the guarded request starts no later than it would have, and the writes and polls keep
 // their order. A read whose answer those attempts lost gets its remaining retries after the
 // guarded request (runPending). Without this, a device whose replies are dropped held every
-// client's read of another device for its guards (about 145 ms after each retry: issue 52);
-// whole transactions did not do (a read's two attempts, about 105 ms at 115200, rarely fitted).
+// client's read of another device for its guards (about 145 ms after each retry: issue 52).
+// Attempts, not whole transactions: a read's two attempts (up to about 105 ms at 115200 with
+// the default timeouts) fitted only a guard's first 40 ms or so.
 void BusScheduler::useGuardTime(const Request& next) {
   if (in_guard_) return;
   while (transport_.connected()) {
