@@ -920,6 +920,7 @@ TEST(BusSchedulerGuardTime, OnlyWhatEndsBeforeTheGuardGoesFirst) {
   auto w = f.write("a", 1);
   for (int i = 0; i < 4; ++i) f.share("b", Request::readHoldingRegisters(2, 0, 1));
   f.runAll();
+  EXPECT_TRUE(w.get().ok());
   EXPECT_EQ(f.line.log, (std::vector<std::string>{"2r", "2r", "2r", "1w", "2r"}));
   EXPECT_EQ(f.scheduler.ranInGuards(), 3u);
 }
@@ -931,6 +932,7 @@ TEST(BusSchedulerGuardTime, ATransactionLongerThanTheGuardWaits) {
   auto w = f.write("a", 1);
   f.share("b", Request::readHoldingRegisters(2, 0, 1));
   f.runAll();
+  EXPECT_TRUE(w.get().ok());
   EXPECT_EQ(f.line.log, (std::vector<std::string>{"1w", "2r"}));
   EXPECT_EQ(f.scheduler.ranInGuards(), 0u);
 }
@@ -949,6 +951,8 @@ TEST(BusSchedulerGuardTime, NothingElseGoesAhead) {
   f.share("d", Request::readHoldingRegisters(4, 0, 1));  // its device has a write queued
   f.line.line_seconds = 0.03;
   f.runAll();
+  EXPECT_TRUE(w1.get().ok());
+  EXPECT_TRUE(w4.get().ok());
   // Once device d's write has gone, its read may use slave 1's guard.
   EXPECT_EQ(f.line.log, (std::vector<std::string>{"1w", "4w", "4r", "1r", "0w", "3r"}));
   EXPECT_EQ(f.scheduler.ranInGuards(), 1u);
@@ -975,6 +979,7 @@ TEST(BusSchedulerGuardTime, ADevicesSharedRequestsKeepTheirOrder) {
   Clock::time_point next{};
   while (s.step(&next)) {
   }
+  EXPECT_TRUE(w.get().ok());
   EXPECT_EQ(line.log, (std::vector<std::string>{"5r", "1w", "2r", "2r"}));
   EXPECT_EQ(s.ranInGuards(), 1u);
 }
