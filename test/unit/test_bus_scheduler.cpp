@@ -872,8 +872,9 @@ struct GuardedLine : Transport {
   std::vector<std::string> log;
 };
 
-struct GuardFill {
-  GuardFill() : line(clock), scheduler(line, {}, clock) { scheduler.startStepping(); }
+template <class Line = GuardedLine>
+struct GuardFillOn {
+  GuardFillOn() : line(clock), scheduler(line, {}, clock) { scheduler.startStepping(); }
   void guard(uint8_t slave, std::chrono::milliseconds left) {
     line.guard_until[slave] = clock.now() + left;
   }
@@ -884,8 +885,8 @@ struct GuardFill {
   }
   void share(const std::string& device, const Request& r) {
     scheduler.submitShared(
-        device, [r](Transport& t) { return t.execute(r); }, [this](const Result&) { ++answered; },
-        0, r);
+        device, [r](Transport& t) { return t.execute(r); },
+        [this](const Result& result) { answers.push_back(result); }, 0, r);
   }
   void runAll() {
     Clock::time_point next{};
@@ -893,10 +894,11 @@ struct GuardFill {
     }
   }
   ManualClock clock;
-  GuardedLine line;
+  Line line;
   BusScheduler scheduler;
-  int answered = 0;
+  std::vector<Result> answers;  // of the shared requests, in order
 };
+using GuardFill = GuardFillOn<>;
 
 }  // namespace
 
@@ -908,7 +910,7 @@ TEST(BusSchedulerGuardTime, ASharedReadOfAnotherDeviceGoesWithinTheGuard) {
   f.share("b", Request::readHoldingRegisters(2, 1, 1));
   f.runAll();
   EXPECT_TRUE(w.get().ok());
-  EXPECT_EQ(f.answered, 2);
+  EXPECT_EQ(f.answers.size(), 2u);
   EXPECT_EQ(f.line.log, (std::vector<std::string>{"2r", "2r", "1w"}));
   EXPECT_EQ(f.scheduler.ranInGuards(), 2u);
 }
@@ -1014,58 +1016,38 @@ struct RetryingLine : GuardedLine {
 }  // namespace
 
 TEST(BusSchedulerGuardTime, AReadGoesWhenOneAttemptFitsAndItsRetryAfterTheGuardedRequest) {
-  ManualClock clock;
-  RetryingLine line(clock);
-  BusScheduler s(line, {}, clock);
-  s.startStepping();
+  GuardFillOn<RetryingLine> f;
   // 34 ms: the first attempt fits (30), then 29 ms are left: the retry does not.
-  line.guard_until[1] = clock.now() + 34ms;
-  auto w =
-      s.submit("a", [](Transport& t) { return t.execute(Request::writeSingleCoil(1, 0, true)); });
-  std::vector<Result> answers;
-  const Request read = Request::readHoldingRegisters(2, 0, 1);
-  s.submitShared(
-      "b", [read](Transport& t) { return t.execute(read); },
-      [&answers](const Result& r) { answers.push_back(r); }, 0, read);
-  Clock::time_point next{};
-  while (s.step(&next)) {
-  }
+  f.guard(1, 34ms);
+  auto w = f.write("a", 1);
+  f.share("b", Request::readHoldingRegisters(2, 0, 1));
+  f.runAll();
   EXPECT_TRUE(w.get().ok());
-  EXPECT_EQ(line.log, (std::vector<std::string>{"2r", "1w", "2r"}));
-  EXPECT_EQ(line.firsts, (std::vector<int>{0, 1})) << "the retry is attempt 1, not a new read";
-  ASSERT_EQ(answers.size(), 1u) << "one answer, after the retry";
-  EXPECT_TRUE(answers[0].ok()) << answers[0].message;
-  EXPECT_EQ(s.ranInGuards(), 1u);
+  EXPECT_EQ(f.line.log, (std::vector<std::string>{"2r", "1w", "2r"}));
+  EXPECT_EQ(f.line.firsts, (std::vector<int>{0, 1})) << "the retry is attempt 1, not a new read";
+  ASSERT_EQ(f.answers.size(), 1u) << "one answer, after the retry";
+  EXPECT_TRUE(f.answers[0].ok()) << f.answers[0].message;
+  EXPECT_EQ(f.scheduler.ranInGuards(), 1u);
 }
 
 // A read that no attempt gets an answer to ends with the link's retries spent, also when the
 // guard cut it short: 1 + retries attempts in all.
 TEST(BusSchedulerGuardTime, AReadCutShortNeverGetsMoreAttemptsThanItsRetries) {
-  ManualClock clock;
-  RetryingLine line(clock);
-  line.lost = 10;  // never answered
-  line.retries = 2;
-  BusScheduler s(line, {}, clock);
-  s.startStepping();
-  line.guard_until[1] = clock.now() + 64ms;  // two attempts fit (60), the third does not
-  auto w =
-      s.submit("a", [](Transport& t) { return t.execute(Request::writeSingleCoil(1, 0, true)); });
-  std::vector<Result> answers;
-  const Request read = Request::readHoldingRegisters(2, 0, 1);
-  s.submitShared(
-      "b", [read](Transport& t) { return t.execute(read); },
-      [&answers](const Result& r) { answers.push_back(r); }, 0, read);
-  Clock::time_point next{};
-  while (s.step(&next)) {
-  }
+  GuardFillOn<RetryingLine> f;
+  f.line.lost = 10;  // never answered
+  f.line.retries = 2;
+  f.guard(1, 64ms);  // two attempts fit (60), the third does not
+  auto w = f.write("a", 1);
+  f.share("b", Request::readHoldingRegisters(2, 0, 1));
+  f.runAll();
   EXPECT_TRUE(w.get().ok());
   // Two attempts fit the guard's 64 ms; they take 10, and the third fits the 54 left: all three
   // go before the write, the answer lost in each, and no fourth.
-  EXPECT_EQ(line.log, (std::vector<std::string>{"2r", "2r", "2r", "1w"}));
-  EXPECT_EQ(line.firsts, (std::vector<int>{0, 2}));
-  ASSERT_EQ(answers.size(), 1u);
-  EXPECT_EQ(answers[0].error, ErrorKind::kTimeout);
-  EXPECT_FALSE(answers[0].retry_owed);
+  EXPECT_EQ(f.line.log, (std::vector<std::string>{"2r", "2r", "2r", "1w"}));
+  EXPECT_EQ(f.line.firsts, (std::vector<int>{0, 2}));
+  ASSERT_EQ(f.answers.size(), 1u);
+  EXPECT_EQ(f.answers[0].error, ErrorKind::kTimeout);
+  EXPECT_FALSE(f.answers[0].retry_owed);
 }
 
 // A poll's request waits on the guard too: the shared read goes inside the poll, before it.
@@ -1082,7 +1064,7 @@ TEST(BusSchedulerGuardTime, APollsGuardedRequestLetsASharedReadGoFirst) {
   Clock::time_point next{};
   EXPECT_TRUE(f.scheduler.step(&next));
   EXPECT_EQ(f.line.log, (std::vector<std::string>{"2r", "1r"}));
-  EXPECT_EQ(f.answered, 1);
+  EXPECT_EQ(f.answers.size(), 1u);
 }
 
 // docs/share.md: on a bus the polls alone fill (every poll a period late), the polls are not
